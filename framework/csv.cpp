@@ -1,0 +1,320 @@
+#include "framework/csv.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <optional>
+#include <string_view>
+
+#include "framework/atomic_file.hpp"
+#include "framework/error.hpp"
+#include "framework/units.hpp"
+
+namespace driftlab {
+namespace {
+
+struct Suffix {
+  std::string_view suffix;
+  std::string_view unit;
+};
+constexpr Suffix kSuffixes[] = {{"_dps", "deg/s"}, {"_rps", "rad/s"}, {"_dph", "deg/h"}, {"_c", "degC"},
+                                {"_k", "K"},       {"_hz", "Hz"},     {"_s", "s"}};
+
+std::string role_of_stem(const std::string& stem) {
+  if (stem == "temp") return role::kTemperature;
+  if (stem == "die_temp") return role::kDieTemperature;
+  if (stem == "drive_freq") return role::kDriveFrequency;
+  if (stem == "t") return "time";
+  return stem;
+}
+
+std::optional<ColumnMapping> mapping_from_suffix(const std::string& column) {
+  for (const auto& s : kSuffixes) {
+    if (column.size() > s.suffix.size() && column.ends_with(s.suffix))
+      return ColumnMapping{role_of_stem(column.substr(0, column.size() - s.suffix.size())), column,
+                           std::string(s.unit)};
+  }
+  return std::nullopt;
+}
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = s.substr(1, s.size() - 2);
+  return s;
+}
+
+std::vector<std::string_view> split(std::string_view line) {
+  std::vector<std::string_view> out;
+  std::size_t start = 0;
+  while (true) {
+    const auto comma = line.find(',', start);
+    out.push_back(trim(line.substr(start, comma == std::string_view::npos ? line.npos : comma - start)));
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+bool parse_number(std::string_view cell, double& value) {
+  if (!cell.empty() && cell.front() == '+') cell.remove_prefix(1);
+  const auto res = std::from_chars(cell.data(), cell.data() + cell.size(), value);
+  return res.ec == std::errc() && res.ptr == cell.data() + cell.size();
+}
+
+std::string read_file(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw DataError({path.string(), 0, ""}, "file does not exist or is not a regular file");
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw DataError({path.string(), 0, ""}, std::string("cannot open: ") + std::strerror(errno));
+  std::string buffer(std::filesystem::file_size(path), '\0');
+  const auto n = std::fread(buffer.data(), 1, buffer.size(), f);
+  std::fclose(f);
+  buffer.resize(n);
+  return buffer;
+}
+
+// A column that is read: where it sits in each row and how to convert it.
+struct Wanted {
+  ColumnMapping mapping;
+  Unit unit;
+  std::size_t index = 0;
+  std::vector<double> values;
+};
+
+Unit unit_or_throw(const ColumnMapping& m) {
+  auto u = find_unit(m.unit);
+  if (!u) {
+    std::string known;
+    for (const auto& k : known_unit_spellings()) known += (known.empty() ? "" : ", ") + k;
+    throw ConfigError({"", 0, m.column}, "unknown unit '" + m.unit + "' (known: " + known + ")");
+  }
+  return *u;
+}
+
+class LineCursor {
+ public:
+  explicit LineCursor(const std::string& text) : text_(text) {}
+  // Next non-blank, non-comment line; false at end of file.
+  bool next(std::string_view& line) {
+    while (pos_ < text_.size()) {
+      const char* begin = text_.data() + pos_;
+      const void* nl = std::memchr(begin, '\n', text_.size() - pos_);
+      const std::size_t len = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - begin) : text_.size() - pos_;
+      pos_ += len + 1;
+      ++line_;
+      line = std::string_view(begin, len);
+      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+      if (line.empty() || line.front() == '#' || trim(line).empty()) continue;
+      return true;
+    }
+    return false;
+  }
+  int line_number() const { return line_; }
+
+ private:
+  const std::string& text_;
+  std::size_t pos_ = 0;
+  int line_ = 0;
+};
+
+}  // namespace
+
+ColumnMapping parse_column_mapping(const std::string& text) {
+  const Location where{"--column", 0, text};
+  ColumnMapping m;
+  std::string rest = text;
+  if (const auto eq = rest.find('='); eq != std::string::npos) {
+    m.role = rest.substr(0, eq);
+    rest = rest.substr(eq + 1);
+  }
+  if (const auto colon = rest.rfind(':'); colon != std::string::npos) {
+    m.column = rest.substr(0, colon);
+    m.unit = rest.substr(colon + 1);
+  } else if (auto s = mapping_from_suffix(rest)) {
+    m.column = s->column;
+    m.unit = s->unit;
+    if (m.role.empty()) m.role = s->role;
+  } else {
+    throw ConfigError(where, "expected role=column:unit, column:unit or a column name with a unit suffix "
+                             "(_dps, _rps, _dph, _c, _k, _hz, _s)");
+  }
+  if (m.role.empty()) m.role = m.column;
+  if (m.column.empty()) throw ConfigError(where, "empty column name");
+  unit_or_throw(m);
+  return m;
+}
+
+TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& options) {
+  const std::string file = path.string();
+  const std::string text = read_file(path);
+  LineCursor cursor(text);
+  std::string_view line;
+  if (!cursor.next(line)) throw DataError({file, 0, ""}, "file is empty (expected a header row and data rows)");
+
+  const int header_line = cursor.line_number();
+  const auto header = split(line);
+  {
+    double dummy;
+    if (std::all_of(header.begin(), header.end(), [&](std::string_view c) { return parse_number(c, dummy); }))
+      throw DataError({file, header_line, ""}, "missing header row (the first row holds only numbers)");
+  }
+  std::string available;
+  for (const auto& h : header) available += (available.empty() ? "" : ", ") + std::string(h);
+  const auto find_index = [&](const std::string& column, bool required) -> std::optional<std::size_t> {
+    for (std::size_t i = 0; i < header.size(); ++i)
+      if (header[i] == column) return i;
+    if (required)
+      throw DataError({file, header_line, column}, "missing column (the header has: " + available + ")");
+    return std::nullopt;
+  };
+  for (std::size_t i = 0; i < header.size(); ++i)
+    for (std::size_t j = i + 1; j < header.size(); ++j)
+      if (header[i] == header[j] && !header[i].empty())
+        throw DataError({file, header_line, std::string(header[i])}, "duplicated column name");
+
+  std::vector<Wanted> wanted;
+  std::optional<ColumnMapping> time_mapping;
+  const auto add_wanted = [&](const ColumnMapping& m, std::size_t index) {
+    if (m.role == "time") {
+      time_mapping = m;
+    }
+    try {
+      wanted.push_back({m, unit_or_throw(m), index, {}});
+    } catch (const ConfigError& e) {
+      throw ConfigError({file, header_line, m.column}, e.problems().front().message);
+    }
+  };
+  if (options.columns.empty()) {
+    for (std::size_t i = 0; i < header.size(); ++i)
+      if (auto m = mapping_from_suffix(std::string(header[i]))) add_wanted(*m, i);
+  } else {
+    bool has_time = false;
+    for (const auto& m : options.columns) has_time = has_time || m.role == "time";
+    if (!has_time && options.sample_rate_hz <= 0.0) add_wanted({"time", "t_s", "s"}, *find_index("t_s", true));
+    for (const auto& m : options.columns) add_wanted(m, *find_index(m.column, true));
+  }
+  if (!time_mapping && options.sample_rate_hz <= 0.0)
+    throw DataError({file, header_line, "t_s"},
+                    "missing time column (the header has: " + available + "); give one with --column "
+                    "time=NAME:UNIT or a sample rate with --fs");
+  for (const auto& r : options.required_roles) {
+    const bool found = std::any_of(wanted.begin(), wanted.end(), [&](const Wanted& w) { return w.mapping.role == r; });
+    if (!found)
+      throw DataError({file, header_line, r},
+                      "no column for the '" + r + "' channel (the header has: " + available +
+                          "); name one with --column " + r + "=COLUMN:UNIT");
+  }
+  if (time_mapping && options.sample_rate_hz > 0.0)
+    throw ConfigError({file, header_line, time_mapping->column}, "the file has a time column; do not also give --fs");
+
+  std::vector<int> line_of_row;
+  const std::size_t estimated_rows = text.size() / std::max<std::size_t>(1, line.size() + 1);
+  for (auto& w : wanted) w.values.reserve(estimated_rows);
+  line_of_row.reserve(estimated_rows);
+  std::vector<std::pair<std::size_t, Wanted*>> by_index;
+  for (auto& w : wanted) by_index.emplace_back(w.index, &w);
+  std::sort(by_index.begin(), by_index.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+
+  while (cursor.next(line)) {
+    const int lineno = cursor.line_number();
+    std::size_t field = 0, pos = 0, next_wanted = 0;
+    while (true) {
+      const auto comma = line.find(',', pos);
+      const auto end = comma == std::string_view::npos ? line.size() : comma;
+      if (next_wanted < by_index.size() && by_index[next_wanted].first == field) {
+        const auto cell = trim(line.substr(pos, end - pos));
+        Wanted& w = *by_index[next_wanted].second;
+        double v;
+        if (cell.empty()) throw DataError({file, lineno, w.mapping.column}, "empty cell (expected a number)");
+        if (!parse_number(cell, v))
+          throw DataError({file, lineno, w.mapping.column}, "expected a number, got '" + std::string(cell) + "'");
+        if (!std::isfinite(v))
+          throw DataError({file, lineno, w.mapping.column}, "value is " + std::string(cell) + " (NaN/Inf not allowed)");
+        w.values.push_back(to_internal(v, w.unit));
+        ++next_wanted;
+      }
+      if (comma == std::string_view::npos) break;
+      pos = comma + 1;
+      ++field;
+    }
+    if (field + 1 != header.size())
+      throw DataError({file, lineno, ""}, "row has " + std::to_string(field + 1) + " cells, the header has " +
+                                              std::to_string(header.size()));
+    line_of_row.push_back(lineno);
+  }
+  const std::size_t rows = line_of_row.size();
+  if (rows == 0) throw DataError({file, header_line, ""}, "no data rows after the header");
+
+  Eigen::VectorXd time(static_cast<Eigen::Index>(rows));
+  if (time_mapping) {
+    const auto& tv = std::find_if(wanted.begin(), wanted.end(), [](const Wanted& w) { return w.mapping.role == "time"; })->values;
+    std::copy(tv.begin(), tv.end(), time.data());
+    for (std::size_t i = 1; i < rows; ++i) {
+      if (tv[i] == tv[i - 1])
+        throw DataError({file, line_of_row[i], time_mapping->column},
+                        "duplicated time stamp (same as line " + std::to_string(line_of_row[i - 1]) + ")");
+      if (tv[i] < tv[i - 1])
+        throw DataError({file, line_of_row[i], time_mapping->column},
+                        "time stamps must increase (this one is earlier than line " +
+                            std::to_string(line_of_row[i - 1]) + ")");
+    }
+    if (options.max_gap_factor > 0.0 && rows > 2) {
+      std::vector<double> steps(rows - 1);
+      for (std::size_t i = 1; i < rows; ++i) steps[i - 1] = tv[i] - tv[i - 1];
+      auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+      std::nth_element(steps.begin(), mid, steps.end());
+      const double limit = options.max_gap_factor * *mid;
+      for (std::size_t i = 1; i < rows; ++i)
+        if (tv[i] - tv[i - 1] > limit)
+          throw DataError({file, line_of_row[i], time_mapping->column},
+                          "gap of " + std::to_string(tv[i] - tv[i - 1]) + " s after line " +
+                              std::to_string(line_of_row[i - 1]) + " (median step " + std::to_string(*mid) +
+                              " s; allowed up to " + std::to_string(options.max_gap_factor) +
+                              " x median, see --max-gap)");
+    }
+  } else {
+    for (std::size_t i = 0; i < rows; ++i) time[static_cast<Eigen::Index>(i)] = static_cast<double>(i) / options.sample_rate_hz;
+  }
+
+  TimeSeries series(std::move(time));
+  for (auto& w : wanted) {
+    if (w.mapping.role == "time") continue;
+    Channel c{w.mapping.role, internal_unit_symbol(w.unit.quantity), w.mapping.column,
+              Eigen::Map<const Eigen::VectorXd>(w.values.data(), static_cast<Eigen::Index>(w.values.size()))};
+    series.set_channel(std::move(c));
+  }
+  return series;
+}
+
+void write_csv(const std::filesystem::path& path, const std::vector<CsvColumn>& columns) {
+  std::vector<Unit> units;
+  Eigen::Index rows = columns.empty() ? 0 : columns.front().values.size();
+  for (const auto& c : columns) {
+    auto u = find_unit(c.unit);
+    if (!u) throw ConfigError({path.string(), 0, c.name}, "unknown output unit '" + c.unit + "'");
+    if (c.values.size() != rows)
+      throw DataError({path.string(), 0, c.name}, "column length differs from the first column");
+    units.push_back(*u);
+  }
+  std::string out;
+  out.reserve(static_cast<std::size_t>(rows) * columns.size() * 24 + 256);
+  for (std::size_t j = 0; j < columns.size(); ++j) out += (j ? "," : "") + columns[j].name;
+  out += '\n';
+  char buf[32];
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    for (std::size_t j = 0; j < columns.size(); ++j) {
+      if (j) out += ',';
+      const auto res = std::to_chars(buf, buf + sizeof buf, from_internal(columns[j].values[i], units[j]));
+      out.append(buf, res.ptr);
+    }
+    out += '\n';
+  }
+  write_file_atomically(path, out);
+}
+
+}  // namespace driftlab

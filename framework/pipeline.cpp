@@ -1,0 +1,422 @@
+#include "framework/pipeline.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "framework/error.hpp"
+#include "framework/params_io.hpp"
+#include "framework/registry.hpp"
+
+namespace driftlab {
+namespace {
+
+int line_of(const YAML::Node& node) { return node && node.Mark().line >= 0 ? node.Mark().line + 1 : 0; }
+
+struct RawStep {
+  PipelineStep step;
+  std::vector<std::pair<std::string, int>> refs;  // (reference, line), every input
+};
+
+std::int64_t derived_seed(std::int64_t pipeline_seed, const std::string& step_name) {
+  std::uint64_t h = 1469598103934665603ull ^ static_cast<std::uint64_t>(pipeline_seed);
+  for (unsigned char c : step_name) h = (h ^ c) * 1099511628211ull;
+  h ^= h >> 33;
+  return static_cast<std::int64_t>(h & 0x7fffffffull);
+}
+
+class Parser {
+ public:
+  Parser(const Registry& registry, std::string file) : registry_(registry), file_(std::move(file)) {}
+
+  Pipeline parse(const YAML::Node& root) {
+    Pipeline p;
+    p.file = file_;
+    if (!root.IsMap()) {
+      problem(root, "", "expected a map with format, inputs, steps and outputs");
+      finish();
+    }
+    for (const auto& kv : root) {
+      const auto key = kv.first.as<std::string>();
+      if (key != "format" && key != "seed" && key != "inputs" && key != "steps" && key != "outputs")
+        problem(kv.first, key, "unknown key (expected format, seed, inputs, steps, outputs)");
+    }
+    const auto format = root["format"];
+    if (!format) problem(root, "format", std::string("missing (expected ") + kPipelineFormat + ")");
+    else if (!format.IsScalar() || format.Scalar() != kPipelineFormat)
+      problem(format, "format", "unsupported format '" + (format.IsScalar() ? format.Scalar() : std::string("?")) +
+                                    "' (expected " + kPipelineFormat + ")");
+    if (const auto seed = root["seed"]) {
+      try {
+        p.seed = seed.as<std::int64_t>();
+        if (p.seed < 0) problem(seed, "seed", "must be >= 0");
+      } catch (const YAML::Exception&) {
+        problem(seed, "seed", "expected a non-negative integer");
+      }
+    }
+    read_inputs(root["inputs"], p);
+    auto raw = read_steps(root["steps"], p);
+    read_outputs(root["outputs"], p);
+    check_references(raw, p);
+    order_steps(raw, p);
+    finish();
+    return p;
+  }
+
+ private:
+  void problem(const YAML::Node& node, const std::string& key, const std::string& message) {
+    problems_.push_back({{file_, line_of(node), key}, message});
+  }
+  void finish() {
+    if (!problems_.empty()) throw ConfigError(problems_);
+  }
+
+  void read_inputs(const YAML::Node& node, Pipeline& p) {
+    if (!node) {
+      p.inputs = {{"rate", role::kRate}};
+      return;
+    }
+    if (!node.IsMap()) return problem(node, "inputs", "expected a map of input name to channel role");
+    for (const auto& kv : node) {
+      if (!kv.second.IsScalar()) {
+        problem(kv.second, "inputs." + kv.first.as<std::string>(), "expected a channel role");
+        continue;
+      }
+      p.inputs[kv.first.as<std::string>()] = kv.second.as<std::string>();
+    }
+  }
+
+  std::vector<RawStep> read_steps(const YAML::Node& node, Pipeline& p) {
+    std::vector<RawStep> raw;
+    if (!node || !node.IsSequence() || node.size() == 0) {
+      problem(node ? node : YAML::Node(), "steps", "expected a non-empty list of steps");
+      return raw;
+    }
+    static const std::regex name_re("[A-Za-z_][A-Za-z0-9_]*");
+    std::map<std::string, int> seen;
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      const auto s = node[i];
+      const std::string where = "steps[" + std::to_string(i) + "]";
+      if (!s.IsMap()) {
+        problem(s, where, "expected a map with name, plugin, inputs, params");
+        continue;
+      }
+      RawStep r;
+      r.step.line = line_of(s);
+      for (const auto& kv : s) {
+        const auto key = kv.first.as<std::string>();
+        if (key != "name" && key != "plugin" && key != "inputs" && key != "params" && key != "sum")
+          problem(kv.first, where + "." + key, "unknown key (expected name, plugin, inputs, params, or sum)");
+      }
+      if (!s["name"] || !s["name"].IsScalar() || !std::regex_match(s["name"].Scalar(), name_re)) {
+        problem(s["name"] ? s["name"] : s, where + ".name", "expected an identifier (letters, digits, _)");
+      } else {
+        r.step.name = s["name"].Scalar();
+        if (auto it = seen.find(r.step.name); it != seen.end())
+          problem(s["name"], where + ".name",
+                  "duplicate step name '" + r.step.name + "' (first used on line " + std::to_string(it->second) + ")");
+        else
+          seen[r.step.name] = line_of(s["name"]);
+      }
+      const std::string label = r.step.name.empty() ? where : r.step.name;
+      if (s["sum"]) {
+        read_sum(s, label, r);
+      } else {
+        read_plugin_step(s, label, p, r);
+      }
+      raw.push_back(std::move(r));
+    }
+    return raw;
+  }
+
+  void read_sum(const YAML::Node& s, const std::string& label, RawStep& r) {
+    if (s["plugin"] || s["params"] || s["inputs"])
+      problem(s, label, "a sum step takes only `name` and `sum: [references]`");
+    const auto list = s["sum"];
+    if (!list.IsSequence() || list.size() == 0) return problem(list, label + ".sum", "expected a list of references");
+    for (const auto& ref : list) {
+      r.step.inputs["terms"].push_back(ref.as<std::string>());
+      r.refs.emplace_back(ref.as<std::string>(), line_of(ref));
+    }
+  }
+
+  void read_plugin_step(const YAML::Node& s, const std::string& label, Pipeline& p, RawStep& r) {
+    const auto plugin = s["plugin"];
+    if (!plugin || !plugin.IsScalar()) return problem(plugin ? plugin : s, label + ".plugin", "missing plugin name");
+    r.step.plugin = plugin.Scalar();
+    if (!registry_.contains(r.step.plugin)) {
+      try {
+        registry_.info(r.step.plugin);
+      } catch (const ConfigError& e) {
+        problem(plugin, label + ".plugin", e.problems().front().message);
+      }
+      return;
+    }
+    const auto& info = registry_.info(r.step.plugin);
+    const auto& ports = ports_of_kind(info.kind());
+    if (ports.outputs.empty())
+      return problem(plugin, label + ".plugin", info.kind() + " plugins cannot run as pipeline steps");
+    const auto inputs = s["inputs"];
+    if (inputs && !inputs.IsMap()) problem(inputs, label + ".inputs", "expected a map of port to reference");
+    if (inputs && inputs.IsMap()) {
+      for (const auto& kv : inputs) {
+        const auto port = kv.first.as<std::string>();
+        const auto spec = std::find_if(ports.inputs.begin(), ports.inputs.end(),
+                                       [&](const PortSpec& ps) { return ps.name == port; });
+        if (spec == ports.inputs.end()) {
+          std::string valid;
+          for (const auto& ps : ports.inputs) valid += (valid.empty() ? "" : ", ") + ps.name;
+          problem(kv.first, label + ".inputs." + port, "unknown input port of a " + info.kind() + " step (valid: " + valid + ")");
+          continue;
+        }
+        if (kv.second.IsSequence() && !spec->many)
+          problem(kv.second, label + ".inputs." + port, "this port takes a single reference");
+        const auto add = [&](const YAML::Node& ref) {
+          r.step.inputs[port].push_back(ref.as<std::string>());
+          r.refs.emplace_back(ref.as<std::string>(), line_of(ref));
+        };
+        if (kv.second.IsSequence())
+          for (const auto& ref : kv.second) add(ref);
+        else if (kv.second.IsScalar())
+          add(kv.second);
+        else
+          problem(kv.second, label + ".inputs." + port, "expected a reference (input name or step.output)");
+      }
+    }
+    for (const auto& ps : ports.inputs)
+      if (ps.required && !r.step.inputs.count(ps.name))
+        problem(inputs ? inputs : s, label + ".inputs." + ps.name, "required input port is not connected");
+
+    const auto params = s["params"];
+    r.step.params = resolve_params(registry_, r.step.plugin, params, file_, label + ".params", problems_);
+    if (info.params.find("seed") && !(params && params.IsMap() && params["seed"]))
+      r.step.params.set("seed", derived_seed(p.seed, r.step.name));
+  }
+
+  void read_outputs(const YAML::Node& node, Pipeline& p) {
+    if (!node || !node.IsMap() || node.size() == 0)
+      return problem(node ? node : YAML::Node(), "outputs", "expected a map of output name to step.output");
+    for (const auto& kv : node) {
+      p.outputs[kv.first.as<std::string>()] = kv.second.as<std::string>();
+      output_refs_.emplace_back(kv.second.as<std::string>(), line_of(kv.second));
+    }
+  }
+
+  // Output names of a step, or empty when the step is unknown.
+  std::vector<std::string> outputs_of(const std::vector<RawStep>& raw, const std::string& step) const {
+    for (const auto& r : raw)
+      if (r.step.name == step) {
+        if (r.step.plugin.empty()) return {"signal"};
+        if (!registry_.contains(r.step.plugin)) return {"*"};
+        return ports_of_kind(registry_.info(r.step.plugin).kind()).outputs;
+      }
+    return {};
+  }
+
+  void check_ref(const std::vector<RawStep>& raw, const Pipeline& p, const std::string& ref, int line,
+                 const std::string& key) {
+    const auto dot = ref.find('.');
+    if (dot == std::string::npos) {
+      if (!p.inputs.count(ref) && ref != "time") {
+        std::string names = "time";
+        for (const auto& [n, r] : p.inputs) names += ", " + n;
+        problems_.push_back({{file_, line, key}, "dangling reference '" + ref + "': no pipeline input of that name (inputs: " + names + ")"});
+      }
+      return;
+    }
+    const auto step = ref.substr(0, dot), output = ref.substr(dot + 1);
+    const auto outs = outputs_of(raw, step);
+    if (outs.empty()) {
+      problems_.push_back({{file_, line, key}, "dangling reference '" + ref + "': no step named '" + step + "'"});
+    } else if (outs.front() != "*" && std::find(outs.begin(), outs.end(), output) == outs.end()) {
+      std::string valid;
+      for (const auto& o : outs) valid += (valid.empty() ? "" : ", ") + o;
+      problems_.push_back({{file_, line, key}, "dangling reference '" + ref + "': step '" + step + "' has outputs " + valid});
+    }
+  }
+
+  void check_references(const std::vector<RawStep>& raw, const Pipeline& p) {
+    for (const auto& r : raw)
+      for (const auto& [ref, line] : r.refs) check_ref(raw, p, ref, line, r.step.name + ".inputs");
+    for (const auto& [ref, line] : output_refs_) check_ref(raw, p, ref, line, "outputs");
+  }
+
+  void order_steps(std::vector<RawStep>& raw, Pipeline& p) {
+    std::vector<bool> placed(raw.size(), false);
+    std::set<std::string> done;
+    while (p.steps.size() < raw.size()) {
+      bool progressed = false;
+      for (std::size_t i = 0; i < raw.size(); ++i) {
+        if (placed[i]) continue;
+        const bool ready = std::all_of(raw[i].refs.begin(), raw[i].refs.end(), [&](const auto& ref) {
+          const auto dot = ref.first.find('.');
+          return dot == std::string::npos || done.count(ref.first.substr(0, dot)) ||
+                 outputs_of(raw, ref.first.substr(0, dot)).empty();
+        });
+        if (!ready) continue;
+        placed[i] = true;
+        done.insert(raw[i].step.name);
+        p.steps.push_back(raw[i].step);
+        progressed = true;
+      }
+      if (!progressed) {
+        std::string cycle;
+        for (std::size_t i = 0; i < raw.size(); ++i)
+          if (!placed[i]) cycle += (cycle.empty() ? "" : ", ") + raw[i].step.name;
+        for (std::size_t i = 0; i < raw.size(); ++i)
+          if (!placed[i]) {
+            problems_.push_back({{file_, raw[i].step.line, raw[i].step.name},
+                                 "cyclic reference: steps " + cycle + " depend on each other"});
+            break;
+          }
+        return;
+      }
+    }
+  }
+
+  const Registry& registry_;
+  std::string file_;
+  std::vector<Diagnostic> problems_;
+  std::vector<std::pair<std::string, int>> output_refs_;
+};
+
+Signal resolve_ref(const std::string& ref, const std::map<std::string, std::map<std::string, Signal>>& produced,
+                   const std::map<std::string, Signal>& inputs) {
+  const auto dot = ref.find('.');
+  if (dot == std::string::npos) return inputs.at(ref);
+  return produced.at(ref.substr(0, dot)).at(ref.substr(dot + 1));
+}
+
+Signal side_by_side(const std::vector<Signal>& parts) {
+  if (parts.size() == 1) return parts.front();
+  Signal s;
+  Eigen::Index cols = 0;
+  for (const auto& p : parts) cols += p.columns.cols();
+  s.columns.resize(parts.front().columns.rows(), cols);
+  Eigen::Index c = 0;
+  for (const auto& p : parts) {
+    s.columns.middleCols(c, p.columns.cols()) = p.columns;
+    c += p.columns.cols();
+    s.labels.insert(s.labels.end(), p.labels.begin(), p.labels.end());
+  }
+  s.unit = parts.front().unit;
+  return s;
+}
+
+}  // namespace
+
+Pipeline parse_pipeline(const std::string& yaml_text, const std::string& file_label, const Registry& registry) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    throw ConfigError({file_label, e.mark.line + 1, ""}, "not valid YAML: " + e.msg);
+  }
+  return Parser(registry, file_label).parse(root);
+}
+
+Pipeline load_pipeline(const std::filesystem::path& path, const Registry& registry) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError({path.string(), 0, ""}, "cannot read the pipeline file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return parse_pipeline(buffer.str(), path.string(), registry);
+}
+
+std::string effective_pipeline_yaml(const Pipeline& pipeline, const Registry& registry) {
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  out << YAML::Key << "format" << YAML::Value << kPipelineFormat;
+  out << YAML::Key << "seed" << YAML::Value << pipeline.seed;
+  out << YAML::Key << "inputs" << YAML::Value << YAML::BeginMap;
+  for (const auto& [name, role] : pipeline.inputs) out << YAML::Key << name << YAML::Value << role;
+  out << YAML::EndMap;
+  out << YAML::Key << "steps" << YAML::Value << YAML::BeginSeq;
+  for (const auto& step : pipeline.steps) {
+    out << YAML::BeginMap << YAML::Key << "name" << YAML::Value << step.name;
+    if (step.plugin.empty()) {
+      out << YAML::Key << "sum" << YAML::Value << YAML::Flow << step.inputs.at("terms");
+    } else {
+      out << YAML::Key << "plugin" << YAML::Value << step.plugin;
+      out << YAML::Key << "inputs" << YAML::Value << YAML::BeginMap;
+      for (const auto& [port, refs] : step.inputs) {
+        out << YAML::Key << port << YAML::Value;
+        if (refs.size() == 1)
+          out << refs.front();
+        else
+          out << YAML::Flow << refs;
+      }
+      out << YAML::EndMap;
+      out << YAML::Key << "params" << YAML::Value << params_to_yaml(registry, step.plugin, step.params);
+    }
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "outputs" << YAML::Value << YAML::BeginMap;
+  for (const auto& [name, ref] : pipeline.outputs) out << YAML::Key << name << YAML::Value << ref;
+  out << YAML::EndMap << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Registry& registry,
+                                           const TimeSeries& record, const PipelineRunOptions& options,
+                                           nlohmann::json& report) {
+  std::map<std::string, Signal> inputs;
+  inputs["time"] = Signal::single(record.time(), "time", "s");
+  for (const auto& [name, role] : pipeline.inputs) {
+    if (role == "time") {
+      inputs[name] = inputs["time"];
+      continue;
+    }
+    const auto& c = record.channel(role);
+    inputs[name] = Signal::single(c.values, name, c.unit);
+  }
+  report["steps"] = nlohmann::json::array();
+  std::map<std::string, std::map<std::string, Signal>> produced;
+  for (std::size_t i = 0; i < pipeline.steps.size(); ++i) {
+    const auto& step = pipeline.steps[i];
+    nlohmann::json entry{{"name", step.name}, {"plugin", step.plugin.empty() ? "sum" : step.plugin}, {"status", "running"}};
+    report["steps"].push_back(entry);
+    auto& slot = report["steps"].back();
+    const auto start = std::chrono::steady_clock::now();
+    RunContext ctx;
+    ctx.threads = options.threads;
+    ctx.time_s = record.time();
+    ctx.seed = static_cast<std::uint64_t>(derived_seed(pipeline.seed, step.name));
+    if (options.progress)
+      ctx.progress = [&, i](double f) { options.progress(i, pipeline.steps.size(), step.name, f); };
+    std::map<std::string, Signal> port_values;
+    for (const auto& [port, refs] : step.inputs) {
+      std::vector<Signal> parts;
+      for (const auto& ref : refs) parts.push_back(resolve_ref(ref, produced, inputs));
+      port_values[port] = side_by_side(parts);
+    }
+    ctx.progress(0.0);
+    try {
+      if (step.plugin.empty()) {
+        const auto& terms = port_values.at("terms");
+        produced[step.name]["signal"] = Signal::single(terms.sum(), step.name, terms.unit);
+      } else {
+        auto plugin = registry.create(step.plugin, step.params);
+        produced[step.name] = plugin->run(port_values, ctx);
+      }
+    } catch (const std::exception& e) {
+      slot["status"] = "failed";
+      slot["error"] = e.what();
+      slot["diagnostics"] = ctx.diagnostics;
+      throw;
+    }
+    ctx.progress(1.0);
+    slot["status"] = "ok";
+    slot["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    slot["diagnostics"] = ctx.diagnostics;
+  }
+  std::map<std::string, Signal> outputs;
+  for (const auto& [name, ref] : pipeline.outputs) outputs[name] = resolve_ref(ref, produced, inputs);
+  return outputs;
+}
+
+}  // namespace driftlab

@@ -1,0 +1,79 @@
+// Pipeline descriptions (`format: driftlab-pipeline/1`, DESIGN.md §4):
+//
+//   format: driftlab-pipeline/1
+//   seed: 7                                  # optional (default 1); fills every step's `seed`
+//   inputs: {rate: rate, temperature: temperature}   # name -> channel role of the record
+//   steps:                                   # `time` is always available as an input name
+//     - name: decompose
+//       plugin: decomposition/emd
+//       inputs: {signal: rate}               # port -> reference (input name or step.output)
+//       params: {max_imfs: 8}
+//     - name: reconstruct
+//       sum: [denoise.signal, compensate.residual]   # built-in: adds signals; output `signal`
+//   outputs: {compensated: reconstruct.signal}
+//
+// Ports per plugin kind are listed by ports_of_kind() (plugin.hpp); a port marked `many` takes a
+// list of references whose columns are put side by side. load_pipeline() validates everything
+// before any data is touched and reports every problem at once (file, line, key): unknown keys,
+// wrong format version, unknown plugin, unknown or invalid parameter, unknown port, missing
+// required port, dangling reference, cycle, duplicate step name, steps of a kind that cannot run
+// as a step. Steps run in dependency order (file order among independent steps).
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "framework/params.hpp"
+#include "framework/plugin.hpp"
+#include "framework/time_series.hpp"
+
+namespace driftlab {
+
+class Registry;
+
+inline constexpr const char* kPipelineFormat = "driftlab-pipeline/1";
+
+struct PipelineStep {
+  std::string name;
+  std::string plugin;  // "kind/name"; empty for the built-in sum
+  std::map<std::string, std::vector<std::string>> inputs;  // port -> references
+  ParamValues params;  // resolved, defaults and seed filled in
+  int line = 0;
+};
+
+struct Pipeline {
+  std::string file;
+  std::int64_t seed = 1;
+  std::map<std::string, std::string> inputs;   // input name -> channel role
+  std::vector<PipelineStep> steps;             // in execution order
+  std::map<std::string, std::string> outputs;  // output name -> reference
+};
+
+// Parses and validates. Throws ConfigError with every problem found.
+Pipeline load_pipeline(const std::filesystem::path& path, const Registry& registry);
+Pipeline parse_pipeline(const std::string& yaml_text, const std::string& file_label, const Registry& registry);
+
+// The effective pipeline: every parameter and seed written out. Loading it gives the same run.
+std::string effective_pipeline_yaml(const Pipeline& pipeline, const Registry& registry);
+
+struct PipelineRunOptions {
+  unsigned threads = 1;
+  // Called with (step index, step count, step name, fraction of that step done).
+  std::function<void(std::size_t, std::size_t, const std::string&, double)> progress;
+};
+
+// Runs the steps on a record. `report` is filled as steps complete (status, seconds,
+// diagnostics per step), so it is useful even when a step throws. Throws DataError when a
+// pipeline input's role is missing from the record; other errors propagate from plugins.
+std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Registry& registry,
+                                           const TimeSeries& record, const PipelineRunOptions& options,
+                                           nlohmann::json& report);
+
+}  // namespace driftlab

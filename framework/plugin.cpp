@@ -1,0 +1,109 @@
+#include "framework/plugin.hpp"
+
+#include "framework/error.hpp"
+
+namespace driftlab {
+namespace {
+
+const Signal& input(const SignalMap& inputs, const std::string& port) {
+  auto it = inputs.find(port);
+  if (it == inputs.end()) throw ConfigError({"", 0, port}, "required input is not connected");
+  return it->second;
+}
+
+}  // namespace
+
+const std::vector<std::string>& plugin_kinds() {
+  static const std::vector<std::string> kinds{"decomposition", "classifier", "regressor",
+                                              "optimizer",     "filter",     "effect"};
+  return kinds;
+}
+
+const KindPorts& ports_of_kind(const std::string& kind) {
+  static const std::map<std::string, KindPorts> ports{
+      {"decomposition", {{{"signal", true, false, "signal to decompose"}}, {"imfs", "residue"}}},
+      {"classifier",
+       {{{"imfs", true, false, "IMFs to group"}, {"residue", false, false, "added to the drift group"}},
+        {"noise", "mixed", "drift"}}},
+      {"regressor",
+       {{{"target", true, false, "signal to model"}, {"features", true, true, "explanatory signals"}},
+        {"fitted", "residual"}}},
+      {"filter", {{{"signal", true, false, "signal to filter"}}, {"signal"}}},
+      {"optimizer", {{}, {}}},
+      {"effect", {{}, {}}},
+  };
+  auto it = ports.find(kind);
+  if (it == ports.end()) throw ConfigError({"", 0, kind}, "unknown plugin kind");
+  return it->second;
+}
+
+Signal Signal::single(Eigen::VectorXd values, std::string label, std::string unit) {
+  Signal s;
+  s.columns = std::move(values);
+  s.labels = {std::move(label)};
+  s.unit = std::move(unit);
+  return s;
+}
+
+std::string to_string(ImfGroup group) {
+  switch (group) {
+    case ImfGroup::Noise: return "noise";
+    case ImfGroup::Mixed: return "mixed";
+    case ImfGroup::Drift: return "drift";
+  }
+  return "?";
+}
+
+SignalMap Decomposer::run(const SignalMap& inputs, RunContext& ctx) {
+  const auto& x = input(inputs, "signal");
+  auto d = decompose(x.sum(), ctx);
+  Signal imfs;
+  imfs.columns = std::move(d.imfs);
+  imfs.unit = x.unit;
+  for (Eigen::Index k = 0; k < imfs.columns.cols(); ++k) imfs.labels.push_back("imf" + std::to_string(k + 1));
+  ctx.diagnostics["imf_count"] = imfs.columns.cols();
+  return {{"imfs", std::move(imfs)}, {"residue", Signal::single(std::move(d.residue), "residue", x.unit)}};
+}
+
+SignalMap Classifier::run(const SignalMap& inputs, RunContext& ctx) {
+  const auto& imfs = input(inputs, "imfs");
+  const auto c = classify(imfs.columns, ctx);
+  const Eigen::Index n = imfs.columns.rows();
+  Eigen::VectorXd noise = Eigen::VectorXd::Zero(n), mixed = noise, drift = noise;
+  auto& log = ctx.diagnostics["imfs"] = nlohmann::json::array();
+  for (std::size_t k = 0; k < c.groups.size(); ++k) {
+    const auto col = imfs.columns.col(static_cast<Eigen::Index>(k));
+    (c.groups[k] == ImfGroup::Noise ? noise : c.groups[k] == ImfGroup::Mixed ? mixed : drift) += col;
+    log.push_back({{"imf", k + 1},
+                   {"group", to_string(c.groups[k])},
+                   {"score", k < c.scores.size() ? c.scores[k] : 0.0},
+                   {"reason", k < c.reasons.size() ? c.reasons[k] : ""}});
+  }
+  if (auto it = inputs.find("residue"); it != inputs.end()) drift += it->second.sum();
+  return {{"noise", Signal::single(std::move(noise), "noise", imfs.unit)},
+          {"mixed", Signal::single(std::move(mixed), "mixed", imfs.unit)},
+          {"drift", Signal::single(std::move(drift), "drift", imfs.unit)}};
+}
+
+SignalMap Regressor::run(const SignalMap& inputs, RunContext& ctx) {
+  const auto& target = input(inputs, "target");
+  const Eigen::VectorXd y = target.sum();
+  const auto& X = input(inputs, "features").columns;
+  fit(X, y, ctx);
+  Eigen::VectorXd fitted = predict(X);
+  Eigen::VectorXd residual = y - fitted;
+  ctx.diagnostics["rms_residual"] = std::sqrt(residual.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, y.size())));
+  return {{"fitted", Signal::single(std::move(fitted), "fitted", target.unit)},
+          {"residual", Signal::single(std::move(residual), "residual", target.unit)}};
+}
+
+SignalMap Optimizer::run(const SignalMap&, RunContext&) {
+  throw ConfigError({"", 0, "plugin"}, "optimizer plugins run nested inside another plugin, not as steps");
+}
+
+SignalMap Filter::run(const SignalMap& inputs, RunContext& ctx) {
+  const auto& x = input(inputs, "signal");
+  return {{"signal", Signal::single(filter(x.sum(), ctx), "signal", x.unit)}};
+}
+
+}  // namespace driftlab

@@ -1,0 +1,40 @@
+#include "framework/time_series.hpp"
+
+#include "framework/error.hpp"
+
+namespace driftlab {
+
+double TimeSeries::sample_rate_hz() const {
+  if (time_.size() < 2) return 0.0;
+  return static_cast<double>(time_.size() - 1) / (time_[time_.size() - 1] - time_[0]);
+}
+
+void TimeSeries::set_channel(Channel channel) {
+  if (channel.values.size() != time_.size())
+    throw DataError({channel.source, 0, channel.role},
+                    "channel has " + std::to_string(channel.values.size()) + " samples, time has " +
+                        std::to_string(time_.size()));
+  for (auto& c : channels_)
+    if (c.role == channel.role) {
+      c = std::move(channel);
+      return;
+    }
+  channels_.push_back(std::move(channel));
+}
+
+bool TimeSeries::has(const std::string& role) const {
+  for (const auto& c : channels_)
+    if (c.role == role) return true;
+  return false;
+}
+
+const Channel& TimeSeries::channel(const std::string& role) const {
+  for (const auto& c : channels_)
+    if (c.role == role) return c;
+  std::string roles;
+  for (const auto& c : channels_) roles += (roles.empty() ? "" : ", ") + c.role;
+  throw DataError({"", 0, role}, "no channel with this role (the record has: " +
+                                     (roles.empty() ? std::string("none") : roles) + ")");
+}
+
+}  // namespace driftlab

@@ -1,0 +1,48 @@
+// A record: one time vector plus named channels, each with a role and an internal (SI) unit.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace driftlab {
+
+// Well-known channel roles. Any other string is allowed too (it is the column's name stem).
+namespace role {
+inline constexpr const char* kRate = "rate";                // angular rate, rad/s
+inline constexpr const char* kTemperature = "temperature";  // case / sensor temperature, degC
+inline constexpr const char* kTrueRate = "true_rate";       // reference input rate, rad/s
+inline constexpr const char* kDieTemperature = "die_temperature";  // degC
+inline constexpr const char* kDriveFrequency = "drive_frequency";  // Hz
+}  // namespace role
+
+struct Channel {
+  std::string role;      // "rate", "temperature", ...
+  std::string unit;      // internal unit symbol ("rad/s", "degC", "Hz", "s", "1")
+  std::string source;    // where it came from (CSV column name), for messages
+  Eigen::VectorXd values;
+};
+
+class TimeSeries {
+ public:
+  TimeSeries() = default;
+  explicit TimeSeries(Eigen::VectorXd time_s) : time_(std::move(time_s)) {}
+
+  const Eigen::VectorXd& time() const { return time_; }
+  Eigen::Index size() const { return time_.size(); }
+  // Mean sample rate in Hz from the first and last time stamps (0 when fewer than two samples).
+  double sample_rate_hz() const;
+
+  // Adds or replaces the channel with this role. Throws DataError when the length differs.
+  void set_channel(Channel channel);
+  bool has(const std::string& role) const;
+  // Throws DataError naming the role and the roles that exist.
+  const Channel& channel(const std::string& role) const;
+  const std::vector<Channel>& channels() const { return channels_; }
+
+ private:
+  Eigen::VectorXd time_;
+  std::vector<Channel> channels_;
+};
+
+}  // namespace driftlab

@@ -1,0 +1,39 @@
+// Units at the I/O boundary. Inside the library everything is SI: angular rate in rad/s, time in
+// s, frequency in Hz, temperature differences in K and absolute temperature in degC.
+// A unit converts to its quantity's internal unit by  internal = value * scale + offset.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace driftlab {
+
+enum class Quantity { AngularRate, Temperature, Time, Frequency, Dimensionless };
+
+struct Unit {
+  std::string symbol;   // canonical spelling, e.g. "deg/s"
+  Quantity quantity;
+  double scale;         // internal = value * scale + offset
+  double offset;
+};
+
+// Looks a unit up by any accepted spelling ("deg/s", "dps", "°/s", "rad/s", "deg/h", "degC",
+// "C", "°C", "K", "s", "ms", "us", "h", "Hz", "kHz", "1"). Empty optional when unknown.
+std::optional<Unit> find_unit(std::string_view spelling);
+
+// Every accepted spelling, for error messages.
+std::vector<std::string> known_unit_spellings();
+
+// Internal unit symbol of a quantity ("rad/s", "degC", "s", "Hz", "1").
+std::string internal_unit_symbol(Quantity q);
+
+inline double to_internal(double value, const Unit& u) { return value * u.scale + u.offset; }
+inline double from_internal(double value, const Unit& u) { return (value - u.offset) / u.scale; }
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegPerRad = 180.0 / kPi;
+constexpr double kRadPerDeg = kPi / 180.0;
+
+}  // namespace driftlab

@@ -1,0 +1,27 @@
+// The benchmark records written by ../shared/bench/gen_signals.py (static gyro at 100 Hz, one
+// thermal cycle per record), read from $DRIFTLAB_BENCH_SIGNALS:
+//   gyro_N{1000,10000,100000,1000000}.csv  (t_s, rate_dps, temp_c)
+//   gyro_N10000000.f64                     (raw little-endian float64 rate_dps only)
+// Loaded once per process and cached; file parsing is never inside a timed region.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <string>
+
+namespace driftlab::bench {
+
+struct BenchSignal {
+  Eigen::VectorXd time_s;
+  Eigen::VectorXd rate_rad_s;
+  Eigen::VectorXd temp_c;  // empty for the 1e7 binary record
+  double sample_rate_hz = 100.0;
+};
+
+// Throws std::runtime_error naming the missing file and how to generate it.
+const BenchSignal& bench_signal(std::size_t n);
+
+// The directory in $DRIFTLAB_BENCH_SIGNALS, or empty.
+std::string bench_signal_dir();
+
+}  // namespace driftlab::bench

@@ -1,0 +1,55 @@
+// Shared pieces of the `driftlab` command line: global options, the registry, record loading with
+// --data/--column/--fs/--max-gap, output-path checks and progress on stderr.
+// Each subcommand lives in cmd_<name>.cpp and exposes add_<name>_command(app, env).
+// Errors are thrown (ConfigError -> exit 2, DataError -> exit 3, others -> exit 1); main() maps them.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "framework/registry.hpp"
+#include "framework/time_series.hpp"
+
+namespace driftlab::cli {
+
+inline constexpr int kExitOk = 0, kExitFailure = 1, kExitUsage = 2, kExitData = 3;
+
+struct CommandEnv {
+  std::vector<std::string> plugin_dirs;  // --plugin-path (repeatable), after $DRIFTLAB_PLUGIN_PATH
+  bool quiet = false;                    // --quiet: no progress output
+  unsigned threads = 1;                  // --threads
+
+  // Built-ins plus external plugins, loaded on first use.
+  const Registry& registry();
+  // True when progress should be drawn (stderr is a terminal and not --quiet).
+  bool show_progress() const;
+  // Draws "label  NN%" on stderr (overwriting the line) when show_progress(); fraction in [0, 1].
+  void progress(const std::string& label, double fraction) const;
+
+ private:
+  std::unique_ptr<Registry> registry_;
+};
+
+struct DataOptions {
+  std::string path;
+  std::vector<std::string> columns;  // --column mappings (see csv.hpp)
+  double sample_rate_hz = 0.0;       // --fs
+  double max_gap_factor = 3.0;       // --max-gap
+};
+
+// Adds --data, --column, --fs and --max-gap to a subcommand.
+void add_data_options(CLI::App* command, DataOptions& data, const std::string& column_help);
+// Reads the record; `required_roles` must be present (the first --column's role replaces "rate").
+TimeSeries load_record(const DataOptions& data, std::vector<std::string> required_roles = {"rate"});
+// Role analysed by single-signal commands: the first --column's role, else "rate".
+std::string primary_role(const DataOptions& data);
+// Unit a channel is written back in: the unit it was read in when known ("deg/s" for rates).
+std::string display_unit(const TimeSeries& record, const std::string& role, const DataOptions& data);
+
+// Throws ConfigError when `output` would overwrite one of the inputs.
+void check_output(const std::string& output, const std::vector<std::string>& inputs);
+
+}  // namespace driftlab::cli

@@ -1,0 +1,109 @@
+#include <chrono>
+#include <iostream>
+#include <memory>
+
+#include "framework/atomic_file.hpp"
+#include "framework/csv.hpp"
+#include "framework/error.hpp"
+#include "framework/pipeline.hpp"
+#include "tools/driftlab/cli.hpp"
+#include "tools/driftlab/version.hpp"
+
+namespace driftlab::cli {
+namespace {
+
+// Output unit and column suffix for an internal unit.
+std::pair<std::string, std::string> written_as(const std::string& internal_unit) {
+  if (internal_unit == "rad/s") return {"deg/s", "_dps"};
+  if (internal_unit == "degC") return {"degC", "_c"};
+  if (internal_unit == "Hz") return {"Hz", "_hz"};
+  if (internal_unit == "s") return {"s", "_s"};
+  return {"1", ""};
+}
+
+struct RunOptions {
+  std::string pipeline;
+  DataOptions data;
+  std::string out;
+  bool validate_only = false;
+};
+
+void run(const RunOptions& o, CommandEnv& env) {
+  const auto& registry = env.registry();
+  const auto pipeline = load_pipeline(o.pipeline, registry);
+  if (o.validate_only) {
+    std::cout << o.pipeline << ": valid (" << pipeline.steps.size() << " steps)\n";
+    return;
+  }
+  std::vector<std::string> roles;
+  for (const auto& [name, role] : pipeline.inputs)
+    if (role != "time") roles.push_back(role);
+  const auto record = load_record(o.data, roles);
+
+  std::error_code ec;
+  std::filesystem::create_directories(o.out, ec);
+  if (!std::filesystem::is_directory(o.out))
+    throw ConfigError({o.out, 0, "--out"}, "cannot create the output directory");
+  const auto out_dir = std::filesystem::path(o.out);
+  const auto outputs_csv = out_dir / "outputs.csv", effective = out_dir / "pipeline.effective.yaml",
+             report_json = out_dir / "report.json";
+  for (const auto& f : {outputs_csv, effective, report_json}) check_output(f.string(), {o.data.path, o.pipeline});
+
+  nlohmann::json report{{"format", "driftlab-run-report/1"},
+                        {"driftlab_version", kVersion},
+                        {"pipeline", o.pipeline},
+                        {"data", o.data.path},
+                        {"samples", record.size()},
+                        {"seed", pipeline.seed},
+                        {"threads", env.threads}};
+  PipelineRunOptions options;
+  options.threads = env.threads;
+  options.progress = [&env](std::size_t i, std::size_t n, const std::string& name, double f) {
+    env.progress("[" + std::to_string(i + 1) + "/" + std::to_string(n) + "] " + name, f);
+  };
+  const auto start = std::chrono::steady_clock::now();
+  std::map<std::string, Signal> outputs;
+  try {
+    outputs = run_pipeline(pipeline, registry, record, options, report);
+  } catch (...) {
+    report["status"] = "failed";
+    write_file_atomically(report_json, report.dump(2) + "\n");
+    throw;
+  }
+  report["status"] = "ok";
+  report["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  std::vector<CsvColumn> columns{{"t_s", record.time(), "s"}};
+  report["outputs"] = nlohmann::json::array();
+  for (const auto& [name, signal] : outputs) {
+    const auto [unit, suffix] = written_as(signal.unit);
+    for (Eigen::Index c = 0; c < signal.columns.cols(); ++c) {
+      const auto column = signal.columns.cols() == 1 ? name + suffix : name + "_" + signal.labels[c] + suffix;
+      columns.push_back({column, signal.columns.col(c), unit});
+      report["outputs"].push_back({{"column", column}, {"unit", unit}});
+    }
+  }
+  write_csv(outputs_csv, columns);
+  write_file_atomically(effective, effective_pipeline_yaml(pipeline, registry));
+  write_file_atomically(report_json, report.dump(2) + "\n");
+  if (!env.quiet)
+    std::cerr << "wrote " << outputs_csv.string() << ", " << effective.string() << ", " << report_json.string() << "\n";
+}
+
+}  // namespace
+
+void add_run_command(CLI::App& app, CommandEnv& env) {
+  auto opts = std::make_shared<RunOptions>();
+  auto* cmd = app.add_subcommand("run", "run a pipeline on a record; writes outputs.csv, pipeline.effective.yaml "
+                                        "and report.json into --out");
+  cmd->add_option("--pipeline", opts->pipeline, "pipeline description (YAML, driftlab-pipeline/1)")->required();
+  add_data_options(cmd, opts->data, "column mapping role=column:unit (e.g. rate=gyro_z:rad/s); repeatable");
+  cmd->add_option("--out", opts->out, "output directory (created if missing)");
+  cmd->add_flag("--validate-only", opts->validate_only, "check the pipeline and stop before reading data");
+  cmd->callback([opts, &env] {
+    if (!opts->validate_only && opts->out.empty()) throw ConfigError({"", 0, "--out"}, "--out is required");
+    run(*opts, env);
+  });
+}
+
+}  // namespace driftlab::cli
