@@ -8,7 +8,7 @@ packages=(
   libeigen3-dev libboost-dev libboost-filesystem-dev
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3-numpy
+  zlib1g-dev python3-numpy
 )
 if [[ "${DRIFTLAB_WITH_MRPT:-OFF}" == "ON" ]]; then
   packages+=(libmrpt-dev)

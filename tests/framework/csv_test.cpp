@@ -1,0 +1,142 @@
+#include "framework/csv.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "framework/error.hpp"
+#include "framework/units.hpp"
+
+namespace driftlab {
+namespace {
+
+const std::filesystem::path kCsvDir = std::filesystem::path(DRIFTLAB_TEST_DATA) / "csv";
+constexpr double kUnitConversionTolerance = 1e-12;  // a couple of double roundings
+
+TEST(CsvReader, ReadsDefaultColumnsAndConvertsToInternalUnits) {
+  const auto record = read_csv(kCsvDir / "good.csv");
+  ASSERT_EQ(record.size(), 50);
+  EXPECT_DOUBLE_EQ(record.time()[1], 0.1);
+  EXPECT_EQ(record.channel("rate").unit, "rad/s");
+  EXPECT_NEAR(record.channel("rate").values[7], 0.01 * std::sin(1.0) * kRadPerDeg, 1e-6 * kRadPerDeg);
+  EXPECT_EQ(record.channel("temperature").unit, "degC");
+  EXPECT_NEAR(record.channel("temperature").values[10], 25.01, kUnitConversionTolerance);
+  EXPECT_NEAR(record.sample_rate_hz(), 10.0, 1e-9);
+}
+
+TEST(CsvReader, ReadsOtherFilesThroughExplicitMappings) {
+  CsvReadOptions options;
+  options.columns = {parse_column_mapping("time=timestamp_ms:ms"), parse_column_mapping("rate=gyro_z:rad/s"),
+                     parse_column_mapping("temperature=board_temp_k:K")};
+  const auto record = read_csv(kCsvDir / "gyro_z_rad_s.csv", options);
+  EXPECT_NEAR(record.time()[3], 0.03, kUnitConversionTolerance);
+  EXPECT_NEAR(record.channel("rate").values[4], 0.004, kUnitConversionTolerance);
+  EXPECT_NEAR(record.channel("temperature").values[0], 25.0, kUnitConversionTolerance);
+}
+
+TEST(CsvReader, SynthesizesTimeFromTheSampleRateWhenThereIsNoTimeColumn) {
+  CsvReadOptions options;
+  options.columns = {parse_column_mapping("rate=gyro_z:deg/h")};
+  options.sample_rate_hz = 50.0;
+  const auto record = read_csv(kCsvDir / "gyro_z_rad_s.csv", options);
+  EXPECT_DOUBLE_EQ(record.time()[5], 0.1);
+  EXPECT_NEAR(record.channel("rate").values[3], 0.003 * kRadPerDeg / 3600.0, kUnitConversionTolerance);
+}
+
+TEST(ColumnMapping, AcceptsTheThreeSpellingsAndRejectsUnknownUnits) {
+  EXPECT_EQ(parse_column_mapping("rate=gyro_z:rad/s").role, "rate");
+  EXPECT_EQ(parse_column_mapping("gyro_x:deg/s").role, "gyro_x");
+  const auto suffixed = parse_column_mapping("true_rate_dps");
+  EXPECT_EQ(suffixed.role, "true_rate");
+  EXPECT_EQ(suffixed.unit, "deg/s");
+  try {
+    parse_column_mapping("rate=gyro_z:furlongs/fortnight");
+    FAIL() << "an unknown unit must be rejected";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown unit 'furlongs/fortnight'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("rad/s"), std::string::npos) << "lists the known units";
+  }
+}
+
+struct BadCsv {
+  const char* file;
+  int line;
+  const char* column;
+  const char* message;
+};
+
+class CsvReaderRejects : public testing::TestWithParam<BadCsv> {};
+
+TEST_P(CsvReaderRejects, NamingFileLineAndColumn) {
+  const auto& bad = GetParam();
+  const auto path = kCsvDir / bad.file;
+  try {
+    read_csv(path);
+    FAIL() << bad.file << " must be rejected";
+  } catch (const DataError& e) {
+    EXPECT_EQ(e.where().file, path.string());
+    EXPECT_EQ(e.where().line, bad.line) << e.what();
+    EXPECT_EQ(e.where().field, bad.column) << e.what();
+    EXPECT_NE(std::string(e.what()).find(bad.message), std::string::npos) << e.what();
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Fixtures, CsvReaderRejects,
+    testing::Values(BadCsv{"empty.csv", 0, "", "file is empty"},
+                    BadCsv{"no_header.csv", 1, "", "missing header row"},
+                    BadCsv{"missing_rate_column.csv", 1, "rate", "no column for the 'rate' channel"},
+                    BadCsv{"non_numeric.csv", 8, "rate_dps", "expected a number, got 'abc'"},
+                    BadCsv{"nan_line_1234.csv", 1234, "rate_dps", "NaN/Inf not allowed"},
+                    BadCsv{"inf_temperature.csv", 11, "temp_c", "NaN/Inf not allowed"},
+                    BadCsv{"decreasing_time.csv", 7, "t_s", "time stamps must increase"},
+                    BadCsv{"duplicated_time.csv", 10, "t_s", "duplicated time stamp (same as line 9)"},
+                    BadCsv{"gap.csv", 12, "t_s", "gap of"},
+                    BadCsv{"ragged_row.csv", 5, "", "row has 4 cells, the header has 3"},
+                    BadCsv{"empty_cell.csv", 13, "rate_dps", "empty cell"},
+                    BadCsv{"does_not_exist.csv", 0, "", "does not exist"}),
+    [](const auto& info) {
+      std::string name = info.param.file;
+      return name.substr(0, name.find('.'));
+    });
+
+TEST(CsvReader, AcceptsGapsWhenTheToleranceIsDisabled) {
+  CsvReadOptions options;
+  options.max_gap_factor = 0.0;
+  EXPECT_EQ(read_csv(kCsvDir / "gap.csv", options).size(), 20);
+}
+
+TEST(CsvReader, RejectsAMappedColumnThatIsMissing) {
+  CsvReadOptions options;
+  options.columns = {parse_column_mapping("rate=gyro_q:rad/s")};
+  try {
+    read_csv(kCsvDir / "gyro_z_rad_s.csv", options);
+    FAIL();
+  } catch (const DataError& e) {
+    EXPECT_EQ(e.where().line, 1);
+    EXPECT_NE(std::string(e.what()).find("timestamp_ms"), std::string::npos) << "lists the header: " << e.what();
+  }
+}
+
+TEST(CsvWriter, WritesAtomicallyAndRoundTripsExactly) {
+  const auto dir = std::filesystem::temp_directory_path() / "driftlab_csv_writer_test";
+  std::filesystem::create_directories(dir);
+  const auto path = dir / "out.csv";
+  Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(100, 0.0, 9.9);
+  Eigen::VectorXd rate = (t.array() * 1.2345678901234567).sin() * 0.01;
+  write_csv(path, {{"t_s", t, "s"}, {"rate_rps", rate, "rad/s"}});
+  const auto back = read_csv(path);
+  EXPECT_EQ(back.channel("rate").values, rate) << "shortest round-trip formatting is exact";
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    EXPECT_EQ(entry.path().filename(), "out.csv") << "no temporary file left behind";
+  std::filesystem::remove_all(dir);
+}
+
+TEST(CsvWriter, FailsClearlyWhenTheDirectoryIsMissing) {
+  EXPECT_THROW(write_csv("/nonexistent-dir/out.csv", {{"t_s", Eigen::VectorXd::Zero(2), "s"}}), DataError);
+}
+
+}  // namespace
+}  // namespace driftlab

@@ -1,0 +1,50 @@
+// Runs the real `driftlab` executable for end-to-end tests and captures exit code and output.
+#pragma once
+
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace driftlab::testing_cli {
+
+struct CliResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+inline std::string read_text(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A fresh, empty scratch directory for one test.
+inline std::filesystem::path scratch_dir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / ("driftlab_cli_" + name);
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+// `args` is appended to the executable path as shell words (quote paths with spaces yourself).
+inline CliResult run_driftlab(const std::string& args, const std::string& env = "") {
+  const auto dir = scratch_dir("capture_" + std::to_string(std::rand()));
+  const auto out = dir / "stdout", err = dir / "stderr";
+  const std::string command = env + (env.empty() ? "" : " ") + std::string(DRIFTLAB_EXE) + " " + args + " >" +
+                              out.string() + " 2>" + err.string() + " </dev/null";
+  const int status = std::system(command.c_str());
+  CliResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = read_text(out);
+  r.err = read_text(err);
+  std::filesystem::remove_all(dir);
+  return r;
+}
+
+}  // namespace driftlab::testing_cli
