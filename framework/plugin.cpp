@@ -101,6 +101,10 @@ SignalMap Optimizer::run(const SignalMap&, RunContext&) {
   throw ConfigError({"", 0, "plugin"}, "optimizer plugins run nested inside another plugin, not as steps");
 }
 
+SignalMap Effect::run(const SignalMap&, RunContext&) {
+  throw ConfigError({"", 0, "plugin"}, "effect plugins run inside `driftlab discrepancy`, not as pipeline steps");
+}
+
 SignalMap Filter::run(const SignalMap& inputs, RunContext& ctx) {
   const auto& x = input(inputs, "signal");
   return {{"signal", Signal::single(filter(x.sum(), ctx), "signal", x.unit)}};

@@ -7,7 +7,7 @@
 //   regressor      Regressor::fit(X, y); predict(X)    (predict before fit throws NotFittedError)
 //   optimizer      Optimizer::minimize(objective, bounds)
 //   filter         Filter::filter(z)                    (batch; kernels offer streaming step())
-//   effect         Effect (discrepancy workflow; see models/discrepancy)
+//   effect         Effect::evaluate(record, theta)     -> basis columns (+ moved model temperature)
 //
 // Every plugin can also run as a pipeline step: run() maps named input signals to named output
 // signals. The kind base classes implement run() from the kind's methods, so adapters only
@@ -22,6 +22,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
+
+#include "framework/time_series.hpp"
 
 namespace driftlab {
 
@@ -138,6 +140,65 @@ class Filter : public Plugin {
  public:
   virtual Eigen::VectorXd filter(const Eigen::VectorXd& z, RunContext& ctx) = 0;
   SignalMap run(const SignalMap& inputs, RunContext& ctx) final;
+};
+
+// ---- effect ---------------------------------------------------------------------------------
+// A candidate physical term for the discrepancy workflow (models/discrepancy/discrepancy.hpp). For
+// nonlinear parameters theta (time constants, widths, periods; searched by the workflow) an effect
+// contributes
+//
+//   rate += sum_j c_j basis_j(record; theta)          (c fitted jointly with the model by least squares)
+//
+// and may move the temperature that the model's bias(T) and scale factor follow (a thermal lag:
+// the model is then evaluated at model_temperature_c instead of the sensor's temperature).
+struct EffectParameter {
+  std::string name;  // e.g. "tau_s"
+  std::string unit;  // e.g. "s"
+  double lower = 0.0, upper = 0.0;  // search interval, 0 < lower < upper
+  // Log: grid uniform in log(value). Period: grid uniform in 1/value, clamped by the workflow to
+  // the periods the (block-averaged) record resolves.
+  enum class Scale { Log, Period } scale = Scale::Log;
+};
+
+struct EffectContext {
+  double reference_temp_c = 25.0;  // T0 of the device model, degC
+  double start_time_s = 0.0;       // first time stamp of the record (power-on for warm-up terms)
+  // Drive-mode frequency f(T) ~ f_ref + slope (T - T0) from the device file; slope 0 = unknown.
+  double drive_frequency_at_reference_hz = 0.0;
+  double drive_frequency_slope_hz_per_k = 0.0;
+};
+
+struct EffectTerm {
+  Eigen::MatrixXd basis;                // samples x coefficients, rad/s per unit coefficient
+  Eigen::VectorXd model_temperature_c;  // empty, or the temperature the model's bias(T) follows
+};
+
+// One reported parameter, in the unit a device file's `effects:` section uses for it.
+struct EffectValue {
+  std::string key;             // e.g. "tau_s", "coefficients_ppm"
+  std::string unit;            // e.g. "s"
+  std::vector<double> values;  // one value, or several for a list key
+};
+
+class Effect : public Plugin {
+ public:
+  // Channel roles it reads besides time (role::kTemperature, role::kTrueRate, ...). The workflow
+  // leaves an effect out when the record lacks one of them.
+  virtual std::vector<std::string> required_roles() const = 0;
+  virtual std::vector<EffectParameter> nonlinear_parameters() const = 0;
+  // One name per basis column (its linear coefficient), e.g. {"height_rad_s"}; may be empty.
+  virtual std::vector<std::string> coefficient_names() const = 0;
+  // True when evaluate() sets model_temperature_c (at most one such effect is in a model).
+  virtual bool moves_model_temperature() const { return false; }
+  // theta has one value per nonlinear_parameters(). Pure function of its arguments. Throws
+  // DataError when a required channel is missing.
+  virtual EffectTerm evaluate(const TimeSeries& record, const EffectContext& context,
+                              const Eigen::VectorXd& theta) const = 0;
+  // The fitted term as reported (device-file keys and units where the simulator has the effect).
+  virtual std::vector<EffectValue> describe(const TimeSeries& record, const EffectContext& context,
+                                            const Eigen::VectorXd& theta,
+                                            const Eigen::VectorXd& coefficients) const = 0;
+  SignalMap run(const SignalMap& inputs, RunContext& ctx) final;  // throws: effects run in the workflow
 };
 
 }  // namespace driftlab

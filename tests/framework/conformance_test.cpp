@@ -39,7 +39,7 @@ TEST_P(EveryBuiltinPlugin, RejectsAGeneratedInvalidValueForEveryConstraintNaming
   for (const auto& spec : info.params.params) {
     for (const auto& bad : invalid_examples(spec)) {
       EXPECT_FALSE(spec.check(bad.value).empty()) << spec.key << " accepted " << format_value(bad.value);
-      if (spec.type == ParamType::Plugin) continue;
+      if (spec.type == driftlab::ParamType::Plugin) continue;
       const std::string assignment = spec.key + "=" + format_value(bad.value);
       try {
         params_from_assignments(registry(), GetParam(), {assignment});
@@ -59,7 +59,7 @@ TEST_P(EveryBuiltinPlugin, DescribesItselfCompletely) {
   EXPECT_FALSE(info.reference.empty()) << "built-ins name the paper or standard they implement";
   for (const auto& spec : info.params.params) {
     EXPECT_FALSE(spec.doc.empty()) << spec.key;
-    EXPECT_TRUE(spec.type == ParamType::Plugin || !spec.unit.empty()) << spec.key << " states a unit ('1' if none)";
+    EXPECT_TRUE(spec.type == driftlab::ParamType::Plugin || !spec.unit.empty()) << spec.key << " states a unit ('1' if none)";
     EXPECT_THAT(spec.key, ::testing::MatchesRegex("[a-z][a-z0-9_]*")) << "snake_case keys";
     EXPECT_TRUE(spec.check(spec.default_value).empty()) << spec.key << ": default violates its own constraint";
   }

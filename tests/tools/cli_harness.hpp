@@ -2,6 +2,7 @@
 #pragma once
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -26,7 +27,7 @@ inline std::string read_text(const std::filesystem::path& p) {
 
 // A fresh, empty scratch directory for one test.
 inline std::filesystem::path scratch_dir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("driftlab_cli_" + name);
+  const auto dir = std::filesystem::temp_directory_path() / ("driftlab_cli_" + std::to_string(::getpid()) + "_" + name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
@@ -34,7 +35,8 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
 
 // `args` is appended to the executable path as shell words (quote paths with spaces yourself).
 inline CliResult run_driftlab(const std::string& args, const std::string& env = "") {
-  const auto dir = scratch_dir("capture_" + std::to_string(std::rand()));
+  static int calls = 0;  // ctest runs test processes in parallel: name captures by pid and call
+  const auto dir = scratch_dir("capture_" + std::to_string(::getpid()) + "_" + std::to_string(++calls));
   const auto out = dir / "stdout", err = dir / "stderr";
   const std::string command = env + (env.empty() ? "" : " ") + std::string(DRIFTLAB_EXE) + " " + args + " >" +
                               out.string() + " 2>" + err.string() + " </dev/null";

@@ -8,6 +8,12 @@
 namespace driftlab::cli {
 void add_plugins_command(CLI::App& app, CommandEnv& env);
 void add_run_command(CLI::App& app, CommandEnv& env);
+void add_devices_command(CLI::App& app, CommandEnv& env);
+void add_simulate_command(CLI::App& app, CommandEnv& env);
+void add_entropy_command(CLI::App& app, CommandEnv& env);
+void add_allan_command(CLI::App& app, CommandEnv& env);
+void add_decompose_command(CLI::App& app, CommandEnv& env);
+void add_discrepancy_command(CLI::App& app, CommandEnv& env);
 }  // namespace driftlab::cli
 
 int main(int argc, char** argv) {
@@ -26,6 +32,12 @@ int main(int argc, char** argv) {
 
   add_plugins_command(app, env);
   add_run_command(app, env);
+  add_devices_command(app, env);
+  add_simulate_command(app, env);
+  add_entropy_command(app, env);
+  add_allan_command(app, env);
+  add_decompose_command(app, env);
+  add_discrepancy_command(app, env);
 
   try {
     app.parse(argc, argv);

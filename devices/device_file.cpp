@@ -1,0 +1,465 @@
+#include "devices/device_file.hpp"
+
+#include <algorithm>
+#include <map>
+#include <sstream>
+
+#include "devices/yaml_fields.hpp"
+#include "framework/units.hpp"
+
+namespace driftlab::devices {
+namespace {
+
+constexpr double kRadPerSecPerDph = kRadPerDeg / 3600.0;
+constexpr double kPpm = 1e-6;
+
+const std::vector<std::string> kRoles{"rate", "temperature", "drive_frequency"};
+
+Quantity quantity_of_role(const std::string& role) {
+  if (role == "rate") return Quantity::AngularRate;
+  if (role == "temperature") return Quantity::Temperature;
+  return Quantity::Frequency;
+}
+
+std::string quantity_name(Quantity q) {
+  switch (q) {
+    case Quantity::AngularRate: return "an angular-rate unit (deg/s, rad/s, deg/h)";
+    case Quantity::Temperature: return "a temperature unit (degC, K)";
+    case Quantity::Frequency: return "a frequency unit (Hz, kHz)";
+    default: return "a unit";
+  }
+}
+
+class DeviceReader {
+ public:
+  DeviceReader(const std::string& file, std::vector<Diagnostic>& problems) : y_(file, problems), problems_(problems) {}
+
+  DeviceDefinition read(const YAML::Node& root) {
+    DeviceDefinition d;
+    d.source = y_.file();
+    if (!y_.map(root, "", {"format", "identity", "reference_temp_c", "structure", "modes", "electronics",
+                           "thermal", "channels", "error_model", "effects"}))
+      return d;
+    if (auto format = y_.text(root, "", "format", true); format && *format != kDeviceFormat)
+      y_.problem(y_.child(root, "", "format", false), "format",
+                 "unsupported format '" + *format + "'; expected " + kDeviceFormat);
+    read_identity(y_.child(root, "", "identity", true), d);
+    d.physics.reference_temp_c = y_.number_or(root, "", "reference_temp_c", 25.0, Bounds::between(-273.15, 500.0));
+    d.error_model.reference_temp_c = d.physics.reference_temp_c;
+    read_structure(y_.child(root, "", "structure", true), d.physics.structure);
+    read_modes(y_.child(root, "", "modes", true), d.physics);
+    read_electronics(y_.child(root, "", "electronics", true), d.physics.electronics);
+    read_thermal(y_.child(root, "", "thermal", false), d.thermal);
+    read_channels(y_.child(root, "", "channels", true), d.channels);
+    read_error_model(y_.child(root, "", "error_model", false), d.error_model);
+    if (const auto effects = y_.child(root, "", "effects", false); effects.IsDefined() && !effects.IsNull())
+      parse_effects(effects, y_.file(), "effects", d.error_model.effects, problems_);
+    if (problems_.empty()) check_consistency(root, d);
+    return d;
+  }
+
+ private:
+  void read_identity(const YAML::Node& node, DeviceDefinition& d) {
+    if (!node.IsDefined() || !y_.map(node, "identity", {"name", "title", "manufacturer", "reference", "notes"}))
+      return;
+    d.name = y_.text(node, "identity", "name", true).value_or("");
+    d.title = y_.text(node, "identity", "title", false).value_or(d.name);
+    d.manufacturer = y_.text(node, "identity", "manufacturer", false).value_or("");
+    d.reference = y_.text(node, "identity", "reference", false).value_or("");
+    d.notes = y_.text(node, "identity", "notes", false).value_or("");
+  }
+
+  void read_structure(const YAML::Node& node, Structure& s) {
+    const std::string p = "structure";
+    if (!node.IsDefined() ||
+        !y_.map(node, p, {"material", "youngs_modulus_gpa", "youngs_modulus_tc_ppm_per_k", "poisson_ratio",
+                          "density_kg_m3", "length_um", "width_um", "thickness_um", "proof_mass_area_fraction",
+                          "suspension"}))
+      return;
+    y_.text(node, p, "material", false);
+    s.youngs_modulus_pa = y_.number(node, p, "youngs_modulus_gpa", true, Bounds::positive()).value_or(1.0) * 1e9;
+    s.youngs_modulus_tc_per_k = y_.number_or(node, p, "youngs_modulus_tc_ppm_per_k", -60.0) * kPpm;
+    s.poisson_ratio = y_.number(node, p, "poisson_ratio", true, Bounds::between(0.0, 0.5)).value_or(0.0);
+    s.density_kg_m3 = y_.number(node, p, "density_kg_m3", true, Bounds::positive()).value_or(1.0);
+    s.length_m = y_.number(node, p, "length_um", true, Bounds::positive()).value_or(1.0) * 1e-6;
+    s.width_m = y_.number(node, p, "width_um", true, Bounds::positive()).value_or(1.0) * 1e-6;
+    s.thickness_m = y_.number(node, p, "thickness_um", true, Bounds::positive()).value_or(1.0) * 1e-6;
+    s.proof_mass_area_fraction =
+        y_.number(node, p, "proof_mass_area_fraction", true, {0.0, 1.0, true}).value_or(0.5);
+    const YAML::Node suspension = y_.child(node, p, "suspension", false);
+    if (suspension.IsDefined() && y_.map(suspension, p + ".suspension", {"beams_per_mode", "beam_width_um"})) {
+      const std::string sp = p + ".suspension";
+      if (auto beams = y_.number(suspension, sp, "beams_per_mode", false, Bounds::between(1, 1024))) {
+        if (*beams != static_cast<int>(*beams))
+          y_.problem(y_.child(suspension, sp, "beams_per_mode", false), sp + ".beams_per_mode",
+                     "expected a whole number of beams");
+        s.beams_per_mode = static_cast<int>(*beams);
+      }
+      s.beam_width_m = y_.number_or(suspension, sp, "beam_width_um", s.beam_width_m * 1e6, Bounds::positive()) * 1e-6;
+    }
+  }
+
+  void read_mode(const YAML::Node& node, const std::string& p, double tce, Mode& m) {
+    if (!node.IsDefined() || !y_.map(node, p, {"frequency_hz", "quality_factor", "frequency_tc_ppm_per_k",
+                                               "frequency_tc2_ppb_per_k2", "quality_factor_exponent"}))
+      return;
+    m.frequency_hz = y_.number(node, p, "frequency_hz", true, Bounds::positive()).value_or(1.0);
+    m.quality_factor = y_.number(node, p, "quality_factor", true, Bounds::positive()).value_or(1.0);
+    m.frequency_tc_per_k = y_.number_or(node, p, "frequency_tc_ppm_per_k", tce / kPpm / 2.0) * kPpm;
+    m.frequency_tc2_per_k2 = y_.number_or(node, p, "frequency_tc2_ppb_per_k2", 0.0) * 1e-9;
+    m.quality_factor_exponent = y_.number_or(node, p, "quality_factor_exponent", 1.0, Bounds::between(-10, 10));
+  }
+
+  void read_modes(const YAML::Node& node, PhysicsConfig& physics) {
+    if (!node.IsDefined() || !y_.map(node, "modes", {"drive", "sense"})) return;
+    const double tce = physics.structure.youngs_modulus_tc_per_k;
+    read_mode(y_.child(node, "modes", "drive", true), "modes.drive", tce, physics.drive);
+    const YAML::Node sense = y_.child(node, "modes", "sense", true);
+    read_mode(sense, "modes.sense", tce, physics.sense);
+    if (sense.IsMap() && physics.sense.frequency_hz == physics.drive.frequency_hz)
+      y_.problem(y_.child(sense, "modes.sense", "frequency_hz", false), "modes.sense.frequency_hz",
+                 "equals the drive frequency; the open-loop sense model needs a mode split");
+  }
+
+  void read_electronics(const YAML::Node& node, Electronics& e) {
+    const std::string p = "electronics";
+    if (!node.IsDefined() || !y_.map(node, p, {"drive_amplitude_um", "quadrature_dps", "quadrature_tc_ppm_per_k",
+                                               "demodulation_phase_error_mrad"}))
+      return;
+    e.drive_amplitude_m = y_.number(node, p, "drive_amplitude_um", true, Bounds::positive()).value_or(1.0) * 1e-6;
+    e.quadrature_rad_s = y_.number_or(node, p, "quadrature_dps", 0.0) * kRadPerDeg;
+    e.quadrature_tc_per_k = y_.number_or(node, p, "quadrature_tc_ppm_per_k", 0.0) * kPpm;
+    e.demodulation_phase_error_rad =
+        y_.number_or(node, p, "demodulation_phase_error_mrad", 0.0, Bounds::between(-1500, 1500)) * 1e-3;
+  }
+
+  void read_thermal(const YAML::Node& node, Thermal& t) {
+    if (!node.IsDefined() || !y_.map(node, "thermal", {"die_time_constant_s", "sensor_time_constant_s"})) return;
+    t.die_time_constant_s = y_.number_or(node, "thermal", "die_time_constant_s", 0.0, Bounds::non_negative());
+    t.sensor_time_constant_s = y_.number_or(node, "thermal", "sensor_time_constant_s", 0.0, Bounds::non_negative());
+  }
+
+  void read_channels(const YAML::Node& node, std::vector<ChannelSpec>& channels) {
+    if (!node.IsDefined()) return;
+    if (!node.IsSequence()) {
+      y_.problem(node, "channels", "expected a list of channels ({name, role, unit, ...})");
+      return;
+    }
+    std::map<std::string, int> role_lines;
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      const YAML::Node c = node[i];
+      const std::string p = "channels[" + std::to_string(i) + "]";
+      if (!y_.map(c, p, {"name", "role", "unit", "range", "resolution", "noise", "scale_factor_mv_per_dps"}))
+        continue;
+      ChannelSpec spec;
+      spec.name = y_.text(c, p, "name", true).value_or("");
+      spec.role = y_.text(c, p, "role", true).value_or("");
+      spec.unit = y_.text(c, p, "unit", true).value_or("");
+      if (spec.role.empty() || spec.unit.empty()) continue;
+      if (std::find(kRoles.begin(), kRoles.end(), spec.role) == kRoles.end()) {
+        y_.problem(y_.child(c, p, "role", false), p + ".role",
+                   "unknown role '" + spec.role + "'; expected one of: rate, temperature, drive_frequency");
+        continue;
+      }
+      if (const auto [it, inserted] = role_lines.emplace(spec.role, YamlFields::line_of(c)); !inserted) {
+        y_.problem(y_.child(c, p, "role", false), p + ".role",
+                   "role '" + spec.role + "' already used by the channel on line " + std::to_string(it->second));
+        continue;
+      }
+      const auto unit = find_unit(spec.unit);
+      const Quantity quantity = quantity_of_role(spec.role);
+      if (!unit || unit->quantity != quantity) {
+        y_.problem(y_.child(c, p, "unit", false), p + ".unit",
+                   "unit '" + spec.unit + "' does not fit role '" + spec.role + "'; expected " + quantity_name(quantity));
+        continue;
+      }
+      if (auto range = y_.numbers(c, p, "range", false)) {
+        if (range->size() != 2 || !((*range)[0] < (*range)[1])) {
+          y_.problem(y_.child(c, p, "range", false), p + ".range", "expected [min, max] with min < max");
+        } else {
+          spec.range_min = to_internal((*range)[0], *unit);
+          spec.range_max = to_internal((*range)[1], *unit);
+        }
+      }
+      spec.resolution = y_.number_or(c, p, "resolution", 0.0, Bounds::non_negative()) * unit->scale;
+      spec.noise = y_.number_or(c, p, "noise", 0.0, Bounds::non_negative()) * unit->scale;
+      spec.scale_factor_mv_per_dps = y_.number_or(c, p, "scale_factor_mv_per_dps", 0.0, Bounds::non_negative());
+      if (spec.role == "rate" && !(spec.range_min < 0.0 && spec.range_max > 0.0))
+        y_.problem(y_.child(c, p, "range", false), p + ".range", "the rate range must contain 0");
+      channels.push_back(spec);
+    }
+    for (const char* required : {"rate", "temperature"})
+      if (!role_lines.count(required))
+        y_.problem(node, "channels", std::string("no channel with role '") + required + "' (required)");
+  }
+
+  void read_error_model(const YAML::Node& node, error_model::Config& config) {
+    const std::string p = "error_model";
+    if (!node.IsDefined() || !y_.map(node, p, {"bias_polynomial", "scale_factor_polynomial_ppm", "noise"})) return;
+    const YAML::Node bias = y_.child(node, p, "bias_polynomial", false);
+    if (bias.IsDefined() && y_.map(bias, p + ".bias_polynomial", {"unit", "coefficients"})) {
+      const std::string bp = p + ".bias_polynomial";
+      const auto unit_text = y_.text(bias, bp, "unit", true);
+      const auto coefficients = y_.numbers(bias, bp, "coefficients", true);
+      const auto unit = unit_text ? find_unit(*unit_text) : std::nullopt;
+      if (unit_text && (!unit || unit->quantity != Quantity::AngularRate))
+        y_.problem(y_.child(bias, bp, "unit", false), bp + ".unit",
+                   "unit '" + *unit_text + "' is not " + quantity_name(Quantity::AngularRate));
+      else if (unit && coefficients)
+        for (double c : *coefficients) config.bias_polynomial_rad_s.push_back(c * unit->scale);
+    }
+    if (auto sf = y_.numbers(node, p, "scale_factor_polynomial_ppm", false))
+      for (double c : *sf) config.scale_factor_polynomial.push_back(c * kPpm);
+    const YAML::Node noise = y_.child(node, p, "noise", false);
+    const std::string np = p + ".noise";
+    if (!noise.IsDefined() ||
+        !y_.map(noise, np, {"arw_dph_rthz", "bias_instability_dph", "rate_random_walk_dph_rth",
+                            "flicker_correlation_times_s", "flicker_poles_per_decade"}))
+      return;
+    auto& n = config.noise;
+    n.arw_rad_sqrt_s = y_.number_or(noise, np, "arw_dph_rthz", 0.0, Bounds::non_negative()) * kRadPerSecPerDph;
+    n.bias_instability_rad_s =
+        y_.number_or(noise, np, "bias_instability_dph", 0.0, Bounds::non_negative()) * kRadPerSecPerDph;
+    n.rate_random_walk_rad_s_sqrt_s =
+        y_.number_or(noise, np, "rate_random_walk_dph_rth", 0.0, Bounds::non_negative()) * kRadPerSecPerDph / 60.0;
+    n.flicker_poles_per_decade =
+        y_.number_or(noise, np, "flicker_poles_per_decade", n.flicker_poles_per_decade, Bounds::between(0.5, 20));
+    if (auto taus = y_.numbers(noise, np, "flicker_correlation_times_s", false)) {
+      if (taus->size() != 2 || !((*taus)[0] > 0.0) || !((*taus)[0] < (*taus)[1]))
+        y_.problem(y_.child(noise, np, "flicker_correlation_times_s", false), np + ".flicker_correlation_times_s",
+                   "expected [min, max] with 0 < min < max");
+      else
+        n.flicker_tau_min_s = (*taus)[0], n.flicker_tau_max_s = (*taus)[1];
+    }
+  }
+
+  void check_consistency(const YAML::Node& root, DeviceDefinition& d) {
+    const YAML::Node structure = y_.child(root, "", "structure", false);
+    const YAML::Node suspension = y_.child(structure, "structure", "suspension", false);
+    try {
+      const DeviceModel model(d.physics);
+      const double die_size = std::max(d.physics.structure.length_m, d.physics.structure.width_m);
+      for (const auto* mode : {&d.physics.drive, &d.physics.sense}) {
+        const double beam = model.implied_beam_length_m(*mode);
+        if (beam > die_size) {
+          std::ostringstream msg;
+          msg << "the " << (mode == &d.physics.drive ? "drive" : "sense") << " stiffness k = "
+              << model.stiffness_n_per_m(*mode) << " N/m needs suspension beams " << beam * 1e6
+              << " um long, longer than the die (" << die_size * 1e6
+              << " um); use fewer or narrower beams or a larger proof-mass fraction";
+          y_.problem(suspension.IsDefined() ? suspension : structure, "structure.suspension", msg.str());
+        }
+      }
+    } catch (const ConfigError& e) {
+      for (auto problem : e.problems()) {
+        problem.where.file = y_.file();
+        problem.where.line = YamlFields::line_of(root);
+        problems_.push_back(problem);
+      }
+    }
+  }
+
+  YamlFields y_;
+  std::vector<Diagnostic>& problems_;
+};
+
+struct EffectConversion {
+  EffectInfo info;
+  std::vector<double> to_si;  // one factor per key
+};
+
+const std::vector<EffectConversion>& effect_table() {
+  static const std::vector<EffectConversion> table{
+      {{"thermal_lag", "the resonator (die) lags the temperature sensor by an extra first-order lag",
+        {{"tau_s", "s", "time constant"}}},
+       {1.0}},
+      {{"temperature_rate", "bias proportional to the die's dT/dt",
+        {{"coefficient_dph_per_c_per_min", "deg/h per degC/min", "bias per unit heating rate"}}},
+       {kRadPerSecPerDph * 60.0}},
+      {{"hysteresis", "heating/cooling branch offset that saturates a few degC after each reversal",
+        {{"height_dph", "deg/h", "gap between the branches (cooling above)"},
+         {"width_c", "degC", "temperature travel to reach 1 - 1/e of the switch"}}},
+       {kRadPerSecPerDph, 1.0}},
+      {{"warmup_transient", "power-on exponential from the start of the record",
+        {{"amplitude_dph", "deg/h", "value at t = 0"}, {"tau_s", "s", "decay time"}}},
+       {kRadPerSecPerDph, 1.0}},
+      {{"periodic_disturbance", "a sinusoid on the rate",
+        {{"amplitude_dph", "deg/h", "amplitude"}, {"period_s", "s", "period"}, {"phase_deg", "deg", "phase at t = 0"}}},
+       {kRadPerSecPerDph, 1.0, kRadPerDeg}},
+      {{"scale_factor_temperature", "extra scale-factor drift: s *= 1 + sum c_i (T - T0)^(i+1)",
+        {{"coefficients_ppm", "ppm/K, ppm/K^2, ...", "polynomial coefficients", true}}},
+       {kPpm}},
+  };
+  return table;
+}
+
+std::vector<std::string> effect_names() {
+  std::vector<std::string> names;
+  for (const auto& e : effect_table()) names.push_back(e.info.name);
+  return names;
+}
+
+void store_effect(const std::string& name, const std::vector<std::vector<double>>& v, error_model::Effects& e) {
+  if (name == "thermal_lag") e.thermal_lag = error_model::ThermalLag{v[0][0]};
+  else if (name == "temperature_rate") e.temperature_rate = error_model::TemperatureRate{v[0][0]};
+  else if (name == "hysteresis") e.hysteresis = error_model::Hysteresis{v[0][0], v[1][0]};
+  else if (name == "warmup_transient") e.warmup_transient = error_model::WarmupTransient{v[0][0], v[1][0]};
+  else if (name == "periodic_disturbance") e.periodic_disturbance = error_model::PeriodicDisturbance{v[0][0], v[1][0], v[2][0]};
+  else if (name == "scale_factor_temperature") e.scale_factor_temperature = error_model::ScaleFactorTemperature{v[0]};
+}
+
+std::string number_text(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+bool requires_positive(const std::string& key) {
+  return key == "tau_s" || key == "width_c" || key == "period_s";
+}
+
+}  // namespace
+
+const ChannelSpec* DeviceDefinition::find_channel(const std::string& role) const {
+  for (const auto& c : channels)
+    if (c.role == role) return &c;
+  return nullptr;
+}
+
+DeviceDefinition parse_device(const std::string& yaml_text, const std::string& file) {
+  const YAML::Node root = parse_yaml_text(yaml_text, file);
+  std::vector<Diagnostic> problems;
+  DeviceReader reader(file, problems);
+  DeviceDefinition d = reader.read(root);
+  if (!problems.empty()) throw ConfigError(std::move(problems));
+  return d;
+}
+
+DeviceDefinition load_device_file(const std::filesystem::path& path) {
+  const YAML::Node root = load_yaml_file(path.string());
+  std::vector<Diagnostic> problems;
+  DeviceReader reader(path.string(), problems);
+  DeviceDefinition d = reader.read(root);
+  if (!problems.empty()) throw ConfigError(std::move(problems));
+  return d;
+}
+
+std::vector<std::filesystem::path> list_device_files(const std::filesystem::path& dir) {
+  if (!std::filesystem::is_directory(dir))
+    throw ConfigError({dir.string(), 0, ""}, "devices directory does not exist (use --devices-dir or DRIFTLAB_DEVICES_DIR)");
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    if (entry.is_regular_file() && entry.path().extension() == ".yaml") files.push_back(entry.path());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+const std::vector<EffectInfo>& effect_catalogue() {
+  static const std::vector<EffectInfo> infos = [] {
+    std::vector<EffectInfo> out;
+    for (const auto& e : effect_table()) out.push_back(e.info);
+    return out;
+  }();
+  return infos;
+}
+
+void parse_effects(const YAML::Node& node, const std::string& file, const std::string& path,
+                   error_model::Effects& effects, std::vector<Diagnostic>& problems) {
+  YamlFields y(file, problems);
+  if (!y.map(node, path, effect_names())) return;
+  for (const auto& entry : effect_table()) {
+    const YAML::Node params = y.child(node, path, entry.info.name, false);
+    if (!params.IsDefined()) continue;
+    const std::string p = YamlFields::join(path, entry.info.name);
+    std::vector<std::string> keys;
+    for (const auto& k : entry.info.keys) keys.push_back(k.key);
+    if (!y.map(params, p, keys)) continue;
+    std::vector<std::vector<double>> values;
+    bool complete = true;
+    for (std::size_t i = 0; i < entry.info.keys.size(); ++i) {
+      const auto& key = entry.info.keys[i];
+      std::vector<double> v;
+      if (key.list) {
+        v = y.numbers(params, p, key.key, true).value_or(std::vector<double>{});
+        if (v.empty()) complete = false;
+      } else if (auto x = y.number(params, p, key.key, true, requires_positive(key.key) ? Bounds::positive() : Bounds{})) {
+        v.push_back(*x);
+      } else {
+        complete = false;
+      }
+      for (double& x : v) x *= entry.to_si[i];
+      values.push_back(std::move(v));
+    }
+    if (complete) store_effect(entry.info.name, values, effects);
+  }
+}
+
+void apply_effect_option(const std::string& text, error_model::Effects& effects) {
+  const std::string field = "--effect " + text;
+  const auto colon = text.find(':');
+  const std::string name = text.substr(0, colon);
+  std::string yaml = "{" + name + ": {";
+  if (colon != std::string::npos) {
+    int depth = 0;
+    std::string item;
+    bool first = true;
+    auto flush = [&] {
+      const auto eq = item.find('=');
+      if (eq == std::string::npos)
+        throw ConfigError({"", 0, field}, "expected NAME:key=value,key=value; got '" + item + "'");
+      yaml += (first ? "" : ", ") + item.substr(0, eq) + ": " + item.substr(eq + 1);
+      first = false;
+      item.clear();
+    };
+    for (char ch : text.substr(colon + 1)) {
+      if (ch == '[') ++depth;
+      if (ch == ']') --depth;
+      if (ch == ',' && depth == 0) flush();
+      else item += ch;
+    }
+    if (!item.empty()) flush();
+  }
+  yaml += "}}";
+  std::vector<Diagnostic> problems;
+  YAML::Node node;
+  try {
+    node = YAML::Load(yaml);
+  } catch (const YAML::ParserException& e) {
+    throw ConfigError({"", 0, field}, "cannot parse: " + e.msg);
+  }
+  parse_effects(node, "", "", effects, problems);
+  for (auto& p : problems) {
+    p.where.line = 0;
+    p.where.field = "--effect " + p.where.field;
+  }
+  if (!problems.empty()) throw ConfigError(std::move(problems));
+}
+
+std::vector<std::string> describe_effects(const error_model::Effects& e) {
+  std::vector<std::string> out;
+  auto emit = [&](const std::string& text) { out.push_back(text); };
+  if (e.thermal_lag) emit("thermal_lag{tau_s=" + number_text(e.thermal_lag->tau_s) + "}");
+  if (e.temperature_rate)
+    emit("temperature_rate{coefficient_dph_per_c_per_min=" +
+         number_text(e.temperature_rate->coefficient_rad_s_per_k_s / (kRadPerSecPerDph * 60.0)) + "}");
+  if (e.hysteresis)
+    emit("hysteresis{height_dph=" + number_text(e.hysteresis->height_rad_s / kRadPerSecPerDph) +
+         ", width_c=" + number_text(e.hysteresis->width_k) + "}");
+  if (e.warmup_transient)
+    emit("warmup_transient{amplitude_dph=" + number_text(e.warmup_transient->amplitude_rad_s / kRadPerSecPerDph) +
+         ", tau_s=" + number_text(e.warmup_transient->tau_s) + "}");
+  if (e.periodic_disturbance)
+    emit("periodic_disturbance{amplitude_dph=" +
+         number_text(e.periodic_disturbance->amplitude_rad_s / kRadPerSecPerDph) +
+         ", period_s=" + number_text(e.periodic_disturbance->period_s) +
+         ", phase_deg=" + number_text(e.periodic_disturbance->phase_rad / kRadPerDeg) + "}");
+  if (e.scale_factor_temperature) {
+    std::string list;
+    for (double c : e.scale_factor_temperature->coefficients_per_k)
+      list += (list.empty() ? "" : ", ") + number_text(c / kPpm);
+    emit("scale_factor_temperature{coefficients_ppm=[" + list + "]}");
+  }
+  return out;
+}
+
+}  // namespace driftlab::devices

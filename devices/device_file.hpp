@@ -1,0 +1,106 @@
+// Device definitions as data: devices/*.yaml (format driftlab-device/1). Adding a gyro means adding
+// a file. Loading validates everything and throws one driftlab::ConfigError listing every problem
+// with file, line and key path. Units are in the key names (converted to SI on load):
+//
+//   format: driftlab-device/1                         required
+//   identity: {name, title, manufacturer, reference, notes}          name required
+//   reference_temp_c: 25                              calibration temperature T0, degC
+//   structure:                                        the die (see device_model.hpp for assumptions)
+//     youngs_modulus_gpa, poisson_ratio (0..0.5), density_kg_m3, length_um, width_um, thickness_um,
+//     proof_mass_area_fraction (0..1]                 required
+//     youngs_modulus_tc_ppm_per_k: -60                TCE
+//     suspension: {beams_per_mode: 16, beam_width_um: 5}
+//   modes:
+//     drive: / sense:  frequency_hz, quality_factor   required
+//       frequency_tc_ppm_per_k (default TCE/2), frequency_tc2_ppb_per_k2 (0), quality_factor_exponent (1)
+//   electronics: drive_amplitude_um (required), quadrature_dps, quadrature_tc_ppm_per_k,
+//                demodulation_phase_error_mrad
+//   thermal: die_time_constant_s, sensor_time_constant_s          (first-order lags, default 0)
+//   channels: - {name, role, unit, range: [min, max], resolution, noise, scale_factor_mv_per_dps}
+//     roles: rate (angular-rate unit, required), temperature (temperature unit, required),
+//            drive_frequency (frequency unit); resolution and noise in the channel's unit
+//   error_model:
+//     bias_polynomial: {unit: deg/h, coefficients: [c0, c1, c2, ...]}   c_i per K^i around T0
+//     scale_factor_polynomial_ppm: [ppm/K, ppm/K^2, ...]
+//     noise: {arw_dph_rthz (N, deg/h/sqrt(Hz)), bias_instability_dph (B, deg/h),
+//             rate_random_walk_dph_rth (K, deg/h/sqrt(h)), flicker_correlation_times_s: [min, max],
+//             flicker_poles_per_decade}
+//   effects: {NAME: {key: value, ...}, ...}           optional; see effect_catalogue()
+//
+// Cross-checks: the implied suspension-beam length (device_model.hpp) must fit within the die; the
+// rate range must contain 0; channel roles unique.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "devices/device_model.hpp"
+#include "framework/error.hpp"
+#include "models/error_model/error_model.hpp"
+
+namespace driftlab::devices {
+
+inline constexpr const char* kDeviceFormat = "driftlab-device/1";
+
+struct ChannelSpec {
+  std::string name;
+  std::string role;   // rate | temperature | drive_frequency
+  std::string unit;   // as written in the file (e.g. "deg/s")
+  double range_min = -std::numeric_limits<double>::infinity();  // internal units
+  double range_max = std::numeric_limits<double>::infinity();
+  double resolution = 0.0;  // LSB, internal units; 0 = not quantized
+  double noise = 0.0;       // white noise std per sample, internal units (temperature, frequency)
+  double scale_factor_mv_per_dps = 0.0;  // rate channel: analogue scale factor, informative
+};
+
+struct Thermal {
+  double die_time_constant_s = 0.0;     // die lags the chamber
+  double sensor_time_constant_s = 0.0;  // case temperature sensor lags the die
+};
+
+struct DeviceDefinition {
+  std::string source;  // file it was loaded from
+  std::string name, title, manufacturer, reference, notes;
+  PhysicsConfig physics;
+  Thermal thermal;
+  std::vector<ChannelSpec> channels;
+  error_model::Config error_model;  // reference temperature, polynomials, noise, effects
+
+  const ChannelSpec* find_channel(const std::string& role) const;  // nullptr when absent
+};
+
+DeviceDefinition load_device_file(const std::filesystem::path& path);
+// `file` names the source in messages.
+DeviceDefinition parse_device(const std::string& yaml_text, const std::string& file);
+
+// Sorted *.yaml files of a directory. Throws ConfigError when it is not a directory.
+std::vector<std::filesystem::path> list_device_files(const std::filesystem::path& dir);
+
+// ---- effects (issue 6): the same table drives the `effects:` section and `--effect` --------------
+struct EffectKey {
+  std::string key;   // e.g. "tau_s"
+  std::string unit;  // as documented, e.g. "s"
+  std::string doc;
+  bool list = false;  // a list of numbers
+};
+struct EffectInfo {
+  std::string name;  // e.g. "thermal_lag" (plugin effect/thermal_lag in the discrepancy workflow)
+  std::string doc;
+  std::vector<EffectKey> keys;  // all required
+};
+const std::vector<EffectInfo>& effect_catalogue();
+
+// Reads an `effects:` mapping into `effects` (added or replaced), reporting problems.
+void parse_effects(const YAML::Node& node, const std::string& file, const std::string& path,
+                   error_model::Effects& effects, std::vector<Diagnostic>& problems);
+// Command-line form "NAME:key=value,key=value" (values are YAML, so lists like [100, 1] work).
+// Throws ConfigError (field "--effect").
+void apply_effect_option(const std::string& text, error_model::Effects& effects);
+// Names of the switched-on effects with their parameters in file units, e.g. "thermal_lag{tau_s=400}".
+std::vector<std::string> describe_effects(const error_model::Effects& effects);
+
+}  // namespace driftlab::devices

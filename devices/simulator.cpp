@@ -1,0 +1,220 @@
+#include "devices/simulator.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "devices/yaml_fields.hpp"
+#include "framework/units.hpp"
+
+namespace driftlab::devices {
+namespace {
+
+constexpr std::uint64_t kTemperatureNoiseStream = 1000;
+constexpr std::uint64_t kDriveFrequencyNoiseStream = 1001;
+
+double quantize(double value, double resolution) {
+  return resolution > 0.0 ? std::round(value / resolution) * resolution : value;
+}
+
+// Reads {start_<unit>, segments: [...]} with values in `unit_suffix` (c or dps) times `scale`.
+Profile read_profile_section(YamlFields& y, const YAML::Node& node, const std::string& path,
+                             const std::string& unit_suffix, double scale, double fallback_start) {
+  const std::string start_key = "start_" + unit_suffix;
+  const std::string to_key = "to_" + unit_suffix;
+  const std::string rate_key = "rate_" + unit_suffix + "_per_min";
+  if (!y.map(node, path, {start_key, "segments"})) return Profile(fallback_start);
+  Profile profile(y.number_or(node, path, start_key, fallback_start / scale) * scale);
+  const YAML::Node segments = y.child(node, path, "segments", false);
+  if (!segments.IsDefined()) return profile;
+  if (!segments.IsSequence()) {
+    y.problem(segments, path + ".segments", "expected a list of segments");
+    return profile;
+  }
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    const YAML::Node s = segments[i];
+    const std::string p = path + ".segments[" + std::to_string(i) + "]";
+    if (!y.map(s, p, {"hold_s", to_key, "duration_s", rate_key})) continue;
+    const bool holds = y.child(s, p, "hold_s", false).IsDefined();
+    const bool moves = y.child(s, p, to_key, false).IsDefined();
+    if (holds == moves) {
+      y.problem(s, p, "a segment is either {hold_s: S} or {" + to_key + ": V, duration_s: S | " + rate_key + ": R}");
+      continue;
+    }
+    if (holds) {
+      if (auto d = y.number(s, p, "hold_s", true, Bounds::non_negative())) profile.hold(*d);
+      continue;
+    }
+    const auto target = y.number(s, p, to_key, true);
+    const bool has_duration = y.child(s, p, "duration_s", false).IsDefined();
+    const bool has_rate = y.child(s, p, rate_key, false).IsDefined();
+    if (has_duration == has_rate) {
+      y.problem(s, p, "give exactly one of duration_s and " + rate_key);
+      continue;
+    }
+    if (!target) continue;
+    if (has_duration) {
+      if (auto d = y.number(s, p, "duration_s", true, Bounds::non_negative())) profile.ramp_to(*target * scale, *d);
+    } else if (auto r = y.number(s, p, rate_key, true, Bounds::positive())) {
+      profile.ramp_at_rate(*target * scale, *r * scale / 60.0);
+    }
+  }
+  return profile;
+}
+
+}  // namespace
+
+Profile::Profile(double start, std::vector<ProfileSegment> segments) : values_{start} {
+  for (const auto& s : segments) {
+    if (s.target) ramp_to(*s.target, s.duration_s);
+    else hold(s.duration_s);
+  }
+}
+
+Profile& Profile::hold(double duration_s) { return ramp_to(values_.back(), duration_s); }
+
+Profile& Profile::ramp_to(double target, double duration_s) {
+  times_.push_back(times_.back() + duration_s);
+  values_.push_back(target);
+  return *this;
+}
+
+Profile& Profile::ramp_at_rate(double target, double rate_per_s) {
+  return ramp_to(target, std::abs(target - values_.back()) / rate_per_s);
+}
+
+double Profile::value_at(double t_s) const {
+  if (t_s >= times_.back()) return values_.back();
+  if (t_s <= times_.front()) return values_.front();
+  const auto upper = std::upper_bound(times_.begin(), times_.end(), t_s);
+  const auto i = static_cast<std::size_t>(upper - times_.begin());
+  const double span = times_[i] - times_[i - 1];
+  const double fraction = span > 0.0 ? (t_s - times_[i - 1]) / span : 1.0;
+  return values_[i - 1] + fraction * (values_[i] - values_[i - 1]);
+}
+
+Eigen::VectorXd Profile::sample(const Eigen::VectorXd& time_s) const {
+  Eigen::VectorXd out(time_s.size());
+  std::size_t i = 1;
+  for (Eigen::Index k = 0; k < time_s.size(); ++k) {
+    const double t = time_s[k];
+    while (i < times_.size() && times_[i] <= t) ++i;
+    if (i >= times_.size() || t <= times_.front()) {
+      out[k] = i >= times_.size() ? values_.back() : values_.front();
+      continue;
+    }
+    const double span = times_[i] - times_[i - 1];
+    out[k] = values_[i - 1] + (t - times_[i - 1]) / span * (values_[i] - values_[i - 1]);
+  }
+  return out;
+}
+
+SimulationProfile default_oven_profile() {
+  SimulationProfile p;
+  p.chamber_c = Profile(-30.0);
+  p.chamber_c.hold(1800).ramp_at_rate(60.0, 1.0 / 60.0).hold(1800).ramp_at_rate(-30.0, 1.0 / 60.0).hold(1800);
+  p.source = "oven: -30 degC soak 30 min, +1 degC/min to +60 degC, soak 30 min, -1 degC/min to -30 degC, soak 30 min";
+  return p;
+}
+
+SimulationProfile parse_profile(const std::string& yaml_text, const std::string& file) {
+  const YAML::Node root = parse_yaml_text(yaml_text, file);
+  std::vector<Diagnostic> problems;
+  YamlFields y(file, problems);
+  SimulationProfile profile;
+  profile.source = file;
+  if (y.map(root, "", {"format", "chamber", "rate"})) {
+    if (auto format = y.text(root, "", "format", true); format && *format != "driftlab-profile/1")
+      y.problem(y.child(root, "", "format", false), "format",
+                "unsupported format '" + *format + "'; expected driftlab-profile/1");
+    if (const auto chamber = y.child(root, "", "chamber", false); chamber.IsDefined())
+      profile.chamber_c = read_profile_section(y, chamber, "chamber", "c", 1.0, 25.0);
+    if (const auto rate = y.child(root, "", "rate", false); rate.IsDefined())
+      profile.true_rate = read_profile_section(y, rate, "rate", "dps", kRadPerDeg, 0.0);
+  }
+  if (!problems.empty()) throw ConfigError(std::move(problems));
+  return profile;
+}
+
+SimulationProfile load_profile_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError({path.string(), 0, ""}, "cannot open profile file");
+  std::ostringstream content;
+  content << in.rdbuf();
+  return parse_profile(content.str(), path.string());
+}
+
+TimeSeries SimulationRecord::to_time_series() const {
+  TimeSeries series(time_s);
+  series.set_channel({role::kRate, "rad/s", "simulated rate_dps", rate_rad_s});
+  series.set_channel({role::kTemperature, "degC", "simulated temp_c", temp_c});
+  series.set_channel({role::kTrueRate, "rad/s", "simulated true_rate_dps", true_rate_rad_s});
+  series.set_channel({role::kDieTemperature, "degC", "simulated die_temp_c", die_temp_c});
+  if (drive_frequency_hz.size() == time_s.size())
+    series.set_channel({role::kDriveFrequency, "Hz", "simulated drive_freq_hz", drive_frequency_hz});
+  return series;
+}
+
+SimulationRecord simulate(const DeviceDefinition& device, const SimulationProfile& profile,
+                          const SimulationOptions& options) {
+  const double fs = options.sample_rate_hz;
+  if (!(fs > 0.0) || !std::isfinite(fs))
+    throw ConfigError({"", 0, "fs"}, "sample rate must be positive, got " + std::to_string(fs));
+  const double duration = options.duration_s.value_or(profile.duration_s());
+  if (!(duration > 0.0) || !std::isfinite(duration))
+    throw ConfigError({profile.source, 0, "duration"},
+                      "duration must be positive (the profile is static; give a duration)");
+  const auto n = static_cast<Eigen::Index>(std::floor(duration * fs + 1e-9));
+  if (n < 2) throw ConfigError({"", 0, "duration"}, "the run has fewer than 2 samples; raise fs or the duration");
+
+  const DeviceModel model(device.physics);
+  const error_model::Config& config = device.error_model;
+  const error_model::Effects& effects = config.effects;
+
+  SimulationRecord r;
+  r.time_s.resize(n);
+  for (Eigen::Index k = 0; k < n; ++k) r.time_s[k] = static_cast<double>(k) / fs;
+  r.chamber_temp_c = profile.chamber_c.sample(r.time_s);
+  r.true_rate_rad_s = profile.true_rate.sample(r.time_s);
+  const Eigen::VectorXd die = error_model::first_order_lag(r.time_s, r.chamber_temp_c, device.thermal.die_time_constant_s);
+  const Eigen::VectorXd sensor = error_model::first_order_lag(r.time_s, die, device.thermal.sensor_time_constant_s);
+  r.die_temp_c = effects.thermal_lag ? error_model::first_order_lag(r.time_s, die, effects.thermal_lag->tau_s) : die;
+
+  r.systematic_rate_rad_s = error_model::additive_effects(effects, r.time_s, r.die_temp_c);
+  Eigen::VectorXd drive_hz(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double temp = r.die_temp_c[k];
+    error_model::DeviceResponse response = model.response(temp);
+    response.scale_factor *= error_model::effect_scale_factor(effects, config.reference_temp_c, temp);
+    r.systematic_rate_rad_s[k] += error_model::systematic_rate(config, response, temp, r.true_rate_rad_s[k]);
+    drive_hz[k] = response.drive_frequency_hz;
+  }
+
+  const ChannelSpec* rate_channel = device.find_channel(role::kRate);
+  const ChannelSpec* temp_channel = device.find_channel(role::kTemperature);
+  const ChannelSpec* drive_channel = device.find_channel(role::kDriveFrequency);
+  r.rate_rad_s = r.systematic_rate_rad_s + error_model::rate_noise(config.noise, fs, n, options.seed);
+  if (rate_channel)
+    for (double& w : r.rate_rad_s)
+      w = quantize(std::clamp(w, rate_channel->range_min, rate_channel->range_max), rate_channel->resolution);
+
+  r.temp_c = sensor;
+  if (temp_channel) {
+    error_model::NormalStream noise(options.seed, kTemperatureNoiseStream);
+    for (double& t : r.temp_c) {
+      if (temp_channel->noise > 0.0) t += temp_channel->noise * noise.next();
+      t = quantize(std::clamp(t, temp_channel->range_min, temp_channel->range_max), temp_channel->resolution);
+    }
+  }
+  if (drive_channel) {
+    error_model::NormalStream noise(options.seed, kDriveFrequencyNoiseStream);
+    for (double& f : drive_hz) {
+      if (drive_channel->noise > 0.0) f += drive_channel->noise * noise.next();
+      f = quantize(f, drive_channel->resolution);
+    }
+    r.drive_frequency_hz = std::move(drive_hz);
+  }
+  return r;
+}
+
+}  // namespace driftlab::devices

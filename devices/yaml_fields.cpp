@@ -1,0 +1,151 @@
+#include "devices/yaml_fields.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace driftlab::devices {
+namespace {
+
+std::string joined(const std::vector<std::string>& items) {
+  std::string s;
+  for (const auto& i : items) s += (s.empty() ? "" : ", ") + i;
+  return s;
+}
+
+std::string bounds_text(const Bounds& b) {
+  std::ostringstream out;
+  if (b.min && b.max) out << "in [" << *b.min << ", " << *b.max << "]";
+  else if (b.min) out << (b.min_exclusive ? "> " : ">= ") << *b.min;
+  else if (b.max) out << "<= " << *b.max;
+  return out.str();
+}
+
+bool within(const Bounds& b, double v) {
+  if (b.min && (b.min_exclusive ? !(v > *b.min) : !(v >= *b.min))) return false;
+  if (b.max && !(v <= *b.max)) return false;
+  return true;
+}
+
+}  // namespace
+
+int YamlFields::line_of(const YAML::Node& node) {
+  return node.IsDefined() && node.Mark().line >= 0 ? node.Mark().line + 1 : 0;
+}
+
+std::string YamlFields::join(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+
+void YamlFields::problem(const YAML::Node& at, const std::string& field, const std::string& message) {
+  problems_.push_back({{file_, line_of(at), field}, message});
+}
+
+bool YamlFields::map(const YAML::Node& node, const std::string& path, const std::vector<std::string>& allowed) {
+  if (!node.IsMap()) {
+    problem(node, path, "expected a mapping of keys (" + joined(allowed) + ")");
+    return false;
+  }
+  for (const auto& kv : node) {
+    const std::string key = kv.first.Scalar();
+    if (std::find(allowed.begin(), allowed.end(), key) == allowed.end())
+      problem(kv.first, join(path, key), "unknown key; expected one of: " + joined(allowed));
+  }
+  return true;
+}
+
+YAML::Node YamlFields::child(const YAML::Node& parent, const std::string& path, const std::string& key,
+                             bool required) {
+  if (!parent.IsMap()) return YAML::Node(YAML::NodeType::Undefined);
+  for (const auto& kv : parent)
+    if (kv.first.Scalar() == key) return kv.second;
+  if (required) problem(parent, join(path, key), "missing required key");
+  return YAML::Node(YAML::NodeType::Undefined);
+}
+
+std::optional<double> YamlFields::number(const YAML::Node& parent, const std::string& path,
+                                         const std::string& key, bool required, Bounds bounds) {
+  const YAML::Node node = child(parent, path, key, required);
+  if (!node.IsDefined()) return std::nullopt;
+  const std::string field = join(path, key);
+  double value = 0.0;
+  try {
+    if (!node.IsScalar()) throw YAML::BadConversion(node.Mark());
+    value = node.as<double>();
+  } catch (const YAML::BadConversion&) {
+    problem(node, field, "expected a number, got '" + (node.IsScalar() ? node.Scalar() : std::string("a collection")) + "'");
+    return std::nullopt;
+  }
+  if (!std::isfinite(value)) {
+    problem(node, field, "must be finite, got '" + node.Scalar() + "'");
+    return std::nullopt;
+  }
+  if (!within(bounds, value)) {
+    problem(node, field, "must be " + bounds_text(bounds) + ", got " + node.Scalar());
+    return std::nullopt;
+  }
+  return value;
+}
+
+double YamlFields::number_or(const YAML::Node& parent, const std::string& path, const std::string& key,
+                             double fallback, Bounds bounds) {
+  return number(parent, path, key, false, bounds).value_or(fallback);
+}
+
+std::optional<std::string> YamlFields::text(const YAML::Node& parent, const std::string& path,
+                                            const std::string& key, bool required) {
+  const YAML::Node node = child(parent, path, key, required);
+  if (!node.IsDefined()) return std::nullopt;
+  if (!node.IsScalar() || node.Scalar().empty()) {
+    problem(node, join(path, key), "expected non-empty text");
+    return std::nullopt;
+  }
+  return node.Scalar();
+}
+
+std::optional<std::vector<double>> YamlFields::numbers(const YAML::Node& parent, const std::string& path,
+                                                       const std::string& key, bool required) {
+  const YAML::Node node = child(parent, path, key, required);
+  if (!node.IsDefined()) return std::nullopt;
+  const std::string field = join(path, key);
+  std::vector<double> values;
+  auto add = [&](const YAML::Node& item) {
+    try {
+      if (!item.IsScalar()) throw YAML::BadConversion(item.Mark());
+      const double v = item.as<double>();
+      if (!std::isfinite(v)) throw YAML::BadConversion(item.Mark());
+      values.push_back(v);
+      return true;
+    } catch (const YAML::BadConversion&) {
+      problem(item, field, "expected a list of finite numbers, got '" +
+                               (item.IsScalar() ? item.Scalar() : std::string("a collection")) + "'");
+      return false;
+    }
+  };
+  if (node.IsSequence()) {
+    for (const auto& item : node)
+      if (!add(item)) return std::nullopt;
+  } else if (!add(node)) {
+    return std::nullopt;
+  }
+  return values;
+}
+
+YAML::Node parse_yaml_text(const std::string& text, const std::string& file) {
+  try {
+    return YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw ConfigError({file, e.mark.line >= 0 ? e.mark.line + 1 : 0, ""}, "YAML syntax error: " + e.msg);
+  }
+}
+
+YAML::Node load_yaml_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError({path, 0, ""}, "cannot open file");
+  std::ostringstream content;
+  content << in.rdbuf();
+  return parse_yaml_text(content.str(), path);
+}
+
+}  // namespace driftlab::devices

@@ -1,0 +1,61 @@
+// Line-aware reading of the small YAML formats in devices/ (device files, chamber/rate profiles).
+// Every problem is appended as a Diagnostic (file, 1-based line, dotted key path) so a loader can
+// collect all of them and throw one ConfigError.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "framework/error.hpp"
+
+namespace driftlab::devices {
+
+struct Bounds {
+  std::optional<double> min, max;
+  bool min_exclusive = false;
+  static Bounds positive() { return {0.0, std::nullopt, true}; }
+  static Bounds non_negative() { return {0.0, std::nullopt, false}; }
+  static Bounds between(double lo, double hi) { return {lo, hi, false}; }
+};
+
+class YamlFields {
+ public:
+  YamlFields(std::string file, std::vector<Diagnostic>& problems)
+      : file_(std::move(file)), problems_(problems) {}
+
+  static int line_of(const YAML::Node& node);
+  static std::string join(const std::string& path, const std::string& key);
+  const std::string& file() const { return file_; }
+
+  void problem(const YAML::Node& at, const std::string& field, const std::string& message);
+
+  // True when `node` is a map; reports keys not in `allowed` (listing the allowed ones).
+  bool map(const YAML::Node& node, const std::string& path, const std::vector<std::string>& allowed);
+  // A map's child; reports "missing required key" at the parent's line when required and absent.
+  YAML::Node child(const YAML::Node& parent, const std::string& path, const std::string& key, bool required);
+
+  // A finite number within bounds; nullopt (with a problem when required or malformed) otherwise.
+  std::optional<double> number(const YAML::Node& parent, const std::string& path, const std::string& key,
+                               bool required, Bounds bounds = {});
+  double number_or(const YAML::Node& parent, const std::string& path, const std::string& key,
+                   double fallback, Bounds bounds = {});
+  std::optional<std::string> text(const YAML::Node& parent, const std::string& path, const std::string& key,
+                                  bool required);
+  // A list of finite numbers (a single number is a list of one).
+  std::optional<std::vector<double>> numbers(const YAML::Node& parent, const std::string& path,
+                                             const std::string& key, bool required);
+
+ private:
+  std::string file_;
+  std::vector<Diagnostic>& problems_;
+};
+
+// Parses YAML text; a syntax error becomes a ConfigError with the file and line.
+YAML::Node parse_yaml_text(const std::string& text, const std::string& file);
+// Reads and parses a file; a missing or unreadable file is a ConfigError naming it.
+YAML::Node load_yaml_file(const std::string& path);
+
+}  // namespace driftlab::devices

@@ -1,0 +1,130 @@
+#include "models/discrepancy/blocks.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace driftlab::discrepancy {
+namespace {
+
+// x - (1 - e^{-x}) without cancellation for small x.
+double lag_excess(double x) { return x + std::expm1(-x); }
+
+double gauss_markov_variance(double sigma, double tau, double length) {
+  const double x = length / tau;
+  return 2.0 * sigma * sigma * tau * tau / (length * length) * lag_excess(x);
+}
+
+double gauss_markov_covariance(double sigma, double tau, double length_i, double length_j, double gap) {
+  return sigma * sigma * tau * tau / (length_i * length_j) * -std::expm1(-length_i / tau) *
+         -std::expm1(-length_j / tau) * std::exp(-gap / tau);
+}
+
+}  // namespace
+
+Blocks make_blocks(const Eigen::VectorXd& time_s, double block_s) {
+  const Eigen::Index n = time_s.size();
+  if (n < 2) throw std::invalid_argument("the record has fewer than 2 samples");
+  if (!(block_s > 0.0)) throw std::invalid_argument("block length must be positive");
+  std::vector<double> steps(static_cast<std::size_t>(n - 1));
+  for (Eigen::Index k = 0; k + 1 < n; ++k) steps[static_cast<std::size_t>(k)] = time_s[k + 1] - time_s[k];
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  Blocks b;
+  b.sample_interval_s = steps[steps.size() / 2];
+  b.record_start_s = time_s[0];
+  std::vector<double> start, end, mean;
+  Eigen::Index current = -1;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const auto index = static_cast<Eigen::Index>(std::floor((time_s[k] - time_s[0]) / block_s));
+    if (index != current) {
+      current = index;
+      b.first.push_back(k);
+      b.count.push_back(0);
+      start.push_back(time_s[k]);
+      end.push_back(time_s[k]);
+      mean.push_back(0.0);
+    }
+    ++b.count.back();
+    end.back() = time_s[k];
+    mean.back() += time_s[k];
+  }
+  const auto blocks = static_cast<Eigen::Index>(b.first.size());
+  b.start_s.resize(blocks);
+  b.end_s.resize(blocks);
+  b.time_s.resize(blocks);
+  for (Eigen::Index i = 0; i < blocks; ++i) {
+    const auto m = static_cast<double>(b.count[static_cast<std::size_t>(i)]);
+    b.start_s[i] = start[static_cast<std::size_t>(i)];
+    b.end_s[i] = b.start_s[i] + m * b.sample_interval_s;
+    b.time_s[i] = mean[static_cast<std::size_t>(i)] / m;
+  }
+  return b;
+}
+
+double Blocks::median_spacing_s() const {
+  if (size() < 2) return duration_s();
+  std::vector<double> spacing(static_cast<std::size_t>(size() - 1));
+  for (Eigen::Index i = 0; i + 1 < size(); ++i) spacing[static_cast<std::size_t>(i)] = time_s[i + 1] - time_s[i];
+  std::nth_element(spacing.begin(), spacing.begin() + static_cast<std::ptrdiff_t>(spacing.size() / 2), spacing.end());
+  return spacing[spacing.size() / 2];
+}
+
+Eigen::VectorXd block_means(const Blocks& blocks, const Eigen::VectorXd& x) {
+  Eigen::VectorXd means(blocks.size());
+  for (Eigen::Index i = 0; i < blocks.size(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    means[i] = x.segment(blocks.first[k], blocks.count[k]).mean();
+  }
+  return means;
+}
+
+Eigen::VectorXd interpolate(const Blocks& blocks, const Eigen::VectorXd& block_values, const Eigen::VectorXd& time_s) {
+  Eigen::VectorXd out(time_s.size());
+  const Eigen::Index last = blocks.size() - 1;
+  Eigen::Index i = 0;
+  for (Eigen::Index k = 0; k < time_s.size(); ++k) {
+    const double t = time_s[k];
+    while (i < last && blocks.time_s[i + 1] <= t) ++i;
+    if (t <= blocks.time_s[0] || last == 0) out[k] = block_values[0];
+    else if (i >= last) out[k] = block_values[last];
+    else {
+      const double w = (t - blocks.time_s[i]) / (blocks.time_s[i + 1] - blocks.time_s[i]);
+      out[k] = block_values[i] + w * (block_values[i + 1] - block_values[i]);
+    }
+  }
+  return out;
+}
+
+Eigen::MatrixXd noise_covariance(const Blocks& blocks, const error_model::NoiseTerms& noise) {
+  const Eigen::Index n = blocks.size();
+  const Eigen::VectorXd length = blocks.end_s - blocks.start_s;
+  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(n, n);
+  const double white = noise.arw_rad_sqrt_s * noise.arw_rad_sqrt_s;
+  const double walk = noise.rate_random_walk_rad_s_sqrt_s * noise.rate_random_walk_rad_s_sqrt_s;
+  const auto components = error_model::flicker_components(noise);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double a = blocks.start_s[i] - blocks.record_start_s;
+    c(i, i) = white / length[i] + walk * (a + length[i] / 3.0);
+    for (const auto& g : components) c(i, i) += gauss_markov_variance(g.sigma_rad_s, g.tau_s, length[i]);
+    const double walk_cov = walk * (a + 0.5 * length[i]);
+    for (Eigen::Index j = i + 1; j < n; ++j) {
+      double v = walk_cov;
+      const double gap = blocks.start_s[j] - blocks.end_s[i];
+      for (const auto& g : components)
+        v += gauss_markov_covariance(g.sigma_rad_s, g.tau_s, length[i], length[j], std::max(0.0, gap));
+      c(i, j) = c(j, i) = v;
+    }
+  }
+  return c;
+}
+
+double model_allan_deviation(const error_model::NoiseTerms& noise, double tau_s) {
+  double avar = noise.arw_rad_sqrt_s * noise.arw_rad_sqrt_s / tau_s +
+                noise.rate_random_walk_rad_s_sqrt_s * noise.rate_random_walk_rad_s_sqrt_s * tau_s / 3.0;
+  for (const auto& g : error_model::flicker_components(noise))
+    avar += gauss_markov_variance(g.sigma_rad_s, g.tau_s, tau_s) -
+            gauss_markov_covariance(g.sigma_rad_s, g.tau_s, tau_s, tau_s, 0.0);
+  return std::sqrt(avar);
+}
+
+}  // namespace driftlab::discrepancy

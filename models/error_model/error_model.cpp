@@ -1,0 +1,171 @@
+#include "models/error_model/error_model.hpp"
+
+#include <cmath>
+#include <numbers>
+
+namespace driftlab::error_model {
+namespace {
+
+std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ULL;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+  return x ^ (x >> 31);
+}
+
+}  // namespace
+
+double polynomial(const std::vector<double>& coefficients, double x) {
+  double value = 0.0;
+  for (auto it = coefficients.rbegin(); it != coefficients.rend(); ++it) value = value * x + *it;
+  return value;
+}
+
+std::vector<GaussMarkovComponent> flicker_components(const NoiseTerms& terms) {
+  std::vector<GaussMarkovComponent> components;
+  if (terms.bias_instability_rad_s <= 0.0) return components;
+  const double decades = std::log10(terms.flicker_tau_max_s / terms.flicker_tau_min_s);
+  const int count = static_cast<int>(std::ceil(terms.flicker_poles_per_decade * decades)) + 1;
+  const double sigma = terms.bias_instability_rad_s *
+                       std::sqrt(std::numbers::ln10 / (std::numbers::pi * terms.flicker_poles_per_decade));
+  for (int i = 0; i < count; ++i) {
+    const double fraction = count == 1 ? 0.0 : static_cast<double>(i) / (count - 1);
+    components.push_back({terms.flicker_tau_min_s * std::pow(10.0, fraction * decades), sigma});
+  }
+  return components;
+}
+
+bool Effects::any() const {
+  return thermal_lag || temperature_rate || hysteresis || warmup_transient || periodic_disturbance ||
+         scale_factor_temperature;
+}
+
+double empirical_scale_factor(const Config& config, double die_temp_c) {
+  const double x = die_temp_c - config.reference_temp_c;
+  return 1.0 + x * polynomial(config.scale_factor_polynomial, x);
+}
+
+double systematic_rate(const Config& config, const DeviceResponse& device, double die_temp_c,
+                       double true_rate_rad_s) {
+  const double x = die_temp_c - config.reference_temp_c;
+  const double scale = device.scale_factor * empirical_scale_factor(config, die_temp_c);
+  return scale * true_rate_rad_s + device.bias_rad_s + polynomial(config.bias_polynomial_rad_s, x);
+}
+
+Eigen::VectorXd first_order_lag(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, double tau_s) {
+  if (tau_s <= 0.0 || x.size() == 0) return x;
+  Eigen::VectorXd y(x.size());
+  y[0] = x[0];
+  for (Eigen::Index k = 0; k + 1 < x.size(); ++k) {
+    const double h = time_s[k + 1] - time_s[k];
+    const double a = std::exp(-h / tau_s);
+    const double ramp_gain = 1.0 - tau_s * (1.0 - a) / h;
+    y[k + 1] = a * y[k] + (1.0 - a) * x[k] + (x[k + 1] - x[k]) * ramp_gain;
+  }
+  return y;
+}
+
+Eigen::VectorXd time_derivative(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x) {
+  const Eigen::Index n = x.size();
+  Eigen::VectorXd d = Eigen::VectorXd::Zero(n);
+  if (n < 2) return d;
+  d[0] = (x[1] - x[0]) / (time_s[1] - time_s[0]);
+  d[n - 1] = (x[n - 1] - x[n - 2]) / (time_s[n - 1] - time_s[n - 2]);
+  for (Eigen::Index k = 1; k + 1 < n; ++k) d[k] = (x[k + 1] - x[k - 1]) / (time_s[k + 1] - time_s[k - 1]);
+  return d;
+}
+
+Eigen::VectorXd hysteresis_state(const Eigen::VectorXd& temp_c, double width_k) {
+  Eigen::VectorXd s = Eigen::VectorXd::Zero(temp_c.size());
+  double state = 0.0;
+  for (Eigen::Index k = 1; k < temp_c.size(); ++k) {
+    const double step = temp_c[k] - temp_c[k - 1];
+    if (step != 0.0) {
+      const double target = step > 0.0 ? 1.0 : -1.0;
+      state = target + (state - target) * std::exp(-std::abs(step) / width_k);
+    }
+    s[k] = state;
+  }
+  return s;
+}
+
+Eigen::VectorXd additive_effects(const Effects& effects, const Eigen::VectorXd& time_s,
+                                 const Eigen::VectorXd& die_temp_c) {
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(time_s.size());
+  if (effects.temperature_rate)
+    sum += effects.temperature_rate->coefficient_rad_s_per_k_s * time_derivative(time_s, die_temp_c);
+  if (effects.hysteresis)
+    sum -= 0.5 * effects.hysteresis->height_rad_s * hysteresis_state(die_temp_c, effects.hysteresis->width_k);
+  if (const auto& w = effects.warmup_transient) {
+    const double t0 = time_s.size() > 0 ? time_s[0] : 0.0;
+    sum += (w->amplitude_rad_s * (-(time_s.array() - t0) / w->tau_s).exp()).matrix();
+  }
+  if (const auto& p = effects.periodic_disturbance)
+    sum += (p->amplitude_rad_s * (2.0 * std::numbers::pi * time_s.array() / p->period_s + p->phase_rad).sin())
+               .matrix();
+  return sum;
+}
+
+double effect_scale_factor(const Effects& effects, double reference_temp_c, double die_temp_c) {
+  if (!effects.scale_factor_temperature) return 1.0;
+  const double x = die_temp_c - reference_temp_c;
+  return 1.0 + x * polynomial(effects.scale_factor_temperature->coefficients_per_k, x);
+}
+
+NormalStream::NormalStream(std::uint64_t seed, std::uint64_t stream)
+    : engine_(splitmix64(splitmix64(seed) ^ splitmix64(stream + 0x632BE59BD9B4E019ULL))) {}
+
+double NormalStream::uniform_open() {
+  const double u = static_cast<double>(engine_() >> 11) * 0x1.0p-53;
+  return 2.0 * u - 1.0;
+}
+
+double NormalStream::next() {
+  if (has_spare_) {
+    has_spare_ = false;
+    return spare_;
+  }
+  double u, v, s;
+  do {
+    u = uniform_open();
+    v = uniform_open();
+    s = u * u + v * v;
+  } while (s >= 1.0 || s == 0.0);
+  const double factor = std::sqrt(-2.0 * std::log(s) / s);
+  spare_ = v * factor;
+  has_spare_ = true;
+  return u * factor;
+}
+
+Eigen::VectorXd rate_noise(const NoiseTerms& terms, double fs_hz, Eigen::Index n, std::uint64_t seed) {
+  Eigen::VectorXd noise = Eigen::VectorXd::Zero(n);
+  const double h = 1.0 / fs_hz;
+  if (terms.arw_rad_sqrt_s > 0.0) {
+    NormalStream white(seed, 0);
+    const double sigma = terms.arw_rad_sqrt_s * std::sqrt(fs_hz);
+    for (Eigen::Index k = 0; k < n; ++k) noise[k] += sigma * white.next();
+  }
+  if (terms.rate_random_walk_rad_s_sqrt_s > 0.0) {
+    NormalStream walk(seed, 1);
+    const double step = terms.rate_random_walk_rad_s_sqrt_s * std::sqrt(h);
+    double state = 0.0;
+    for (Eigen::Index k = 0; k < n; ++k) {
+      noise[k] += state;
+      state += step * walk.next();
+    }
+  }
+  const auto components = flicker_components(terms);
+  for (std::size_t i = 0; i < components.size(); ++i) {
+    NormalStream stream(seed, 2 + i);
+    const double a = std::exp(-h / components[i].tau_s);
+    const double drive = components[i].sigma_rad_s * std::sqrt(1.0 - a * a);
+    double state = components[i].sigma_rad_s * stream.next();
+    for (Eigen::Index k = 0; k < n; ++k) {
+      noise[k] += state;
+      state = a * state + drive * stream.next();
+    }
+  }
+  return noise;
+}
+
+}  // namespace driftlab::error_model

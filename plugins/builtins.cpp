@@ -1,0 +1,21 @@
+#include "framework/registry.hpp"
+
+namespace driftlab {
+
+void register_ga_plugins(Registry&);
+void register_rbf_plugins(Registry&);
+void register_sample_entropy_plugins(Registry&);
+void register_kalman_plugins(Registry&);
+void register_emd_plugins(Registry&);
+void register_effect_plugins(Registry&);
+
+void register_builtin_plugins(Registry& registry) {
+  register_ga_plugins(registry);
+  register_rbf_plugins(registry);
+  register_sample_entropy_plugins(registry);
+  register_kalman_plugins(registry);
+  register_emd_plugins(registry);
+  register_effect_plugins(registry);
+}
+
+}  // namespace driftlab

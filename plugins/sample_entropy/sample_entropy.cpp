@@ -1,0 +1,297 @@
+#include "plugins/sample_entropy/sample_entropy.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+
+namespace driftlab::sampen {
+namespace {
+
+void require_finite(std::span<const double> x) {
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    if (!std::isfinite(x[i])) {
+      throw std::invalid_argument("sample entropy: sample " + std::to_string(i) + " is not finite");
+    }
+  }
+}
+
+// Pairs i < j with |v[i] - v[j]| < r.
+std::int64_t count_close_pairs(std::span<const double> v, double r) {
+  std::vector<double> sorted(v.begin(), v.end());
+  std::sort(sorted.begin(), sorted.end());
+  std::int64_t count = 0;
+  std::size_t hi = 0;
+  for (std::size_t i = 0; i < sorted.size(); ++i) {
+    hi = std::max(hi, i + 1);
+    while (hi < sorted.size() && sorted[hi] - sorted[i] < r) ++hi;
+    count += static_cast<std::int64_t>(hi - i - 1);
+  }
+  return count;
+}
+
+struct PairCounts {
+  std::int64_t prefix = 0;  // pairs matching in coordinates 0 .. coords-2
+  std::int64_t full = 0;    // pairs matching in every coordinate
+};
+
+constexpr int kMaxUnrolledCoords = 6;
+
+// Counts matches among the candidates j in [a, b) of template i. Coordinate 1 is known to match.
+// The 0/1 indicators are summed in double (exact below 2^53, so in any order): with
+// -fopenmp-simd the loop becomes a vector reduction.
+template <int kCoords>
+void count_candidates(const std::vector<const double*>& c, std::size_t i, std::size_t a,
+                      std::size_t b, double r, PairCounts& out) {
+  const int coords = kCoords > 0 ? kCoords : static_cast<int>(c.size());
+  const double* first = c[0];
+  const double* last = c[coords - 1];
+  const double first_i = first[i];
+  const double last_i = last[i];
+  double prefix = 0.0;
+  double full = 0.0;
+#pragma omp simd reduction(+ : prefix, full)
+  for (std::size_t j = a; j < b; ++j) {
+    double match = std::fabs(first[j] - first_i) < r ? 1.0 : 0.0;
+    for (int k = 2; k < coords - 1; ++k) match = std::fabs(c[k][j] - c[k][i]) < r ? match : 0.0;
+    prefix += match;
+    full += (coords == 2 || std::fabs(last[j] - last_i) < r) ? match : 0.0;
+  }
+  out.prefix += static_cast<std::int64_t>(prefix);
+  out.full += static_cast<std::int64_t>(full);
+}
+
+// Templates t = 0 .. count-1 with coordinates x[t + k], k = 0 .. coords-1 (coords >= 2).
+template <int kCoords>
+PairCounts count_template_pairs(std::span<const double> x, std::size_t count, int coords,
+                                double r) {
+  std::vector<std::size_t> order(count);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return x[p] < x[q]; });
+
+  std::vector<std::size_t> strip_begin;
+  for (std::size_t s = 0; s < count;) {
+    strip_begin.push_back(s);
+    std::size_t e = s + 1;
+    while (e < count && x[order[e]] - x[order[s]] < r) ++e;
+    std::sort(order.begin() + static_cast<std::ptrdiff_t>(s),
+              order.begin() + static_cast<std::ptrdiff_t>(e),
+              [&](std::size_t p, std::size_t q) { return x[p + 1] < x[q + 1]; });
+    s = e;
+  }
+  strip_begin.push_back(count);
+
+  std::vector<std::vector<double>> storage(static_cast<std::size_t>(coords),
+                                           std::vector<double>(count));
+  std::vector<const double*> c(static_cast<std::size_t>(coords));
+  for (int k = 0; k < coords; ++k) {
+    auto& column = storage[static_cast<std::size_t>(k)];
+    for (std::size_t p = 0; p < count; ++p) column[p] = x[order[p] + static_cast<std::size_t>(k)];
+    c[static_cast<std::size_t>(k)] = column.data();
+  }
+  const double* second = c[1];
+
+  PairCounts counts;
+  for (std::size_t strip = 0; strip + 1 < strip_begin.size(); ++strip) {
+    const std::size_t begin = strip_begin[strip];
+    const std::size_t end = strip_begin[strip + 1];
+    const std::size_t next_end = strip + 2 < strip_begin.size() ? strip_begin[strip + 2] : end;
+    std::size_t same_hi = begin;
+    std::size_t next_lo = end;
+    std::size_t next_hi = end;
+    for (std::size_t i = begin; i < end; ++i) {
+      const double s = second[i];
+      same_hi = std::max(same_hi, i + 1);
+      while (same_hi < end && second[same_hi] - s < r) ++same_hi;
+      count_candidates<kCoords>(c, i, i + 1, same_hi, r, counts);
+      while (next_lo < next_end && second[next_lo] - s <= -r) ++next_lo;
+      next_hi = std::max(next_hi, next_lo);
+      while (next_hi < next_end && second[next_hi] - s < r) ++next_hi;
+      count_candidates<kCoords>(c, i, next_lo, next_hi, r, counts);
+    }
+  }
+  return counts;
+}
+
+PairCounts count_template_pairs(std::span<const double> x, std::size_t count, int coords,
+                                double r) {
+  switch (coords) {
+    case 2: return count_template_pairs<2>(x, count, coords, r);
+    case 3: return count_template_pairs<3>(x, count, coords, r);
+    case 4: return count_template_pairs<4>(x, count, coords, r);
+    case 5: return count_template_pairs<5>(x, count, coords, r);
+    case kMaxUnrolledCoords: return count_template_pairs<kMaxUnrolledCoords>(x, count, coords, r);
+    default: return count_template_pairs<0>(x, count, coords, r);
+  }
+}
+
+std::string format_entropy(double value) {
+  if (std::isinf(value)) return "Inf";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", value);
+  return text;
+}
+
+void require_no_nan(std::span<const double> entropies) {
+  for (const double v : entropies) {
+    if (std::isnan(v)) throw std::invalid_argument("sample entropy grouping: NaN entropy");
+  }
+}
+
+}  // namespace
+
+std::string to_string(Status status) {
+  switch (status) {
+    case Status::Finite: return "finite";
+    case Status::NoMatches: return "no matches of length m+1 (SampEn = Inf)";
+    case Status::Undefined: return "no matches of length m (SampEn undefined, reported as Inf)";
+  }
+  return "unknown";
+}
+
+double population_sd(std::span<const double> x) {
+  if (x.empty()) throw std::invalid_argument("sample entropy: empty signal");
+  const double n = static_cast<double>(x.size());
+  const double mean = std::accumulate(x.begin(), x.end(), 0.0) / n;
+  double sum_sq = 0.0;
+  for (const double v : x) sum_sq += (v - mean) * (v - mean);
+  return std::sqrt(sum_sq / n);
+}
+
+Result sample_entropy(std::span<const double> x, int m, double tolerance) {
+  if (m < 0) throw std::invalid_argument("sample entropy: m must be >= 0");
+  if (!(tolerance >= 0.0) || !std::isfinite(tolerance)) {
+    throw std::invalid_argument("sample entropy: r must be finite and >= 0");
+  }
+  require_finite(x);
+
+  Result result;
+  result.m = m;
+  result.tolerance = tolerance;
+  result.n = x.size();
+  const std::size_t length = static_cast<std::size_t>(m);
+  if (x.size() > length + 1) {
+    const std::size_t templates = x.size() - length;
+    if (m == 0) {
+      const auto n = static_cast<std::int64_t>(x.size());
+      result.b = n * (n - 1) / 2;
+      result.a = count_close_pairs(x, tolerance);
+    } else if (m == 1) {
+      result.b = count_close_pairs(x.first(templates), tolerance);
+      result.a = count_template_pairs(x, templates, 2, tolerance).full;
+    } else {
+      const PairCounts counts = count_template_pairs(x, templates, m + 1, tolerance);
+      result.b = counts.prefix;
+      result.a = counts.full;
+    }
+  }
+
+  if (result.b == 0) {
+    result.status = Status::Undefined;
+    result.value = std::numeric_limits<double>::infinity();
+  } else if (result.a == 0) {
+    result.status = Status::NoMatches;
+    result.value = std::numeric_limits<double>::infinity();
+  } else {
+    result.status = Status::Finite;
+    result.value = -std::log(static_cast<double>(result.a) / static_cast<double>(result.b));
+  }
+  return result;
+}
+
+Result sample_entropy_relative(std::span<const double> x, int m, double r_relative) {
+  if (!(r_relative >= 0.0) || !std::isfinite(r_relative)) {
+    throw std::invalid_argument("sample entropy: r must be finite and >= 0");
+  }
+  require_finite(x);
+  return sample_entropy(x, m, r_relative * population_sd(x));
+}
+
+std::vector<Result> sample_entropy_profile(std::span<const double> x, int max_m, double tolerance) {
+  if (max_m < 0) throw std::invalid_argument("sample entropy: max_m must be >= 0");
+  std::vector<Result> results;
+  results.reserve(static_cast<std::size_t>(max_m) + 1);
+  for (int m = 0; m <= max_m; ++m) results.push_back(sample_entropy(x, m, tolerance));
+  return results;
+}
+
+std::string to_string(Group group) {
+  switch (group) {
+    case Group::Noise: return "noise";
+    case Group::Mixed: return "mixed";
+    case Group::Drift: return "drift";
+  }
+  return "unknown";
+}
+
+std::vector<GroupDecision> group_by_thresholds(std::span<const double> entropies, double noise_above,
+                                               double drift_below) {
+  if (!(noise_above > drift_below)) {
+    throw std::invalid_argument("sample entropy grouping: noise_above must exceed drift_below");
+  }
+  require_no_nan(entropies);
+  std::vector<GroupDecision> decisions;
+  decisions.reserve(entropies.size());
+  for (const double v : entropies) {
+    const std::string se = "SampEn " + format_entropy(v);
+    if (v > noise_above) {
+      decisions.push_back({Group::Noise, se + " > noise_above " + format_entropy(noise_above) + " -> noise"});
+    } else if (v < drift_below) {
+      decisions.push_back({Group::Drift, se + " < drift_below " + format_entropy(drift_below) + " -> drift"});
+    } else {
+      decisions.push_back({Group::Mixed, "drift_below " + format_entropy(drift_below) + " <= " + se +
+                                             " <= noise_above " + format_entropy(noise_above) + " -> mixed"});
+    }
+  }
+  return decisions;
+}
+
+std::vector<GroupDecision> group_by_gaps(std::span<const double> entropies) {
+  require_no_nan(entropies);
+  const std::size_t count = entropies.size();
+  std::vector<std::size_t> order(count);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t p, std::size_t q) { return entropies[p] > entropies[q]; });
+
+  struct Gap {
+    std::size_t after;  // position in `order` of the value above the gap
+    double size;
+  };
+  std::vector<Gap> gaps;
+  for (std::size_t p = 0; p + 1 < count; ++p) {
+    const double above = entropies[order[p]];
+    const double below = entropies[order[p + 1]];
+    const double size = std::isinf(above) && std::isinf(below) ? 0.0 : above - below;
+    if (size > 0.0) gaps.push_back({p, size});
+  }
+  std::stable_sort(gaps.begin(), gaps.end(), [](const Gap& g, const Gap& h) { return g.size > h.size; });
+  if (gaps.size() > 2) gaps.resize(2);
+  std::sort(gaps.begin(), gaps.end(), [](const Gap& g, const Gap& h) { return g.after < h.after; });
+
+  auto describe_cut = [&](const Gap& gap) {
+    return "(" + format_entropy(entropies[order[gap.after]]) + " | " +
+           format_entropy(entropies[order[gap.after + 1]]) + ")";
+  };
+
+  std::vector<GroupDecision> decisions(count);
+  for (std::size_t p = 0; p < count; ++p) {
+    GroupDecision& d = decisions[order[p]];
+    const std::string se = "SampEn " + format_entropy(entropies[order[p]]);
+    if (gaps.empty()) {
+      d = {Group::Mixed, se + ": no gap between the SampEn values (one IMF or all equal) -> mixed"};
+    } else if (p <= gaps.front().after) {
+      d = {Group::Noise, se + " is above the cut " + describe_cut(gaps.front()) + " -> noise"};
+    } else if (p > gaps.back().after) {
+      d = {Group::Drift, se + " is below the cut " + describe_cut(gaps.back()) + " -> drift"};
+    } else {
+      d = {Group::Mixed, se + " lies between the cuts " + describe_cut(gaps.front()) + " and " +
+                             describe_cut(gaps.back()) + " -> mixed"};
+    }
+  }
+  return decisions;
+}
+
+}  // namespace driftlab::sampen

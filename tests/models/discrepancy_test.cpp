@@ -1,0 +1,317 @@
+// The discrepancy workflow (models/discrepancy) on simulated oven records with hidden effects
+// (tests/models/oven_records.hpp: seeded, different ramp rates per record, FMVMG noise), plus its
+// building blocks: block means, the noise covariance of block means, the residual views.
+//
+// Record counts (1 Hz, 3.2-5.8 h each): 36 with one hidden effect drawn at random, 16 with none,
+// 10 with two, 1 with a drive-frequency channel; the single-effect records are run once and shared
+// by the three checks on them. DRIFTLAB_DISCREPANCY_SCALE=k multiplies the counts by k for an
+// offline validation (the tests print a one-line summary of each check).
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <map>
+#include <set>
+
+#include "framework/params_io.hpp"
+#include "framework/registry.hpp"
+#include "models/discrepancy/discrepancy.hpp"
+#include "tests/models/oven_records.hpp"
+#include "tools/driftlab/discrepancy_device.hpp"
+
+namespace driftlab {
+namespace {
+
+using testing_oven::kRadPerSecPerDph;
+
+constexpr std::uint64_t kSeed = 2026;
+
+int scale() {
+  const char* text = std::getenv("DRIFTLAB_DISCREPANCY_SCALE");
+  return text ? std::max(1, std::atoi(text)) : 1;
+}
+const int kSingleEffectRecords = 36 * scale();
+const int kNoiseOnlyRecords = 16 * scale();
+const int kTwoEffectRecords = 10 * scale();
+constexpr double kNearlyAll = 0.9;  // fraction of records in which the hidden effect must be named first
+
+// Parameter tolerances: relative error, or 3 reported standard deviations when that is larger.
+constexpr double kTimeConstantTolerance = 0.05;  // the rate table's scale-factor signature pins tau to ~1 %
+constexpr double kScaleFactorTolerance = 0.05;   // the basis leaves out the device's own s_dev(T) = 1 +- 1.5 %
+constexpr double kPeriodTolerance = 0.01;        // ~ one tenth of a periodogram bin over 4 h
+constexpr double kAmplitudeTolerance = 0.30;     // amplitudes of the order of the flicker noise: 10-20 % at 1 sigma
+constexpr double kSigmas = 3.0;
+
+devices::DeviceDefinition fmvmg(bool with_drive_frequency) {
+  auto device = devices::load_device_file(std::filesystem::path(DRIFTLAB_SOURCE_DIR) / "devices" / "fmvmg.yaml");
+  if (!with_drive_frequency)
+    std::erase_if(device.channels, [](const auto& c) { return c.role == role::kDriveFrequency; });
+  return device;
+}
+
+struct Candidates {
+  Candidates() {
+    register_builtin_plugins(registry);
+    for (const auto* info : registry.list("effect")) {
+      owned.push_back(registry.create_as<Effect>({info->name, params_from_assignments(registry, info->name, {})}));
+      list.push_back({info->name.substr(7), owned.back().get()});
+    }
+  }
+  Registry registry;
+  std::vector<std::unique_ptr<Effect>> owned;
+  std::vector<discrepancy::Candidate> list;
+};
+
+const Candidates& candidates() {
+  static const Candidates c;
+  return c;
+}
+
+struct Run {
+  testing_oven::OvenRecord record;
+  discrepancy::Result result;
+};
+
+Run run_record(std::uint64_t index, const std::vector<std::string>& hidden, bool with_drive_frequency = false) {
+  const auto device = fmvmg(with_drive_frequency);
+  Run r{testing_oven::make_record(device, kSeed, index, hidden), {}};
+  r.result = discrepancy::find_missing_effects(r.record.series, candidates().list, cli::device_options(device));
+  return r;
+}
+
+std::vector<std::string> named(const discrepancy::Result& r) {
+  std::vector<std::string> out;
+  for (const auto& s : r.steps) out.push_back(s.effect);
+  return out;
+}
+
+// RMS of (model - truth) about its mean: the systematic gap, leaving the constant that the noise's
+// random-walk start sets aside.
+double gap_to_truth(const Eigen::VectorXd& model, const Eigen::VectorXd& truth) {
+  const Eigen::ArrayXd d = (model - truth).array();
+  return std::sqrt((d - d.mean()).square().mean());
+}
+
+const std::vector<Run>& single_effect_runs() {
+  static const std::vector<Run> runs = [] {
+    std::vector<Run> out;
+    for (int i = 0; i < kSingleEffectRecords; ++i)
+      out.push_back(run_record(static_cast<std::uint64_t>(i), testing_oven::draw_effects(kSeed, static_cast<std::uint64_t>(i), 1)));
+    return out;
+  }();
+  return runs;
+}
+
+const discrepancy::ReportedValue& value(const discrepancy::Step& step, const std::string& key) {
+  for (const auto& p : step.parameters)
+    if (p.key == key) return p;
+  throw std::runtime_error("no parameter " + key + " in " + step.effect);
+}
+
+// (fitted, sigma, truth, relative tolerance) of the parameters that characterize the hidden effect.
+struct Check {
+  std::string what;
+  double fitted, sigma, truth, tolerance;
+};
+std::vector<Check> parameter_checks(const discrepancy::Step& step, const error_model::Effects& e) {
+  auto check = [&](const std::string& key, double truth, double tolerance) {
+    const auto& v = value(step, key);
+    return Check{step.effect + "." + key, v.values[0], v.sigmas[0], truth, tolerance};
+  };
+  const double dph = kRadPerSecPerDph;
+  if (step.effect == "thermal_lag") return {check("tau_s", e.thermal_lag->tau_s, kTimeConstantTolerance)};
+  if (step.effect == "temperature_rate")
+    return {check("coefficient_dph_per_c_per_min", e.temperature_rate->coefficient_rad_s_per_k_s / dph / 60.0, kAmplitudeTolerance)};
+  if (step.effect == "hysteresis") return {check("height_dph", e.hysteresis->height_rad_s / dph, kAmplitudeTolerance)};
+  if (step.effect == "warmup_transient")
+    return {check("amplitude_dph", e.warmup_transient->amplitude_rad_s / dph, kAmplitudeTolerance)};
+  if (step.effect == "periodic_disturbance")
+    return {check("amplitude_dph", e.periodic_disturbance->amplitude_rad_s / dph, kAmplitudeTolerance),
+            check("period_s", e.periodic_disturbance->period_s, kPeriodTolerance)};
+  if (step.effect == "scale_factor_temperature")
+    return {check("coefficients_ppm", e.scale_factor_temperature->coefficients_per_k[0] * 1e6, kScaleFactorTolerance)};
+  return {};
+}
+
+TEST(HiddenEffect, IsNamedFirstInNearlyAllOvenRecordsAndNoOtherEffectEverIs) {
+  int first_is_hidden = 0;
+  for (const auto& run : single_effect_runs()) {
+    const auto names = named(run.result);
+    if (!names.empty() && names.front() == run.record.hidden.front()) ++first_is_hidden;
+    for (const auto& n : names) EXPECT_EQ(n, run.record.hidden.front()) << devices::describe_effects(run.record.effects)[0];
+  }
+  EXPECT_GE(first_is_hidden, static_cast<int>(std::ceil(kNearlyAll * kSingleEffectRecords)))
+      << first_is_hidden << " of " << kSingleEffectRecords;
+  std::printf("[ summary  ] hidden effect named first in %d of %d records\n", first_is_hidden, kSingleEffectRecords);
+}
+
+TEST(HiddenEffect, FittedParametersLandNearTheTruth) {
+  std::map<std::string, std::vector<double>> relative_errors;
+  for (const auto& run : single_effect_runs()) {
+    if (run.result.steps.empty()) continue;
+    for (const auto& c : parameter_checks(run.result.steps.front(), run.record.effects)) {
+      const double allowed = std::max(c.tolerance * std::abs(c.truth), kSigmas * c.sigma);
+      EXPECT_LE(std::abs(c.fitted - c.truth), allowed) << c.what << ": fitted " << c.fitted << " +- " << c.sigma
+                                                       << ", truth " << c.truth;
+      relative_errors[c.what].push_back(std::abs(c.fitted / c.truth - 1.0));
+    }
+  }
+  for (auto& [what, errors] : relative_errors) {
+    std::sort(errors.begin(), errors.end());
+    std::printf("[ summary  ] %s: %zu records, relative error median %.3f, max %.3f\n", what.c_str(), errors.size(),
+                errors[errors.size() / 2], errors.back());
+  }
+}
+
+TEST(HiddenEffect, SystematicGapToTheTruthShrinksByAtLeastHalfInNearlyAllRecords) {
+  // What is left after the effect is mostly the slow noise that the bias polynomial absorbed (the
+  // same before and after); where the effect is weak, that floor can exceed half the initial gap.
+  int halved = 0;
+  std::string not_halved;
+  for (const auto& run : single_effect_runs()) {
+    const double before = gap_to_truth(run.result.model_initial_rad_s, run.record.truth_rad_s);
+    const double after = gap_to_truth(run.result.model_final_rad_s, run.record.truth_rad_s);
+    if (after <= 0.5 * before) ++halved;
+    else
+      not_halved += devices::describe_effects(run.record.effects)[0] + ": " + std::to_string(before / kRadPerSecPerDph) +
+                    " -> " + std::to_string(after / kRadPerSecPerDph) + " deg/h\n";
+  }
+  EXPECT_GE(halved, static_cast<int>(std::ceil(kNearlyAll * kSingleEffectRecords))) << not_halved;
+  std::printf("[ summary  ] systematic gap to the truth halved in %d of %d records\n", halved, kSingleEffectRecords);
+}
+
+TEST(NoHiddenEffect, NothingIsNamedInRecordsWithOnlyColouredNoise) {
+  double largest = -std::numeric_limits<double>::infinity();
+  for (int i = 0; i < kNoiseOnlyRecords; ++i) {
+    const auto run = run_record(100000 + static_cast<std::uint64_t>(i), {});
+    EXPECT_THAT(named(run.result), ::testing::IsEmpty()) << "record " << i;
+    ASSERT_FALSE(run.result.final_scores.empty());
+    largest = std::max(largest, run.result.final_scores.front().delta_bic);
+  }
+  std::printf("[ summary  ] %d noise-only records: largest delta BIC of any candidate %.1f (names above 10)\n",
+              kNoiseOnlyRecords, largest);
+}
+
+TEST(TwoHiddenEffects, BothAreNamedInNearlyAllRecordsAndNothingElseEver) {
+  int both = 0;
+  for (int i = 0; i < kTwoEffectRecords; ++i) {
+    const auto index = 200000 + static_cast<std::uint64_t>(i);
+    const auto hidden = testing_oven::draw_effects(kSeed, index, 2);
+    const auto run = run_record(index, hidden);
+    const auto list = named(run.result);
+    const std::set<std::string> names(list.begin(), list.end());
+    if (names == std::set<std::string>(hidden.begin(), hidden.end())) ++both;
+    for (const auto& n : names)
+      EXPECT_THAT(hidden, ::testing::Contains(n)) << ::testing::PrintToString(devices::describe_effects(run.record.effects));
+  }
+  EXPECT_GE(both, static_cast<int>(std::ceil(kNearlyAll * kTwoEffectRecords))) << both << " of " << kTwoEffectRecords;
+  std::printf("[ summary  ] both hidden effects named in %d of %d records\n", both, kTwoEffectRecords);
+}
+
+TEST(HiddenThermalLag, IsSeenThroughTheDriveFrequencyWhenTheRecordHasIt) {
+  // With a drive-frequency channel the resonator's own temperature is measured: the lag needs no
+  // time constant, and mode_split_drift (0 added parameters) explains it.
+  const auto run = run_record(300000, {"thermal_lag"}, true);
+  ASSERT_THAT(named(run.result), ::testing::ElementsAre("mode_split_drift"));
+  EXPECT_LE(gap_to_truth(run.result.model_final_rad_s, run.record.truth_rad_s),
+            0.1 * gap_to_truth(run.result.model_initial_rad_s, run.record.truth_rad_s));
+  EXPECT_NEAR(value(run.result.steps.front(), "drive_frequency_tc_ppm_per_k").values[0], -30.0, 1e-9);
+}
+
+TEST(DiscrepancyWorkflow, RejectsBadOptionsAndRecordsWithoutTemperature) {
+  const auto device = fmvmg(false);
+  TimeSeries record(Eigen::VectorXd::LinSpaced(100, 0.0, 99.0));
+  record.set_channel({role::kRate, "rad/s", "rate_dps", Eigen::VectorXd::Zero(100)});
+  auto options = cli::device_options(device);
+  EXPECT_THROW(discrepancy::find_missing_effects(record, candidates().list, options), DataError);
+  record.set_channel({role::kTemperature, "degC", "temp_c", Eigen::VectorXd::LinSpaced(100, 0.0, 10.0)});
+  options.bias_degree = 9;
+  EXPECT_THROW(discrepancy::find_missing_effects(record, candidates().list, options), ConfigError);
+}
+
+// ---- building blocks -------------------------------------------------------------------------
+
+TEST(Blocks, AverageEachTimeSpanAndDropEmptyOnesInGaps) {
+  Eigen::VectorXd t(8), x(8);
+  t << 0, 1, 2, 3, 20, 21, 22, 23;
+  x << 1, 2, 3, 4, 10, 20, 30, 40;
+  const auto b = discrepancy::make_blocks(t, 2.0);
+  ASSERT_EQ(b.size(), 4);
+  EXPECT_THAT(b.count, ::testing::ElementsAre(2, 2, 2, 2));
+  const Eigen::VectorXd m = discrepancy::block_means(b, x);
+  EXPECT_THAT(std::vector<double>(m.data(), m.data() + m.size()), ::testing::ElementsAre(1.5, 3.5, 15.0, 35.0));
+  EXPECT_DOUBLE_EQ(b.start_s[2], 20.0);
+  EXPECT_DOUBLE_EQ(b.end_s[2], 22.0);  // two samples of dt = 1 s
+  const Eigen::VectorXd at = discrepancy::interpolate(b, m, Eigen::Vector3d(-5.0, 1.5, 100.0));
+  EXPECT_DOUBLE_EQ(at[0], 1.5);
+  EXPECT_DOUBLE_EQ(at[2], 35.0);
+}
+
+TEST(NoiseCovariance, MatchesTheSampleCovarianceOfSimulatedBlockMeans) {
+  // 400 realizations of 1 h at 1 Hz with N, B and K all on; blocks of 120 s.
+  error_model::NoiseTerms noise;
+  noise.arw_rad_sqrt_s = 5e-4;
+  noise.bias_instability_rad_s = 1.5e-4;
+  noise.rate_random_walk_rad_s_sqrt_s = 2e-6;
+  const int realizations = 400, n = 3600;
+  const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(n, 0.0, n - 1.0);
+  const auto blocks = discrepancy::make_blocks(t, 120.0);
+  const Eigen::MatrixXd model = discrepancy::noise_covariance(blocks, noise);
+  Eigen::MatrixXd sample = Eigen::MatrixXd::Zero(blocks.size(), blocks.size());
+  for (int r = 0; r < realizations; ++r) {
+    const Eigen::VectorXd m = discrepancy::block_means(blocks, error_model::rate_noise(noise, 1.0, n, 77 + static_cast<std::uint64_t>(r)));
+    sample += m * m.transpose() / realizations;
+  }
+  // Sample (co)variances of 400 draws scatter by about sqrt(2/400) = 7 % of the variance.
+  constexpr double kSamplingTolerance = 0.25;
+  for (Eigen::Index i : {0, 7, 15, 29}) {
+    EXPECT_NEAR(sample(i, i), model(i, i), kSamplingTolerance * model(i, i)) << "block " << i;
+    if (i + 1 < blocks.size()) {
+      EXPECT_NEAR(sample(i, i + 1), model(i, i + 1), kSamplingTolerance * model(i, i)) << "blocks " << i << ", " << i + 1;
+    }
+  }
+  EXPECT_NEAR(sample(0, 29), model(0, 29), kSamplingTolerance * model(0, 0));
+}
+
+TEST(NoiseAllanDeviation, FollowsTheIeee952ClosedForms) {
+  error_model::NoiseTerms white, walk, flicker;
+  white.arw_rad_sqrt_s = 1e-3;
+  walk.rate_random_walk_rad_s_sqrt_s = 1e-5;
+  flicker.bias_instability_rad_s = 1e-4;
+  for (double tau : {1.0, 10.0, 100.0}) {
+    EXPECT_NEAR(discrepancy::model_allan_deviation(white, tau), 1e-3 / std::sqrt(tau), 1e-15);
+    EXPECT_NEAR(discrepancy::model_allan_deviation(walk, tau), 1e-5 * std::sqrt(tau / 3.0), 1e-15);
+  }
+  // Flicker floor 0.664 B within +-5 % for tau in [10 tau_min, tau_max / 3] (Gauss-Markov sum with
+  // 2 poles per decade over [0.5, 5000] s; the continuous-time average rolls off below 10 tau_min).
+  constexpr double kFlickerFloorTolerance = 0.05;
+  for (double tau : {5.0, 100.0, 1600.0})
+    EXPECT_NEAR(discrepancy::model_allan_deviation(flicker, tau), 0.664 * 1e-4, kFlickerFloorTolerance * 0.664e-4) << tau;
+}
+
+TEST(ResidualViews, SeparateHeatingFromCoolingAndFindTheSinusoid) {
+  const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(720, 0.0, 719.0 * 10.0);
+  Eigen::VectorXd temp(t.size()), residual(t.size());
+  for (Eigen::Index k = 0; k < t.size(); ++k) {
+    temp[k] = k < 360 ? 0.02 * t[k] : 0.02 * (7190.0 - t[k]);
+    residual[k] = (k < 360 ? -1e-4 : 1e-4) + 6e-5 * std::sin(2.0 * std::numbers::pi * t[k] / 600.0);
+  }
+  const auto blocks = discrepancy::make_blocks(t, 10.0);
+  const auto v = discrepancy::residual_views(blocks, temp, residual, residual, error_model::NoiseTerms{}, 6);
+  constexpr double kSinusoidAverage = 1e-5;  // the sinusoid averages out over each leg within this
+  EXPECT_NEAR(v.heating.mean_rad_s, -1e-4, kSinusoidAverage);
+  EXPECT_NEAR(v.cooling.mean_rad_s, 1e-4, kSinusoidAverage);
+  EXPECT_EQ(v.heating_by_temperature.size(), 6u);
+  // The leg step is the largest line (its fundamental, 4/pi x 1e-4); the sinusoid is among the peaks.
+  const auto peak = std::find_if(v.peaks.begin(), v.peaks.end(), [](const auto& p) { return std::abs(p.period_s - 600.0) < 12.0; });
+  ASSERT_NE(peak, v.peaks.end());
+  EXPECT_NEAR(peak->amplitude_rad_s, 6e-5, 6e-6);
+  EXPECT_FALSE(v.allan.empty());
+}
+
+}  // namespace
+}  // namespace driftlab

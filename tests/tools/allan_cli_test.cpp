@@ -1,0 +1,128 @@
+// End-to-end tests of `driftlab allan`: the published ADIS16405 OADEV through the CSV/JSON/SVG
+// outputs, a simulated white-noise record whose angle random walk is known, and bad input.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/tools/cli_harness.hpp"
+
+namespace driftlab {
+namespace {
+
+using ::testing::HasSubstr;
+using testing_cli::read_text;
+using testing_cli::run_driftlab;
+using testing_cli::scratch_dir;
+
+std::vector<std::vector<double>> read_csv_rows(const std::filesystem::path& path, std::string& header) {
+  std::ifstream in(path);
+  std::getline(in, header);
+  std::vector<std::vector<double>> rows;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<double> row;
+    std::stringstream s(line);
+    std::string cell;
+    while (std::getline(s, cell, ',')) row.push_back(std::stod(cell));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// 2^16 samples at 100 Hz of white rate noise with N = 0.5 deg/sqrt(h) (std N sqrt(fs) in deg/s)
+// on a 0.3 deg/s bias; no time column (--fs).
+std::filesystem::path white_noise_csv(const std::filesystem::path& dir) {
+  constexpr double kFs = 100.0;
+  const double n_deg_per_sqrt_s = 0.5 / 60.0;
+  std::mt19937_64 engine(42);
+  std::normal_distribution<double> normal;
+  const auto path = dir / "white.csv";
+  std::ofstream out(path);
+  out << "rate_dps\n";
+  char line[64];
+  for (int i = 0; i < (1 << 16); ++i) {
+    std::snprintf(line, sizeof line, "%.17g\n", 0.3 + n_deg_per_sqrt_s * std::sqrt(kFs) * normal(engine));
+    out << line;
+  }
+  return path;
+}
+
+TEST(AllanCommand, WritesIntervalsTermsAndAPlotForAWhiteNoiseRecord) {
+  const auto dir = scratch_dir("allan_white");
+  const auto csv = white_noise_csv(dir);
+  const auto out = dir / "allan.csv", json = dir / "summary.json", svg = dir / "allan.svg";
+  const auto r = run_driftlab("allan --data " + csv.string() + " --fs 100 --out " + out.string() +
+                              " --json " + json.string() + " --plot " + svg.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::string header;
+  const auto rows = read_csv_rows(out, header);
+  EXPECT_EQ(header, "tau_s,dev,dev_lo,dev_hi,n");
+  ASSERT_EQ(rows.size(), 15u);  // octave grid up to (N-1)/4 = 16384 samples
+  EXPECT_DOUBLE_EQ(rows.front()[0], 0.01);
+  EXPECT_EQ(rows.front()[4], 65535.0);  // N - 2m terms at m = 1 (N = 65537 angle samples)
+  for (const auto& row : rows) {
+    EXPECT_LT(row[2], row[1]);
+    EXPECT_GT(row[3], row[1]);
+  }
+  const auto summary = nlohmann::json::parse(read_text(json));
+  for (const auto& [key, unit] : std::vector<std::pair<std::string, std::string>>{
+           {"Q", "deg"}, {"N", "deg/sqrt(h)"}, {"B", "deg/h"}, {"K", "deg/h/sqrt(h)"}, {"R", "deg/h/h"}}) {
+    ASSERT_TRUE(summary.contains(key)) << key;
+    EXPECT_EQ(summary[key]["unit"], unit);
+    EXPECT_TRUE(summary[key].contains("value"));
+    EXPECT_TRUE(summary[key].contains("sigma"));
+  }
+  constexpr double kRecoveryTolerance = 0.05;  // relative; 2^16 samples of white noise
+  EXPECT_NEAR(summary["N"]["value"].get<double>() / 0.5, 1.0, kRecoveryTolerance);
+  EXPECT_NEAR(summary["N_density"]["value"].get<double>() / 30.0, 1.0, kRecoveryTolerance);
+  EXPECT_NEAR(summary["kalibr"]["gyroscope_noise_density"]["value"].get<double>() /
+                  (0.5 / 60.0 * 3.14159265358979323846 / 180.0),
+              1.0, kRecoveryTolerance);
+  EXPECT_DOUBLE_EQ(summary["record_length_s"].get<double>(), 655.36);
+  const std::string plot = read_text(svg);
+  EXPECT_THAT(plot, HasSubstr("<svg"));
+  EXPECT_THAT(plot, HasSubstr("tau (s)"));
+  EXPECT_THAT(plot, HasSubstr("N term"));
+}
+
+TEST(AllanCommand, ReproducesThePublishedAdis16405AllanVariance) {
+  const auto data = std::filesystem::path(DRIFTLAB_SHARED_DATA) / "real" / "smac-imudata-static" /
+                    "adis16405_imu1_gyro_dps.csv";
+  if (!std::filesystem::exists(data)) GTEST_SKIP() << "shared reference data not found: " << data;
+  const auto dir = scratch_dir("allan_adis");
+  const auto out = dir / "allan.csv";
+  const auto r = run_driftlab("allan --data " + data.string() +
+                              " --column rate=gyro_x_dps:deg/s --fs 100 --taus 0.02,1.28,2621.44 --out " +
+                              out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::string header;
+  const auto rows = read_csv_rows(out, header);
+  ASSERT_EQ(rows.size(), 3u);
+  constexpr double kPublishedTolerance = 1e-4;
+  const double published[] = {6.6290651997e-02, 1.3045389364e-03, 3.2755302229e-05};  // (deg/s)^2
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_NEAR(rows[i][1] * rows[i][1] / published[i], 1.0, kPublishedTolerance) << rows[i][0];
+  }
+}
+
+TEST(AllanCommand, RejectsBadOptionsAndData) {
+  const auto dir = scratch_dir("allan_bad");
+  const auto csv = white_noise_csv(dir);
+  const auto out = (dir / "allan.csv").string();
+  EXPECT_EQ(run_driftlab("allan --data " + csv.string() + " --fs 100 --kind bogus --out " + out).exit_code, 2);
+  EXPECT_EQ(run_driftlab("allan --data " + csv.string() + " --fs 100 --taus 1e6 --out " + out).exit_code, 2);
+  EXPECT_EQ(run_driftlab("allan --data " + csv.string() + " --fs 100 --out " + csv.string()).exit_code, 2);
+  EXPECT_EQ(run_driftlab("allan --data " + (dir / "missing.csv").string() + " --fs 100 --out " + out).exit_code, 3);
+}
+
+}  // namespace
+}  // namespace driftlab

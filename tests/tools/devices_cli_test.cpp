@@ -1,0 +1,85 @@
+// End-to-end: `driftlab devices list|describe` and `driftlab simulate`.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "framework/csv.hpp"
+#include "tests/tools/cli_harness.hpp"
+
+namespace driftlab {
+namespace {
+
+using ::testing::HasSubstr;
+using testing_cli::run_driftlab;
+using testing_cli::scratch_dir;
+
+const std::string kSource = DRIFTLAB_SOURCE_DIR;
+
+TEST(DevicesCli, ListsTheShippedDevices) {
+  const auto r = run_driftlab("devices list");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("fmvmg.yaml"));
+  EXPECT_THAT(r.out, HasSubstr("lsm6dsm.yaml"));
+}
+
+TEST(DevicesCli, ListsADirectoryGivenByTheEnvironment) {
+  const auto r = run_driftlab("devices list", "DRIFTLAB_DEVICES_DIR=" + kSource + "/tests/data/devices");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("valid_minimal.yaml"));
+  EXPECT_THAT(r.out, HasSubstr("INVALID"));
+}
+
+TEST(DevicesCli, DescribesADeviceByNameWithItsTemperatureTable) {
+  const auto r = run_driftlab("devices describe fmvmg");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("30740"));
+  EXPECT_THAT(r.out, HasSubstr("split 146 Hz"));
+  EXPECT_THAT(r.out, HasSubstr("versus die temperature"));
+}
+
+TEST(DevicesCli, AMalformedDeviceExitsTwoNamingFileLineAndKey) {
+  const auto r = run_driftlab("devices describe " + kSource + "/tests/data/devices/negative_frequency.yaml");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("negative_frequency.yaml:18: modes.sense.frequency_hz"));
+}
+
+TEST(DevicesCli, SimulatesTheContractColumnsReproduciblyWithEffects) {
+  const auto dir = scratch_dir("simulate");
+  const std::string common = "simulate --device " + kSource + "/devices/fmvmg.yaml --fs 10 --duration 120 --seed 5";
+  const auto a = run_driftlab(common + " --out " + (dir / "a.csv").string());
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const auto b = run_driftlab(common + " --out " + (dir / "b.csv").string());
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  EXPECT_EQ(testing_cli::read_text(dir / "a.csv"), testing_cli::read_text(dir / "b.csv"));
+  const std::string header = testing_cli::read_text(dir / "a.csv").substr(0, 60);
+  EXPECT_THAT(header, HasSubstr("t_s,rate_dps,temp_c,true_rate_dps,die_temp_c,drive_freq_hz"));
+  const TimeSeries record = read_csv(dir / "a.csv");
+  EXPECT_EQ(record.size(), 1200);
+  EXPECT_TRUE(record.has("drive_frequency"));
+
+  const auto c = run_driftlab(common + " --effect thermal_lag:tau_s=400 --out " + (dir / "c.csv").string());
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_THAT(c.out, HasSubstr("thermal_lag{tau_s=400}"));
+  const auto bad = run_driftlab(common + " --effect thermal_lag:tau_s=-1 --out " + (dir / "d.csv").string());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_THAT(bad.err, HasSubstr("tau_s"));
+}
+
+TEST(DevicesCli, SimulatesAProfileFile) {
+  const auto dir = scratch_dir("simulate_profile");
+  {
+    std::ofstream profile(dir / "table.yaml");
+    profile << "format: driftlab-profile/1\nchamber: {start_c: 20, segments: [{to_c: 30, duration_s: 60}]}\n"
+               "rate: {start_dps: 0, segments: [{hold_s: 30}, {to_dps: 50, duration_s: 0}, {hold_s: 30}]}\n";
+  }
+  const auto r = run_driftlab("simulate --device fmvmg --fs 5 --profile " + (dir / "table.yaml").string() +
+                              " --out " + (dir / "sim.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const TimeSeries record = read_csv(dir / "sim.csv", {.required_roles = {"rate", "true_rate"}});
+  EXPECT_EQ(record.size(), 300);
+  EXPECT_NEAR(record.channel("true_rate").values[250], 50.0 * 3.14159265358979 / 180.0, 1e-9);
+}
+
+}  // namespace
+}  // namespace driftlab

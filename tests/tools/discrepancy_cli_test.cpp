@@ -1,0 +1,86 @@
+// End-to-end tests of `driftlab discrepancy` on records made by `driftlab simulate`.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "tests/tools/cli_harness.hpp"
+
+namespace driftlab {
+namespace {
+
+using ::testing::HasSubstr;
+using testing_cli::read_text;
+using testing_cli::run_driftlab;
+using testing_cli::scratch_dir;
+
+// The default oven run (4.5 h) at 1 Hz: 16 200 samples.
+std::filesystem::path simulated(const std::filesystem::path& dir, const std::string& effect) {
+  const auto csv = dir / "measured.csv";
+  const auto r = run_driftlab("simulate --device fmvmg --fs 1 --seed 11 --out " + csv.string() +
+                              (effect.empty() ? "" : " --effect " + effect));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return csv;
+}
+
+TEST(DiscrepancyCommand, NamesASimulatedDisturbanceAndWritesReportSeriesAndHtml) {
+  const auto dir = scratch_dir("discrepancy_named");
+  const auto csv = simulated(dir, "periodic_disturbance:amplitude_dph=80,period_s=900,phase_deg=30");
+  const auto r = run_driftlab("discrepancy --data " + csv.string() + " --device fmvmg --report " + (dir / "report.json").string() +
+                              " --series " + (dir / "series.csv").string() + " --html " + (dir / "report.html").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("named periodic_disturbance"));
+
+  const auto report = nlohmann::json::parse(read_text(dir / "report.json"));
+  ASSERT_EQ(report["named_effects"].size(), 1u) << report.dump(2);
+  const auto& effect = report["named_effects"][0];
+  EXPECT_EQ(effect["effect"], "periodic_disturbance");
+  constexpr double kPeriodTolerance = 9.0;  // 1 %: a tenth of a periodogram bin over 4.5 h
+  EXPECT_NEAR(effect["parameters"]["period_s"].get<double>(), 900.0, kPeriodTolerance);
+  EXPECT_TRUE(effect["uncertainty"]["amplitude_dph"].is_number());
+  EXPECT_LT(effect["gap_after"].get<double>(), effect["gap_before"].get<double>());
+  EXPECT_DOUBLE_EQ(report["gap_initial"].get<double>(), effect["gap_before"].get<double>());
+  EXPECT_DOUBLE_EQ(report["gap_final"].get<double>(), effect["gap_after"].get<double>());
+  EXPECT_THAT(report["gap_metric"].get<std::string>(), HasSubstr("deg/h"));
+  EXPECT_TRUE(report["views"]["initial"]["spectrum_peaks"].is_array());
+
+  std::ifstream series(dir / "series.csv");
+  std::string header, line;
+  std::getline(series, header);
+  EXPECT_EQ(header, "t_s,measured_dps,model_initial_dps,model_final_dps");
+  std::size_t rows = 0;
+  while (std::getline(series, line)) ++rows;
+  EXPECT_EQ(rows, 16200u);
+
+  const std::string html = read_text(dir / "report.html");
+  EXPECT_THAT(html, HasSubstr("<svg"));
+  EXPECT_THAT(html, HasSubstr("periodic_disturbance"));
+}
+
+TEST(DiscrepancyCommand, SaysNothingIsMissingWhenTheDeviceFileIsTheTruth) {
+  const auto dir = scratch_dir("discrepancy_nothing");
+  const auto csv = simulated(dir, "");
+  const auto r = run_driftlab("discrepancy --data " + csv.string() + " --device fmvmg --report " + (dir / "report.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("nothing significant is missing"));
+  const auto report = nlohmann::json::parse(read_text(dir / "report.json"));
+  EXPECT_TRUE(report["named_effects"].is_array());
+  EXPECT_TRUE(report["named_effects"].empty());
+  EXPECT_DOUBLE_EQ(report["gap_initial"].get<double>(), report["gap_final"].get<double>());
+}
+
+TEST(DiscrepancyCommand, RejectsMissingDataAMissingReportAndOverwritingTheInput) {
+  const auto dir = scratch_dir("discrepancy_bad");
+  const auto csv = simulated(dir, "");
+  EXPECT_EQ(run_driftlab("discrepancy --data " + (dir / "nope.csv").string() + " --report " + (dir / "r.json").string()).exit_code, 3);
+  EXPECT_EQ(run_driftlab("discrepancy --data " + csv.string()).exit_code, 2);
+  EXPECT_EQ(run_driftlab("discrepancy --data " + csv.string() + " --report " + csv.string()).exit_code, 2);
+  EXPECT_EQ(run_driftlab("discrepancy --data " + csv.string() + " --report " + (dir / "r.json").string() +
+                         " --effects effect/nope").exit_code, 2);
+}
+
+}  // namespace
+}  // namespace driftlab

@@ -1,0 +1,66 @@
+// Allan-variance benchmarks on the standard records (rate in rad/s at 100 Hz), one core. Timed:
+// integration of the rate to angle plus the deviations on the default octave grid; file parsing
+// excluded (records are loaded before the timed loop).
+//   BM_Oadev/N    N = 1e5, 1e6, 1e7   overlapping Allan deviation, octave grid up to N/4
+//   BM_Totdev/N   N = 1e5, 1e6, 1e7   total deviation (reflected record), octave grid up to N/2
+//   BM_AllanAnalysis/N  N = 1e6, 1e7  what `driftlab allan` computes: OADEV, noise identification,
+//                                     edf and 68.3 % intervals per tau, noise-term fit
+#include <benchmark/benchmark.h>
+
+#include "models/allan/confidence.hpp"
+#include "models/allan/deviation.hpp"
+#include "models/allan/noise_fit.hpp"
+#include "models/allan/tau_grid.hpp"
+#include "tools/bench/bench_signals.hpp"
+
+namespace driftlab {
+namespace {
+
+const bench::BenchSignal* signal_or_skip(benchmark::State& state) {
+  try {
+    return &bench::bench_signal(static_cast<std::size_t>(state.range(0)));
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return nullptr;
+  }
+}
+
+void run_deviation(benchmark::State& state, allan::Kind kind) {
+  const auto* signal = signal_or_skip(state);
+  if (signal == nullptr) return;
+  const double tau0 = 1.0 / signal->sample_rate_hz;
+  for (auto _ : state) {
+    const Eigen::VectorXd angle = allan::angle_from_rate(signal->rate_rad_s, tau0);
+    const auto n = static_cast<std::size_t>(angle.size());
+    const auto factors = allan::averaging_factors(allan::TauGrid{}, kind, n, tau0);
+    const auto devs = allan::deviations(kind, angle, tau0, factors);
+    benchmark::DoNotOptimize(devs.data());
+  }
+  state.SetItemsProcessed(state.iterations() * state.range(0));
+}
+
+void BM_Oadev(benchmark::State& state) { run_deviation(state, allan::Kind::Oadev); }
+void BM_Totdev(benchmark::State& state) { run_deviation(state, allan::Kind::Totdev); }
+
+void BM_AllanAnalysis(benchmark::State& state) {
+  const auto* signal = signal_or_skip(state);
+  if (signal == nullptr) return;
+  const double tau0 = 1.0 / signal->sample_rate_hz;
+  for (auto _ : state) {
+    const Eigen::VectorXd angle = allan::angle_from_rate(signal->rate_rad_s, tau0);
+    const auto n = static_cast<std::size_t>(angle.size());
+    const auto factors = allan::averaging_factors(allan::TauGrid{}, allan::Kind::Oadev, n, tau0);
+    const auto curve =
+        allan::estimate(allan::Kind::Oadev, angle, tau0, allan::InputType::Rate, factors);
+    const allan::NoiseFit fit = allan::fit_noise_terms(curve);
+    benchmark::DoNotOptimize(fit.chi2);
+  }
+  state.SetItemsProcessed(state.iterations() * state.range(0));
+}
+
+BENCHMARK(BM_Oadev)->Arg(100000)->Arg(1000000)->Arg(10000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Totdev)->Arg(100000)->Arg(1000000)->Arg(10000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_AllanAnalysis)->Arg(1000000)->Arg(10000000)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace driftlab

@@ -1,0 +1,224 @@
+// `driftlab allan`: Allan-family deviation of one channel on a tau grid, with the identified noise
+// type, 68.3 % chi-square intervals and the number of terms per tau (allan.csv), the IEEE 952
+// noise terms fitted to the OADEV curve (summary.json) and a log-log plot (allan.svg).
+//
+// --input angle: the column holds the integrated angle. Angles have no unit of their own in the
+// CSV reader, so the column is mapped with the matching rate unit (deg/s for an angle in deg,
+// rad/s for rad); the deviations then come out in that rate unit.
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "framework/atomic_file.hpp"
+#include "framework/csv.hpp"
+#include "framework/error.hpp"
+#include "framework/units.hpp"
+#include "models/allan/confidence.hpp"
+#include "models/allan/deviation.hpp"
+#include "models/allan/noise_fit.hpp"
+#include "models/allan/tau_grid.hpp"
+#include "tools/driftlab/cli.hpp"
+#include "tools/driftlab/svg_plot.hpp"
+
+namespace driftlab::cli {
+namespace {
+
+struct AllanOptions {
+  DataOptions data;
+  std::string input = "rate";
+  std::string kind = "oadev";
+  std::string taus = "octave";
+  double confidence = allan::kDefaultConfidence;
+  std::string out;
+  std::string json;
+  std::string plot;
+};
+
+// Units of the fitted terms when the channel is not an angular rate: built from its unit u.
+std::string generic_unit(allan::Term term, const std::string& u) {
+  switch (term) {
+    case allan::Term::Q: return u + "*s";
+    case allan::Term::N: return u + "*sqrt(s)";
+    case allan::Term::B: return u;
+    case allan::Term::K: return u + "/sqrt(s)";
+    case allan::Term::R: return u + "/s";
+  }
+  return u;
+}
+
+nlohmann::json term_json(const allan::TermEstimate& t, double factor, std::string_view unit) {
+  return {{"value", t.value * factor}, {"sigma", t.sigma * factor}, {"unit", std::string(unit)},
+          {"fitted", t.fitted}};
+}
+
+nlohmann::json summary_json(const AllanOptions& o, const allan::NoiseFit& fit, bool angular,
+                            const std::string& channel_unit, std::size_t samples, double tau0) {
+  nlohmann::json j;
+  if (angular) {
+    for (const auto& c : allan::kIeee952Units) j[std::string(c.key)] = term_json(fit[c.term], c.factor, c.unit);
+    const auto& d = allan::kNoiseDensityDegPerHour;
+    j[std::string(d.key)] = term_json(fit[d.term], d.factor, d.unit);
+    for (const auto& c : allan::kKalibrUnits) j["kalibr"][std::string(c.key)] = term_json(fit[c.term], c.factor, c.unit);
+    for (const auto& c : allan::kIeee952Units) {
+      j["si"][std::string(c.key)] = term_json(fit[c.term], 1.0, generic_unit(c.term, "rad/s"));
+    }
+  } else {
+    for (const auto& c : allan::kIeee952Units) {
+      j[std::string(c.key)] = term_json(fit[c.term], 1.0, generic_unit(c.term, channel_unit));
+    }
+  }
+  j["record_length_s"] = static_cast<double>(samples) * tau0;
+  j["samples"] = samples;
+  j["sample_rate_hz"] = 1.0 / tau0;
+  j["input"] = o.input;
+  j["kind"] = o.kind;
+  j["confidence"] = o.confidence;
+  j["fit"] = {{"curve", "oadev"}, {"points", fit.points}, {"dof", fit.dof}, {"chi2", fit.chi2},
+              {"covariance_scale", fit.scale},
+              {"model", "sigma^2 = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2"}};
+  return j;
+}
+
+Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& curve,
+                    const allan::NoiseFit* fit, double scale, const std::string& unit) {
+  PlotPanel panel;
+  panel.title = o.kind + " of " + o.data.path;
+  panel.x_label = "tau (s)";
+  panel.y_label = o.kind + " (" + unit + ")";
+  panel.log_x = panel.log_y = true;
+  PlotSeries points;
+  points.label = o.kind + " with " + std::to_string(o.confidence * 100.0).substr(0, 4) + " % interval";
+  points.style = PlotSeries::Style::Markers;
+  for (const auto& e : curve) {
+    points.x.push_back(e.tau);
+    points.y.push_back(e.dev / scale);
+    points.y_low.push_back(e.dev_lo / scale);
+    points.y_high.push_back(e.dev_hi / scale);
+  }
+  panel.series.push_back(points);
+  if (fit != nullptr && !curve.empty()) {
+    const double first = curve.front().tau;
+    const double last = curve.back().tau;
+    std::vector<double> taus;
+    for (double t = first; t <= last * 1.0001; t *= std::pow(10.0, 0.05)) taus.push_back(t);
+    const auto add_line = [&](const std::string& label, PlotSeries::Style style, auto dev) {
+      PlotSeries line;
+      line.label = label;
+      line.style = style;
+      for (const double t : taus) {
+        line.x.push_back(t);
+        line.y.push_back(dev(t) / scale);
+      }
+      panel.series.push_back(line);
+    };
+    for (const auto& c : allan::kIeee952Units) {
+      if (!(*fit)[c.term].fitted) continue;
+      add_line(std::string(c.key) + " term", PlotSeries::Style::Dashed,
+               [&](double t) { return fit->term_deviation(c.term, t); });
+    }
+    add_line("fitted model", PlotSeries::Style::Line, [&](double t) { return fit->model_deviation(t); });
+  }
+  Figure figure;
+  figure.panels.push_back(panel);
+  figure.panel_height = 480;
+  return figure;
+}
+
+void allan_command(const AllanOptions& o) {
+  check_output(o.out, {o.data.path});
+  if (!o.json.empty()) check_output(o.json, {o.data.path});
+  if (!o.plot.empty()) check_output(o.plot, {o.data.path});
+  const auto kind = allan::parse_kind(o.kind);
+  if (!kind) throw ConfigError({"", 0, "--kind"}, "unknown kind '" + o.kind + "'");
+  const auto input = o.input == "angle" ? allan::InputType::Angle : allan::InputType::Rate;
+  const allan::TauGrid grid = allan::parse_tau_grid(o.taus);
+
+  const auto record = load_record(o.data);
+  const std::string role = primary_role(o.data);
+  const auto& channel = record.channel(role);
+  const double fs = record.sample_rate_hz();
+  if (!(fs > 0.0)) throw DataError({o.data.path, 0, "t_s"}, "cannot derive a sample interval");
+  const double tau0 = 1.0 / fs;
+  const Eigen::VectorXd angle =
+      input == allan::InputType::Rate ? allan::angle_from_rate(channel.values, tau0) : channel.values;
+  const auto n = static_cast<std::size_t>(angle.size());
+
+  const auto factors = allan::averaging_factors(grid, *kind, n, tau0);
+  const auto curve = allan::estimate(*kind, angle, tau0, input, factors, o.confidence);
+
+  const std::string unit = display_unit(record, role, o.data);
+  const auto display = find_unit(unit);
+  const double scale = display ? display->scale : 1.0;
+  std::vector<CsvColumn> columns{{"tau_s", {}, "s"}, {"dev", {}, unit}, {"dev_lo", {}, unit},
+                                 {"dev_hi", {}, unit}, {"n", {}, "1"}};
+  for (auto& c : columns) c.values.resize(static_cast<Eigen::Index>(curve.size()));
+  for (std::size_t i = 0; i < curve.size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    columns[0].values(k) = curve[i].tau;
+    columns[1].values(k) = curve[i].dev;
+    columns[2].values(k) = curve[i].dev_lo;
+    columns[3].values(k) = curve[i].dev_hi;
+    columns[4].values(k) = static_cast<double>(curve[i].terms);
+  }
+  write_csv(o.out, columns);
+
+  std::unique_ptr<allan::NoiseFit> fit;
+  try {
+    const auto oadev_curve =
+        *kind == allan::Kind::Oadev
+            ? curve
+            : allan::estimate(allan::Kind::Oadev, angle, tau0, input,
+                              allan::averaging_factors(allan::TauGrid{}, allan::Kind::Oadev, n, tau0),
+                              o.confidence);
+    fit = std::make_unique<allan::NoiseFit>(allan::fit_noise_terms(oadev_curve));
+  } catch (const DataError& e) {
+    if (!o.json.empty()) throw;
+    std::cerr << "note: no noise-term fit: " << e.what() << "\n";
+  }
+  const bool angular = channel.unit == "rad/s";
+  const std::size_t samples = input == allan::InputType::Rate ? n - 1 : n;
+  if (!o.json.empty()) {
+    write_file_atomically(o.json, summary_json(o, *fit, angular, channel.unit, samples, tau0).dump(2) + "\n");
+  }
+  if (!o.plot.empty()) write_file_atomically(o.plot, render_svg(allan_figure(o, curve, fit.get(), scale, unit)));
+
+  std::cout << o.kind << " of " << role << ": " << curve.size() << " taus from " << curve.front().tau
+            << " s to " << curve.back().tau << " s, " << samples << " samples at " << fs << " Hz\n";
+  if (fit && angular) {
+    for (const auto& c : allan::kIeee952Units) {
+      const auto& t = (*fit)[c.term];
+      char line[160];
+      std::snprintf(line, sizeof line, "%s = %.4g +- %.2g %s%s\n", std::string(c.key).c_str(), t.value * c.factor,
+                    t.sigma * c.factor, std::string(c.unit).c_str(), t.fitted ? "" : "  (not resolved: 0)");
+      std::cout << line;
+    }
+  }
+}
+
+}  // namespace
+
+void add_allan_command(CLI::App& app, CommandEnv&) {
+  auto options = std::make_shared<AllanOptions>();
+  auto* cmd = app.add_subcommand(
+      "allan", "Allan-family deviation with confidence intervals and IEEE 952 noise terms (NIST SP 1065)");
+  add_data_options(cmd, options->data, "column to analyse, role=column:unit (default rate_dps)");
+  cmd->add_option("--input", options->input, "the column holds a rate or its integrated angle")
+      ->check(CLI::IsMember({"rate", "angle"}))
+      ->capture_default_str();
+  cmd->add_option("--kind", options->kind, "deviation")
+      ->check(CLI::IsMember({"oadev", "adev", "mdev", "hdev", "ohdev", "totdev"}))
+      ->capture_default_str();
+  cmd->add_option("--taus", options->taus, "tau grid: octave, decade, dense, dense:P or a list of taus in s")
+      ->capture_default_str();
+  cmd->add_option("--confidence", options->confidence, "confidence level of the intervals")
+      ->check(CLI::Range(0.01, 0.999))
+      ->capture_default_str();
+  cmd->add_option("--out", options->out, "output CSV: tau_s,dev,dev_lo,dev_hi,n")->required();
+  cmd->add_option("--json", options->json, "summary JSON with the fitted noise terms");
+  cmd->add_option("--plot", options->plot, "log-log SVG plot with intervals and fitted terms");
+  cmd->callback([options] { allan_command(*options); });
+}
+
+}  // namespace driftlab::cli

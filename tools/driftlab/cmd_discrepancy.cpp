@@ -1,0 +1,121 @@
+// `driftlab discrepancy`: fit the device's model to a measured record, show where it misses and
+// name the physical effects it lacks (models/discrepancy/discrepancy.hpp). Candidates are every
+// effect/* plugin of the registry (built-in and external), or those given with --effects.
+// Outputs: report.json and report.html (discrepancy_report.hpp), series.csv
+// (t_s, measured_dps, model_initial_dps, model_final_dps).
+#include <iostream>
+#include <memory>
+
+#include "devices/device_file.hpp"
+#include "framework/atomic_file.hpp"
+#include "framework/csv.hpp"
+#include "framework/error.hpp"
+#include "framework/params_io.hpp"
+#include "framework/units.hpp"
+#include "tools/driftlab/cli.hpp"
+#include "tools/driftlab/devices_dir.hpp"
+#include "tools/driftlab/discrepancy_device.hpp"
+#include "tools/driftlab/discrepancy_report.hpp"
+
+namespace driftlab::cli {
+namespace {
+
+constexpr double kDphPerRadS = kDegPerRad * 3600.0;
+
+struct DiscrepancyOptions {
+  DataOptions data;
+  std::string device, devices_dir, report, series, html;
+  std::vector<std::string> effects;
+  int bias_degree = -1;
+  double block_s = 0.0;
+  double significance = 10.0;
+  int max_effects = 4;
+};
+
+void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
+  std::vector<std::string> inputs{o.data.path};
+  discrepancy::Options options;
+  std::string device_path;
+  if (!o.device.empty()) {
+    device_path = resolve_device_file(o.device, o.devices_dir).string();
+    options = device_options(devices::load_device_file(device_path));
+    inputs.push_back(device_path);
+  }
+  if (o.bias_degree >= 0) options.bias_degree = o.bias_degree;
+  options.block_s = o.block_s;
+  options.significance = o.significance;
+  options.max_effects = o.max_effects;
+  for (const auto& out : {o.report, o.series, o.html})
+    if (!out.empty()) check_output(out, inputs);
+
+  const Registry& registry = env.registry();
+  std::vector<std::unique_ptr<Effect>> owned;
+  std::vector<discrepancy::Candidate> candidates;
+  std::vector<std::string> names = o.effects;
+  if (names.empty())
+    for (const auto* info : registry.list("effect")) names.push_back(info->name);
+  for (auto name : names) {
+    if (name.rfind("effect/", 0) != 0) name = "effect/" + name;
+    owned.push_back(registry.create_as<Effect>({name, params_from_assignments(registry, name, {})}));
+    candidates.push_back({name.substr(7), owned.back().get()});
+  }
+
+  const TimeSeries record = load_record(o.data, {role::kRate, role::kTemperature});
+  env.progress("discrepancy", 0.0);
+  const auto result = discrepancy::find_missing_effects(record, candidates, options);
+  env.progress("discrepancy", 1.0);
+
+  const DiscrepancyReportInfo info{o.data.path, device_path, &options};
+  write_file_atomically(o.report, discrepancy_json(result, info).dump(2) + "\n");
+  if (!o.series.empty())
+    write_csv(o.series, {{"t_s", record.time(), "s"},
+                         {"measured_dps", record.channel(role::kRate).values, "deg/s"},
+                         {"model_initial_dps", result.model_initial_rad_s, "deg/s"},
+                         {"model_final_dps", result.model_final_rad_s, "deg/s"}});
+  if (!o.html.empty()) write_file_atomically(o.html, discrepancy_html(result, info));
+
+  std::cout << "gap " << result.gap_initial_rad_s * kDphPerRadS << " -> " << result.gap_final_rad_s * kDphPerRadS
+            << " deg/h (noise floor " << result.noise_floor_rad_s * kDphPerRadS << " deg/h, " << result.blocks
+            << " blocks of " << result.block_s << " s)\n";
+  if (result.steps.empty()) std::cout << "nothing significant is missing\n";
+  for (const auto& step : result.steps) {
+    std::cout << "named " << step.effect << " (delta BIC " << step.delta_bic << "):";
+    for (const auto& p : step.parameters)
+      for (std::size_t i = 0; i < p.values.size(); ++i) std::cout << " " << p.key << "=" << p.values[i];
+    std::cout << "; gap " << step.gap_before_rad_s * kDphPerRadS << " -> " << step.gap_after_rad_s * kDphPerRadS
+              << " deg/h\n";
+  }
+}
+
+}  // namespace
+
+void add_discrepancy_command(CLI::App& app, CommandEnv& env) {
+  auto options = std::make_shared<DiscrepancyOptions>();
+  auto* cmd = app.add_subcommand(
+      "discrepancy", "fit the device's model to a measured record, show where it misses and name the missing effects");
+  add_data_options(cmd, options->data,
+                   "column mapping role=column:unit (roles rate, temperature; true_rate and drive_frequency used "
+                   "when present)");
+  cmd->add_option("--device", options->device,
+                  "device file or name: its model is the prior, its noise terms the covariance (default: a bias "
+                  "polynomial with noise terms estimated from the record)");
+  cmd->add_option("--devices-dir", options->devices_dir, "directory of device files");
+  cmd->add_option("--report", options->report, "report.json (named effects, gaps, evidence, residual views)")->required();
+  cmd->add_option("--series", options->series, "series.csv: t_s, measured_dps, model_initial_dps, model_final_dps");
+  cmd->add_option("--html", options->html, "report.html with residual plots before and after");
+  cmd->add_option("--effects", options->effects, "candidate effects (default: every effect/* plugin)");
+  cmd->add_option("--bias-degree", options->bias_degree,
+                  "degree of the fitted bias correction polynomial (default: the device file's, at least 1; 2 without a device)")
+      ->check(CLI::Range(0, 6));
+  cmd->add_option("--block", options->block_s, "block length for the fit, s (default: duration / 400)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--significance", options->significance, "delta BIC needed to name an effect")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--max-effects", options->max_effects, "stop after naming this many effects")
+      ->check(CLI::Range(0, 20))
+      ->capture_default_str();
+  cmd->callback([options, &env] { discrepancy_command(*options, env); });
+}
+
+}  // namespace driftlab::cli

@@ -1,0 +1,107 @@
+// `driftlab simulate`: run a device file through the oven simulator and write a CSV record
+// (t_s, rate_dps, temp_c, true_rate_dps, die_temp_c, drive_freq_hz).
+#include <cmath>
+#include <iostream>
+#include <memory>
+
+#include "devices/device_file.hpp"
+#include "devices/simulator.hpp"
+#include "framework/csv.hpp"
+#include "framework/units.hpp"
+#include "tools/driftlab/cli.hpp"
+#include "tools/driftlab/devices_dir.hpp"
+
+namespace driftlab::cli {
+namespace {
+
+struct SimulateOptions {
+  std::string device, profile = "oven", out, devices_dir;
+  std::vector<std::string> effects;
+  double fs = 100.0;
+  double duration = 0.0;
+  std::uint64_t seed = 1;
+};
+
+// A column in `unit`, snapped to the channel's resolution as k / steps (steps = 1 / resolution in
+// that unit, when it is a whole number) so that the shortest round-trip text is the clean decimal
+// the device would print; values are already converted, so they are written with unit "1".
+CsvColumn output_column(const std::string& name, const Eigen::VectorXd& internal, const std::string& unit,
+                        const devices::ChannelSpec* channel) {
+  const auto u = find_unit(unit);
+  Eigen::VectorXd values = internal.unaryExpr([&](double v) { return from_internal(v, *u); });
+  if (channel && channel->resolution > 0.0) {
+    const double steps = u->scale / channel->resolution;
+    if (std::abs(steps - std::round(steps)) < 1e-6 * steps) {
+      const double whole = std::round(steps);
+      for (double& v : values) v = std::round(v * whole) / whole;
+    }
+  }
+  return {name, std::move(values), "1"};
+}
+
+void simulate_command(const SimulateOptions& o, CommandEnv& env) {
+  const auto device_path = resolve_device_file(o.device, o.devices_dir);
+  auto device = devices::load_device_file(device_path);
+  for (const auto& effect : o.effects) devices::apply_effect_option(effect, device.error_model.effects);
+  const auto profile = o.profile == "oven" ? devices::default_oven_profile() : devices::load_profile_file(o.profile);
+  check_output(o.out, {device_path.string(), o.profile});
+
+  devices::SimulationOptions options;
+  options.sample_rate_hz = o.fs;
+  options.seed = o.seed;
+  if (o.duration > 0.0) options.duration_s = o.duration;
+  env.progress("simulate " + device.name, 0.0);
+  const auto record = devices::simulate(device, profile, options);
+  env.progress("simulate " + device.name, 0.5);
+
+  std::vector<CsvColumn> columns{
+      {"t_s", record.time_s, "s"},
+      output_column("rate_dps", record.rate_rad_s, "deg/s", device.find_channel(role::kRate)),
+      output_column("temp_c", record.temp_c, "degC", device.find_channel(role::kTemperature)),
+      output_column("true_rate_dps", record.true_rate_rad_s, "deg/s", nullptr),
+      output_column("die_temp_c", record.die_temp_c, "degC", nullptr)};
+  if (record.drive_frequency_hz.size() == record.time_s.size())
+    columns.push_back(output_column("drive_freq_hz", record.drive_frequency_hz, "Hz",
+                                    device.find_channel(role::kDriveFrequency)));
+  write_csv(o.out, columns);
+  env.progress("simulate " + device.name, 1.0);
+
+  const auto effects = devices::describe_effects(device.error_model.effects);
+  std::cout << o.out << ": " << record.time_s.size() << " samples, " << record.time_s[record.time_s.size() - 1]
+            << " s at " << o.fs << " Hz, device " << device.name << ", profile " << profile.source << ", seed "
+            << o.seed << ", effects:";
+  if (effects.empty()) std::cout << " none";
+  for (const auto& e : effects) std::cout << " " << e;
+  std::cout << "\n";
+}
+
+std::string effect_help() {
+  std::string text = "switch on an effect the device file leaves out, NAME:key=value,...; repeatable. Effects:";
+  for (const auto& e : devices::effect_catalogue()) {
+    text += "\n  " + e.name + ":";
+    for (std::size_t i = 0; i < e.keys.size(); ++i)
+      text += (i ? "," : "") + e.keys[i].key + "=" + (e.keys[i].list ? "[..]" : "X");
+    text += "  " + e.doc;
+  }
+  return text;
+}
+
+}  // namespace
+
+void add_simulate_command(CLI::App& app, CommandEnv& env) {
+  auto options = std::make_shared<SimulateOptions>();
+  auto* cmd = app.add_subcommand("simulate", "simulate a device in a temperature chamber and write a CSV record");
+  cmd->add_option("--device", options->device, "device file, or the name of one in the devices directory")->required();
+  cmd->add_option("--profile", options->profile,
+                  "chamber/rate profile: 'oven' (-30 -> +60 -> -30 degC, 4.5 h) or a driftlab-profile/1 YAML file")
+      ->capture_default_str();
+  cmd->add_option("--fs", options->fs, "sample rate, Hz")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--duration", options->duration, "duration, s (default: the profile's)")->check(CLI::PositiveNumber);
+  cmd->add_option("--seed", options->seed, "random seed; same seed, same record")->capture_default_str();
+  cmd->add_option("--effect", options->effects, effect_help());
+  cmd->add_option("--devices-dir", options->devices_dir, "directory of device files");
+  cmd->add_option("--out", options->out, "output CSV (written atomically)")->required();
+  cmd->callback([options, &env] { simulate_command(*options, env); });
+}
+
+}  // namespace driftlab::cli
