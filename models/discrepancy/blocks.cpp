@@ -22,15 +22,20 @@ double gauss_markov_covariance(double sigma, double tau, double length_i, double
 
 }  // namespace
 
-Blocks make_blocks(const Eigen::VectorXd& time_s, double block_s) {
+double median_interval(const Eigen::VectorXd& time_s) {
   const Eigen::Index n = time_s.size();
   if (n < 2) throw std::invalid_argument("the record has fewer than 2 samples");
-  if (!(block_s > 0.0)) throw std::invalid_argument("block length must be positive");
   std::vector<double> steps(static_cast<std::size_t>(n - 1));
   for (Eigen::Index k = 0; k + 1 < n; ++k) steps[static_cast<std::size_t>(k)] = time_s[k + 1] - time_s[k];
   std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  return steps[steps.size() / 2];
+}
+
+Blocks make_blocks(const Eigen::VectorXd& time_s, double block_s) {
+  const Eigen::Index n = time_s.size();
+  if (!(block_s > 0.0)) throw std::invalid_argument("block length must be positive");
   Blocks b;
-  b.sample_interval_s = steps[steps.size() / 2];
+  b.sample_interval_s = median_interval(time_s);
   b.record_start_s = time_s[0];
   std::vector<double> start, end, mean;
   Eigen::Index current = -1;
@@ -61,13 +66,7 @@ Blocks make_blocks(const Eigen::VectorXd& time_s, double block_s) {
   return b;
 }
 
-double Blocks::median_spacing_s() const {
-  if (size() < 2) return duration_s();
-  std::vector<double> spacing(static_cast<std::size_t>(size() - 1));
-  for (Eigen::Index i = 0; i + 1 < size(); ++i) spacing[static_cast<std::size_t>(i)] = time_s[i + 1] - time_s[i];
-  std::nth_element(spacing.begin(), spacing.begin() + static_cast<std::ptrdiff_t>(spacing.size() / 2), spacing.end());
-  return spacing[spacing.size() / 2];
-}
+double Blocks::median_spacing_s() const { return size() < 2 ? duration_s() : median_interval(time_s); }
 
 Eigen::VectorXd block_means(const Blocks& blocks, const Eigen::VectorXd& x) {
   Eigen::VectorXd means(blocks.size());
@@ -85,8 +84,10 @@ Eigen::VectorXd interpolate(const Blocks& blocks, const Eigen::VectorXd& block_v
   for (Eigen::Index k = 0; k < time_s.size(); ++k) {
     const double t = time_s[k];
     while (i < last && blocks.time_s[i + 1] <= t) ++i;
-    if (t <= blocks.time_s[0] || last == 0) out[k] = block_values[0];
-    else if (i >= last) out[k] = block_values[last];
+    if (t <= blocks.time_s[0] || last == 0)
+      out[k] = block_values[0];
+    else if (i >= last)
+      out[k] = block_values[last];
     else {
       const double w = (t - blocks.time_s[i]) / (blocks.time_s[i + 1] - blocks.time_s[i]);
       out[k] = block_values[i] + w * (block_values[i + 1] - block_values[i]);

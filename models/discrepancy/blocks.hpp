@@ -43,6 +43,9 @@ struct Blocks {
   double median_spacing_s() const;
 };
 
+// Median of the sample intervals. Throws std::invalid_argument for fewer than 2 samples.
+double median_interval(const Eigen::VectorXd& time_s);
+
 // Throws std::invalid_argument when block_s <= 0 or the record has fewer than 2 samples.
 Blocks make_blocks(const Eigen::VectorXd& time_s, double block_s);
 

@@ -3,7 +3,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <stdexcept>
 
 #include "framework/error.hpp"
@@ -15,10 +14,10 @@ namespace driftlab::discrepancy {
 namespace {
 
 constexpr double kTargetBlocks = 400.0;
-constexpr double kRankThreshold = 1e-10;   // relative column norm below which a direction is dropped
-constexpr double kDifferenceStep = 1e-4;   // relative step of the finite differences
+constexpr double kRankThreshold = 1e-10;  // relative column norm below which a direction is dropped
+constexpr double kDifferenceStep = 1e-4;  // relative step of the finite differences
 constexpr int kMaxPeriodGrid = 4000;
-constexpr double kGapFactor = 1.5;         // a step above 1.5 x the median step is a gap
+constexpr double kGapFactor = 1.5;  // a step above 1.5 x the median step is a gap
 constexpr double kGoldenRatio = 0.6180339887498949;
 
 struct Term {
@@ -27,10 +26,10 @@ struct Term {
 };
 
 struct Design {
-  Eigen::MatrixXd columns;  // correction polynomial, then each non-moving term's basis
-  Eigen::VectorXd offset;   // prior
+  Eigen::MatrixXd columns;                 // correction polynomial, then each non-moving term's basis
+  Eigen::VectorXd offset;                  // prior
   std::vector<Eigen::Index> first_column;  // per term (moving terms: no columns)
-  TimeSeries moved;         // the record as non-moving effects see it (model temperature)
+  TimeSeries moved;                        // the record as non-moving effects see it (model temperature)
 };
 
 struct Fit {
@@ -77,7 +76,9 @@ LeastSquares least_squares(const Eigen::MatrixXd& a, const Eigen::VectorXd& b) {
   return ls;
 }
 
-double rms(const Eigen::VectorXd& x) { return std::sqrt(x.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, x.size()))); }
+double rms(const Eigen::VectorXd& x) {
+  return std::sqrt(x.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, x.size())));
+}
 
 double golden_section(const std::function<double(double)>& f, double a, double b, int iterations, double& best_u) {
   double c = b - kGoldenRatio * (b - a), d = a + kGoldenRatio * (b - a);
@@ -107,11 +108,8 @@ class Workflow {
     record.channel(role::kRate);
     record.channel(role::kTemperature);
     const double duration = t[t.size() - 1] - t[0];
-    blocks_ = make_blocks(t, 1.0);  // for the median step
-    const double block_s = options.block_s > 0.0 ? options.block_s
-                                                  : std::max(blocks_.sample_interval_s, duration / kTargetBlocks);
-    blocks_ = make_blocks(t, block_s);
-    block_s_ = block_s;
+    block_s_ = options.block_s > 0.0 ? options.block_s : std::max(median_interval(t), duration / kTargetBlocks);
+    blocks_ = make_blocks(t, block_s_);
     evenly_sampled_ = true;
     for (Eigen::Index k = 0; k + 1 < t.size(); ++k)
       evenly_sampled_ = evenly_sampled_ && t[k + 1] - t[k] <= kGapFactor * blocks_.sample_interval_s;
@@ -183,13 +181,15 @@ class Workflow {
  private:
   void validate_options() const {
     std::vector<Diagnostic> problems;
-    if (options_.bias_degree < 0 || options_.bias_degree > 6) problems.push_back({{"", 0, "bias_degree"}, "must be in [0, 6]"});
+    if (options_.bias_degree < 0 || options_.bias_degree > 6)
+      problems.push_back({{"", 0, "bias_degree"}, "must be in [0, 6]"});
     if (options_.block_s < 0.0) problems.push_back({{"", 0, "block_s"}, "must be >= 0 (0 = automatic)"});
     if (!(options_.significance >= 0.0)) problems.push_back({{"", 0, "significance"}, "must be >= 0"});
     if (options_.max_effects < 0) problems.push_back({{"", 0, "max_effects"}, "must be >= 0"});
     if (options_.grid_points_per_decade < 1) problems.push_back({{"", 0, "grid_points_per_decade"}, "must be >= 1"});
     if (options_.golden_iterations < 0) problems.push_back({{"", 0, "golden_iterations"}, "must be >= 0"});
-    if (!(options_.sensor_time_constant_s >= 0.0)) problems.push_back({{"", 0, "sensor_time_constant_s"}, "must be >= 0"});
+    if (!(options_.sensor_time_constant_s >= 0.0))
+      problems.push_back({{"", 0, "sensor_time_constant_s"}, "must be >= 0"});
     for (const auto& c : candidates_)
       if (!c.effect) problems.push_back({{"", 0, c.name}, "candidate without an effect"});
     if (!problems.empty()) throw ConfigError(std::move(problems));
@@ -201,7 +201,8 @@ class Workflow {
       noise_ = *options_.noise;
     } else {
       if (!evenly_sampled_)
-        throw DataError({"", 0, "rate"}, "the record has gaps: give the device's noise terms (--device) to test effects");
+        throw DataError({"", 0, "rate"},
+                        "the record has gaps: give the device's noise terms (--device) to test effects");
       whitener_ = Eigen::MatrixXd::Identity(blocks_.size(), blocks_.size());
       const State ordinary = fitted({});
       const Eigen::VectorXd residual = record_.channel(role::kRate).values - full_model(ordinary);
@@ -211,10 +212,12 @@ class Workflow {
     result.noise = noise_;
     Eigen::MatrixXd c = noise_covariance(blocks_, noise_);
     const double jitter = 1e-12 * c.diagonal().mean();
-    if (!(jitter > 0.0)) throw DataError({"", 0, "noise"}, "the noise terms are all zero: the test needs a noise model");
+    if (!(jitter > 0.0))
+      throw DataError({"", 0, "noise"}, "the noise terms are all zero: the test needs a noise model");
     c.diagonal().array() += jitter;
     Eigen::LLT<Eigen::MatrixXd> llt(c);
-    if (llt.info() != Eigen::Success) throw DataError({"", 0, "noise"}, "the noise covariance is not positive definite");
+    if (llt.info() != Eigen::Success)
+      throw DataError({"", 0, "noise"}, "the noise covariance is not positive definite");
     whitener_ = llt.matrixL();
     covariance_trace_ = c.trace();
   }
@@ -232,8 +235,6 @@ class Workflow {
     n.rate_random_walk_rad_s_sqrt_s = fit[allan::Term::K].value;
     n.flicker_tau_min_s = std::max(n.flicker_tau_min_s, tau0);
     n.flicker_tau_max_s = std::max(n.flicker_tau_max_s, blocks_.duration_s());
-    const double white_floor = rms(residual) * std::sqrt(tau0) * 1e-3;
-    n.arw_rad_sqrt_s = std::max(n.arw_rad_sqrt_s, white_floor);
     return n;
   }
 
@@ -268,7 +269,7 @@ class Workflow {
       at += b.cols();
     }
     const Eigen::VectorXd w = rec.has(role::kTrueRate) ? rec.channel(role::kTrueRate).values : Eigen::VectorXd::Zero(n);
-    d.offset = options_.prior ? options_.prior(rec.time(), temp, w) : Eigen::VectorXd::Zero(n);
+    d.offset = options_.prior ? options_.prior(rec.time(), temp, w) : w;
     return d;
   }
 
@@ -343,7 +344,8 @@ class Workflow {
     if (a.scale == EffectParameter::Scale::Log) {
       count = std::max(3, static_cast<int>(std::ceil(std::log10(a.hi / a.lo) * options_.grid_points_per_decade)) + 1);
     } else {
-      count = std::clamp(static_cast<int>(std::ceil(std::abs(u1 - u0) * 4.0 * blocks_.duration_s())) + 1, 3, kMaxPeriodGrid);
+      count = std::clamp(static_cast<int>(std::ceil(std::abs(u1 - u0) * 4.0 * blocks_.duration_s())) + 1, 3,
+                         kMaxPeriodGrid);
     }
     std::vector<double> u(static_cast<std::size_t>(count));
     for (int i = 0; i < count; ++i) u[static_cast<std::size_t>(i)] = u0 + (u1 - u0) * i / (count - 1);
@@ -367,7 +369,8 @@ class Workflow {
     }
     const double lo = u[best == 0 ? 0 : best - 1], hi = u[std::min(best + 1, u.size() - 1)];
     double refined_u = u[best];
-    const double refined = golden_section(at, std::min(lo, hi), std::max(lo, hi), options_.golden_iterations, refined_u);
+    const double refined =
+        golden_section(at, std::min(lo, hi), std::max(lo, hi), options_.golden_iterations, refined_u);
     theta[k] = a.from_u(refined < best_value ? refined_u : u[best]);
     return std::min(refined, best_value);
   }
@@ -399,7 +402,8 @@ class Workflow {
     for (std::size_t c = 0; c < candidates_.size(); ++c) {
       Score s;
       s.effect = candidates_[c].name;
-      if (std::any_of(state.terms.begin(), state.terms.end(), [&](const Term& t) { return t.candidate == c; })) continue;
+      if (std::any_of(state.terms.begin(), state.terms.end(), [&](const Term& t) { return t.candidate == c; }))
+        continue;
       const Effect& e = *candidates_[c].effect;
       for (const auto& role : e.required_roles())
         if (!block_record_.has(role)) s.note = "the record has no " + role + " channel";
@@ -408,8 +412,10 @@ class Workflow {
       const auto params = e.nonlinear_parameters();
       std::vector<Axis> axes;
       for (const auto& p : params) {
-        if (auto a = axis(p)) axes.push_back(*a);
-        else if (s.note.empty()) s.note = "the record does not resolve " + p.name + " in its search interval";
+        if (auto a = axis(p))
+          axes.push_back(*a);
+        else if (s.note.empty())
+          s.note = "the record does not resolve " + p.name + " in its search interval";
       }
       if (!s.note.empty()) {
         s.applicable = false;
@@ -423,7 +429,8 @@ class Workflow {
       for (std::size_t k = 0; k < axes.size(); ++k)
         s.theta[static_cast<Eigen::Index>(k)] = std::sqrt(axes[k].lo * axes[k].hi);
       double best = s.theta.size() == 0 ? chi2(s.theta) : 0.0;
-      for (std::size_t k = 0; k < axes.size(); ++k) best = search_coordinate(chi2, axes[k], s.theta, static_cast<Eigen::Index>(k));
+      for (std::size_t k = 0; k < axes.size(); ++k)
+        best = search_coordinate(chi2, axes[k], s.theta, static_cast<Eigen::Index>(k));
       s.added_parameters = static_cast<int>(params.size() + e.coefficient_names().size());
       s.delta_chi2 = state.fit.chi2 - best;
       s.delta_bic = s.delta_chi2 / scale - s.added_parameters * log_blocks;
@@ -526,7 +533,8 @@ class Workflow {
     for (Eigen::Index k = 0; k < coefficients; ++k) v[t.theta.size() + k] = s.fit.beta[first + k];
     Eigen::MatrixXd sigma(p, p);
     for (Eigen::Index a = 0; a < p; ++a)
-      for (Eigen::Index b = 0; b < p; ++b) sigma(a, b) = covariance(indices[static_cast<std::size_t>(a)], indices[static_cast<std::size_t>(b)]);
+      for (Eigen::Index b = 0; b < p; ++b)
+        sigma(a, b) = covariance(indices[static_cast<std::size_t>(a)], indices[static_cast<std::size_t>(b)]);
 
     auto values_at = [&](const Eigen::VectorXd& x) {
       const auto described = e.describe(rec, context_, x.head(t.theta.size()), x.tail(coefficients));
@@ -543,7 +551,8 @@ class Workflow {
       up[k] += h;
       down[k] -= h;
       const auto fu = values_at(up), fd = values_at(down);
-      for (std::size_t r = 0; r < flat.size(); ++r) jacobian(static_cast<Eigen::Index>(r), k) = (fu[r] - fd[r]) / (2.0 * h);
+      for (std::size_t r = 0; r < flat.size(); ++r)
+        jacobian(static_cast<Eigen::Index>(r), k) = (fu[r] - fd[r]) / (2.0 * h);
     }
     std::vector<ReportedValue> out;
     Eigen::Index row = 0;
@@ -563,8 +572,8 @@ class Workflow {
   Views views(const State& s, const Eigen::VectorXd& full_model_rad_s) const {
     const Eigen::VectorXd full_residual =
         evenly_sampled_ ? Eigen::VectorXd(record_.channel(role::kRate).values - full_model_rad_s) : Eigen::VectorXd();
-    return residual_views(blocks_, block_record_.channel(role::kTemperature).values, y_ - block_model(s),
-                          full_residual, noise_);
+    return residual_views(blocks_, block_record_.channel(role::kTemperature).values, y_ - block_model(s), full_residual,
+                          noise_);
   }
 
   const TimeSeries& record_;

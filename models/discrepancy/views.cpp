@@ -28,13 +28,14 @@ struct Accumulator {
     if (count == 0) return b;
     const double n = static_cast<double>(count);
     b.mean_rad_s = sum / n;
-    if (count > 1) b.standard_error_rad_s = std::sqrt(std::max(0.0, (sum_sq - n * b.mean_rad_s * b.mean_rad_s) / (n - 1)) / n);
+    if (count > 1)
+      b.standard_error_rad_s = std::sqrt(std::max(0.0, (sum_sq - n * b.mean_rad_s * b.mean_rad_s) / (n - 1)) / n);
     return b;
   }
 };
 
-std::vector<Bin> binned(const Eigen::VectorXd& by, const Eigen::VectorXd& value, const std::vector<bool>& keep, int bins,
-                        double lo, double hi) {
+std::vector<Bin> binned(const Eigen::VectorXd& by, const Eigen::VectorXd& value, const std::vector<bool>& keep,
+                        int bins, double lo, double hi) {
   std::vector<Accumulator> acc(static_cast<std::size_t>(bins));
   const double width = hi > lo ? (hi - lo) / bins : 1.0;
   for (Eigen::Index i = 0; i < by.size(); ++i) {
@@ -44,7 +45,8 @@ std::vector<Bin> binned(const Eigen::VectorXd& by, const Eigen::VectorXd& value,
   }
   std::vector<Bin> out;
   for (int k = 0; k < bins; ++k)
-    if (acc[static_cast<std::size_t>(k)].count > 0) out.push_back(acc[static_cast<std::size_t>(k)].bin(lo + (k + 0.5) * width));
+    if (acc[static_cast<std::size_t>(k)].count > 0)
+      out.push_back(acc[static_cast<std::size_t>(k)].bin(lo + (k + 0.5) * width));
   return out;
 }
 

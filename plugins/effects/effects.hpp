@@ -62,9 +62,9 @@ Eigen::MatrixXd scale_factor_basis(const Eigen::VectorXd& temp_c, const Eigen::V
                                    double reference_temp_c, int degree);
 
 struct ResonatorThermometer {
-  double frequency_at_reference_hz;   // f_ref, drive frequency at T0
-  double slope_hz_per_k;              // k = df/dT
-  Eigen::VectorXd temperature_c;      // T0 + (f - f_ref)/k
+  double frequency_at_reference_hz;  // f_ref, drive frequency at T0
+  double slope_hz_per_k;             // k = df/dT
+  Eigen::VectorXd temperature_c;     // T0 + (f - f_ref)/k
 };
 // The inversion T0 + (f - f_ref)/k for a known line (slope_hz_per_k != 0), else the least-squares
 // line f ~ f_ref + k (T - T0) of the record first. Throws std::invalid_argument when the line has

@@ -7,8 +7,11 @@
 // differ, so rate-dependent terms can be told from direction-dependent ones. A rate table cycles
 // 0, +50, -50 deg/s (200 s each) so that scale-factor terms are visible. Sampled at 1 Hz
 // (the FMVMG's noise terms, no effects in the device file). Hidden effects and their parameters are
-// drawn from the ranges below (realistic for a vacuum-packaged MEMS gyro of this noise class; the
-// amplitudes are at least about the bias instability B = 34.7 deg/h, so the record can show them).
+// drawn from the ranges below: realistic for a MEMS gyro of this noise class, with the lower ends
+// set at about twice the bias instability B = 34.7 deg/h of the signal each term puts into a
+// record (hysteresis +-h/2, dT/dt term c x 0.6..3.6 degC/min, ...), the level at which a 4-h record
+// can show a term above flicker and random-walk noise. Weaker terms are not named (by design: the
+// criterion is set so that noise alone names nothing).
 //
 //   thermal_lag               tau_s                      log-uniform [150, 900] s
 //   temperature_rate          coefficient                +-log-uniform [50, 150] deg/h per degC/min
@@ -36,8 +39,8 @@
 namespace driftlab::testing_oven {
 
 inline constexpr double kRadPerSecPerDph = kRadPerDeg / 3600.0;
-inline const std::array<std::string, 6> kEffectNames{"thermal_lag",       "temperature_rate",
-                                                     "hysteresis",        "warmup_transient",
+inline const std::array<std::string, 6> kEffectNames{"thermal_lag",          "temperature_rate",
+                                                     "hysteresis",           "warmup_transient",
                                                      "periodic_disturbance", "scale_factor_temperature"};
 
 inline std::uint64_t splitmix64(std::uint64_t x) {
@@ -53,7 +56,9 @@ class Draw {
   double uniform(double lo, double hi) { return lo + (hi - lo) * static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
   double log_uniform(double lo, double hi) { return std::exp(uniform(std::log(lo), std::log(hi))); }
   double signed_log_uniform(double lo, double hi) { return (uniform(0, 1) < 0.5 ? -1.0 : 1.0) * log_uniform(lo, hi); }
-  std::size_t index(std::size_t n) { return std::min(n - 1, static_cast<std::size_t>(uniform(0, 1) * static_cast<double>(n))); }
+  std::size_t index(std::size_t n) {
+    return std::min(n - 1, static_cast<std::size_t>(uniform(0, 1) * static_cast<double>(n)));
+  }
   std::uint64_t bits() { return engine_(); }
 
  private:
@@ -69,16 +74,19 @@ struct OvenRecord {
 };
 
 inline void switch_on(const std::string& name, Draw& d, error_model::Effects& e) {
-  if (name == "thermal_lag") e.thermal_lag = error_model::ThermalLag{d.log_uniform(150, 900)};
+  if (name == "thermal_lag")
+    e.thermal_lag = error_model::ThermalLag{d.log_uniform(150, 900)};
   else if (name == "temperature_rate")
     e.temperature_rate = error_model::TemperatureRate{d.signed_log_uniform(50, 150) * kRadPerSecPerDph * 60.0};
   else if (name == "hysteresis")
     e.hysteresis = error_model::Hysteresis{d.signed_log_uniform(150, 400) * kRadPerSecPerDph, d.log_uniform(0.5, 4)};
   else if (name == "warmup_transient")
-    e.warmup_transient = error_model::WarmupTransient{d.signed_log_uniform(300, 1000) * kRadPerSecPerDph, d.log_uniform(300, 1800)};
+    e.warmup_transient =
+        error_model::WarmupTransient{d.signed_log_uniform(300, 1000) * kRadPerSecPerDph, d.log_uniform(300, 1800)};
   else if (name == "periodic_disturbance")
-    e.periodic_disturbance = error_model::PeriodicDisturbance{d.log_uniform(60, 180) * kRadPerSecPerDph,
-                                                              d.log_uniform(300, 2400), d.uniform(-std::numbers::pi, std::numbers::pi)};
+    e.periodic_disturbance =
+        error_model::PeriodicDisturbance{d.log_uniform(60, 180) * kRadPerSecPerDph, d.log_uniform(300, 2400),
+                                         d.uniform(-std::numbers::pi, std::numbers::pi)};
   else if (name == "scale_factor_temperature")
     e.scale_factor_temperature = error_model::ScaleFactorTemperature{{d.signed_log_uniform(30, 150) * 1e-6}};
 }
@@ -88,8 +96,13 @@ inline devices::SimulationProfile oven_profile(Draw& d, std::array<double, 3>& r
   for (std::size_t i = rates.size() - 1; i > 0; --i) std::swap(rates[i], rates[d.index(i + 1)]);
   devices::SimulationProfile p;
   p.chamber_c = devices::Profile(-30.0);
-  p.chamber_c.hold(1200).ramp_at_rate(60.0, rates[0] / 60.0).hold(1200).ramp_at_rate(-30.0, rates[1] / 60.0).hold(1200)
-      .ramp_at_rate(15.0, rates[2] / 60.0).hold(600);
+  p.chamber_c.hold(1200)
+      .ramp_at_rate(60.0, rates[0] / 60.0)
+      .hold(1200)
+      .ramp_at_rate(-30.0, rates[1] / 60.0)
+      .hold(1200)
+      .ramp_at_rate(15.0, rates[2] / 60.0)
+      .hold(600);
   p.true_rate = devices::Profile(0.0);
   const double w = 50.0 * kRadPerDeg;
   while (p.true_rate.duration_s() < p.chamber_c.duration_s())

@@ -1,5 +1,7 @@
 // Effect kernels and plugins (plugins/effects): closed forms, identity with the simulator's effect
 // terms (models/error_model), and the plugins' reported keys against the device-file catalogue.
+#include "plugins/effects/effects.hpp"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -12,7 +14,6 @@
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
 #include "models/error_model/error_model.hpp"
-#include "plugins/effects/effects.hpp"
 
 namespace driftlab {
 namespace {
@@ -160,7 +161,8 @@ TEST_F(EffectPlugins, ReportTheDeviceFileKeysOfTheEffectsTheSimulatorKnows) {
   const TimeSeries record = oven_record();
   for (const auto& entry : devices::effect_catalogue()) {
     const auto e = make("effect/" + entry.name);
-    const Eigen::VectorXd theta = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(e->nonlinear_parameters().size()), 100.0);
+    const Eigen::VectorXd theta =
+        Eigen::VectorXd::Constant(static_cast<Eigen::Index>(e->nonlinear_parameters().size()), 100.0);
     const Eigen::VectorXd c = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(e->coefficient_names().size()), 1e-4);
     std::set<std::string> reported, catalogue;
     for (const auto& v : e->describe(record, {}, theta, c)) reported.insert(v.key);
@@ -172,11 +174,13 @@ TEST_F(EffectPlugins, ReportTheDeviceFileKeysOfTheEffectsTheSimulatorKnows) {
 TEST_F(EffectPlugins, ReportTemperatureRateAndHysteresisInDeviceFileUnits) {
   const TimeSeries record = oven_record();
   const double rad_s_per_dph = kPi / 180.0 / 3600.0;
-  const auto rate = make("effect/temperature_rate")->describe(record, {}, {}, Eigen::VectorXd::Constant(1, 60.0 * rad_s_per_dph * 60.0));
+  const auto rate = make("effect/temperature_rate")
+                        ->describe(record, {}, {}, Eigen::VectorXd::Constant(1, 60.0 * rad_s_per_dph * 60.0));
   EXPECT_NEAR(rate[0].values[0], 60.0, 1e-9);  // 60 deg/h per degC/min
   Eigen::VectorXd width(1);
   width << 2.5;
-  const auto hysteresis = make("effect/hysteresis")->describe(record, {}, width, Eigen::VectorXd::Constant(1, 150.0 * rad_s_per_dph));
+  const auto hysteresis =
+      make("effect/hysteresis")->describe(record, {}, width, Eigen::VectorXd::Constant(1, 150.0 * rad_s_per_dph));
   EXPECT_NEAR(hysteresis[0].values[0], 150.0, 1e-9);
   EXPECT_NEAR(hysteresis[1].values[0], 2.5, 0.0);
 }

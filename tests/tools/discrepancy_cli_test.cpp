@@ -29,8 +29,9 @@ std::filesystem::path simulated(const std::filesystem::path& dir, const std::str
 TEST(DiscrepancyCommand, NamesASimulatedDisturbanceAndWritesReportSeriesAndHtml) {
   const auto dir = scratch_dir("discrepancy_named");
   const auto csv = simulated(dir, "periodic_disturbance:amplitude_dph=80,period_s=900,phase_deg=30");
-  const auto r = run_driftlab("discrepancy --data " + csv.string() + " --device fmvmg --report " + (dir / "report.json").string() +
-                              " --series " + (dir / "series.csv").string() + " --html " + (dir / "report.html").string());
+  const auto r =
+      run_driftlab("discrepancy --data " + csv.string() + " --device fmvmg --report " + (dir / "report.json").string() +
+                   " --series " + (dir / "series.csv").string() + " --html " + (dir / "report.html").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("named periodic_disturbance"));
 
@@ -63,7 +64,8 @@ TEST(DiscrepancyCommand, NamesASimulatedDisturbanceAndWritesReportSeriesAndHtml)
 TEST(DiscrepancyCommand, SaysNothingIsMissingWhenTheDeviceFileIsTheTruth) {
   const auto dir = scratch_dir("discrepancy_nothing");
   const auto csv = simulated(dir, "");
-  const auto r = run_driftlab("discrepancy --data " + csv.string() + " --device fmvmg --report " + (dir / "report.json").string());
+  const auto r =
+      run_driftlab("discrepancy --data " + csv.string() + " --device fmvmg --report " + (dir / "report.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("nothing significant is missing"));
   const auto report = nlohmann::json::parse(read_text(dir / "report.json"));
@@ -72,14 +74,32 @@ TEST(DiscrepancyCommand, SaysNothingIsMissingWhenTheDeviceFileIsTheTruth) {
   EXPECT_DOUBLE_EQ(report["gap_initial"].get<double>(), report["gap_final"].get<double>());
 }
 
+TEST(DiscrepancyCommand, WithoutADeviceFitsABiasPolynomialAndEstimatesTheNoiseTermsFromTheRecord) {
+  const auto dir = scratch_dir("discrepancy_no_device");
+  const auto csv = simulated(dir, "periodic_disturbance:amplitude_dph=80,period_s=900,phase_deg=30");
+  const auto r = run_driftlab("discrepancy --data " + csv.string() + " --report " + (dir / "report.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto report = nlohmann::json::parse(read_text(dir / "report.json"));
+  EXPECT_TRUE(report["model"]["noise_estimated"].get<bool>());
+  // The FMVMG's white noise is N = 99.6 deg/h/sqrt(Hz); the Allan fit of the residual finds it.
+  constexpr double kArwTolerance = 10.0;  // deg/h/sqrt(Hz): the fit's spread over one 4.5-h record
+  EXPECT_NEAR(report["model"]["noise"]["arw_dph_rthz"].get<double>(), 99.6, kArwTolerance);
+  ASSERT_EQ(report["named_effects"].size(), 1u) << report.dump(2);
+  EXPECT_EQ(report["named_effects"][0]["effect"], "periodic_disturbance");
+}
+
 TEST(DiscrepancyCommand, RejectsMissingDataAMissingReportAndOverwritingTheInput) {
   const auto dir = scratch_dir("discrepancy_bad");
   const auto csv = simulated(dir, "");
-  EXPECT_EQ(run_driftlab("discrepancy --data " + (dir / "nope.csv").string() + " --report " + (dir / "r.json").string()).exit_code, 3);
+  EXPECT_EQ(run_driftlab("discrepancy --data " + (dir / "nope.csv").string() + " --report " + (dir / "r.json").string())
+                .exit_code,
+            3);
   EXPECT_EQ(run_driftlab("discrepancy --data " + csv.string()).exit_code, 2);
   EXPECT_EQ(run_driftlab("discrepancy --data " + csv.string() + " --report " + csv.string()).exit_code, 2);
   EXPECT_EQ(run_driftlab("discrepancy --data " + csv.string() + " --report " + (dir / "r.json").string() +
-                         " --effects effect/nope").exit_code, 2);
+                         " --effects effect/nope")
+                .exit_code,
+            2);
 }
 
 }  // namespace

@@ -100,12 +100,14 @@ void add_discrepancy_command(CLI::App& app, CommandEnv& env) {
                   "device file or name: its model is the prior, its noise terms the covariance (default: a bias "
                   "polynomial with noise terms estimated from the record)");
   cmd->add_option("--devices-dir", options->devices_dir, "directory of device files");
-  cmd->add_option("--report", options->report, "report.json (named effects, gaps, evidence, residual views)")->required();
+  cmd->add_option("--report", options->report, "report.json (named effects, gaps, evidence, residual views)")
+      ->required();
   cmd->add_option("--series", options->series, "series.csv: t_s, measured_dps, model_initial_dps, model_final_dps");
   cmd->add_option("--html", options->html, "report.html with residual plots before and after");
   cmd->add_option("--effects", options->effects, "candidate effects (default: every effect/* plugin)");
-  cmd->add_option("--bias-degree", options->bias_degree,
-                  "degree of the fitted bias correction polynomial (default: the device file's, at least 1; 2 without a device)")
+  cmd->add_option(
+         "--bias-degree", options->bias_degree,
+         "degree of the fitted bias correction polynomial (default: the device file's, at least 1; 2 without a device)")
       ->check(CLI::Range(0, 6));
   cmd->add_option("--block", options->block_s, "block length for the fit, s (default: duration / 400)")
       ->check(CLI::NonNegativeNumber);

@@ -53,7 +53,8 @@ nlohmann::json views_json(const discrepancy::Views& v) {
   nlohmann::json peaks = nlohmann::json::array(), allan = nlohmann::json::array();
   for (const auto& p : v.peaks) peaks.push_back({{"period_s", p.period_s}, {"amplitude_dph", dph(p.amplitude_rad_s)}});
   for (const auto& a : v.allan)
-    allan.push_back({{"tau_s", a.tau_s}, {"residual_dph", dph(a.residual_rad_s)}, {"noise_model_dph", dph(a.model_rad_s)}});
+    allan.push_back(
+        {{"tau_s", a.tau_s}, {"residual_dph", dph(a.residual_rad_s)}, {"noise_model_dph", dph(a.model_rad_s)}});
   return {{"by_temperature_heating", bins_json(v.heating_by_temperature, "temp_c", 1.0)},
           {"by_temperature_cooling", bins_json(v.cooling_by_temperature, "temp_c", 1.0)},
           {"by_temperature_rate", bins_json(v.by_temperature_rate, "rate_c_per_min", 60.0)},
@@ -107,20 +108,35 @@ Figure residual_figure(const discrepancy::Result& r) {
   const auto& a = r.initial_views;
   const auto& b = r.final_views;
   Figure f;
-  f.panels.push_back({"residual over time (block means): measured - model", "time (h)", "residual (deg/h)", false, false,
-                      {{"initial model", to_vector(a.time_s, 1.0 / kSecondsPerHour), to_vector(a.residual_rad_s, kDphPerRadS)},
-                       {"final model", to_vector(b.time_s, 1.0 / kSecondsPerHour), to_vector(b.residual_rad_s, kDphPerRadS)}}});
-  f.panels.push_back({"residual by temperature, heating and cooling (mean +- s/sqrt(n) per bin)", "temperature (degC)",
-                      "residual (deg/h)", false, false,
+  f.panels.push_back(
+      {"residual over time (block means): measured - model",
+       "time (h)",
+       "residual (deg/h)",
+       false,
+       false,
+       {{"initial model", to_vector(a.time_s, 1.0 / kSecondsPerHour), to_vector(a.residual_rad_s, kDphPerRadS)},
+        {"final model", to_vector(b.time_s, 1.0 / kSecondsPerHour), to_vector(b.residual_rad_s, kDphPerRadS)}}});
+  f.panels.push_back({"residual by temperature, heating and cooling (mean +- s/sqrt(n) per bin)",
+                      "temperature (degC)",
+                      "residual (deg/h)",
+                      false,
+                      false,
                       {bin_series("initial, heating", a.heating_by_temperature, 1.0, PlotSeries::Style::Markers),
                        bin_series("initial, cooling", a.cooling_by_temperature, 1.0, PlotSeries::Style::Markers),
                        bin_series("final, heating", b.heating_by_temperature, 1.0, PlotSeries::Style::Line),
                        bin_series("final, cooling", b.cooling_by_temperature, 1.0, PlotSeries::Style::Line)}});
-  f.panels.push_back({"residual by temperature rate", "dT/dt (degC/min)", "residual (deg/h)", false, false,
+  f.panels.push_back({"residual by temperature rate",
+                      "dT/dt (degC/min)",
+                      "residual (deg/h)",
+                      false,
+                      false,
                       {bin_series("initial model", a.by_temperature_rate, 60.0, PlotSeries::Style::Markers),
                        bin_series("final model", b.by_temperature_rate, 60.0, PlotSeries::Style::Line)}});
   if (!a.spectrum.empty())
-    f.panels.push_back({"residual spectrum (least-squares sinusoid amplitude)", "period (s)", "amplitude (deg/h)", true,
+    f.panels.push_back({"residual spectrum (least-squares sinusoid amplitude)",
+                        "period (s)",
+                        "amplitude (deg/h)",
+                        true,
                         false,
                         {spectrum_series("initial model", a, PlotSeries::Style::Line),
                          spectrum_series("final model", b, PlotSeries::Style::Line)}});
@@ -138,8 +154,12 @@ Figure residual_figure(const discrepancy::Result& r) {
       after.x.push_back(p.tau_s);
       after.y.push_back(dph(p.residual_rad_s));
     }
-    f.panels.push_back({"Allan deviation of the residual against the model's noise terms", "tau (s)",
-                        "Allan deviation (deg/h)", true, true, {before, after, model}});
+    f.panels.push_back({"Allan deviation of the residual against the model's noise terms",
+                        "tau (s)",
+                        "Allan deviation (deg/h)",
+                        true,
+                        true,
+                        {before, after, model}});
   }
   return f;
 }
@@ -232,9 +252,9 @@ std::string discrepancy_html(const discrepancy::Result& r, const DiscrepancyRepo
   if (r.steps.empty()) {
     h << "<p>Nothing significant is missing";
     if (!r.final_scores.empty() && r.final_scores.front().applicable)
-      h << " (best candidate " << escape(r.final_scores.front().effect) << ", &Delta;BIC = "
-        << format(r.final_scores.front().delta_bic, "%.1f") << ", needs &gt; " << format(info.options->significance)
-        << ")";
+      h << " (best candidate " << escape(r.final_scores.front().effect)
+        << ", &Delta;BIC = " << format(r.final_scores.front().delta_bic, "%.1f") << ", needs &gt; "
+        << format(info.options->significance) << ")";
     h << ".</p>\n";
   } else {
     h << "<table><tr><th>step</th><th>effect</th><th>parameters (final model)</th><th>&Delta;BIC</th>"
