@@ -1,20 +1,11 @@
 #include "models/error_model/error_model.hpp"
 
+#include "framework/seeded_random.hpp"
+
 #include <cmath>
 #include <numbers>
 
 namespace driftlab::error_model {
-namespace {
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31);
-}
-
-}  // namespace
-
 double polynomial(const std::vector<double>& coefficients, double x) {
   double value = 0.0;
   for (auto it = coefficients.rbegin(); it != coefficients.rend(); ++it) value = value * x + *it;

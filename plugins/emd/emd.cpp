@@ -1,5 +1,7 @@
 #include "plugins/emd/emd.hpp"
 
+#include "framework/seeded_random.hpp"
+
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -609,13 +611,6 @@ struct EmdWorkspace {
   std::vector<long> sifts;
   int count = 0;
 };
-
-std::uint64_t splitmix64(std::uint64_t z) {
-  z += 0x9e3779b97f4a7c15ULL;
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
 
 void fill_gaussian(std::uint64_t seed, int member, double* out, Index n) {
   std::mt19937_64 rng(splitmix64(splitmix64(seed) + static_cast<std::uint64_t>(member)));

@@ -1,5 +1,7 @@
 #include "plugins/ga/ga.hpp"
 
+#include "framework/seeded_random.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -12,31 +14,6 @@
 
 namespace driftlab::ga {
 namespace {
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31);
-}
-
-class Random {
- public:
-  explicit Random(std::uint64_t seed) : engine_(splitmix64(seed)) {}
-
-  double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
-
-  std::size_t index(std::size_t n) {
-    const std::uint64_t limit = std::numeric_limits<std::uint64_t>::max() -
-                                std::numeric_limits<std::uint64_t>::max() % n;
-    std::uint64_t draw = engine_();
-    while (draw >= limit) draw = engine_();
-    return static_cast<std::size_t>(draw % n);
-  }
-
- private:
-  std::mt19937_64 engine_;
-};
 
 struct Gene {
   double lower, upper;
@@ -84,7 +61,7 @@ double sbx_spread(double u, double beta, double eta) {
 }
 
 void sbx(Eigen::VectorXd& a, Eigen::VectorXd& b, const std::vector<Gene>& genes, double eta,
-         Random& rng) {
+         SeededRandom& rng) {
   constexpr double kSameGene = 1e-14;
   for (std::size_t i = 0; i < genes.size(); ++i) {
     const auto k = static_cast<Eigen::Index>(i);
@@ -104,7 +81,7 @@ void sbx(Eigen::VectorXd& a, Eigen::VectorXd& b, const std::vector<Gene>& genes,
 }
 
 void polynomial_mutation(Eigen::VectorXd& x, const std::vector<Gene>& genes, double probability,
-                         double eta, Random& rng) {
+                         double eta, SeededRandom& rng) {
   const double power = 1.0 / (eta + 1.0);
   for (std::size_t i = 0; i < genes.size(); ++i) {
     const auto k = static_cast<Eigen::Index>(i);
@@ -125,7 +102,7 @@ void polynomial_mutation(Eigen::VectorXd& x, const std::vector<Gene>& genes, dou
   }
 }
 
-Eigen::VectorXd random_individual(const std::vector<Gene>& genes, Random& rng) {
+Eigen::VectorXd random_individual(const std::vector<Gene>& genes, SeededRandom& rng) {
   Eigen::VectorXd x(static_cast<Eigen::Index>(genes.size()));
   for (std::size_t i = 0; i < genes.size(); ++i) {
     const Gene& g = genes[i];
@@ -172,7 +149,7 @@ std::vector<std::size_t> ranking(const std::vector<double>& values) {
   return order;
 }
 
-std::size_t tournament(const std::vector<double>& values, std::size_t size, Random& rng) {
+std::size_t tournament(const std::vector<double>& values, std::size_t size, SeededRandom& rng) {
   std::size_t winner = rng.index(values.size());
   for (std::size_t i = 1; i < size; ++i) {
     const std::size_t challenger = rng.index(values.size());
@@ -186,7 +163,7 @@ std::size_t tournament(const std::vector<double>& values, std::size_t size, Rand
 Result minimize(const Objective& objective, const std::vector<Bound>& bounds, const Config& config) {
   check(config);
   const std::vector<Gene> genes = checked_genes(bounds);
-  Random rng(config.seed);
+  SeededRandom rng(config.seed);
   const std::size_t n = config.population;
 
   std::vector<Eigen::VectorXd> population;

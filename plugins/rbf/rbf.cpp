@@ -1,5 +1,7 @@
 #include "plugins/rbf/rbf.hpp"
 
+#include "framework/seeded_random.hpp"
+
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
@@ -13,31 +15,6 @@ namespace driftlab::rbf {
 namespace {
 
 constexpr Eigen::Index kBlockRows = 4096;
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31);
-}
-
-class Random {
- public:
-  explicit Random(std::uint64_t seed) : engine_(splitmix64(seed)) {}
-
-  double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
-
-  std::size_t index(std::size_t n) {
-    const std::uint64_t limit = std::numeric_limits<std::uint64_t>::max() -
-                                std::numeric_limits<std::uint64_t>::max() % n;
-    std::uint64_t draw = engine_();
-    while (draw >= limit) draw = engine_();
-    return static_cast<std::size_t>(draw % n);
-  }
-
- private:
-  std::mt19937_64 engine_;
-};
 
 Eigen::MatrixXd squared_distances(const Eigen::MatrixXd& U, const Eigen::MatrixXd& C) {
   Eigen::MatrixXd D(U.rows(), C.rows());
@@ -77,7 +54,7 @@ void check(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Config& c) 
   }
 }
 
-std::vector<Eigen::Index> subsample(Eigen::Index n, std::size_t cap, Random& rng) {
+std::vector<Eigen::Index> subsample(Eigen::Index n, std::size_t cap, SeededRandom& rng) {
   std::vector<Eigen::Index> rows(static_cast<std::size_t>(n));
   std::iota(rows.begin(), rows.end(), 0);
   if (rows.size() <= cap) return rows;
@@ -88,7 +65,7 @@ std::vector<Eigen::Index> subsample(Eigen::Index n, std::size_t cap, Random& rng
 }
 
 Eigen::MatrixXd kmeans(const Eigen::MatrixXd& U, const Config& c) {
-  Random rng(c.seed);
+  SeededRandom rng(c.seed);
   const auto rows = subsample(U.rows(), c.kmeans_sample, rng);
   const auto s = static_cast<Eigen::Index>(rows.size());
   const auto k = static_cast<Eigen::Index>(c.centres);
@@ -272,7 +249,7 @@ FitResult fit(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Config& 
 Split blocked_holdout(Eigen::Index n, double fraction, std::size_t blocks, std::uint64_t seed) {
   if (!(fraction > 0 && fraction < 1)) fail("holdout fraction must lie in (0, 1)");
   if (blocks < 1) fail("holdout needs at least one block");
-  Random rng(seed);
+  SeededRandom rng(seed);
   std::vector<bool> held(static_cast<std::size_t>(n), false);
   const auto b = static_cast<Eigen::Index>(blocks);
   for (Eigen::Index s = 0; s < b; ++s) {
