@@ -34,6 +34,7 @@
 
 #include "devices/device_file.hpp"
 #include "devices/simulator.hpp"
+#include "framework/seeded_random.hpp"
 #include "framework/units.hpp"
 
 namespace driftlab::testing_oven {
@@ -42,13 +43,6 @@ inline constexpr double kRadPerSecPerDph = kRadPerDeg / 3600.0;
 inline const std::array<std::string, 6> kEffectNames{"thermal_lag",          "temperature_rate",
                                                      "hysteresis",           "warmup_transient",
                                                      "periodic_disturbance", "scale_factor_temperature"};
-
-inline std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31);
-}
 
 class Draw {
  public:
