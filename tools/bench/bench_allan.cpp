@@ -16,17 +16,8 @@
 namespace driftlab {
 namespace {
 
-const bench::BenchSignal* signal_or_skip(benchmark::State& state) {
-  try {
-    return &bench::bench_signal(static_cast<std::size_t>(state.range(0)));
-  } catch (const std::exception& e) {
-    state.SkipWithError(e.what());
-    return nullptr;
-  }
-}
-
 void run_deviation(benchmark::State& state, allan::Kind kind) {
-  const auto* signal = signal_or_skip(state);
+  const auto* signal = bench::signal_or_skip(state);
   if (signal == nullptr) return;
   const double tau0 = 1.0 / signal->sample_rate_hz;
   for (auto _ : state) {
@@ -43,7 +34,7 @@ void BM_Oadev(benchmark::State& state) { run_deviation(state, allan::Kind::Oadev
 void BM_Totdev(benchmark::State& state) { run_deviation(state, allan::Kind::Totdev); }
 
 void BM_AllanAnalysis(benchmark::State& state) {
-  const auto* signal = signal_or_skip(state);
+  const auto* signal = bench::signal_or_skip(state);
   if (signal == nullptr) return;
   const double tau0 = 1.0 / signal->sample_rate_hz;
   for (auto _ : state) {

@@ -15,15 +15,6 @@
 namespace driftlab {
 namespace {
 
-const bench::BenchSignal* signal_or_skip(benchmark::State& state) {
-  try {
-    return &bench::bench_signal(static_cast<std::size_t>(state.range(0)));
-  } catch (const std::exception& e) {
-    state.SkipWithError(e.what());
-    return nullptr;
-  }
-}
-
 void report(benchmark::State& state, const emd::Result& r) {
   state.counters["imfs"] = static_cast<double>(r.imfs.cols());
   state.counters["sifts"] = static_cast<double>(std::accumulate(r.sifts.begin(), r.sifts.end(), 0L));
@@ -31,7 +22,7 @@ void report(benchmark::State& state, const emd::Result& r) {
 }
 
 void BM_Emd(benchmark::State& state) {
-  const auto* signal = signal_or_skip(state);
+  const auto* signal = bench::signal_or_skip(state);
   if (signal == nullptr) return;
   const emd::EmdConfig config;  // S-number 4, max 50 sifts, mirror ends
   emd::Result r;
@@ -43,7 +34,7 @@ void BM_Emd(benchmark::State& state) {
 }
 
 void BM_Ceemdan(benchmark::State& state) {
-  const auto* signal = signal_or_skip(state);
+  const auto* signal = bench::signal_or_skip(state);
   if (signal == nullptr) return;
   emd::CeemdanConfig config;
   config.ensemble.ensemble_size = 100;

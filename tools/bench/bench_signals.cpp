@@ -44,6 +44,15 @@ BenchSignal load(std::size_t n) {
 
 }  // namespace
 
+const BenchSignal* signal_or_skip(benchmark::State& state) {
+  try {
+    return &bench_signal(static_cast<std::size_t>(state.range(0)));
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return nullptr;
+  }
+}
+
 std::string bench_signal_dir() {
   const char* dir = std::getenv("DRIFTLAB_BENCH_SIGNALS");
   return dir ? dir : "";

@@ -5,6 +5,8 @@
 // Loaded once per process and cached; file parsing is never inside a timed region.
 #pragma once
 
+#include <benchmark/benchmark.h>
+
 #include <Eigen/Core>
 #include <cstddef>
 #include <string>
@@ -20,6 +22,10 @@ struct BenchSignal {
 
 // Throws std::runtime_error naming the missing file and how to generate it.
 const BenchSignal& bench_signal(std::size_t n);
+
+// The signal of length state.range(0), or nullptr after marking the benchmark skipped with the
+// reason (e.g. the signal files are missing).
+const BenchSignal* signal_or_skip(benchmark::State& state);
 
 // The directory in $DRIFTLAB_BENCH_SIGNALS, or empty.
 std::string bench_signal_dir();
