@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #define DRIFTLAB_SIMD_CLONES __attribute__((target_clones("avx2", "default")))
@@ -19,63 +21,122 @@ namespace {
 constexpr std::array<std::string_view, 6> kKindNames = {"adev", "oadev", "mdev",
                                                         "hdev", "ohdev", "totdev"};
 
-// Block length of the cache-blocked sweeps (doubles): small enough that the blocks of every lag
-// stay in L2, long enough that the per-block overhead vanishes.
-constexpr std::size_t kBlock = 8192;
-
-DRIFTLAB_SIMD_CLONES double second_difference_sum(const double* x, std::size_t count,
-                                                  std::size_t m) {
-  double sum = 0.0;
-#pragma omp simd reduction(+ : sum)
-  for (std::size_t i = 0; i < count; ++i) {
-    const double d = x[i + 2 * m] - 2.0 * x[i + m] + x[i];
-    sum += d * d;
-  }
-  return sum;
+// Second (kOrder 2) or third (kOrder 3) difference of x at lag m, starting at x[0].
+template <int kOrder>
+[[gnu::always_inline]] inline double difference(const double* x, std::size_t m) {
+  if constexpr (kOrder == 2) return x[2 * m] - 2.0 * x[m] + x[0];
+  else return x[3 * m] - 3.0 * x[2 * m] + 3.0 * x[m] - x[0];
 }
 
-DRIFTLAB_SIMD_CLONES double third_difference_sum(const double* x, std::size_t count,
-                                                 std::size_t m) {
-  double sum = 0.0;
-#pragma omp simd reduction(+ : sum)
-  for (std::size_t i = 0; i < count; ++i) {
-    const double d = x[i + 3 * m] - 3.0 * x[i + 2 * m] + 3.0 * x[i + m] - x[i];
-    sum += d * d;
-  }
-  return sum;
-}
+// Partial sums of one overlapping estimate, kept apart so that the additions of consecutive
+// terms do not wait for each other (four AVX2 vectors of four lanes in flight).
+constexpr std::size_t kLanes = 16;
+using Lanes = std::array<double, kLanes>;
 
-// Sums difference(base[k] + i, ., factors[k]) over i < counts[k] for every k in one sweep over
-// the record, block by block, so the blocks of all lags are reused from cache.
-template <class DifferenceSum>
-std::vector<double> blocked_sums(std::span<const double* const> bases,
-                                 std::span<const std::size_t> factors,
-                                 std::span<const std::size_t> counts, DifferenceSum difference) {
-  std::vector<double> sums(factors.size(), 0.0);
-  const std::size_t longest = *std::max_element(counts.begin(), counts.end());
-  for (std::size_t start = 0; start < longest; start += kBlock) {
-    for (std::size_t k = 0; k < factors.size(); ++k) {
-      if (start >= counts[k]) continue;
-      const std::size_t length = std::min(kBlock, counts[k] - start);
-      sums[k] += difference(bases[k] + start, length, factors[k]);
+// lanes[j] += D(x + i, m)^2 for i < count, i = j mod kLanes. Compiled once per target clone; the
+// lane loop is vectorized and the lane assignment does not depend on the clone, so every clone
+// gives the same bits.
+template <int kOrder>
+DRIFTLAB_SIMD_CLONES void accumulate_squares(const double* x, std::size_t count, std::size_t m,
+                                             Lanes& lanes) {
+  Lanes sums = lanes;
+  std::size_t i = 0;
+  for (; i + kLanes <= count; i += kLanes) {
+    for (std::size_t j = 0; j < kLanes; ++j) {
+      const double d = difference<kOrder>(x + i + j, m);
+      sums[j] += d * d;
     }
   }
-  return sums;
+  for (std::size_t j = 0; i < count; ++i, ++j) {
+    const double d = difference<kOrder>(x + i, m);
+    sums[j] += d * d;
+  }
+  lanes = sums;
+}
+
+// One overlapping estimate: the sum of D(e + p, m)^2 over the starts p in [begin, end).
+struct OverlappingSum {
+  std::size_t m, begin, end;
+};
+
+// Cache plan of the overlapping sums. The record e is viewed as rows of `row` samples (a power of
+// two, at least L / kMaxRows for a record of L samples):
+//   - a sum whose lag is a multiple of the row width combines samples in the same column of rows
+//     k, k + m/row, ...: the record is copied one column strip (kStrip samples of every row) at a
+//     time into a contiguous buffer (at most kMaxRows * kStrip * 8 bytes, so it stays in L2; the
+//     copy also keeps the power-of-two row stride from mapping every row to the same cache set),
+//     and all such lags are summed on the buffer, so together they read the record from memory once;
+//   - every other sum (the short lags, and long lags that are no multiple of the row width) is
+//     swept along the record in blocks of kBlock starts; for lags under the row width the blocks
+//     of all lags lie within 2 rows plus a block and are reused from cache.
+// For the octave grid this reads the record from memory twice whatever its length, instead of
+// once per long lag.
+constexpr std::size_t kBlock = 4096;
+constexpr std::size_t kStrip = 128;
+constexpr std::size_t kMaxRows = 512;
+constexpr std::size_t kMinRow = 2048;
+
+template <int kOrder>
+std::vector<double> overlapping_sums(const double* e, std::size_t length,
+                                     std::span<const OverlappingSum> sums) {
+  const std::size_t row = std::max(kMinRow, std::bit_ceil(length / kMaxRows + 1));
+  std::vector<Lanes> lanes(sums.size(), Lanes{});
+  std::vector<std::size_t> swept, striped;
+  for (std::size_t k = 0; k < sums.size(); ++k) {
+    (sums[k].m % row == 0 ? striped : swept).push_back(k);
+  }
+
+  std::size_t last_end = 0;
+  for (const std::size_t k : swept) last_end = std::max(last_end, sums[k].end);
+  for (std::size_t start = 0; start < last_end; start += kBlock) {
+    for (const std::size_t k : swept) {
+      const std::size_t lo = std::max(start, sums[k].begin);
+      const std::size_t hi = std::min(start + kBlock, sums[k].end);
+      if (lo < hi) accumulate_squares<kOrder>(e + lo, hi - lo, sums[k].m, lanes[k]);
+    }
+  }
+
+  if (!striped.empty()) {
+    const std::size_t rows = (length + row - 1) / row;
+    std::vector<double> strip(rows * kStrip);
+    for (std::size_t column = 0; column < row; column += kStrip) {
+      for (std::size_t r = 0; r < rows; ++r) {
+        const std::size_t from = r * row + column;
+        const std::size_t count = from < length ? std::min(kStrip, length - from) : 0;
+        std::copy_n(e + from, count, strip.data() + r * kStrip);
+      }
+      for (const std::size_t k : striped) {
+        // Starts p = r * row + column + t (t < kStrip) sit at strip[r * kStrip + t]: the starts of
+        // rows first..last are one run of the strip, clipped at both ends to [begin, end).
+        const auto& [m, begin, end] = sums[k];
+        const std::size_t first = begin / row, last = (end - 1) / row;
+        const std::size_t lo = std::clamp(begin, first * row + column, first * row + column + kStrip);
+        const std::size_t hi = std::clamp(end, last * row + column, last * row + column + kStrip);
+        const std::size_t from = first * kStrip + (lo - first * row - column);
+        const std::size_t to = last * kStrip + (hi - last * row - column);
+        if (from < to) accumulate_squares<kOrder>(strip.data() + from, to - from, m / row * kStrip, lanes[k]);
+      }
+    }
+  }
+
+  std::vector<double> totals(sums.size(), 0.0);
+  for (std::size_t k = 0; k < sums.size(); ++k) {
+    for (const double lane : lanes[k]) totals[k] += lane;
+  }
+  return totals;
 }
 
 double strided_sum(const double* x, std::size_t terms, std::size_t m, int order) {
   double sum = 0.0;
   for (std::size_t k = 0; k < terms; ++k) {
-    const double* p = x + k * m;
-    const double d = order == 2 ? p[2 * m] - 2.0 * p[m] + p[0]
-                                : p[3 * m] - 3.0 * p[2 * m] + 3.0 * p[m] - p[0];
+    const double d = order == 2 ? difference<2>(x + k * m, m) : difference<3>(x + k * m, m);
     sum += d * d;
   }
   return sum;
 }
 
 double modified_sum(const double* x, std::size_t terms, std::size_t m) {
-  const auto d = [x, m](std::size_t i) { return x[i + 2 * m] - 2.0 * x[i + m] + x[i]; };
+  const auto d = [x, m](std::size_t i) { return difference<2>(x + i, m); };
   double window = 0.0;
   for (std::size_t i = 0; i < m; ++i) window += d(i);
   double sum = window * window;
@@ -112,11 +173,22 @@ std::optional<Kind> parse_kind(std::string_view name) {
 bool is_hadamard(Kind kind) { return kind == Kind::Hdev || kind == Kind::Ohdev; }
 
 Eigen::VectorXd angle_from_rate(const Eigen::Ref<const Eigen::VectorXd>& rate, double tau0) {
-  Eigen::VectorXd x(rate.size() + 1);
+  return angle_from_rate(Eigen::VectorXd(rate), tau0);
+}
+
+Eigen::VectorXd angle_from_rate(Eigen::VectorXd&& rate, double tau0) {
+  Eigen::VectorXd x = std::move(rate);
+  const Eigen::Index n = x.size();
+  const double mean = n > 0 ? x.mean() : 0.0;
+  x.conservativeResize(n + 1);
+  double next_rate = n > 0 ? x(0) : 0.0, angle = 0.0;
   x(0) = 0.0;
-  if (rate.size() == 0) return x;
-  const double mean = rate.mean();
-  for (Eigen::Index i = 0; i < rate.size(); ++i) x(i + 1) = x(i) + tau0 * (rate(i) - mean);
+  for (Eigen::Index i = 1; i <= n; ++i) {
+    const double y = next_rate;
+    if (i < n) next_rate = x(i);
+    angle += tau0 * (y - mean);
+    x(i) = angle;
+  }
   return x;
 }
 
@@ -173,16 +245,19 @@ std::vector<Deviation> deviations(Kind kind, const Eigen::Ref<const Eigen::Vecto
   std::vector<double> sums(factors.size(), 0.0);
   Eigen::VectorXd extended;
   if (kind == Kind::Oadev || kind == Kind::Ohdev) {
-    std::vector<const double*> bases(factors.size(), x);
-    sums = kind == Kind::Oadev ? blocked_sums(bases, factors, counts, second_difference_sum)
-                               : blocked_sums(bases, factors, counts, third_difference_sum);
+    std::vector<OverlappingSum> overlapping(factors.size());
+    for (std::size_t k = 0; k < factors.size(); ++k) overlapping[k] = {factors[k], 0, counts[k]};
+    sums = kind == Kind::Oadev ? overlapping_sums<2>(x, n, overlapping)
+                               : overlapping_sums<3>(x, n, overlapping);
   } else if (kind == Kind::Totdev) {
     extended = reflected(angle);
-    std::vector<const double*> bases(factors.size());
+    std::vector<OverlappingSum> overlapping(factors.size());
     for (std::size_t k = 0; k < factors.size(); ++k) {
-      bases[k] = extended.data() + (n - 2) + 1 - factors[k];
+      const std::size_t begin = (n - 2) + 1 - factors[k];
+      overlapping[k] = {factors[k], begin, begin + counts[k]};
     }
-    sums = blocked_sums(bases, factors, counts, second_difference_sum);
+    sums = overlapping_sums<2>(extended.data(), static_cast<std::size_t>(extended.size()),
+                               overlapping);
   } else {
     for (std::size_t k = 0; k < factors.size(); ++k) {
       if (kind == Kind::Mdev) sums[k] = modified_sum(x, counts[k], factors[k]);

@@ -66,8 +66,8 @@ TEST_P(EveryBuiltinPlugin, DescribesItselfCompletely) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, EveryBuiltinPlugin, ::testing::ValuesIn(builtin_names()),
-                         [](const auto& info) {
-                           std::string n = info.param;
+                         [](const auto& test_info) {
+                           std::string n = test_info.param;
                            std::replace(n.begin(), n.end(), '/', '_');
                            return n;
                          });

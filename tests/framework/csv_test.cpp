@@ -97,8 +97,8 @@ INSTANTIATE_TEST_SUITE_P(
                     BadCsv{"ragged_row.csv", 5, "", "row has 4 cells, the header has 3"},
                     BadCsv{"empty_cell.csv", 13, "rate_dps", "empty cell"},
                     BadCsv{"does_not_exist.csv", 0, "", "does not exist"}),
-    [](const auto& info) {
-      std::string name = info.param.file;
+    [](const auto& test_info) {
+      std::string name = test_info.param.file;
       return name.substr(0, name.find('.'));
     });
 

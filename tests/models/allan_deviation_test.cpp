@@ -13,6 +13,7 @@
 #include <map>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace driftlab::allan {
@@ -166,6 +167,46 @@ TEST(Deviations, AgreeWithStraightforwardDefinitionsAtEveryFactor) {
       EXPECT_EQ(devs[i].terms, term_count(kind, angle.size(), factors[i]));
     }
   }
+}
+
+// Long lags that are multiples of the kernel's row width (2048 samples at this length) are summed
+// on column strips of the record, the others swept along it; both must match the definitions,
+// including the partial last row and TOTDEV's reflected record.
+TEST(Deviations, AgreeWithStraightforwardDefinitionsAtLongLagsOnEitherCachePath) {
+  constexpr double kSummationTolerance = 1e-10;  // relative; different summation order
+  std::mt19937_64 engine(19);
+  std::normal_distribution<double> normal;
+  Eigen::VectorXd rate(23456);
+  double walk = 0.0;
+  for (auto& r : rate) r = normal(engine) + (walk += 0.01 * normal(engine));
+  const double tau0 = 0.01;
+  const Eigen::VectorXd angle = angle_from_rate(rate, tau0);
+  for (const Kind kind : {Kind::Oadev, Kind::Ohdev, Kind::Totdev}) {
+    std::vector<std::size_t> factors;
+    for (const std::size_t m : {1, 3, 2047, 2048, 3001, 4096, 6144, 7000, 7812, 8192, 10240, 16384}) {
+      if (m <= max_factor(kind, angle.size())) factors.push_back(m);
+    }
+    const auto devs = deviations(kind, angle, tau0, factors);
+    for (std::size_t i = 0; i < factors.size(); ++i) {
+      EXPECT_NEAR(devs[i].dev / naive(kind, angle, factors[i], tau0), 1.0, kSummationTolerance)
+          << kind_name(kind) << " m=" << factors[i];
+    }
+  }
+}
+
+TEST(AngleFromRate, InPlaceIntegrationEqualsTheCopyingOne) {
+  std::mt19937_64 engine(23);
+  std::normal_distribution<double> normal;
+  Eigen::VectorXd rate(1001);
+  for (auto& r : rate) r = 2.0 + normal(engine);
+  const Eigen::VectorXd copied = angle_from_rate(rate, 0.1);
+  Eigen::VectorXd consumed = rate;
+  const Eigen::VectorXd in_place = angle_from_rate(std::move(consumed), 0.1);
+  ASSERT_EQ(in_place.size(), rate.size() + 1);
+  EXPECT_EQ(in_place, copied);
+  EXPECT_EQ(in_place(0), 0.0);
+  EXPECT_NEAR(in_place(1), 0.1 * (rate(0) - rate.mean()), 1e-15);
+  EXPECT_EQ(angle_from_rate(Eigen::VectorXd(), 0.1), Eigen::VectorXd::Zero(1));
 }
 
 TEST(Deviations, GiveTheSameResultForARateAndItsIntegratedAngle) {
