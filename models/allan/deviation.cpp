@@ -1,6 +1,7 @@
 #include "models/allan/deviation.hpp"
 
 #include "framework/error.hpp"
+#include "framework/simd.hpp"
 
 #include <algorithm>
 #include <array>
@@ -9,11 +10,6 @@
 #include <string>
 #include <utility>
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#define DRIFTLAB_SIMD_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define DRIFTLAB_SIMD_CLONES
-#endif
 
 namespace driftlab::allan {
 namespace {

@@ -1,6 +1,7 @@
 #include "plugins/emd/emd.hpp"
 
 #include "framework/seeded_random.hpp"
+#include "framework/simd.hpp"
 
 #include <algorithm>
 #include <array>
@@ -10,6 +11,7 @@
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <exception>
 #include <initializer_list>
 #include <mutex>
@@ -43,22 +45,54 @@ struct ExtremaSet {
 
 std::uint64_t bits(double v) { return std::bit_cast<std::uint64_t>(v); }
 
+// Start of the first whole chunk of kTurnChunk samples in [from, to) holding a difference with its
+// sign bit set, x[i] - x[i-1] (kFalling) or x[i-1] - x[i]; the start of the incomplete tail when
+// none does. Vectorized: a cheap skip over the long monotonic runs of the slow IMFs.
+constexpr Index kTurnChunk = 8;
+
+template <bool kFalling>
+[[gnu::always_inline]] inline Index skip_monotonic(const double* x, Index from, Index to) {
+  Index i = from;
+  for (; i + kTurnChunk <= to; i += kTurnChunk) {
+    std::uint64_t signs = 0;
+    for (Index k = i; k < i + kTurnChunk; ++k)
+      signs |= bits(kFalling ? x[k] - x[k - 1] : x[k - 1] - x[k]);
+    if (signs >> 63) break;
+  }
+  return i;
+}
+
+DRIFTLAB_SIMD_CLONES Index skip_rising(const double* x, Index from, Index to) {
+  return skip_monotonic<true>(x, from, to);
+}
+
+DRIFTLAB_SIMD_CLONES Index skip_falling(const double* x, Index from, Index to) {
+  return skip_monotonic<false>(x, from, to);
+}
+
 // Smallest i in [from, to) with x[i] < x[i-1] (kFalling) or x[i] > x[i-1], else `to`. Chunks are
-// skipped when no difference in them has its sign bit set (vectorizable; exact for finite samples:
+// skipped when no difference in them has its sign bit set (exact for finite samples:
 // x[i] < x[i-1] implies x[i] - x[i-1] < 0), and the exact test runs from the first chunk that may
 // hold the turn.
 template <bool kFalling>
 Index next_turn(const double* x, Index from, Index to) {
-  constexpr Index kChunk = 8;
-  Index i = from;
-  while (i + kChunk <= to) {
-    std::uint64_t signs = 0;
-    for (Index k = i; k < i + kChunk; ++k) signs |= bits(kFalling ? x[k] - x[k - 1] : x[k - 1] - x[k]);
-    if (signs >> 63) break;
-    i += kChunk;
-  }
+  Index i = kFalling ? skip_rising(x, from, to) : skip_falling(x, from, to);
   while (i < to && !(kFalling ? x[i] < x[i - 1] : x[i] > x[i - 1])) ++i;
   return i;
+}
+
+// Number of i in [from, to) where the sign bits of x[i] and x[i-1] differ.
+DRIFTLAB_SIMD_CLONES Index count_sign_changes(const double* x, Index from, Index to) {
+  std::uint64_t changes = 0;
+  for (Index k = from; k < to; ++k) changes += (bits(x[k]) ^ bits(x[k - 1])) >> 63;
+  return static_cast<Index>(changes);
+}
+
+// True when x[i] == x[i - 1] for some i in [from, to).
+DRIFTLAB_SIMD_CLONES bool has_equal_neighbours(const double* x, Index from, Index to) {
+  Index equal = 0;
+  for (Index i = from; i < to; ++i) equal += x[i] == x[i - 1];
+  return equal > 0;
 }
 
 // Interior extrema and zero crossings of a signal scanned block by block, in order: a search for
@@ -89,44 +123,39 @@ class ExtremaScanner {
     count_zero_crossings(x, from, to);
   }
 
-  // The same result without branches on the data: for densely packed extrema, where the search
-  // would mispredict at almost every turn. Each step writes a candidate slot and advances a count
-  // only at an extremum.
-  void scan_dense(const double* x, Index from, Index to) {
-    Index run_start = from - 1;
-    while (run_start > 0 && x[run_start - 1] == x[run_start]) --run_start;
+  // The same result without branches on the data, for densely packed extrema, where the search
+  // would mispredict at almost every turn: each step writes a candidate slot and advances a count
+  // only at an extremum. Returns false, having done nothing, when two neighbouring samples of
+  // x[from - 2, to) are equal (a flat run needs the search's bookkeeping).
+  bool scan_strict(const double* x, Index from, Index to) {
+    if (has_equal_neighbours(x, std::max<Index>(from - 1, 1), to)) return false;
     double* max_pos = out_.max.pos.data() + kPad;
     double* max_val = out_.max.val.data() + kPad;
     double* min_pos = out_.min.pos.data() + kPad;
     double* min_val = out_.min.val.data() + kPad;
     Index max_count = out_.max.count, min_count = out_.min.count;
-    Index direction = direction_;
-    double prev = x[from - 1];
-    for (Index i = from; i < to; ++i) {
-      const double xi = x[i];
-      const Index up = xi > prev, down = xi < prev, moved = up | down;
-      const double middle = static_cast<double>((run_start + i - 1) >> 1);
-      max_pos[max_count] = middle;
-      max_val[max_count] = prev;
-      max_count += down & (direction > 0);
-      min_pos[min_count] = middle;
-      min_val[min_count] = prev;
-      min_count += up & (direction < 0);
-      direction += moved * (up - down - direction);
-      run_start += moved * (i - run_start);
-      prev = xi;
+    double before = from >= 2 ? x[from - 1] - x[from - 2] : 0.0;
+    double position = static_cast<double>(from - 1);
+    for (Index i = from; i < to; ++i, position += 1.0) {
+      const double step = x[i] - x[i - 1];
+      max_pos[max_count] = position;
+      max_val[max_count] = x[i - 1];
+      max_count += (before > 0.0) & (step < 0.0);
+      min_pos[min_count] = position;
+      min_val[min_count] = x[i - 1];
+      min_count += (before < 0.0) & (step > 0.0);
+      before = step;
     }
     out_.max.count = max_count;
     out_.min.count = min_count;
-    direction_ = static_cast<int>(direction);
+    if (to - from >= 1 && to >= 2) direction_ = x[to - 1] > x[to - 2] ? 1 : -1;
     count_zero_crossings(x, from, to);
+    return true;
   }
 
  private:
   void count_zero_crossings(const double* x, Index from, Index to) {
-    std::uint64_t crossings = 0;
-    for (Index k = from; k < to; ++k) crossings += (bits(x[k]) ^ bits(x[k - 1])) >> 63;
-    out_.zero_crossings += static_cast<Index>(crossings);
+    out_.zero_crossings += count_sign_changes(x, from, to);
   }
 
   ExtremaSet& out_;
@@ -232,17 +261,22 @@ double inverse_step(double h) {
   return h < kSmallSteps ? kInverses[static_cast<int>(h)] : 1.0 / h;
 }
 
-// One piece of a cubic spline: S(t) = y + dt (b + dt (c + dt d)), dt = t - x, from knot x to the
-// next piece's x.
-struct Segment {
-  double x, y, b, c, d;
+// A cubic spline in the second-derivative form: knots (x[k], y[k]) and second derivatives m[k],
+// k < knots. On [x_j, x_{j+1}], with h = x_{j+1} - x_j and dt = t - x_j,
+//   S(t) = y_j + dt (b + dt (c + dt d)),  b = (y_{j+1} - y_j)/h - h (2 m_j + m_{j+1})/6,
+//   c = m_j / 2,  d = (m_{j+1} - m_j) / (6 h);
+// the coefficients are formed when a piece is evaluated, so a fit writes one value per knot.
+struct Spline {
+  const double *x = nullptr, *y = nullptr, *m = nullptr;
+  Index knots = 0;
 };
 
 struct SplineScratch {
-  std::vector<double> slope, second, inverse_step, ratio;
+  std::vector<double> second, ratio;
 
   void reserve(std::size_t capacity) {
-    for (auto* v : {&slope, &second, &inverse_step, &ratio}) v->resize(capacity);
+    second.resize(capacity);
+    ratio.resize(capacity);
   }
 };
 
@@ -254,99 +288,228 @@ double power_of_two_below(double q) {
 }
 
 // Not-a-knot cubic spline through (x[k], y[k]), k < n, n >= 2 (x strictly increasing whole
-// numbers) into out[0, n): piece j covers [x[j], x[j+1]]; out[n-1] holds the last knot only.
-// The tridiagonal system for the second derivatives M is eliminated with the Thomas recurrence in
-// homogeneous form: pivot_i = Q_i / Q_{i-1}, ratio_i = P_i / Q_i, M'_i = R_i / Q_i with P, Q, R
-// linear recurrences, so no division sits on the dependency chain. (P, Q, R) are rescaled by a
-// power of two every kRescaleEvery rows (Q grows by at most 6n per row, so this holds for
-// n < 2^40).
-void fit_spline(const double* x, const double* y, Index n, SplineScratch& scratch, Segment* out) {
-  constexpr Index kRescaleEvery = 8;
-  double* slope = scratch.slope.data();
-  double* m = scratch.second.data();
-  double* inverse = scratch.inverse_step.data();
-  double* ratio = scratch.ratio.data();
-  auto chord = [&](Index j) {
-    inverse[j] = inverse_step(x[j + 1] - x[j]);
-    slope[j] = (y[j + 1] - y[j]) * inverse[j];
-  };
-  auto emit = [&](Index j) {
-    const double step = x[j + 1] - x[j];
-    out[j] = {x[j], y[j], slope[j] - step * (2.0 * m[j] + m[j + 1]) / 6.0, 0.5 * m[j],
-              (m[j + 1] - m[j]) * inverse[j] / 6.0};
-  };
-  out[n - 1] = {x[n - 1], y[n - 1], 0.0, 0.0, 0.0};
-  chord(0);
-  if (n == 2) {
-    m[0] = m[1] = 0.0;
-    emit(0);
-    return;
+// numbers): fills the second derivatives M. The tridiagonal system for M is eliminated with the
+// Thomas recurrence in homogeneous form: pivot_i = Q_i / Q_{i-1}, ratio_i = P_i / Q_i,
+// M'_i = R_i / Q_i with P, Q, R linear recurrences, so no division sits on the dependency chain.
+// (P, Q, R) are rescaled by a power of two every kRescaleEvery rows (Q grows by at most 6n per
+// row, so this holds for n < 2^40). Chords are recomputed rather than stored: a fit touches two
+// arrays besides the knots, which matters because the knots of the first IMFs do not fit in cache.
+// The recurrences are exposed a row at a time so that fit_splines can interleave two independent
+// splines: each row waits on the previous one, two chains in flight overlap.
+class SplineFit {
+ public:
+  SplineFit(const double* x, const double* y, Index n, SplineScratch& scratch)
+      : x_(x), y_(y), n_(n), last_(n >= 4 ? n - 2 : 0), m_(scratch.second.data()),
+        ratio_(scratch.ratio.data()) {
+    if (n == 2) {
+      m_[0] = m_[1] = 0.0;
+    } else if (n == 3) {
+      m_[0] = m_[1] = m_[2] = 2.0 * (slope(1) - slope(0)) / (x[2] - x[0]);
+    } else {
+      previous_inverse_ = inverse_step(x[1] - x[0]);
+      previous_slope_ = (y[1] - y[0]) * previous_inverse_;
+    }
   }
-  chord(1);
-  if (n == 3) {
-    m[0] = m[1] = m[2] = 2.0 * (slope[1] - slope[0]) / (x[2] - x[0]);
-    emit(0);
-    emit(1);
-    return;
-  }
-  const Index last = n - 2;
-  double p_prev = 0.0, q_prev = 1.0, r_prev = 0.0;
-  for (Index i = 1; i <= last; ++i) {
-    if (i > 1) chord(i);
-    const double before = x[i] - x[i - 1], after = x[i + 1] - x[i];
+
+  Spline spline() const { return {x_, y_, m_, n_}; }
+
+  // Rows 1..rows() are eliminated, then substituted back from rows() - 1 down to 1, then finish().
+  // A spline of 2 or 3 knots is complete on construction (rows() == 0).
+  Index rows() const { return last_; }
+
+  void eliminate(Index i) {
+    const double before = x_[i] - x_[i - 1], after = x_[i + 1] - x_[i];
+    const double inverse = inverse_step(after), chord_slope = (y_[i + 1] - y_[i]) * inverse;
     double sub = before, diag = 2.0 * (before + after), super = after;
     if (i == 1) {
-      diag += before * (before + after) * inverse[1];
-      super -= before * before * inverse[1];
+      diag += before * (before + after) * inverse;
+      super -= before * before * inverse;
     }
-    if (i == last) {
-      sub -= after * after * inverse[i - 1];
-      diag += after * (before + after) * inverse[i - 1];
+    if (i == last_) {
+      sub -= after * after * previous_inverse_;
+      diag += after * (before + after) * previous_inverse_;
     }
-    const double p = super * q_prev;
-    double q = diag * q_prev - sub * p_prev;
-    double r = 6.0 * (slope[i] - slope[i - 1]) * q_prev - sub * r_prev;
+    const double p = super * q_prev_;
+    double q = diag * q_prev_ - sub * p_prev_;
+    double r = 6.0 * (chord_slope - previous_slope_) * q_prev_ - sub * r_prev_;
     const double inverse_q = 1.0 / q;
-    ratio[i] = p * inverse_q;
-    m[i] = r * inverse_q;
-    p_prev = p;
+    ratio_[i] = p * inverse_q;
+    m_[i] = r * inverse_q;
+    p_prev_ = p;
     if (i % kRescaleEvery == 0) {
       const double scale = power_of_two_below(q);
-      p_prev *= scale;
+      p_prev_ *= scale;
       q *= scale;
       r *= scale;
     }
-    q_prev = q;
-    r_prev = r;
+    q_prev_ = q;
+    r_prev_ = r;
+    previous_inverse_ = inverse;
+    previous_slope_ = chord_slope;
   }
-  for (Index i = last - 1; i >= 1; --i) {
-    m[i] -= ratio[i] * m[i + 1];
-    if (i == last - 1) {
-      const double ha = x[n - 2] - x[n - 3], hb = x[n - 1] - x[n - 2];
-      m[n - 1] = ((ha + hb) * m[n - 2] - hb * m[n - 3]) * inverse[n - 3];
-      emit(n - 2);
-    }
-    emit(i);
-  }
-  const double h0 = x[1] - x[0], h1 = x[2] - x[1];
-  m[0] = ((h0 + h1) * m[1] - h0 * m[2]) * inverse[1];
-  emit(0);
-}
 
-// A spline piece re-expanded about a sample position t0: S(t0 + s) = p0 + s (p1 + s (p2 + s p3)).
-struct LocalCubic {
-  double p0, p1, p2, p3;
+  void substitute(Index i) { m_[i] -= ratio_[i] * m_[i + 1]; }
+
+  void finish() {
+    if (last_ == 0) return;
+    const double ha = x_[n_ - 2] - x_[n_ - 3], hb = x_[n_ - 1] - x_[n_ - 2];
+    m_[n_ - 1] = ((ha + hb) * m_[n_ - 2] - hb * m_[n_ - 3]) * inverse_step(ha);
+    const double h0 = x_[1] - x_[0], h1 = x_[2] - x_[1];
+    m_[0] = ((h0 + h1) * m_[1] - h0 * m_[2]) * inverse_step(h1);
+  }
+
+ private:
+  static constexpr Index kRescaleEvery = 8;
+
+  double slope(Index j) const { return (y_[j + 1] - y_[j]) * inverse_step(x_[j + 1] - x_[j]); }
+
+  const double *x_, *y_;
+  Index n_, last_;
+  double *m_, *ratio_;
+  double p_prev_ = 0.0, q_prev_ = 1.0, r_prev_ = 0.0;
+  double previous_inverse_ = 0.0, previous_slope_ = 0.0;
 };
 
-LocalCubic about(const Segment& g, double t0) {
-  const double delta = t0 - g.x;
-  return {g.y + delta * (g.b + delta * (g.c + delta * g.d)), g.b + delta * (2.0 * g.c + 3.0 * g.d * delta),
+// Fits two independent splines with their recurrences interleaved row by row.
+void fit_splines(SplineFit& a, SplineFit& b) {
+  const Index common = std::min(a.rows(), b.rows());
+  for (Index i = 1; i <= common; ++i) {
+    a.eliminate(i);
+    b.eliminate(i);
+  }
+  for (Index i = common + 1; i <= a.rows(); ++i) a.eliminate(i);
+  for (Index i = common + 1; i <= b.rows(); ++i) b.eliminate(i);
+  Index ia = a.rows() - 1, ib = b.rows() - 1;
+  for (; ia >= 1 && ib >= 1; --ia, --ib) {
+    a.substitute(ia);
+    b.substitute(ib);
+  }
+  for (; ia >= 1; --ia) a.substitute(ia);
+  for (; ib >= 1; --ib) b.substitute(ib);
+  a.finish();
+  b.finish();
+}
+
+// Values of a spline at the samples t in [from, to) into out[t - from], writing up to
+// 2 kGroup - 1 values past `to`. Piece j serves t in [x_j, x_{j+1}) (the last piece also beyond its
+// right knot); `piece` is the piece serving `from` on entry (or an earlier one) and the one serving
+// `to` on return. Each piece is evaluated kGroup samples at a time (vectorized), at least two
+// groups whatever its length, overwriting the next piece's first samples when it is shorter: the
+// densely packed knots of the first IMFs (pieces of 1 to 8 samples) then cost no mispredicted
+// branch.
+constexpr Index kGroup = 4;
+using Group = double __attribute__((vector_size(kGroup * sizeof(double))));  // GCC/Clang vector
+
+// Piece j of a spline as y0 + dt (b + dt (c + dt d)), dt = t - x_j.
+struct Cubic {
+  double y0, b, c, d;
+};
+
+[[gnu::always_inline]] inline Cubic piece_of(const Spline& spline, Index j) {
+  constexpr double kSixth = 1.0 / 6.0;
+  const double *x = spline.x, *y = spline.y, *m = spline.m;
+  const double step = x[j + 1] - x[j], inverse = inverse_step(step);
+  return {y[j], (y[j + 1] - y[j]) * inverse - step * (2.0 * m[j] + m[j + 1]) * kSixth, 0.5 * m[j],
+          (m[j + 1] - m[j]) * inverse * kSixth};
+}
+
+// The same cubic in s = t - (x_j + delta).
+[[gnu::always_inline]] inline Cubic shifted(const Cubic& g, double delta) {
+  return {g.y0 + delta * (g.b + delta * (g.c + delta * g.d)), g.b + delta * (2.0 * g.c + 3.0 * g.d * delta),
           g.c + 3.0 * g.d * delta, g.d};
 }
 
-double evaluate(const Segment& g, double t) {
-  const double dt = t - g.x;
-  return g.y + dt * (g.b + dt * (g.c + dt * g.d));
+// o[k] = y0 + t_k (b + t_k (c + t_k d)) for the kGroup positions t_k.
+[[gnu::always_inline]] inline void store_cubic(double* o, Group t, double y0, double b, double c,
+                                               double d) {
+  const Group value = y0 + t * (b + t * (c + t * d));
+  std::memcpy(o, &value, sizeof value);
+}
+
+DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Index from, Index to,
+                                         double* out) {
+  const Group offsets = {0.0, 1.0, 2.0, 3.0};
+  const double* x = spline.x;
+  Index j = piece;
+  for (Index a = from; a < to;) {
+    const bool last = j + 2 >= spline.knots;
+    const Index next_knot = last ? to : static_cast<Index>(x[j + 1]);
+    if (next_knot <= a) {
+      ++j;
+      continue;
+    }
+    const Index end = std::min(next_knot, to);
+    const Cubic g = piece_of(spline, j);
+    const auto store = [&g](double* o, Group t) { store_cubic(o, t, g.y0, g.b, g.c, g.d); };
+    double* o = out + (a - from);
+    const Group t = (static_cast<double>(a) - x[j]) + offsets;
+    store(o, t);
+    store(o + kGroup, t + static_cast<double>(kGroup));
+    for (Index k = 2; a + k * kGroup < end; ++k) store(o + k * kGroup, t + static_cast<double>(k * kGroup));
+    if (end == next_knot && !last) ++j;
+    a = end;
+  }
+  piece = j;
+}
+
+// h[i] -= (upper[i] + lower[i]) / 2 for i < count.
+DRIFTLAB_SIMD_CLONES void subtract_mean(double* h, const double* upper, const double* lower,
+                                        Index count) {
+  for (Index i = 0; i < count; ++i) h[i] -= 0.5 * (upper[i] + lower[i]);
+}
+
+// h[t] -= (upper(t) + lower(t)) / 2 for t in [from, to), for sparse knots: one interval between
+// consecutive knots of either spline at a time, the mean of the two pieces expanded about the
+// interval's first sample, so each sample costs one cubic. `upper_piece` and `lower_piece` carry
+// the pieces from block to block as in evaluate_block. With kWithChangeRatio, adds sum h^2 and
+// sum mean^2 (before the subtraction) to sums[0] and sums[1].
+template <bool kWithChangeRatio>
+[[gnu::always_inline]] inline void subtract_mean_by_intervals(const Spline& upper, const Spline& lower, Index& upper_piece,
+                                Index& lower_piece, double* h, Index from, Index to,
+                                double* sums) {
+  const auto next_knot = [to](const Spline& spline, Index j) {
+    return j + 2 >= spline.knots ? to : static_cast<Index>(spline.x[j + 1]);
+  };
+  Index ju = upper_piece, jl = lower_piece;
+  for (Index a = from; a < to;) {
+    while (next_knot(upper, ju) <= a) ++ju;
+    while (next_knot(lower, jl) <= a) ++jl;
+    const Index end = std::min({next_knot(upper, ju), next_knot(lower, jl), to});
+    const double t0 = static_cast<double>(a);
+    const Cubic u = shifted(piece_of(upper, ju), t0 - upper.x[ju]);
+    const Cubic l = shifted(piece_of(lower, jl), t0 - lower.x[jl]);
+    const Cubic mean{0.5 * (u.y0 + l.y0), 0.5 * (u.b + l.b), 0.5 * (u.c + l.c), 0.5 * (u.d + l.d)};
+    double* piece = h + a;
+    const Index length = end - a;
+    Index k = 0;
+    if constexpr (!kWithChangeRatio) {
+      const Group offsets = {0.0, 1.0, 2.0, 3.0};
+      for (Group sk = offsets; k + kGroup <= length; k += kGroup, sk += static_cast<double>(kGroup)) {
+        Group values;
+        std::memcpy(&values, piece + k, sizeof values);
+        values -= mean.y0 + sk * (mean.b + sk * (mean.c + sk * mean.d));
+        std::memcpy(piece + k, &values, sizeof values);
+      }
+    }
+    for (; k < length; ++k) {
+      const double sk = static_cast<double>(k);
+      const double value = mean.y0 + sk * (mean.b + sk * (mean.c + sk * mean.d));
+      if constexpr (kWithChangeRatio) {
+        sums[0] += piece[k] * piece[k];
+        sums[1] += value * value;
+      }
+      piece[k] -= value;
+    }
+    a = end;
+  }
+  upper_piece = ju;
+  lower_piece = jl;
+}
+
+DRIFTLAB_SIMD_CLONES void subtract_mean_by_intervals(const Spline& upper, const Spline& lower,
+                                                     Index& upper_piece, Index& lower_piece,
+                                                     double* h, Index from, Index to) {
+  subtract_mean_by_intervals<false>(upper, lower, upper_piece, lower_piece, h, from, to, nullptr);
 }
 
 // Sifting workspace: buffers sized once per signal length, reused by every sift.
@@ -395,21 +558,19 @@ class Sifter {
  private:
   void reserve(Index n) {
     const auto capacity = static_cast<std::size_t>(n / 2 + 2 + 2 * kPad);
-    if (scratch_.ratio.size() >= capacity) return;
+    if (upper_scratch_.ratio.size() >= capacity) return;
     for (ExtremaSet& set : sets_) {
       for (Extrema* e : {&set.max, &set.min}) {
         e->pos.resize(capacity);
         e->val.resize(capacity);
       }
     }
-    upper_.resize(capacity);
-    lower_.resize(capacity);
-    scratch_.reserve(capacity);
+    upper_scratch_.reserve(capacity);
+    lower_scratch_.reserve(capacity);
   }
 
-  // Adds the end knots around the interior extrema and fits the envelope through all of them.
-  static Index fit(Extrema& e, const EndKnots& start, const EndKnots& finish, Index n,
-                   SplineScratch& scratch, std::vector<Segment>& envelope) {
+  // Adds the end knots around the interior extrema; returns the index of the first knot.
+  static Index add_end_knots(Extrema& e, const EndKnots& start, const EndKnots& finish, Index n) {
     for (int k = 0; k < start.count; ++k) {
       e.pos[kPad - 1 - k] = start.s[k];
       e.val[kPad - 1 - k] = start.val[k];
@@ -418,9 +579,7 @@ class Sifter {
       e.pos[kPad + e.count + k] = static_cast<double>(n - 1) - finish.s[k];
       e.val[kPad + e.count + k] = finish.val[k];
     }
-    const Index first = kPad - start.count, count = start.count + e.count + finish.count;
-    fit_spline(&e.pos[first], &e.val[first], count, scratch, envelope.data());
-    return count;
+    return kPad - start.count;
   }
 
   void build_envelopes(const double* h, Index n) {
@@ -437,13 +596,22 @@ class Sifter {
       max_finish = linear_end(max_near_finish, h[n - 1], true);
       min_finish = linear_end(min_near_finish, h[n - 1], false);
     }
-    upper_knots_ = fit(e.max, max_start, max_finish, n, scratch_, upper_);
-    lower_knots_ = fit(e.min, min_start, min_finish, n, scratch_, lower_);
+    const Index upper_first = add_end_knots(e.max, max_start, max_finish, n);
+    const Index lower_first = add_end_knots(e.min, min_start, min_finish, n);
+    const Index upper_knots = max_start.count + e.max.count + max_finish.count;
+    const Index lower_knots = min_start.count + e.min.count + min_finish.count;
+    SplineFit upper(&e.max.pos[upper_first], &e.max.val[upper_first], upper_knots, upper_scratch_);
+    SplineFit lower(&e.min.pos[lower_first], &e.min.val[lower_first], lower_knots, lower_scratch_);
+    fit_splines(upper, lower);
+    upper_ = upper.spline();
+    lower_ = lower.spline();
   }
 
   // One sift: h <- h - (upper + lower) / 2, then the extrema of the new h, block by block so that
   // each block is still in cache when scanned. Returns the Cauchy SD (0 for the other rules).
-  // Knots or extrema closer than kDenseSpacing samples on average take the branch-free paths.
+  // Extrema closer than kDenseSpacing samples on average take the branch-free paths: envelopes
+  // evaluated piece by piece into block buffers and the strict extrema scan; sparser ones subtract
+  // the mean interval by interval and search for the turns.
   double sift_pass(double* h, Index n) {
     const bool with_change_ratio = config_.stop_rule == StopRule::CauchySd;
     const ExtremaSet& e = sets_[current_];
@@ -451,104 +619,42 @@ class Sifter {
     ExtremaSet& next = sets_[1 - current_];
     next.max.count = next.min.count = next.zero_crossings = 0;
     ExtremaScanner scanner(next);
-    MeanSums sums;
-    Index ju = 0, jl = 0;
+    double sums[2] = {0.0, 0.0};  // sum h^2, sum mean^2 (Cauchy SD only)
+    Index upper_piece = 0, lower_piece = 0;
     for (Index from = 0; from < n; from += kBlock) {
       const Index to = std::min(n, from + kBlock);
+      const Index scan_from = std::max<Index>(from, 1);
       if (dense) {
-        if (with_change_ratio)
-          remove_mean_dense<true>(h, from, to, ju, jl, sums);
-        else
-          remove_mean_dense<false>(h, from, to, ju, jl, sums);
-        scanner.scan_dense(h, std::max<Index>(from, 1), to);
+        evaluate_block(upper_, upper_piece, from, to, upper_values_.data());
+        evaluate_block(lower_, lower_piece, from, to, lower_values_.data());
+        if (with_change_ratio) {
+          for (Index i = from; i < to; ++i) {
+            const double mean = 0.5 * (upper_values_[i - from] + lower_values_[i - from]);
+            sums[0] += h[i] * h[i];
+            sums[1] += mean * mean;
+          }
+        }
+        subtract_mean(h + from, upper_values_.data(), lower_values_.data(), to - from);
+        if (!scanner.scan_strict(h, scan_from, to)) scanner.scan(h, scan_from, to);
       } else {
-        remove_mean(h, from, to, ju, jl, with_change_ratio, sums);
-        scanner.scan(h, std::max<Index>(from, 1), to);
+        if (with_change_ratio)
+          subtract_mean_by_intervals<true>(upper_, lower_, upper_piece, lower_piece, h, from, to, sums);
+        else
+          subtract_mean_by_intervals(upper_, lower_, upper_piece, lower_piece, h, from, to);
+        scanner.scan(h, scan_from, to);
       }
     }
     current_ = 1 - current_;
-    return with_change_ratio ? sums.mean_sq / sums.h_sq : 0.0;
-  }
-
-  struct MeanSums {
-    double mean_sq = 0.0, h_sq = 0.0;
-  };
-
-  // h[i] -= (upper + lower) / 2 for i in [from, to), one merged knot interval at a time; ju, jl
-  // carry the current pieces from block to block.
-  void remove_mean(double* h, Index from, Index to, Index& ju, Index& jl, bool with_change_ratio,
-                   MeanSums& sums) const {
-    const Segment* upper = upper_.data();
-    const Segment* lower = lower_.data();
-    for (Index i = from; i < to;) {
-      const double t0 = static_cast<double>(i);
-      while (t0 > upper[ju + 1].x) ++ju;
-      while (t0 > lower[jl + 1].x) ++jl;
-      const Index end = std::min(to, static_cast<Index>(std::min(upper[ju + 1].x, lower[jl + 1].x)) + 1);
-      const LocalCubic u = about(upper[ju], t0), l = about(lower[jl], t0);
-      const double p0 = 0.5 * (u.p0 + l.p0), p1 = 0.5 * (u.p1 + l.p1);
-      const double p2 = 0.5 * (u.p2 + l.p2), p3 = 0.5 * (u.p3 + l.p3);
-      double* piece = h + i;
-      const int length = static_cast<int>(end - i);
-      if (with_change_ratio) {
-        for (int k = 0; k < length; ++k) {
-          const double s = k;
-          const double mean = p0 + s * (p1 + s * (p2 + s * p3));
-          sums.h_sq += piece[k] * piece[k];
-          sums.mean_sq += mean * mean;
-          piece[k] -= mean;
-        }
-      } else {
-        for (int k = 0; k < length; ++k) {
-          const double s = k;
-          piece[k] -= p0 + s * (p1 + s * (p2 + s * p3));
-        }
-      }
-      i = end;
-    }
-  }
-
-  // remove_mean evaluating both splines at every sample. The piece index advances by a per-block
-  // table of knot positions, so no branch and no load sits on its dependency chain.
-  template <bool kWithChangeRatio>
-  void remove_mean_dense(double* h, Index from, Index to, Index& ju, Index& jl, MeanSums& sums) {
-    const Segment* upper = upper_.data();
-    const Segment* lower = lower_.data();
-    const double t0 = static_cast<double>(from);
-    while (t0 > upper[ju + 1].x) ++ju;
-    while (t0 > lower[jl + 1].x) ++jl;
-    mark_knots(upper, upper_knots_, ju, from, to, upper_steps_.data());
-    mark_knots(lower, lower_knots_, jl, from, to, lower_steps_.data());
-    for (Index i = from; i < to; ++i) {
-      ju += upper_steps_[i - from];
-      jl += lower_steps_[i - from];
-      const double t = static_cast<double>(i);
-      const double mean = 0.5 * (evaluate(upper[ju], t) + evaluate(lower[jl], t));
-      if constexpr (kWithChangeRatio) {
-        sums.h_sq += h[i] * h[i];
-        sums.mean_sq += mean * mean;
-      }
-      h[i] -= mean;
-    }
-  }
-
-  // steps[i - from] = 1 when sample i - 1 is a knot, for i in (from, to): the piece of sample i is
-  // the piece of sample i - 1 plus steps[i - from] (piece j holds (knot j, knot j+1]).
-  static void mark_knots(const Segment* pieces, Index knots, Index j, Index from, Index to,
-                         unsigned char* steps) {
-    std::fill(steps, steps + (to - from), static_cast<unsigned char>(0));
-    for (Index k = j + 1; k < knots && pieces[k].x < static_cast<double>(to - 1); ++k)
-      steps[static_cast<Index>(pieces[k].x) + 1 - from] = 1;
+    return with_change_ratio ? sums[1] / sums[0] : 0.0;
   }
 
   SiftConfig config_;
   std::array<ExtremaSet, 2> sets_;
   int current_ = 0;
-  SplineScratch scratch_;
-  std::vector<Segment> upper_, lower_;  // envelope pieces, one per knot
-  Index upper_knots_ = 0, lower_knots_ = 0;
-  std::vector<unsigned char> upper_steps_ = std::vector<unsigned char>(kBlock),
-                             lower_steps_ = std::vector<unsigned char>(kBlock);
+  SplineScratch upper_scratch_, lower_scratch_;
+  Spline upper_, lower_;  // envelopes of the current candidate (knots in sets_[current_])
+  std::vector<double> upper_values_ = std::vector<double>(kBlock + 2 * kGroup),
+                      lower_values_ = std::vector<double>(kBlock + 2 * kGroup);  // one block each
 };
 
 void validate(const SiftConfig& c) {

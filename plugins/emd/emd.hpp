@@ -91,8 +91,11 @@
 //   emd      O(S K N) time: one sift is one streaming pass over the samples in cache-sized blocks
 //            (envelope evaluation walking the knots in order, mean removal, the Cauchy sums, then
 //            the extrema and zero crossings of the new candidate while the block is still in
-//            cache) plus O(number of extrema) for the splines. Densely packed extrema (under 5
-//            samples apart) take branch-free variants of the evaluation and the extrema search.
+//            cache) plus O(number of extrema) for the splines (the two envelopes' recurrences
+//            interleaved, one stored value per knot). Densely packed extrema (under 5 samples
+//            apart) take branch-free variants: envelopes evaluated piece by piece, 4 samples at a
+//            time, into block buffers, and a search-free extrema scan. The vectorized loops are
+//            compiled for AVX2 and baseline x86-64 (framework/simd.hpp), with the same results.
 //            O(N K) memory for the output plus O(N) workspace allocated once per call.
 //   eemd     I times emd, spread over `threads`; memory O(N K (threads + 1)).
 //   ceemdan  I (K + 1) single-IMF extractions plus one EMD of each member's noise, spread over
