@@ -45,38 +45,19 @@ struct ExtremaSet {
 
 std::uint64_t bits(double v) { return std::bit_cast<std::uint64_t>(v); }
 
-// Start of the first whole chunk of kTurnChunk samples in [from, to) holding a difference with its
-// sign bit set, x[i] - x[i-1] (kFalling) or x[i-1] - x[i]; the start of the incomplete tail when
-// none does. Vectorized: a cheap skip over the long monotonic runs of the slow IMFs.
-constexpr Index kTurnChunk = 8;
-
-template <bool kFalling>
-[[gnu::always_inline]] inline Index skip_monotonic(const double* x, Index from, Index to) {
-  Index i = from;
-  for (; i + kTurnChunk <= to; i += kTurnChunk) {
-    std::uint64_t signs = 0;
-    for (Index k = i; k < i + kTurnChunk; ++k)
-      signs |= bits(kFalling ? x[k] - x[k - 1] : x[k - 1] - x[k]);
-    if (signs >> 63) break;
-  }
-  return i;
-}
-
-DRIFTLAB_SIMD_CLONES Index skip_rising(const double* x, Index from, Index to) {
-  return skip_monotonic<true>(x, from, to);
-}
-
-DRIFTLAB_SIMD_CLONES Index skip_falling(const double* x, Index from, Index to) {
-  return skip_monotonic<false>(x, from, to);
-}
-
 // Smallest i in [from, to) with x[i] < x[i-1] (kFalling) or x[i] > x[i-1], else `to`. Chunks are
 // skipped when no difference in them has its sign bit set (exact for finite samples:
 // x[i] < x[i-1] implies x[i] - x[i-1] < 0), and the exact test runs from the first chunk that may
 // hold the turn.
 template <bool kFalling>
 Index next_turn(const double* x, Index from, Index to) {
-  Index i = kFalling ? skip_rising(x, from, to) : skip_falling(x, from, to);
+  constexpr Index kChunk = 8;
+  Index i = from;
+  for (; i + kChunk <= to; i += kChunk) {
+    std::uint64_t signs = 0;
+    for (Index k = i; k < i + kChunk; ++k) signs |= bits(kFalling ? x[k] - x[k - 1] : x[k - 1] - x[k]);
+    if (signs >> 63) break;
+  }
   while (i < to && !(kFalling ? x[i] < x[i - 1] : x[i] > x[i - 1])) ++i;
   return i;
 }
