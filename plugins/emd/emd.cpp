@@ -673,28 +673,29 @@ double population_std(const double* x, Index n) {
   return std::sqrt((v.array() - v.mean()).square().mean());
 }
 
-// One EMD: IMFs in imfs[0, count), residue in residue. Reuses its buffers across calls.
+// One EMD: IMFs in the first `count` columns of imfs, residue in residue. Reuses its buffers
+// across calls. The IMF matrix has room for `cap` columns; the pages of columns never written are
+// never touched, and emd() hands the matrix over without copying it.
 struct EmdWorkspace {
   explicit EmdWorkspace(const SiftConfig& sift) : sifter(sift) {}
 
   void decompose(const double* x, Index n, int cap) {
     residue = Eigen::Map<const Eigen::VectorXd>(x, n);
+    if (imfs.rows() != n || imfs.cols() < cap) imfs.resize(n, cap);
+    sifts.assign(static_cast<std::size_t>(cap), 0);
     count = 0;
     while (count < cap) {
-      if (static_cast<int>(imfs.size()) <= count) imfs.emplace_back(n);
-      if (static_cast<int>(sifts.size()) <= count) sifts.push_back(0);
-      Eigen::VectorXd& imf = imfs[count];
-      imf.resize(n);
-      if (!sifter.load(residue.data(), imf.data(), n)) break;
-      sifts[count] = sifter.sift(imf.data(), n);
-      residue -= imf;
+      double* imf = imfs.col(count).data();
+      if (!sifter.load(residue.data(), imf, n)) break;
+      sifts[count] = sifter.sift(imf, n);
+      residue -= imfs.col(count);
       ++count;
     }
   }
 
   Sifter sifter;
   Eigen::VectorXd residue;
-  std::vector<Eigen::VectorXd> imfs;
+  Eigen::MatrixXd imfs;
   std::vector<long> sifts;
   int count = 0;
 };
@@ -771,7 +772,8 @@ Result emd(const Eigen::VectorXd& x, const EmdConfig& config) {
   EmdWorkspace ws(config.sift);
   ws.decompose(x.data(), n, imf_cap(config.max_imfs, n));
   Result result;
-  result.imfs = stack(ws.imfs, ws.count, n);
+  result.imfs = std::move(ws.imfs);
+  result.imfs.conservativeResize(n, ws.count);  // drops the unused columns in place
   result.residue = std::move(ws.residue);
   result.sifts.assign(ws.sifts.begin(), ws.sifts.begin() + ws.count);
   return result;
@@ -805,7 +807,7 @@ Result eemd(const Eigen::VectorXd& x, const EnsembleConfig& config) {
       [&](int, unsigned w) {
         const EmdWorkspace& ws = workers[w].emd;
         for (int k = 0; k < ws.count; ++k) {
-          sum.col(k) += ws.imfs[k];
+          sum.col(k) += ws.imfs.col(k);
           sifts[k] += ws.sifts[k];
         }
         widest = std::max(widest, ws.count);
