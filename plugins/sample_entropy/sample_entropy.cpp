@@ -1,5 +1,7 @@
 #include "plugins/sample_entropy/sample_entropy.hpp"
 
+#include "framework/simd.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -43,7 +45,7 @@ constexpr int kMaxUnrolledCoords = 6;
 // The 0/1 indicators are summed in double (exact below 2^53, so in any order): with
 // -fopenmp-simd the loop becomes a vector reduction.
 template <int kCoords>
-void count_candidates(const std::vector<const double*>& c, std::size_t i, std::size_t a,
+[[gnu::always_inline]] inline void count_candidates(const std::vector<const double*>& c, std::size_t i, std::size_t a,
                       std::size_t b, double r, PairCounts& out) {
   const int coords = kCoords > 0 ? kCoords : static_cast<int>(c.size());
   const double* first = c[0];
@@ -64,8 +66,10 @@ void count_candidates(const std::vector<const double*>& c, std::size_t i, std::s
 }
 
 // Templates t = 0 .. count-1 with coordinates x[t + k], k = 0 .. coords-1 (coords >= 2).
+// Compiled for AVX2 and baseline x86-64 (framework/simd.hpp): the candidate loops inlined here
+// are the vector reductions.
 template <int kCoords>
-PairCounts count_template_pairs(std::span<const double> x, std::size_t count, int coords,
+DRIFTLAB_SIMD_CLONES PairCounts count_template_pairs(std::span<const double> x, std::size_t count, int coords,
                                 double r) {
   std::vector<std::size_t> order(count);
   std::iota(order.begin(), order.end(), std::size_t{0});
