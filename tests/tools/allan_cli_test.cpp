@@ -19,9 +19,7 @@ namespace driftlab {
 namespace {
 
 using ::testing::HasSubstr;
-using testing_cli::read_text;
-using testing_cli::run_driftlab;
-using testing_cli::scratch_dir;
+using namespace testing_cli;
 
 std::vector<std::vector<double>> read_csv_rows(const std::filesystem::path& path, std::string& header) {
   std::ifstream in(path);

@@ -8,9 +8,7 @@ namespace driftlab {
 namespace {
 
 using ::testing::HasSubstr;
-using testing_cli::read_text;
-using testing_cli::run_driftlab;
-using testing_cli::scratch_dir;
+using namespace testing_cli;
 
 const std::string kData = DRIFTLAB_TEST_DATA;
 const std::string kPlugins = std::string("--plugin-path ") + DRIFTLAB_TEST_PLUGIN_DIR;

@@ -17,9 +17,7 @@ namespace driftlab {
 namespace {
 
 using ::testing::HasSubstr;
-using testing_cli::read_text;
-using testing_cli::run_driftlab;
-using testing_cli::scratch_dir;
+using namespace testing_cli;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kSampleRateHz = 100.0;

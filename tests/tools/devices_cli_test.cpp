@@ -11,8 +11,7 @@ namespace driftlab {
 namespace {
 
 using ::testing::HasSubstr;
-using testing_cli::run_driftlab;
-using testing_cli::scratch_dir;
+using namespace testing_cli;
 
 const std::string kSource = DRIFTLAB_SOURCE_DIR;
 
@@ -51,8 +50,8 @@ TEST(DevicesCli, SimulatesTheContractColumnsReproduciblyWithEffects) {
   ASSERT_EQ(a.exit_code, 0) << a.err;
   const auto b = run_driftlab(common + " --out " + (dir / "b.csv").string());
   ASSERT_EQ(b.exit_code, 0) << b.err;
-  EXPECT_EQ(testing_cli::read_text(dir / "a.csv"), testing_cli::read_text(dir / "b.csv"));
-  const std::string header = testing_cli::read_text(dir / "a.csv").substr(0, 60);
+  EXPECT_EQ(read_text(dir / "a.csv"), read_text(dir / "b.csv"));
+  const std::string header = read_text(dir / "a.csv").substr(0, 60);
   EXPECT_THAT(header, HasSubstr("t_s,rate_dps,temp_c,true_rate_dps,die_temp_c,drive_freq_hz"));
   const TimeSeries record = read_csv(dir / "a.csv");
   EXPECT_EQ(record.size(), 1200);

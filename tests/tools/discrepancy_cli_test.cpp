@@ -13,9 +13,7 @@ namespace driftlab {
 namespace {
 
 using ::testing::HasSubstr;
-using testing_cli::read_text;
-using testing_cli::run_driftlab;
-using testing_cli::scratch_dir;
+using namespace testing_cli;
 
 // The default oven run (4.5 h) at 1 Hz: 16 200 samples.
 std::filesystem::path simulated(const std::filesystem::path& dir, const std::string& effect) {

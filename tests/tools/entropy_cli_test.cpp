@@ -13,8 +13,7 @@ namespace driftlab {
 namespace {
 
 using ::testing::HasSubstr;
-using testing_cli::run_driftlab;
-using testing_cli::scratch_dir;
+using namespace testing_cli;
 
 const std::filesystem::path kSampentest =
     std::filesystem::path(DRIFTLAB_SHARED_DATA) / "real" / "physionet-sampen" / "sampentest.txt";

@@ -16,30 +16,32 @@
 #include "tools/bench/bench_signals.hpp"
 
 #include <utility>
+#include <vector>
 
 namespace driftlab {
 namespace {
 
-// Frees the previous iteration's angle and copies the record into `buffer`, outside the timing.
-void refill_untimed(benchmark::State& state, const bench::BenchSignal& signal,
-                    Eigen::VectorXd& buffer) {
+// Integrates a fresh copy of the record in place into `angle` (the copy and the release of the
+// previous angle are not timed) and returns the default octave grid for `kind`.
+std::vector<std::size_t> integrate_copy(benchmark::State& state, const bench::BenchSignal& signal,
+                                        allan::Kind kind, Eigen::VectorXd& angle) {
   state.PauseTiming();
-  buffer = Eigen::VectorXd();
-  buffer = signal.rate_rad_s;
+  angle = Eigen::VectorXd();
+  angle = signal.rate_rad_s;
   state.ResumeTiming();
+  const double tau0 = 1.0 / signal.sample_rate_hz;
+  angle = allan::angle_from_rate(std::move(angle), tau0);
+  return allan::averaging_factors(allan::TauGrid{}, kind, static_cast<std::size_t>(angle.size()),
+                                  tau0);
 }
 
 void run_deviation(benchmark::State& state, allan::Kind kind) {
   const auto* signal = bench::signal_or_skip(state);
   if (signal == nullptr) return;
-  const double tau0 = 1.0 / signal->sample_rate_hz;
   Eigen::VectorXd angle;
   for (auto _ : state) {
-    refill_untimed(state, *signal, angle);
-    angle = allan::angle_from_rate(std::move(angle), tau0);
-    const auto n = static_cast<std::size_t>(angle.size());
-    const auto factors = allan::averaging_factors(allan::TauGrid{}, kind, n, tau0);
-    const auto devs = allan::deviations(kind, angle, tau0, factors);
+    const auto factors = integrate_copy(state, *signal, kind, angle);
+    const auto devs = allan::deviations(kind, angle, 1.0 / signal->sample_rate_hz, factors);
     benchmark::DoNotOptimize(devs.data());
   }
   state.SetItemsProcessed(state.iterations() * state.range(0));
@@ -51,15 +53,12 @@ void BM_Totdev(benchmark::State& state) { run_deviation(state, allan::Kind::Totd
 void BM_AllanAnalysis(benchmark::State& state) {
   const auto* signal = bench::signal_or_skip(state);
   if (signal == nullptr) return;
-  const double tau0 = 1.0 / signal->sample_rate_hz;
+  const auto kind = allan::Kind::Oadev;
   Eigen::VectorXd angle;
   for (auto _ : state) {
-    refill_untimed(state, *signal, angle);
-    angle = allan::angle_from_rate(std::move(angle), tau0);
-    const auto n = static_cast<std::size_t>(angle.size());
-    const auto factors = allan::averaging_factors(allan::TauGrid{}, allan::Kind::Oadev, n, tau0);
-    const auto curve =
-        allan::estimate(allan::Kind::Oadev, angle, tau0, allan::InputType::Rate, factors);
+    const auto factors = integrate_copy(state, *signal, kind, angle);
+    const auto curve = allan::estimate(kind, angle, 1.0 / signal->sample_rate_hz,
+                                       allan::InputType::Rate, factors);
     const allan::NoiseFit fit = allan::fit_noise_terms(curve);
     benchmark::DoNotOptimize(fit.chi2);
   }
