@@ -105,6 +105,7 @@ std::vector<double> overlapping_sums(const double* e, std::size_t length,
         // Starts p = r * row + column + t (t < kStrip) sit at strip[r * kStrip + t]: the starts of
         // rows first..last are one run of the strip, clipped at both ends to [begin, end).
         const auto& [m, begin, end] = sums[k];
+        if (begin >= end) continue;
         const std::size_t first = begin / row, last = (end - 1) / row;
         const std::size_t lo = std::clamp(begin, first * row + column, first * row + column + kStrip);
         const std::size_t hi = std::clamp(end, last * row + column, last * row + column + kStrip);
