@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <limits>
 #include <numeric>
+#include <optional>
+#include <utility>
 #include <stdexcept>
 
 namespace driftlab::sampen {
@@ -69,8 +71,9 @@ template <int kCoords>
 // Compiled for AVX2 and baseline x86-64 (framework/simd.hpp): the candidate loops inlined here
 // are the vector reductions.
 template <int kCoords>
-DRIFTLAB_SIMD_CLONES PairCounts count_template_pairs(std::span<const double> x, std::size_t count, int coords,
-                                double r) {
+DRIFTLAB_SIMD_CLONES std::optional<PairCounts> count_template_pairs(std::span<const double> x,
+                                                                    std::size_t count, int coords,
+                                                                    double r, std::uint64_t budget) {
   std::vector<std::size_t> order(count);
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return x[p] < x[q]; });
@@ -109,26 +112,198 @@ DRIFTLAB_SIMD_CLONES PairCounts count_template_pairs(std::span<const double> x, 
       const double s = second[i];
       same_hi = std::max(same_hi, i + 1);
       while (same_hi < end && second[same_hi] - s < r) ++same_hi;
-      count_candidates<kCoords>(c, i, i + 1, same_hi, r, counts);
       while (next_lo < next_end && second[next_lo] - s <= -r) ++next_lo;
       next_hi = std::max(next_hi, next_lo);
       while (next_hi < next_end && second[next_hi] - s < r) ++next_hi;
+      const std::uint64_t candidates = (same_hi - i - 1) + (next_hi - next_lo);
+      if (candidates > budget) return std::nullopt;
+      budget -= candidates;
+      count_candidates<kCoords>(c, i, i + 1, same_hi, r, counts);
       count_candidates<kCoords>(c, i, next_lo, next_hi, r, counts);
     }
   }
   return counts;
 }
 
-PairCounts count_template_pairs(std::span<const double> x, std::size_t count, int coords,
-                                double r) {
+// Enumerated counts, or nothing once more than `budget` candidate pairs would be compared.
+std::optional<PairCounts> count_template_pairs(std::span<const double> x, std::size_t count,
+                                               int coords, double r, std::uint64_t budget) {
   switch (coords) {
-    case 2: return count_template_pairs<2>(x, count, coords, r);
-    case 3: return count_template_pairs<3>(x, count, coords, r);
-    case 4: return count_template_pairs<4>(x, count, coords, r);
-    case 5: return count_template_pairs<5>(x, count, coords, r);
-    case kMaxUnrolledCoords: return count_template_pairs<kMaxUnrolledCoords>(x, count, coords, r);
-    default: return count_template_pairs<0>(x, count, coords, r);
+    case 2: return count_template_pairs<2>(x, count, coords, r, budget);
+    case 3: return count_template_pairs<3>(x, count, coords, r, budget);
+    case 4: return count_template_pairs<4>(x, count, coords, r, budget);
+    case 5: return count_template_pairs<5>(x, count, coords, r, budget);
+    case kMaxUnrolledCoords: return count_template_pairs<kMaxUnrolledCoords>(x, count, coords, r, budget);
+    default: return count_template_pairs<0>(x, count, coords, r, budget);
   }
+}
+
+// Counts of points at positions 0 .. n-1 (Fenwick tree).
+class Fenwick {
+ public:
+  explicit Fenwick(std::size_t n) : tree_(n + 1, 0) {}
+
+  void add(std::size_t position, std::int32_t delta) {
+    for (std::size_t k = position + 1; k < tree_.size(); k += k & (~k + 1)) tree_[k] += delta;
+  }
+
+  // Points at positions [lo, hi).
+  std::int64_t count(std::size_t lo, std::size_t hi) const { return prefix(hi) - prefix(lo); }
+
+ private:
+  std::int64_t prefix(std::size_t end) const {
+    std::int64_t sum = 0;
+    for (std::size_t k = end; k > 0; k -= k & (~k + 1)) sum += tree_[k];
+    return sum;
+  }
+
+  std::vector<std::int32_t> tree_;
+};
+
+// Counts of points (u, v) in rank space, for a set of points fixed in advance: node k of a Fenwick
+// tree over u keeps the sorted v of the points it covers and a Fenwick tree over them.
+class Fenwick2D {
+ public:
+  Fenwick2D(std::span<const std::uint32_t> u, std::span<const std::uint32_t> v)
+      : n_(u.size()), begin_(n_ + 2, 0) {
+    for (std::size_t p = 0; p < n_; ++p) {
+      for (std::size_t k = u[p] + 1; k <= n_; k += k & (~k + 1)) ++begin_[k + 1];
+    }
+    for (std::size_t k = 1; k <= n_ + 1; ++k) begin_[k] += begin_[k - 1];
+    values_.resize(begin_[n_ + 1]);
+    tree_.assign(begin_[n_ + 1] + n_ + 1, 0);
+    std::vector<std::size_t> fill(begin_.begin(), begin_.end() - 1);
+    for (std::size_t p = 0; p < n_; ++p) {
+      for (std::size_t k = u[p] + 1; k <= n_; k += k & (~k + 1)) values_[fill[k]++] = v[p];
+    }
+    for (std::size_t k = 1; k <= n_; ++k) {
+      std::sort(values_.begin() + static_cast<std::ptrdiff_t>(begin_[k]),
+                values_.begin() + static_cast<std::ptrdiff_t>(begin_[k + 1]));
+    }
+  }
+
+  void add(std::uint32_t u, std::uint32_t v, std::int32_t delta) {
+    for (std::size_t k = u + 1; k <= n_; k += k & (~k + 1)) {
+      const std::size_t size = begin_[k + 1] - begin_[k];
+      std::int32_t* inner = tree_.data() + begin_[k] + k;
+      for (std::size_t j = slot(k, v) + 1; j <= size; j += j & (~j + 1)) inner[j] += delta;
+    }
+  }
+
+  // Points with u in [u_lo, u_hi) and v in [v_lo, v_hi).
+  std::int64_t count(std::size_t u_lo, std::size_t u_hi, std::uint32_t v_lo, std::uint32_t v_hi) const {
+    return prefix(u_hi, v_lo, v_hi) - prefix(u_lo, v_lo, v_hi);
+  }
+
+ private:
+  // Position of v among node k's sorted values (first not below v).
+  std::size_t slot(std::size_t k, std::uint32_t v) const {
+    const auto first = values_.begin() + static_cast<std::ptrdiff_t>(begin_[k]);
+    const auto last = values_.begin() + static_cast<std::ptrdiff_t>(begin_[k + 1]);
+    return static_cast<std::size_t>(std::lower_bound(first, last, v) - first);
+  }
+
+  std::int64_t inner_prefix(std::size_t k, std::size_t end) const {
+    const std::int32_t* inner = tree_.data() + begin_[k] + k;
+    std::int64_t sum = 0;
+    for (std::size_t j = end; j > 0; j -= j & (~j + 1)) sum += inner[j];
+    return sum;
+  }
+
+  std::int64_t prefix(std::size_t u_end, std::uint32_t v_lo, std::uint32_t v_hi) const {
+    std::int64_t sum = 0;
+    for (std::size_t k = u_end; k > 0; k -= k & (~k + 1)) {
+      sum += inner_prefix(k, slot(k, v_hi)) - inner_prefix(k, slot(k, v_lo));
+    }
+    return sum;
+  }
+
+  std::size_t n_;
+  std::vector<std::size_t> begin_;      // node k's values in [begin_[k], begin_[k + 1])
+  std::vector<std::uint32_t> values_;   // sorted v per node
+  std::vector<std::int32_t> tree_;      // per node a Fenwick tree of size + 1 slots
+};
+
+// One coordinate of the templates: its values sorted, each template's rank, and the rank interval
+// of the values within r of a given value (the same fp test as the definition).
+class RankedCoordinate {
+ public:
+  RankedCoordinate(std::span<const double> x, std::size_t offset, std::size_t count)
+      : values_(x.subspan(offset, count)), rank_(count), sorted_(count) {
+    std::vector<std::uint32_t> order(count);
+    std::iota(order.begin(), order.end(), 0u);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::uint32_t p, std::uint32_t q) { return values_[p] < values_[q]; });
+    for (std::size_t k = 0; k < count; ++k) {
+      rank_[order[k]] = static_cast<std::uint32_t>(k);
+      sorted_[k] = values_[order[k]];
+    }
+  }
+
+  double value(std::size_t t) const { return values_[t]; }
+  std::uint32_t rank(std::size_t t) const { return rank_[t]; }
+  std::span<const std::uint32_t> ranks() const { return rank_; }
+
+  // Ranks [lo, hi) of the values v with |value(t) - v| < r.
+  std::pair<std::uint32_t, std::uint32_t> matching(std::size_t t, double r) const {
+    const double c = values_[t];
+    const auto lo = std::partition_point(sorted_.begin(), sorted_.end(),
+                                         [&](double v) { return !(c - v < r); });
+    const auto hi = std::partition_point(lo, sorted_.end(), [&](double v) { return v - c < r; });
+    return {static_cast<std::uint32_t>(lo - sorted_.begin()),
+            static_cast<std::uint32_t>(hi - sorted_.begin())};
+  }
+
+ private:
+  std::span<const double> values_;
+  std::vector<std::uint32_t> rank_;
+  std::vector<double> sorted_;
+};
+
+// Pairs of templates t = 0 .. count-1 (coordinates x[t], x[t+1], and x[t+2] when three) matching
+// in the first two coordinates (prefix) and in all of them (full), by range counting.
+PairCounts range_count_pairs(std::span<const double> x, std::size_t count, int coords, double r) {
+  const RankedCoordinate first(x, 0, count), second(x, 1, count);
+  std::vector<std::uint32_t> order(count);
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t p, std::uint32_t q) { return first.value(p) < first.value(q); });
+  std::optional<RankedCoordinate> third;
+  std::optional<Fenwick2D> boxes;
+  if (coords == 3) {
+    third.emplace(x, 2, count);
+    boxes.emplace(second.ranks(), third->ranks());
+  }
+  Fenwick strips(count);
+  PairCounts counts;
+  std::size_t window = 0;  // order[window .. p) are within r of order[p] in the first coordinate
+  for (std::size_t p = 0; p < count; ++p) {
+    const std::uint32_t t = order[p];
+    for (; !(first.value(t) - first.value(order[window]) < r); ++window) {
+      const std::uint32_t q = order[window];
+      strips.add(second.rank(q), -1);
+      if (boxes) boxes->add(second.rank(q), third->rank(q), -1);
+    }
+    const auto [lo, hi] = second.matching(t, r);
+    counts.prefix += strips.count(lo, hi);
+    if (boxes) {
+      const auto [lo3, hi3] = third->matching(t, r);
+      counts.full += boxes->count(lo, hi, lo3, hi3);
+    }
+    strips.add(second.rank(t), 1);
+    if (boxes) boxes->add(second.rank(t), third->rank(t), 1);
+  }
+  if (coords == 2) counts.full = counts.prefix;
+  return counts;
+}
+
+// Candidate pairs the enumeration may compare before range counting is cheaper. Measured on the
+// reference machine (N = 162k): enumeration ~0.15 ns per candidate, range counting 2-10 us per
+// template (the Fenwick tree of sorted lists is cache-unfriendly), so it pays beyond about
+// 200 N log2(N)^2 candidates: smooth records of a few million samples.
+std::uint64_t enumeration_budget(std::size_t templates) {
+  const double n = static_cast<double>(std::max<std::size_t>(templates, 2));
+  return static_cast<std::uint64_t>(200.0 * n * std::log2(n) * std::log2(n));
 }
 
 std::string format_entropy(double value) {
@@ -164,7 +339,7 @@ double population_sd(std::span<const double> x) {
   return std::sqrt(sum_sq / n);
 }
 
-Result sample_entropy(std::span<const double> x, int m, double tolerance) {
+Result sample_entropy(std::span<const double> x, int m, double tolerance, Counting counting) {
   if (m < 0) throw std::invalid_argument("sample entropy: m must be >= 0");
   if (!(tolerance >= 0.0) || !std::isfinite(tolerance)) {
     throw std::invalid_argument("sample entropy: r must be finite and >= 0");
@@ -182,13 +357,19 @@ Result sample_entropy(std::span<const double> x, int m, double tolerance) {
       const auto n = static_cast<std::int64_t>(x.size());
       result.b = n * (n - 1) / 2;
       result.a = count_close_pairs(x, tolerance);
-    } else if (m == 1) {
-      result.b = count_close_pairs(x.first(templates), tolerance);
-      result.a = count_template_pairs(x, templates, 2, tolerance).full;
     } else {
-      const PairCounts counts = count_template_pairs(x, templates, m + 1, tolerance);
-      result.b = counts.prefix;
-      result.a = counts.full;
+      const int coords = m + 1;
+      const bool can_range_count = m <= 2 && tolerance > 0.0;
+      std::optional<PairCounts> counts;
+      if (counting != Counting::RangeCount || !can_range_count) {
+        const std::uint64_t budget = counting == Counting::Automatic && can_range_count
+                                         ? enumeration_budget(templates)
+                                         : std::numeric_limits<std::uint64_t>::max();
+        counts = count_template_pairs(x, templates, coords, tolerance, budget);
+      }
+      if (!counts) counts = range_count_pairs(x, templates, coords, tolerance);
+      result.b = m == 1 ? count_close_pairs(x.first(templates), tolerance) : counts->prefix;
+      result.a = counts->full;
     }
   }
 

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -147,16 +148,47 @@ TEST(SampleEntropy, ProfileGivesTheSameCountsAsSingleCalls) {
   }
 }
 
+constexpr std::array kCountings = {sampen::Counting::Automatic, sampen::Counting::Enumerate,
+                                   sampen::Counting::RangeCount};
+
+// Smooth records match almost everywhere (the enumeration's quadratic case, where the range
+// counting takes over): a random walk and a slow sine with a little noise.
+TEST(SampleEntropy, CountsEqualTheNaiveDefinitionOnSmoothRecords) {
+  const std::size_t n = 3000;
+  const auto steps = gaussian_noise(n, 77);
+  std::vector<double> walk(n), sine(n);
+  double position = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    walk[i] = position += steps[i];
+    sine[i] = std::sin(2.0 * kPi * static_cast<double>(i) / 700.0) + 0.01 * steps[i];
+  }
+  for (const auto* x : {&walk, &sine}) {
+    for (int m = 1; m <= 2; ++m) {
+      const double r = 0.2 * sampen::population_sd(*x);
+      const auto naive = naive_counts(*x, m, r);
+      for (const auto counting : kCountings) {
+        const auto fast = sampen::sample_entropy(*x, m, r, counting);
+        ASSERT_EQ(fast.a, naive.a) << "m " << m << " counting " << static_cast<int>(counting);
+        ASSERT_EQ(fast.b, naive.b) << "m " << m << " counting " << static_cast<int>(counting);
+      }
+    }
+  }
+}
+
 TEST(SampleEntropy, CountsEqualTheNaiveDefinitionOnGaussianData) {
   for (std::uint64_t seed = 1; seed <= 4; ++seed) {
     for (const std::size_t n : {2u, 3u, 10u, 97u, 400u, 900u}) {
       const auto x = gaussian_noise(n, seed * 1000 + n);
       for (int m = 0; m <= 5; ++m) {
         for (const double r : {0.05, 0.2, 0.5, 1.5}) {
-          const auto fast = sampen::sample_entropy(x, m, r);
           const auto naive = naive_counts(x, m, r);
-          ASSERT_EQ(fast.a, naive.a) << "seed " << seed << " n " << n << " m " << m << " r " << r;
-          ASSERT_EQ(fast.b, naive.b) << "seed " << seed << " n " << n << " m " << m << " r " << r;
+          for (const auto counting : kCountings) {
+            const auto fast = sampen::sample_entropy(x, m, r, counting);
+            ASSERT_EQ(fast.a, naive.a) << "seed " << seed << " n " << n << " m " << m << " r " << r
+                                       << " counting " << static_cast<int>(counting);
+            ASSERT_EQ(fast.b, naive.b) << "seed " << seed << " n " << n << " m " << m << " r " << r
+                                       << " counting " << static_cast<int>(counting);
+          }
         }
       }
     }
@@ -173,10 +205,14 @@ TEST(SampleEntropy, CountsEqualTheNaiveDefinitionOnIntegerDataWithTiesAtTheToler
         for (auto& v : x) v = static_cast<double>(rng() % levels);
         for (int m = 0; m <= 4; ++m) {
           for (const double r : {0.0, 1.0, 2.0, 3.0}) {
-            const auto fast = sampen::sample_entropy(x, m, r);
             const auto naive = naive_counts(x, m, r);
-            ASSERT_EQ(fast.a, naive.a) << "seed " << seed << " n " << n << " levels " << levels << " m " << m << " r " << r;
-            ASSERT_EQ(fast.b, naive.b) << "seed " << seed << " n " << n << " levels " << levels << " m " << m << " r " << r;
+            for (const auto counting : kCountings) {
+              const auto fast = sampen::sample_entropy(x, m, r, counting);
+              ASSERT_EQ(fast.a, naive.a) << "seed " << seed << " n " << n << " levels " << levels
+                                         << " m " << m << " r " << r << " counting " << static_cast<int>(counting);
+              ASSERT_EQ(fast.b, naive.b) << "seed " << seed << " n " << n << " levels " << levels
+                                         << " m " << m << " r " << r << " counting " << static_cast<int>(counting);
+            }
           }
         }
       }
