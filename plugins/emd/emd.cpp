@@ -279,6 +279,13 @@ double power_of_two_below(double q) {
 // splines: each row waits on the previous one, two chains in flight overlap.
 class SplineFit {
  public:
+  // Recurrence state carried from row to row. The callers keep it in local variables: as members
+  // it would be stored and reloaded around every store into m and ratio (which the compiler must
+  // assume may alias it), putting memory latency on the dependency chain.
+  struct Elimination {
+    double p = 0.0, q = 1.0, r = 0.0, previous_inverse = 0.0, previous_slope = 0.0;
+  };
+
   SplineFit(const double* x, const double* y, Index n, SplineScratch& scratch)
       : x_(x), y_(y), n_(n), last_(n >= 4 ? n - 2 : 0), m_(scratch.second.data()),
         ratio_(scratch.ratio.data()) {
@@ -286,19 +293,26 @@ class SplineFit {
       m_[0] = m_[1] = 0.0;
     } else if (n == 3) {
       m_[0] = m_[1] = m_[2] = 2.0 * (slope(1) - slope(0)) / (x[2] - x[0]);
-    } else {
-      previous_inverse_ = inverse_step(x[1] - x[0]);
-      previous_slope_ = (y[1] - y[0]) * previous_inverse_;
     }
   }
 
   Spline spline() const { return {x_, y_, m_, n_}; }
 
-  // Rows 1..rows() are eliminated, then substituted back from rows() - 1 down to 1, then finish().
-  // A spline of 2 or 3 knots is complete on construction (rows() == 0).
+  // Rows 1..rows() are eliminated, then substituted back from rows() - 1 down to 1 (starting from
+  // m_next = last_second()), then finish(). A spline of 2 or 3 knots is complete on construction
+  // (rows() == 0).
   Index rows() const { return last_; }
 
-  void eliminate(Index i) {
+  Elimination start() const {
+    Elimination state;
+    if (last_ > 0) {
+      state.previous_inverse = inverse_step(x_[1] - x_[0]);
+      state.previous_slope = (y_[1] - y_[0]) * state.previous_inverse;
+    }
+    return state;
+  }
+
+  void eliminate(Index i, Elimination& state) const {
     const double before = x_[i] - x_[i - 1], after = x_[i + 1] - x_[i];
     const double inverse = inverse_step(after), chord_slope = (y_[i + 1] - y_[i]) * inverse;
     double sub = before, diag = 2.0 * (before + after), super = after;
@@ -307,31 +321,37 @@ class SplineFit {
       super -= before * before * inverse;
     }
     if (i == last_) {
-      sub -= after * after * previous_inverse_;
-      diag += after * (before + after) * previous_inverse_;
+      sub -= after * after * state.previous_inverse;
+      diag += after * (before + after) * state.previous_inverse;
     }
-    const double p = super * q_prev_;
-    double q = diag * q_prev_ - sub * p_prev_;
-    double r = 6.0 * (chord_slope - previous_slope_) * q_prev_ - sub * r_prev_;
+    const double p = super * state.q;
+    double q = diag * state.q - sub * state.p;
+    double r = 6.0 * (chord_slope - state.previous_slope) * state.q - sub * state.r;
     const double inverse_q = 1.0 / q;
     ratio_[i] = p * inverse_q;
     m_[i] = r * inverse_q;
-    p_prev_ = p;
+    state.p = p;
     if (i % kRescaleEvery == 0) {
       const double scale = power_of_two_below(q);
-      p_prev_ *= scale;
+      state.p *= scale;
       q *= scale;
       r *= scale;
     }
-    q_prev_ = q;
-    r_prev_ = r;
-    previous_inverse_ = inverse;
-    previous_slope_ = chord_slope;
+    state.q = q;
+    state.r = r;
+    state.previous_inverse = inverse;
+    state.previous_slope = chord_slope;
   }
 
-  void substitute(Index i) { m_[i] -= ratio_[i] * m_[i + 1]; }
+  double last_second() const { return last_ > 0 ? m_[last_] : 0.0; }
 
-  void finish() {
+  // m_i -= ratio_i m_{i+1}, with m_{i+1} passed in (and m_i passed out) in a register.
+  void substitute(Index i, double& m_next) const {
+    m_next = m_[i] - ratio_[i] * m_next;
+    m_[i] = m_next;
+  }
+
+  void finish() const {
     if (last_ == 0) return;
     const double ha = x_[n_ - 2] - x_[n_ - 3], hb = x_[n_ - 1] - x_[n_ - 2];
     m_[n_ - 1] = ((ha + hb) * m_[n_ - 2] - hb * m_[n_ - 3]) * inverse_step(ha);
@@ -347,26 +367,26 @@ class SplineFit {
   const double *x_, *y_;
   Index n_, last_;
   double *m_, *ratio_;
-  double p_prev_ = 0.0, q_prev_ = 1.0, r_prev_ = 0.0;
-  double previous_inverse_ = 0.0, previous_slope_ = 0.0;
 };
 
 // Fits two independent splines with their recurrences interleaved row by row.
-void fit_splines(SplineFit& a, SplineFit& b) {
+void fit_splines(const SplineFit& a, const SplineFit& b) {
+  SplineFit::Elimination sa = a.start(), sb = b.start();
   const Index common = std::min(a.rows(), b.rows());
   for (Index i = 1; i <= common; ++i) {
-    a.eliminate(i);
-    b.eliminate(i);
+    a.eliminate(i, sa);
+    b.eliminate(i, sb);
   }
-  for (Index i = common + 1; i <= a.rows(); ++i) a.eliminate(i);
-  for (Index i = common + 1; i <= b.rows(); ++i) b.eliminate(i);
+  for (Index i = common + 1; i <= a.rows(); ++i) a.eliminate(i, sa);
+  for (Index i = common + 1; i <= b.rows(); ++i) b.eliminate(i, sb);
+  double ma = a.last_second(), mb = b.last_second();
   Index ia = a.rows() - 1, ib = b.rows() - 1;
   for (; ia >= 1 && ib >= 1; --ia, --ib) {
-    a.substitute(ia);
-    b.substitute(ib);
+    a.substitute(ia, ma);
+    b.substitute(ib, mb);
   }
-  for (; ia >= 1; --ia) a.substitute(ia);
-  for (; ib >= 1; --ib) b.substitute(ib);
+  for (; ia >= 1; --ia) a.substitute(ia, ma);
+  for (; ib >= 1; --ib) b.substitute(ib, mb);
   a.finish();
   b.finish();
 }
