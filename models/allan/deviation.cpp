@@ -10,7 +10,6 @@
 #include <string>
 #include <utility>
 
-
 namespace driftlab::allan {
 namespace {
 

@@ -129,7 +129,7 @@ class ExtremaScanner {
     }
     out_.max.count = max_count;
     out_.min.count = min_count;
-    if (to - from >= 1 && to >= 2) direction_ = x[to - 1] > x[to - 2] ? 1 : -1;
+    if (to > from) direction_ = x[to - 1] > x[to - 2] ? 1 : -1;
     count_zero_crossings(x, from, to);
     return true;
   }
@@ -400,6 +400,13 @@ void fit_splines(const SplineFit& a, const SplineFit& b) {
 // branch.
 constexpr Index kGroup = 4;
 using Group = double __attribute__((vector_size(kGroup * sizeof(double))));  // GCC/Clang vector
+constexpr Group kGroupOffsets = {0.0, 1.0, 2.0, 3.0};
+
+// First sample past piece j of a spline: its right knot, or `beyond` for the last piece (which
+// also serves the samples past its right knot).
+[[gnu::always_inline]] inline Index piece_end(const Spline& spline, Index j, Index beyond) {
+  return j + 2 >= spline.knots ? beyond : static_cast<Index>(spline.x[j + 1]);
+}
 
 // Piece j of a spline as y0 + dt (b + dt (c + dt d)), dt = t - x_j.
 struct Cubic {
@@ -429,12 +436,11 @@ struct Cubic {
 
 DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Index from, Index to,
                                          double* out) {
-  const Group offsets = {0.0, 1.0, 2.0, 3.0};
   const double* x = spline.x;
   Index j = piece;
   for (Index a = from; a < to;) {
     const bool last = j + 2 >= spline.knots;
-    const Index next_knot = last ? to : static_cast<Index>(x[j + 1]);
+    const Index next_knot = piece_end(spline, j, to);
     if (next_knot <= a) {
       ++j;
       continue;
@@ -443,7 +449,7 @@ DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Ind
     const Cubic g = piece_of(spline, j);
     const auto store = [&g](double* o, Group t) { store_cubic(o, t, g.y0, g.b, g.c, g.d); };
     double* o = out + (a - from);
-    const Group t = (static_cast<double>(a) - x[j]) + offsets;
+    const Group t = (static_cast<double>(a) - x[j]) + kGroupOffsets;
     store(o, t);
     store(o + kGroup, t + static_cast<double>(kGroup));
     for (Index k = 2; a + k * kGroup < end; ++k) store(o + k * kGroup, t + static_cast<double>(k * kGroup));
@@ -453,10 +459,24 @@ DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Ind
   piece = j;
 }
 
-// h[i] -= (upper[i] + lower[i]) / 2 for i < count.
+// h[i] -= (upper[i] + lower[i]) / 2 for i < count. With kWithChangeRatio, adds sum h^2 and
+// sum mean^2 (before the subtraction) to sums[0] and sums[1].
+template <bool kWithChangeRatio>
+[[gnu::always_inline]] inline void subtract_mean(double* h, const double* upper,
+                                                 const double* lower, Index count, double* sums) {
+  for (Index i = 0; i < count; ++i) {
+    const double mean = 0.5 * (upper[i] + lower[i]);
+    if constexpr (kWithChangeRatio) {
+      sums[0] += h[i] * h[i];
+      sums[1] += mean * mean;
+    }
+    h[i] -= mean;
+  }
+}
+
 DRIFTLAB_SIMD_CLONES void subtract_mean(double* h, const double* upper, const double* lower,
                                         Index count) {
-  for (Index i = 0; i < count; ++i) h[i] -= 0.5 * (upper[i] + lower[i]);
+  subtract_mean<false>(h, upper, lower, count, nullptr);
 }
 
 // h[t] -= (upper(t) + lower(t)) / 2 for t in [from, to), for sparse knots: one interval between
@@ -468,14 +488,11 @@ template <bool kWithChangeRatio>
 [[gnu::always_inline]] inline void subtract_mean_by_intervals(const Spline& upper, const Spline& lower, Index& upper_piece,
                                 Index& lower_piece, double* h, Index from, Index to,
                                 double* sums) {
-  const auto next_knot = [to](const Spline& spline, Index j) {
-    return j + 2 >= spline.knots ? to : static_cast<Index>(spline.x[j + 1]);
-  };
   Index ju = upper_piece, jl = lower_piece;
   for (Index a = from; a < to;) {
-    while (next_knot(upper, ju) <= a) ++ju;
-    while (next_knot(lower, jl) <= a) ++jl;
-    const Index end = std::min({next_knot(upper, ju), next_knot(lower, jl), to});
+    while (piece_end(upper, ju, to) <= a) ++ju;
+    while (piece_end(lower, jl, to) <= a) ++jl;
+    const Index end = std::min({piece_end(upper, ju, to), piece_end(lower, jl, to), to});
     const double t0 = static_cast<double>(a);
     const Cubic u = shifted(piece_of(upper, ju), t0 - upper.x[ju]);
     const Cubic l = shifted(piece_of(lower, jl), t0 - lower.x[jl]);
@@ -484,8 +501,7 @@ template <bool kWithChangeRatio>
     const Index length = end - a;
     Index k = 0;
     if constexpr (!kWithChangeRatio) {
-      const Group offsets = {0.0, 1.0, 2.0, 3.0};
-      for (Group sk = offsets; k + kGroup <= length; k += kGroup, sk += static_cast<double>(kGroup)) {
+      for (Group sk = kGroupOffsets; k + kGroup <= length; k += kGroup, sk += static_cast<double>(kGroup)) {
         Group values;
         std::memcpy(&values, piece + k, sizeof values);
         values -= mean.y0 + sk * (mean.b + sk * (mean.c + sk * mean.d));
@@ -628,14 +644,10 @@ class Sifter {
       if (dense) {
         evaluate_block(upper_, upper_piece, from, to, upper_values_.data());
         evaluate_block(lower_, lower_piece, from, to, lower_values_.data());
-        if (with_change_ratio) {
-          for (Index i = from; i < to; ++i) {
-            const double mean = 0.5 * (upper_values_[i - from] + lower_values_[i - from]);
-            sums[0] += h[i] * h[i];
-            sums[1] += mean * mean;
-          }
-        }
-        subtract_mean(h + from, upper_values_.data(), lower_values_.data(), to - from);
+        if (with_change_ratio)
+          subtract_mean<true>(h + from, upper_values_.data(), lower_values_.data(), to - from, sums);
+        else
+          subtract_mean(h + from, upper_values_.data(), lower_values_.data(), to - from);
         if (!scanner.scan_strict(h, scan_from, to)) scanner.scan(h, scan_from, to);
       } else {
         if (with_change_ratio)

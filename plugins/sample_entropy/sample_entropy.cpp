@@ -8,8 +8,8 @@
 #include <limits>
 #include <numeric>
 #include <optional>
-#include <utility>
 #include <stdexcept>
+#include <utility>
 
 namespace driftlab::sampen {
 namespace {
@@ -138,25 +138,36 @@ std::optional<PairCounts> count_template_pairs(std::span<const double> x, std::s
   }
 }
 
-// Counts of points at positions 0 .. n-1 (Fenwick tree).
+// Fenwick (binary indexed) tree over slots 1 .. size of `tree` (slot 0 unused): a point at
+// position p (0-based) is counted in slots p + 1, p + 1 + lowbit, ...
+std::size_t lowest_bit(std::size_t k) { return k & (~k + 1); }
+
+void fenwick_add(std::int32_t* tree, std::size_t size, std::size_t position, std::int32_t delta) {
+  for (std::size_t k = position + 1; k <= size; k += lowest_bit(k)) tree[k] += delta;
+}
+
+// Points at positions [0, end).
+std::int64_t fenwick_prefix(const std::int32_t* tree, std::size_t end) {
+  std::int64_t sum = 0;
+  for (std::size_t k = end; k > 0; k -= lowest_bit(k)) sum += tree[k];
+  return sum;
+}
+
+// Counts of points at positions 0 .. n-1.
 class Fenwick {
  public:
   explicit Fenwick(std::size_t n) : tree_(n + 1, 0) {}
 
   void add(std::size_t position, std::int32_t delta) {
-    for (std::size_t k = position + 1; k < tree_.size(); k += k & (~k + 1)) tree_[k] += delta;
+    fenwick_add(tree_.data(), tree_.size() - 1, position, delta);
   }
 
   // Points at positions [lo, hi).
-  std::int64_t count(std::size_t lo, std::size_t hi) const { return prefix(hi) - prefix(lo); }
-
- private:
-  std::int64_t prefix(std::size_t end) const {
-    std::int64_t sum = 0;
-    for (std::size_t k = end; k > 0; k -= k & (~k + 1)) sum += tree_[k];
-    return sum;
+  std::int64_t count(std::size_t lo, std::size_t hi) const {
+    return fenwick_prefix(tree_.data(), hi) - fenwick_prefix(tree_.data(), lo);
   }
 
+ private:
   std::vector<std::int32_t> tree_;
 };
 
@@ -167,14 +178,14 @@ class Fenwick2D {
   Fenwick2D(std::span<const std::uint32_t> u, std::span<const std::uint32_t> v)
       : n_(u.size()), begin_(n_ + 2, 0) {
     for (std::size_t p = 0; p < n_; ++p) {
-      for (std::size_t k = u[p] + 1; k <= n_; k += k & (~k + 1)) ++begin_[k + 1];
+      for (std::size_t k = u[p] + 1; k <= n_; k += lowest_bit(k)) ++begin_[k + 1];
     }
     for (std::size_t k = 1; k <= n_ + 1; ++k) begin_[k] += begin_[k - 1];
     values_.resize(begin_[n_ + 1]);
     tree_.assign(begin_[n_ + 1] + n_ + 1, 0);
     std::vector<std::size_t> fill(begin_.begin(), begin_.end() - 1);
     for (std::size_t p = 0; p < n_; ++p) {
-      for (std::size_t k = u[p] + 1; k <= n_; k += k & (~k + 1)) values_[fill[k]++] = v[p];
+      for (std::size_t k = u[p] + 1; k <= n_; k += lowest_bit(k)) values_[fill[k]++] = v[p];
     }
     for (std::size_t k = 1; k <= n_; ++k) {
       std::sort(values_.begin() + static_cast<std::ptrdiff_t>(begin_[k]),
@@ -183,10 +194,8 @@ class Fenwick2D {
   }
 
   void add(std::uint32_t u, std::uint32_t v, std::int32_t delta) {
-    for (std::size_t k = u + 1; k <= n_; k += k & (~k + 1)) {
-      const std::size_t size = begin_[k + 1] - begin_[k];
-      std::int32_t* inner = tree_.data() + begin_[k] + k;
-      for (std::size_t j = slot(k, v) + 1; j <= size; j += j & (~j + 1)) inner[j] += delta;
+    for (std::size_t k = u + 1; k <= n_; k += lowest_bit(k)) {
+      fenwick_add(inner(k), begin_[k + 1] - begin_[k], slot(k, v), delta);
     }
   }
 
@@ -203,17 +212,14 @@ class Fenwick2D {
     return static_cast<std::size_t>(std::lower_bound(first, last, v) - first);
   }
 
-  std::int64_t inner_prefix(std::size_t k, std::size_t end) const {
-    const std::int32_t* inner = tree_.data() + begin_[k] + k;
-    std::int64_t sum = 0;
-    for (std::size_t j = end; j > 0; j -= j & (~j + 1)) sum += inner[j];
-    return sum;
-  }
+  // Node k's inner tree: size + 1 slots after the inner trees of nodes 1 .. k-1.
+  std::int32_t* inner(std::size_t k) { return tree_.data() + begin_[k] + k; }
+  const std::int32_t* inner(std::size_t k) const { return tree_.data() + begin_[k] + k; }
 
   std::int64_t prefix(std::size_t u_end, std::uint32_t v_lo, std::uint32_t v_hi) const {
     std::int64_t sum = 0;
-    for (std::size_t k = u_end; k > 0; k -= k & (~k + 1)) {
-      sum += inner_prefix(k, slot(k, v_hi)) - inner_prefix(k, slot(k, v_lo));
+    for (std::size_t k = u_end; k > 0; k -= lowest_bit(k)) {
+      sum += fenwick_prefix(inner(k), slot(k, v_hi)) - fenwick_prefix(inner(k), slot(k, v_lo));
     }
     return sum;
   }
@@ -229,20 +235,21 @@ class Fenwick2D {
 class RankedCoordinate {
  public:
   RankedCoordinate(std::span<const double> x, std::size_t offset, std::size_t count)
-      : values_(x.subspan(offset, count)), rank_(count), sorted_(count) {
-    std::vector<std::uint32_t> order(count);
-    std::iota(order.begin(), order.end(), 0u);
-    std::stable_sort(order.begin(), order.end(),
+      : values_(x.subspan(offset, count)), order_(count), rank_(count), sorted_(count) {
+    std::iota(order_.begin(), order_.end(), 0u);
+    std::stable_sort(order_.begin(), order_.end(),
                      [&](std::uint32_t p, std::uint32_t q) { return values_[p] < values_[q]; });
     for (std::size_t k = 0; k < count; ++k) {
-      rank_[order[k]] = static_cast<std::uint32_t>(k);
-      sorted_[k] = values_[order[k]];
+      rank_[order_[k]] = static_cast<std::uint32_t>(k);
+      sorted_[k] = values_[order_[k]];
     }
   }
 
   double value(std::size_t t) const { return values_[t]; }
   std::uint32_t rank(std::size_t t) const { return rank_[t]; }
   std::span<const std::uint32_t> ranks() const { return rank_; }
+  // Templates by increasing value (ties by index).
+  std::span<const std::uint32_t> order() const { return order_; }
 
   // Ranks [lo, hi) of the values v with |value(t) - v| < r.
   std::pair<std::uint32_t, std::uint32_t> matching(std::size_t t, double r) const {
@@ -256,7 +263,7 @@ class RankedCoordinate {
 
  private:
   std::span<const double> values_;
-  std::vector<std::uint32_t> rank_;
+  std::vector<std::uint32_t> order_, rank_;
   std::vector<double> sorted_;
 };
 
@@ -264,10 +271,7 @@ class RankedCoordinate {
 // in the first two coordinates (prefix) and in all of them (full), by range counting.
 PairCounts range_count_pairs(std::span<const double> x, std::size_t count, int coords, double r) {
   const RankedCoordinate first(x, 0, count), second(x, 1, count);
-  std::vector<std::uint32_t> order(count);
-  std::iota(order.begin(), order.end(), 0u);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::uint32_t p, std::uint32_t q) { return first.value(p) < first.value(q); });
+  const std::span<const std::uint32_t> order = first.order();
   std::optional<RankedCoordinate> third;
   std::optional<Fenwick2D> boxes;
   if (coords == 3) {

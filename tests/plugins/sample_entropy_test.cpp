@@ -151,8 +151,9 @@ TEST(SampleEntropy, ProfileGivesTheSameCountsAsSingleCalls) {
 constexpr std::array kCountings = {sampen::Counting::Automatic, sampen::Counting::Enumerate,
                                    sampen::Counting::RangeCount};
 
-// Smooth records match almost everywhere (the enumeration's quadratic case, where the range
-// counting takes over): a random walk and a slow sine with a little noise.
+// Smooth records match almost everywhere (the enumeration's quadratic case, which range counting
+// bounds; at this length Automatic still enumerates): a random walk and a slow sine with a little
+// noise.
 TEST(SampleEntropy, CountsEqualTheNaiveDefinitionOnSmoothRecords) {
   const std::size_t n = 3000;
   const auto steps = gaussian_noise(n, 77);
