@@ -22,6 +22,10 @@
 #include <thread>
 #include <vector>
 
+#ifdef DRIFTLAB_AVX2_INTRINSICS
+#include <immintrin.h>
+#endif
+
 namespace driftlab::emd {
 namespace {
 
@@ -30,6 +34,7 @@ using Index = std::ptrdiff_t;
 constexpr int kNearest = 3;
 constexpr int kMaxEndKnots = 2;
 constexpr Index kPad = kMaxEndKnots;
+constexpr Index kWrittenPast = 3;  // extrema slots written past the last extremum by a scan
 
 struct Extrema {
   std::vector<double> pos, val;  // interior extrema at [kPad, kPad + count), end knots around them
@@ -76,15 +81,167 @@ DRIFTLAB_SIMD_CLONES bool has_equal_neighbours(const double* x, Index from, Inde
   return equal > 0;
 }
 
-// Interior extrema and zero crossings of a signal scanned block by block, in order: a search for
-// the next change of direction, so the cost per sample is a few comparisons. A flat run of equal
-// samples that is a peak or a trough counts once, at its middle sample.
+// Write cursor into the extrema arrays of one kind: the next extremum goes to pos[count], val[count].
+struct Appender {
+  double *pos, *val;
+  Index count;
+};
+
+// Appends the strict extrema x[j], j in [lo, hi) (1 <= lo, hi + 1 <= length of x), to `max`
+// (x[j] > x[j-1] and x[j] > x[j+1]) and `min` (both <), in order. Every candidate is written and
+// the count advances only at an extremum, so there is no branch on the data; up to kWrittenPast
+// slots past the last extremum are written.
+void append_strict_extrema(const double* x, Index lo, Index hi, Appender& max, Appender& min) {
+  Index max_count = max.count, min_count = min.count;
+  for (Index j = lo; j < hi; ++j) {
+    const double value = x[j], position = static_cast<double>(j);
+    max.pos[max_count] = position;
+    max.val[max_count] = value;
+    max_count += (value > x[j - 1]) & (value > x[j + 1]);
+    min.pos[min_count] = position;
+    min.val[min_count] = value;
+    min_count += (value < x[j - 1]) & (value < x[j + 1]);
+  }
+  max.count = max_count;
+  min.count = min_count;
+}
+
+#ifdef DRIFTLAB_AVX2_INTRINSICS
+// For each 4-bit mask, the 32-bit lane permutation that packs the selected doubles to the front.
+struct CompressPermutations {
+  alignas(32) std::array<std::array<std::int32_t, 8>, 16> lanes{};
+};
+
+constexpr CompressPermutations compress_permutations() {
+  CompressPermutations p;
+  for (int mask = 0; mask < 16; ++mask) {
+    int packed = 0;
+    for (int k = 0; k < 4; ++k) {
+      if ((mask >> k & 1) == 0) continue;
+      p.lanes[mask][2 * packed] = 2 * k;
+      p.lanes[mask][2 * packed + 1] = 2 * k + 1;
+      ++packed;
+    }
+  }
+  return p;
+}
+
+constexpr CompressPermutations kPack = compress_permutations();
+
+// The lanes of v selected by mask, packed to the front.
+DRIFTLAB_AVX2_TARGET inline __m256d pack(__m256d v, int mask) {
+  const __m256i lanes = _mm256_load_si256(reinterpret_cast<const __m256i*>(kPack.lanes[mask].data()));
+  return _mm256_castps_pd(_mm256_permutevar8x32_ps(_mm256_castpd_ps(v), lanes));
+}
+
+// Extremum masks of the 4 candidates x[j, j + 4): bit k set when x[j + k] is a maximum (minimum).
+// `equal` flags x[j + k] == x[j + k + 1]; `sign_changes` flags a sign-bit change between them.
+struct GroupExtrema {
+  __m256d value, equal;
+  __m256i sign_changes;
+  int max, min;
+};
+
+DRIFTLAB_AVX2_TARGET inline GroupExtrema group_extrema(const double* x, Index j) {
+  const __m256d value = _mm256_loadu_pd(x + j), left = _mm256_loadu_pd(x + j - 1),
+                right = _mm256_loadu_pd(x + j + 1);
+  return {value, _mm256_cmp_pd(value, right, _CMP_EQ_OQ),
+          _mm256_srli_epi64(_mm256_xor_si256(_mm256_castpd_si256(value), _mm256_castpd_si256(right)), 63),
+          _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(value, left, _CMP_GT_OQ),
+                                           _mm256_cmp_pd(value, right, _CMP_GT_OQ))),
+          _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(value, left, _CMP_LT_OQ),
+                                           _mm256_cmp_pd(value, right, _CMP_LT_OQ)))};
+}
+
+// scan_strict (below) 8 pairs at a time: the extrema among each 4 candidates are packed with one
+// permutation per array and stored together; equalities and sign changes are accumulated in
+// vectors. With kSkipEmpty, 8 candidates without an extremum store nothing, behind one
+// well-predicted branch (for sparse extrema).
+template <bool kSkipEmpty>
+DRIFTLAB_AVX2_TARGET bool scan_strict_avx2(const double* x, Index from, Index to, Appender& max,
+                                           Appender& min, Index& sign_changes) {
+  Index i = std::max<Index>(from, 2);
+  if (has_equal_neighbours(x, std::max<Index>(from - 1, 1), i)) return false;
+  Index changes = count_sign_changes(x, from, i);
+  Index max_count = max.count, min_count = min.count;
+  const auto append = [&](const GroupExtrema& g, __m256d position) DRIFTLAB_AVX2_TARGET {
+    _mm256_storeu_pd(max.pos + max_count, pack(position, g.max));
+    _mm256_storeu_pd(max.val + max_count, pack(g.value, g.max));
+    _mm256_storeu_pd(min.pos + min_count, pack(position, g.min));
+    _mm256_storeu_pd(min.val + min_count, pack(g.value, g.min));
+    max_count += _mm_popcnt_u32(static_cast<unsigned>(g.max));
+    min_count += _mm_popcnt_u32(static_cast<unsigned>(g.min));
+  };
+  const __m256d offsets = _mm256_setr_pd(0.0, 1.0, 2.0, 3.0), four = _mm256_set1_pd(4.0);
+  __m256d equal = _mm256_setzero_pd();
+  __m256i lane_changes = _mm256_setzero_si256();
+  for (; i + 8 <= to; i += 8) {
+    const GroupExtrema a = group_extrema(x, i - 1), b = group_extrema(x, i + 3);
+    equal = _mm256_or_pd(equal, _mm256_or_pd(a.equal, b.equal));
+    lane_changes = _mm256_add_epi64(lane_changes, _mm256_add_epi64(a.sign_changes, b.sign_changes));
+    if (kSkipEmpty && (a.max | a.min | b.max | b.min) == 0) continue;
+    const __m256d position = _mm256_add_pd(_mm256_set1_pd(static_cast<double>(i - 1)), offsets);
+    append(a, position);
+    append(b, _mm256_add_pd(position, four));
+  }
+  if (_mm256_movemask_pd(equal) != 0 || has_equal_neighbours(x, i, to)) return false;
+  alignas(32) std::array<std::int64_t, 4> lanes;
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes.data()), lane_changes);
+  sign_changes += changes + lanes[0] + lanes[1] + lanes[2] + lanes[3] + count_sign_changes(x, i, to);
+  max.count = max_count;
+  min.count = min_count;
+  append_strict_extrema(x, i - 1, to - 1, max, min);
+  return true;
+}
+#endif
+
+// Extrema expected further apart than kSparseSpacing samples on average take the skipping scan.
+constexpr Index kSparseSpacing = 16;
+
+// For the pairs (x[i - 1], x[i]), i in [from, to), 1 <= from < to: appends the extrema x[i - 1]
+// (i >= 2, as append_strict_extrema) and adds the number of sign-bit changes to sign_changes.
+// Returns false, having changed nothing, when x[i - 1] == x[i] for some i in [max(from - 1, 1), to)
+// (a flat run needs the turn search's bookkeeping).
+bool scan_strict(const double* x, Index from, Index to, bool sparse, Appender& max, Appender& min,
+                 Index& sign_changes) {
+#ifdef DRIFTLAB_AVX2_INTRINSICS
+  if (cpu_has_avx2()) {
+    return sparse ? scan_strict_avx2<true>(x, from, to, max, min, sign_changes)
+                  : scan_strict_avx2<false>(x, from, to, max, min, sign_changes);
+  }
+#endif
+  if (has_equal_neighbours(x, std::max<Index>(from - 1, 1), to)) return false;
+  append_strict_extrema(x, std::max<Index>(from - 1, 1), to - 1, max, min);
+  sign_changes += count_sign_changes(x, from, to);
+  return true;
+}
+
+// Interior extrema and zero crossings of a signal scanned block by block, in order. A flat run of
+// equal samples that is a peak or a trough counts once, at its middle sample.
 class ExtremaScanner {
  public:
-  explicit ExtremaScanner(ExtremaSet& out) : out_(out) {}
+  // `sparse`: extrema expected more than kSparseSpacing samples apart (a hint for speed only).
+  ExtremaScanner(ExtremaSet& out, bool sparse) : out_(out), sparse_(sparse) {}
 
   // Scans x[i] for i in [from, to), from >= 1; x[0, from) must be the samples scanned before.
+  // Blocks without two equal neighbouring samples in x[from - 2, to) take the branch-free strict
+  // test (scan_strict); the others search for each change of direction.
   void scan(const double* x, Index from, Index to) {
+    if (to <= from) return;
+    Appender max{out_.max.pos.data() + kPad, out_.max.val.data() + kPad, out_.max.count};
+    Appender min{out_.min.pos.data() + kPad, out_.min.val.data() + kPad, out_.min.count};
+    if (scan_strict(x, from, to, sparse_, max, min, out_.zero_crossings)) {
+      out_.max.count = max.count;
+      out_.min.count = min.count;
+      direction_ = x[to - 1] > x[to - 2] ? 1 : -1;
+    } else {
+      search(x, from, to);
+      out_.zero_crossings += count_sign_changes(x, from, to);
+    }
+  }
+
+ private:
+  void search(const double* x, Index from, Index to) {
     Index i = from;
     if (direction_ == 0) {
       while (i < to && x[i] == x[i - 1]) ++i;
@@ -101,51 +258,16 @@ class ExtremaScanner {
       ++e.count;
       direction_ = -direction_;
     }
-    count_zero_crossings(x, from, to);
-  }
-
-  // The same result without branches on the data, for densely packed extrema, where the search
-  // would mispredict at almost every turn: each step writes a candidate slot and advances a count
-  // only at an extremum. Returns false, having done nothing, when two neighbouring samples of
-  // x[from - 2, to) are equal (a flat run needs the search's bookkeeping).
-  bool scan_strict(const double* x, Index from, Index to) {
-    if (has_equal_neighbours(x, std::max<Index>(from - 1, 1), to)) return false;
-    double* max_pos = out_.max.pos.data() + kPad;
-    double* max_val = out_.max.val.data() + kPad;
-    double* min_pos = out_.min.pos.data() + kPad;
-    double* min_val = out_.min.val.data() + kPad;
-    Index max_count = out_.max.count, min_count = out_.min.count;
-    double before = from >= 2 ? x[from - 1] - x[from - 2] : 0.0;
-    double position = static_cast<double>(from - 1);
-    for (Index i = from; i < to; ++i, position += 1.0) {
-      const double step = x[i] - x[i - 1];
-      max_pos[max_count] = position;
-      max_val[max_count] = x[i - 1];
-      max_count += (before > 0.0) & (step < 0.0);
-      min_pos[min_count] = position;
-      min_val[min_count] = x[i - 1];
-      min_count += (before < 0.0) & (step > 0.0);
-      before = step;
-    }
-    out_.max.count = max_count;
-    out_.min.count = min_count;
-    if (to > from) direction_ = x[to - 1] > x[to - 2] ? 1 : -1;
-    count_zero_crossings(x, from, to);
-    return true;
-  }
-
- private:
-  void count_zero_crossings(const double* x, Index from, Index to) {
-    out_.zero_crossings += count_sign_changes(x, from, to);
   }
 
   ExtremaSet& out_;
+  bool sparse_;
   int direction_ = 0;
 };
 
 void find_extrema(const double* x, Index n, ExtremaSet& out) {
   out.max.count = out.min.count = out.zero_crossings = 0;
-  ExtremaScanner(out).scan(x, 1, n);
+  ExtremaScanner(out, false).scan(x, 1, n);
 }
 
 // Extrema of one kind nearest to one end, nearest first; s = distance from the end sample.
@@ -574,7 +696,7 @@ class Sifter {
 
  private:
   void reserve(Index n) {
-    const auto capacity = static_cast<std::size_t>(n / 2 + 2 + 2 * kPad);
+    const auto capacity = static_cast<std::size_t>(n / 2 + 2 + 2 * kPad + kWrittenPast);
     if (upper_scratch_.ratio.size() >= capacity) return;
     for (ExtremaSet& set : sets_) {
       for (Extrema* e : {&set.max, &set.min}) {
@@ -626,21 +748,19 @@ class Sifter {
 
   // One sift: h <- h - (upper + lower) / 2, then the extrema of the new h, block by block so that
   // each block is still in cache when scanned. Returns the Cauchy SD (0 for the other rules).
-  // Extrema closer than kDenseSpacing samples on average take the branch-free paths: envelopes
-  // evaluated piece by piece into block buffers and the strict extrema scan; sparser ones subtract
-  // the mean interval by interval and search for the turns.
+  // Extrema closer than kDenseSpacing samples on average have their envelopes evaluated piece by
+  // piece into block buffers; sparser ones subtract the mean interval by interval.
   double sift_pass(double* h, Index n) {
     const bool with_change_ratio = config_.stop_rule == StopRule::CauchySd;
     const ExtremaSet& e = sets_[current_];
     const bool dense = (e.max.count + e.min.count) * kDenseSpacing > n;
     ExtremaSet& next = sets_[1 - current_];
     next.max.count = next.min.count = next.zero_crossings = 0;
-    ExtremaScanner scanner(next);
+    ExtremaScanner scanner(next, (e.max.count + e.min.count) * kSparseSpacing < n);
     double sums[2] = {0.0, 0.0};  // sum h^2, sum mean^2 (Cauchy SD only)
     Index upper_piece = 0, lower_piece = 0;
     for (Index from = 0; from < n; from += kBlock) {
       const Index to = std::min(n, from + kBlock);
-      const Index scan_from = std::max<Index>(from, 1);
       if (dense) {
         evaluate_block(upper_, upper_piece, from, to, upper_values_.data());
         evaluate_block(lower_, lower_piece, from, to, lower_values_.data());
@@ -648,14 +768,13 @@ class Sifter {
           subtract_mean<true>(h + from, upper_values_.data(), lower_values_.data(), to - from, sums);
         else
           subtract_mean(h + from, upper_values_.data(), lower_values_.data(), to - from);
-        if (!scanner.scan_strict(h, scan_from, to)) scanner.scan(h, scan_from, to);
       } else {
         if (with_change_ratio)
           subtract_mean_by_intervals<true>(upper_, lower_, upper_piece, lower_piece, h, from, to, sums);
         else
           subtract_mean_by_intervals(upper_, lower_, upper_piece, lower_piece, h, from, to);
-        scanner.scan(h, scan_from, to);
       }
+      scanner.scan(h, std::max<Index>(from, 1), to);
     }
     current_ = 1 - current_;
     return with_change_ratio ? sums[1] / sums[0] : 0.0;
