@@ -514,12 +514,12 @@ void fit_splines(const SplineFit& a, const SplineFit& b) {
 }
 
 // Values of a spline at the samples t in [from, to) into out[t - from], writing up to
-// 2 kGroup - 1 values past `to`. Piece j serves t in [x_j, x_{j+1}) (the last piece also beyond its
-// right knot); `piece` is the piece serving `from` on entry (or an earlier one) and the one serving
-// `to` on return. Each piece is evaluated kGroup samples at a time (vectorized), at least two
-// groups whatever its length, overwriting the next piece's first samples when it is shorter: the
-// densely packed knots of the first IMFs (pieces of 1 to 8 samples) then cost no mispredicted
-// branch.
+// groups * kGroup - 1 values past `to`. Piece j serves t in [x_j, x_{j+1}) (the last piece also
+// beyond its right knot); `piece` is the piece serving `from` on entry (or an earlier one) and the
+// one serving `to` on return. Each piece is evaluated kGroup samples at a time (vectorized), at
+// least `groups` groups whatever its length, overwriting the next piece's first samples when it is
+// shorter: the densely packed knots of the first IMFs (pieces of 1 to 8 samples) then cost no
+// mispredicted branch.
 constexpr Index kGroup = 4;
 using Group = double __attribute__((vector_size(kGroup * sizeof(double))));  // GCC/Clang vector
 constexpr Group kGroupOffsets = {0.0, 1.0, 2.0, 3.0};
@@ -557,7 +557,7 @@ struct Cubic {
 }
 
 DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Index from, Index to,
-                                         double* out) {
+                                         Index groups, double* out) {
   const double* x = spline.x;
   Index j = piece;
   for (Index a = from; a < to;) {
@@ -572,9 +572,9 @@ DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Ind
     const auto store = [&g](double* o, Group t) { store_cubic(o, t, g.y0, g.b, g.c, g.d); };
     double* o = out + (a - from);
     const Group t = (static_cast<double>(a) - x[j]) + kGroupOffsets;
-    store(o, t);
-    store(o + kGroup, t + static_cast<double>(kGroup));
-    for (Index k = 2; a + k * kGroup < end; ++k) store(o + k * kGroup, t + static_cast<double>(k * kGroup));
+    Index k = 0;
+    for (; k < groups; ++k) store(o + k * kGroup, t + static_cast<double>(k * kGroup));
+    for (; a + k * kGroup < end; ++k) store(o + k * kGroup, t + static_cast<double>(k * kGroup));
     if (end == next_knot && !last) ++j;
     a = end;
   }
@@ -654,7 +654,16 @@ DRIFTLAB_SIMD_CLONES void subtract_mean_by_intervals(const Spline& upper, const 
 // Sifting workspace: buffers sized once per signal length, reused by every sift.
 class Sifter {
   static constexpr Index kBlock = 2048;
-  static constexpr Index kDenseSpacing = 5;
+  static constexpr Index kDenseSpacing = 9;
+  static constexpr Index kMaxGroups = 16;
+
+  // Groups evaluated for every piece of an envelope with `knots` knots over n samples: enough for a
+  // piece of average length, so that the loop over a piece's further groups seldom runs (and
+  // seldom mispredicts).
+  static Index groups_per_piece(Index knots, Index n) {
+    const Index average = n / std::max<Index>(knots, 1);
+    return std::clamp<Index>((average + kGroup - 1) / kGroup, 2, kMaxGroups);
+  }
 
  public:
   explicit Sifter(const SiftConfig& config) : config_(config) {}
@@ -754,6 +763,7 @@ class Sifter {
     const bool with_change_ratio = config_.stop_rule == StopRule::CauchySd;
     const ExtremaSet& e = sets_[current_];
     const bool dense = (e.max.count + e.min.count) * kDenseSpacing > n;
+    const Index upper_groups = groups_per_piece(e.max.count, n), lower_groups = groups_per_piece(e.min.count, n);
     ExtremaSet& next = sets_[1 - current_];
     next.max.count = next.min.count = next.zero_crossings = 0;
     ExtremaScanner scanner(next, (e.max.count + e.min.count) * kSparseSpacing < n);
@@ -762,8 +772,8 @@ class Sifter {
     for (Index from = 0; from < n; from += kBlock) {
       const Index to = std::min(n, from + kBlock);
       if (dense) {
-        evaluate_block(upper_, upper_piece, from, to, upper_values_.data());
-        evaluate_block(lower_, lower_piece, from, to, lower_values_.data());
+        evaluate_block(upper_, upper_piece, from, to, upper_groups, upper_values_.data());
+        evaluate_block(lower_, lower_piece, from, to, lower_groups, lower_values_.data());
         if (with_change_ratio)
           subtract_mean<true>(h + from, upper_values_.data(), lower_values_.data(), to - from, sums);
         else
@@ -785,8 +795,8 @@ class Sifter {
   int current_ = 0;
   SplineScratch upper_scratch_, lower_scratch_;
   Spline upper_, lower_;  // envelopes of the current candidate (knots in sets_[current_])
-  std::vector<double> upper_values_ = std::vector<double>(kBlock + 2 * kGroup),
-                      lower_values_ = std::vector<double>(kBlock + 2 * kGroup);  // one block each
+  std::vector<double> upper_values_ = std::vector<double>(kBlock + kMaxGroups * kGroup),
+                      lower_values_ = std::vector<double>(kBlock + kMaxGroups * kGroup);  // one block each
 };
 
 void validate(const SiftConfig& c) {
