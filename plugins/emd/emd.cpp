@@ -465,6 +465,55 @@ class SplineFit {
     state.previous_slope = chord_slope;
   }
 
+  // Rows [first, end) of two splines at once (2 <= first, end <= both rows(), none of them a
+  // spline's last row), one vector lane each, continuing the states a_state and b_state. Each row
+  // is multiplied through by h_{i-1} h_i, which leaves ratio and M' unchanged and needs no
+  // reciprocal of a spacing: sub = h_{i-1}^2 h_i, diag = 2 (h_{i-1} + h_i) h_{i-1} h_i,
+  // super = h_i^2 h_{i-1}, rhs = 6 (dy_i h_{i-1} - dy_{i-1} h_i).
+  static void eliminate_pair(const SplineFit& a, const SplineFit& b, Index first, Index end,
+                             Elimination& a_state, Elimination& b_state) {
+    using Pair = double __attribute__((vector_size(2 * sizeof(double))));
+    if (first >= end) return;
+    const auto pair = [&](const double* u, const double* v, Index i) { return Pair{u[i], v[i]}; };
+    Pair x = pair(a.x_, b.x_, first), y = pair(a.y_, b.y_, first);
+    Pair before = x - pair(a.x_, b.x_, first - 1), rise = y - pair(a.y_, b.y_, first - 1);
+    Pair p{a_state.p, b_state.p}, q{a_state.q, b_state.q}, r{a_state.r, b_state.r};
+    for (Index i = first; i < end; ++i) {
+      const Pair next_x = pair(a.x_, b.x_, i + 1), next_y = pair(a.y_, b.y_, i + 1);
+      const Pair after = next_x - x, next_rise = next_y - y, both = before * after;
+      const Pair sub = before * both, diag = 2.0 * (before + after) * both, super = after * both;
+      const Pair rhs = 6.0 * (next_rise * before - rise * after);
+      const Pair next_p = super * q;
+      Pair next_q = diag * q - sub * p, next_r = rhs * q - sub * r;
+      const Pair inverse_q = 1.0 / next_q, ratio = next_p * inverse_q, second = next_r * inverse_q;
+      a.ratio_[i] = ratio[0];
+      b.ratio_[i] = ratio[1];
+      a.m_[i] = second[0];
+      b.m_[i] = second[1];
+      p = next_p;
+      if (i % kRescaleEvery == 0) {
+        const Pair scale{power_of_two_below(next_q[0]), power_of_two_below(next_q[1])};
+        p *= scale;
+        next_q *= scale;
+        next_r *= scale;
+      }
+      q = next_q;
+      r = next_r;
+      x = next_x;
+      y = next_y;
+      before = after;
+      rise = next_rise;
+    }
+    for (int lane = 0; lane < 2; ++lane) {
+      Elimination& state = lane == 0 ? a_state : b_state;
+      state.p = p[lane];
+      state.q = q[lane];
+      state.r = r[lane];
+      state.previous_inverse = inverse_step(before[lane]);
+      state.previous_slope = rise[lane] * state.previous_inverse;
+    }
+  }
+
   double last_second() const { return last_ > 0 ? m_[last_] : 0.0; }
 
   // m_i -= ratio_i m_{i+1}, with m_{i+1} passed in (and m_i passed out) in a register.
@@ -494,13 +543,18 @@ class SplineFit {
 // Fits two independent splines with their recurrences interleaved row by row.
 void fit_splines(const SplineFit& a, const SplineFit& b) {
   SplineFit::Elimination sa = a.start(), sb = b.start();
+  // Rows 1 .. common - 1 are plain rows of both splines but the first; row `common` is the last
+  // row of one of them.
   const Index common = std::min(a.rows(), b.rows());
-  for (Index i = 1; i <= common; ++i) {
-    a.eliminate(i, sa);
-    b.eliminate(i, sb);
+  Index next = 1;
+  if (common >= 2) {
+    a.eliminate(1, sa);
+    b.eliminate(1, sb);
+    SplineFit::eliminate_pair(a, b, 2, common, sa, sb);
+    next = common;
   }
-  for (Index i = common + 1; i <= a.rows(); ++i) a.eliminate(i, sa);
-  for (Index i = common + 1; i <= b.rows(); ++i) b.eliminate(i, sb);
+  for (Index i = next; i <= a.rows(); ++i) a.eliminate(i, sa);
+  for (Index i = next; i <= b.rows(); ++i) b.eliminate(i, sb);
   double ma = a.last_second(), mb = b.last_second();
   Index ia = a.rows() - 1, ib = b.rows() - 1;
   for (; ia >= 1 && ib >= 1; --ia, --ib) {
