@@ -153,13 +153,11 @@ DRIFTLAB_AVX2_TARGET inline GroupExtrema group_extrema(const double* x, Index j)
                                            _mm256_cmp_pd(value, right, _CMP_LT_OQ)))};
 }
 
-// scan_strict (below) 8 pairs at a time: the extrema among each 4 candidates are packed with one
-// permutation per array and stored together; equalities and sign changes are accumulated in
-// vectors. With kSkipEmpty, 8 candidates without an extremum store nothing, behind one
-// well-predicted branch (for sparse extrema).
-template <bool kSkipEmpty>
-DRIFTLAB_AVX2_TARGET bool scan_strict_avx2(const double* x, Index from, Index to, Appender& max,
-                                           Appender& min, Index& sign_changes) {
+// scan_strict (below) for densely packed extrema, 8 pairs at a time: the extrema among each 4
+// candidates are packed with one permutation per array and stored together; equalities and sign
+// changes are accumulated in vectors.
+DRIFTLAB_AVX2_TARGET bool scan_dense_avx2(const double* x, Index from, Index to, Appender& max,
+                                          Appender& min, Index& sign_changes) {
   Index i = std::max<Index>(from, 2);
   if (has_equal_neighbours(x, std::max<Index>(from - 1, 1), i)) return false;
   Index changes = count_sign_changes(x, from, i);
@@ -179,7 +177,6 @@ DRIFTLAB_AVX2_TARGET bool scan_strict_avx2(const double* x, Index from, Index to
     const GroupExtrema a = group_extrema(x, i - 1), b = group_extrema(x, i + 3);
     equal = _mm256_or_pd(equal, _mm256_or_pd(a.equal, b.equal));
     lane_changes = _mm256_add_epi64(lane_changes, _mm256_add_epi64(a.sign_changes, b.sign_changes));
-    if (kSkipEmpty && (a.max | a.min | b.max | b.min) == 0) continue;
     const __m256d position = _mm256_add_pd(_mm256_set1_pd(static_cast<double>(i - 1)), offsets);
     append(a, position);
     append(b, _mm256_add_pd(position, four));
@@ -193,9 +190,55 @@ DRIFTLAB_AVX2_TARGET bool scan_strict_avx2(const double* x, Index from, Index to
   append_strict_extrema(x, i - 1, to - 1, max, min);
   return true;
 }
+
+// scan_strict (below) for sparse extrema, 64 candidates c[k] at a time as bit masks: F_k when
+// c[k + 1] < c[k] (falling after c[k]), S_k the sign bit of c[k]. With no equal neighbours,
+// c[k] is a maximum where F_k is set and F_{k-1} is not, a minimum where F_{k-1} is set and F_k is
+// not, and the sign changes are the set bits of S xor (S >> 1); the few extrema are then taken one
+// set bit at a time.
+DRIFTLAB_AVX2_TARGET bool scan_sparse_avx2(const double* x, Index from, Index to, Appender& max,
+                                           Appender& min, Index& sign_changes) {
+  constexpr Index kWord = 64;
+  Index i = std::max<Index>(from, 2);
+  if (has_equal_neighbours(x, std::max<Index>(from - 1, 1), i)) return false;
+  Index changes = count_sign_changes(x, from, i);
+  double *max_pos = max.pos, *max_val = max.val, *min_pos = min.pos, *min_val = min.val;
+  Index max_count = max.count, min_count = min.count;
+  __m256d equal = _mm256_setzero_pd();
+  std::uint64_t falling_before = x[i - 1] < x[i - 2];
+  for (; i + kWord <= to; i += kWord) {
+    const double* c = x + (i - 1);
+    std::uint64_t falling = 0, sign = 0;
+    for (int g = 0; g < kWord / 4; ++g) {
+      const __m256d value = _mm256_loadu_pd(c + 4 * g), right = _mm256_loadu_pd(c + 4 * g + 1);
+      equal = _mm256_or_pd(equal, _mm256_cmp_pd(value, right, _CMP_EQ_OQ));
+      falling |= static_cast<std::uint64_t>(_mm256_movemask_pd(_mm256_cmp_pd(right, value, _CMP_LT_OQ))) << (4 * g);
+      sign |= static_cast<std::uint64_t>(_mm256_movemask_pd(value)) << (4 * g);
+    }
+    changes += std::popcount(sign ^ (sign >> 1 | (bits(c[kWord]) >> 63) << 63));
+    const std::uint64_t before = falling << 1 | falling_before;
+    falling_before = falling >> 63;
+    for (std::uint64_t maxima = falling & ~before; maxima != 0; maxima &= maxima - 1) {
+      const int k = std::countr_zero(maxima);
+      max_pos[max_count] = static_cast<double>(i - 1 + k);
+      max_val[max_count++] = c[k];
+    }
+    for (std::uint64_t minima = before & ~falling; minima != 0; minima &= minima - 1) {
+      const int k = std::countr_zero(minima);
+      min_pos[min_count] = static_cast<double>(i - 1 + k);
+      min_val[min_count++] = c[k];
+    }
+  }
+  if (_mm256_movemask_pd(equal) != 0 || has_equal_neighbours(x, i, to)) return false;
+  sign_changes += changes + count_sign_changes(x, i, to);
+  max.count = max_count;
+  min.count = min_count;
+  append_strict_extrema(x, i - 1, to - 1, max, min);
+  return true;
+}
 #endif
 
-// Extrema expected further apart than kSparseSpacing samples on average take the skipping scan.
+// Extrema expected further apart than kSparseSpacing samples on average take the bit-mask scan.
 constexpr Index kSparseSpacing = 16;
 
 // For the pairs (x[i - 1], x[i]), i in [from, to), 1 <= from < to: appends the extrema x[i - 1]
@@ -206,8 +249,8 @@ bool scan_strict(const double* x, Index from, Index to, bool sparse, Appender& m
                  Index& sign_changes) {
 #ifdef DRIFTLAB_AVX2_INTRINSICS
   if (cpu_has_avx2()) {
-    return sparse ? scan_strict_avx2<true>(x, from, to, max, min, sign_changes)
-                  : scan_strict_avx2<false>(x, from, to, max, min, sign_changes);
+    return sparse ? scan_sparse_avx2(x, from, to, max, min, sign_changes)
+                  : scan_dense_avx2(x, from, to, max, min, sign_changes);
   }
 #endif
   if (has_equal_neighbours(x, std::max<Index>(from - 1, 1), to)) return false;
