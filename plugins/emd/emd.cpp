@@ -657,14 +657,11 @@ DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Ind
                                          Index groups, double* out) {
   const double* x = spline.x;
   Index j = piece;
-  for (Index a = from; a < to;) {
-    const bool last = j + 2 >= spline.knots;
-    const Index next_knot = piece_end(spline, j, to);
-    if (next_knot <= a) {
-      ++j;
-      continue;
-    }
-    const Index end = std::min(next_knot, to);
+  while (piece_end(spline, j, to) <= from) ++j;
+  // One piece per pass, j advancing unconditionally (no data-dependent update on the loop's
+  // critical path); the piece that reaches `to` ends the block and may serve the next one.
+  for (Index a = from;; ++j) {
+    const Index next_knot = piece_end(spline, j, to), end = std::min(next_knot, to);
     const Cubic g = piece_of(spline, j);
     const auto store = [&g](double* o, Group t) { store_cubic(o, t, g.y0, g.b, g.c, g.d); };
     double* o = out + (a - from);
@@ -672,8 +669,8 @@ DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Ind
     Index k = 0;
     for (; k < groups; ++k) store(o + k * kGroup, t + static_cast<double>(k * kGroup));
     for (; a + k * kGroup < end; ++k) store(o + k * kGroup, t + static_cast<double>(k * kGroup));
-    if (end == next_knot && !last) ++j;
-    a = end;
+    if (next_knot >= to) break;
+    a = next_knot;
   }
   piece = j;
 }
