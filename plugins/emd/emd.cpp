@@ -239,7 +239,7 @@ DRIFTLAB_AVX2_TARGET bool scan_sparse_avx2(const double* x, Index from, Index to
 #endif
 
 // Extrema expected further apart than kSparseSpacing samples on average take the bit-mask scan.
-constexpr Index kSparseSpacing = 16;
+constexpr Index kSparseSpacing = 4;
 
 // For the pairs (x[i - 1], x[i]), i in [from, to), 1 <= from < to: appends the extrema x[i - 1]
 // (i >= 2, as append_strict_extrema) and adds the number of sign-bit changes to sign_changes.
