@@ -401,11 +401,10 @@ constexpr std::array<double, kSmallSteps> small_step_inverses() {
   return inverses;
 }
 
+constexpr std::array<double, kSmallSteps> kSmallStepInverses = small_step_inverses();
+
 // 1/h for a knot spacing h (a whole number of samples); small spacings from a table.
-double inverse_step(double h) {
-  static constexpr std::array<double, kSmallSteps> kInverses = small_step_inverses();
-  return h < kSmallSteps ? kInverses[static_cast<int>(h)] : 1.0 / h;
-}
+double inverse_step(double h) { return h < kSmallSteps ? kSmallStepInverses[static_cast<int>(h)] : 1.0 / h; }
 
 // A cubic spline in the second-derivative form: knots (x[k], y[k]) and second derivatives m[k],
 // k < knots. On [x_j, x_{j+1}], with h = x_{j+1} - x_j and dt = t - x_j,
@@ -632,12 +631,17 @@ struct Cubic {
   double y0, b, c, d;
 };
 
-[[gnu::always_inline]] inline Cubic piece_of(const Spline& spline, Index j) {
+// The piece of length `step` (inverse = 1 / step) between knots (y0, m0) and (y1, m1).
+[[gnu::always_inline]] inline Cubic cubic(double step, double inverse, double y0, double y1, double m0,
+                                          double m1) {
   constexpr double kSixth = 1.0 / 6.0;
+  return {y0, (y1 - y0) * inverse - step * (2.0 * m0 + m1) * kSixth, 0.5 * m0, (m1 - m0) * inverse * kSixth};
+}
+
+[[gnu::always_inline]] inline Cubic piece_of(const Spline& spline, Index j) {
   const double *x = spline.x, *y = spline.y, *m = spline.m;
-  const double step = x[j + 1] - x[j], inverse = inverse_step(step);
-  return {y[j], (y[j + 1] - y[j]) * inverse - step * (2.0 * m[j] + m[j + 1]) * kSixth, 0.5 * m[j],
-          (m[j + 1] - m[j]) * inverse * kSixth};
+  const double step = x[j + 1] - x[j];
+  return cubic(step, inverse_step(step), y[j], y[j + 1], m[j], m[j + 1]);
 }
 
 // The same cubic in s = t - (x_j + delta).
@@ -655,22 +659,32 @@ struct Cubic {
 
 DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Index from, Index to,
                                          Index groups, double* out) {
-  const double* x = spline.x;
+  const double *x = spline.x, *y = spline.y, *m = spline.m;
+  const Index last_piece = spline.knots - 2;
   Index j = piece;
   while (piece_end(spline, j, to) <= from) ++j;
   // One piece per pass, j advancing unconditionally (no data-dependent update on the loop's
-  // critical path); the piece that reaches `to` ends the block and may serve the next one.
+  // critical path); the piece that reaches `to` ends the block and may serve the next one. Knot
+  // positions are whole numbers, handled as integers.
+  auto left = static_cast<Index>(x[j]);
   for (Index a = from;; ++j) {
-    const Index next_knot = piece_end(spline, j, to), end = std::min(next_knot, to);
-    const Cubic g = piece_of(spline, j);
+    const auto right = static_cast<Index>(x[j + 1]);
+    const Index next_knot = j >= last_piece ? to : right, end = std::min(next_knot, to);
+    const Index step = right - left;
+    const double inverse = step < kSmallSteps ? kSmallStepInverses[step] : 1.0 / static_cast<double>(step);
+    const Cubic g = cubic(static_cast<double>(step), inverse, y[j], y[j + 1], m[j], m[j + 1]);
     const auto store = [&g](double* o, Group t) { store_cubic(o, t, g.y0, g.b, g.c, g.d); };
     double* o = out + (a - from);
-    const Group t = (static_cast<double>(a) - x[j]) + kGroupOffsets;
-    Index k = 0;
-    for (; k < groups; ++k) store(o + k * kGroup, t + static_cast<double>(k * kGroup));
-    for (; a + k * kGroup < end; ++k) store(o + k * kGroup, t + static_cast<double>(k * kGroup));
+    Group t = static_cast<double>(a - left) + kGroupOffsets;
+    store(o, t);
+    store(o + kGroup, t + static_cast<double>(kGroup));
+    t += static_cast<double>(2 * kGroup);
+    Index k = 2;
+    for (; k < groups; ++k, t += static_cast<double>(kGroup)) store(o + k * kGroup, t);
+    for (; a + k * kGroup < end; ++k, t += static_cast<double>(kGroup)) store(o + k * kGroup, t);
     if (next_knot >= to) break;
     a = next_knot;
+    left = right;
   }
   piece = j;
 }
