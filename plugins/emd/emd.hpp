@@ -91,11 +91,15 @@
 //   emd      O(S K N) time: one sift is one streaming pass over the samples in cache-sized blocks
 //            (envelope evaluation walking the knots in order, mean removal, the Cauchy sums, then
 //            the extrema and zero crossings of the new candidate while the block is still in
-//            cache) plus O(number of extrema) for the splines (the two envelopes' recurrences
-//            interleaved, one stored value per knot). Densely packed extrema (under 5 samples
-//            apart) take branch-free variants: envelopes evaluated piece by piece, 4 samples at a
-//            time, into block buffers, and a search-free extrema scan. The vectorized loops are
-//            compiled for AVX2 and baseline x86-64 (framework/simd.hpp), with the same results.
+//            cache) plus O(number of extrema) for the splines (the two envelopes' rows eliminated
+//            together in two vector lanes, their back substitutions interleaved, one stored value
+//            per knot). Extrema under 9 samples apart on average have their envelopes evaluated
+//            piece by piece, 4 samples at a time, into block buffers, with as many groups per
+//            piece as an average piece needs; sparser ones have the mean removed interval by
+//            interval. Extrema are found without branches on the data: with AVX2, 4 candidates at
+//            a time packed by a lane permutation (under 4 samples apart) or from 64-sample bit
+//            masks (sparser); elsewhere one candidate at a time. The vectorized loops are compiled
+//            for AVX2 and baseline x86-64 (framework/simd.hpp), with the same results.
 //            O(N K) memory for the output plus O(N) workspace allocated once per call.
 //   eemd     I times emd, spread over `threads`; memory O(N K (threads + 1)).
 //   ceemdan  I (K + 1) single-IMF extractions plus one EMD of each member's noise, spread over
