@@ -308,9 +308,9 @@ class ExtremaScanner {
   int direction_ = 0;
 };
 
-void find_extrema(const double* x, Index n, ExtremaSet& out) {
+void find_extrema(const double* x, Index n, bool sparse, ExtremaSet& out) {
   out.max.count = out.min.count = out.zero_crossings = 0;
-  ExtremaScanner(out, false).scan(x, 1, n);
+  ExtremaScanner(out, sparse).scan(x, 1, n);
 }
 
 // Extrema of one kind nearest to one end, nearest first; s = distance from the end sample.
@@ -798,7 +798,7 @@ class Sifter {
     reserve(n);
     current_ = 0;
     std::copy(r, r + n, h);
-    find_extrema(h, n, sets_[current_]);
+    find_extrema(h, n, sparse_residue_, sets_[current_]);
     return sets_[current_].siftable();
   }
 
@@ -911,10 +911,14 @@ class Sifter {
       scanner.scan(h, std::max<Index>(from, 1), to);
     }
     current_ = 1 - current_;
+    sparse_residue_ = (next.max.count + next.min.count) * kSparseSpacing < n;
     return with_change_ratio ? sums[1] / sums[0] : 0.0;
   }
 
   SiftConfig config_;
+  // Whether the last IMF's extrema were sparse: the residue left after it is no denser, so its
+  // extrema search takes the bit-mask scan (a hint for speed only).
+  bool sparse_residue_ = false;
   std::array<ExtremaSet, 2> sets_;
   int current_ = 0;
   SplineScratch upper_scratch_, lower_scratch_;
