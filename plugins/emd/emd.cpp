@@ -106,6 +106,27 @@ void append_strict_extrema(const double* x, Index lo, Index hi, Appender& max, A
   min.count = min_count;
 }
 
+// scan_strict (below) is a head, a vectorized body over the pairs [head, i) and a tail over
+// [i, to). The head checks the pair before `from` (or the first pair) for equality and counts the
+// sign changes of the pairs it covers into `changes`; it returns the body's first pair, or 0 when
+// two neighbours are equal.
+Index strict_scan_head(const double* x, Index from, Index& changes) {
+  const Index i = std::max<Index>(from, 2);
+  if (has_equal_neighbours(x, std::max<Index>(from - 1, 1), i)) return 0;
+  changes = count_sign_changes(x, from, i);
+  return i;
+}
+
+// The tail: false when two neighbours of the pairs [i, to) are equal; otherwise adds `changes`
+// and the tail's sign changes to sign_changes and appends the tail's extrema.
+bool strict_scan_tail(const double* x, Index i, Index to, Index changes, Appender& max, Appender& min,
+                      Index& sign_changes) {
+  if (has_equal_neighbours(x, i, to)) return false;
+  sign_changes += changes + count_sign_changes(x, i, to);
+  append_strict_extrema(x, i - 1, to - 1, max, min);
+  return true;
+}
+
 #ifdef DRIFTLAB_AVX2_INTRINSICS
 // For each 4-bit mask, the 32-bit lane permutation that packs the selected doubles to the front.
 struct CompressPermutations {
@@ -158,9 +179,8 @@ DRIFTLAB_AVX2_TARGET inline GroupExtrema group_extrema(const double* x, Index j)
 // changes are accumulated in vectors.
 DRIFTLAB_AVX2_TARGET bool scan_dense_avx2(const double* x, Index from, Index to, Appender& max,
                                           Appender& min, Index& sign_changes) {
-  Index i = std::max<Index>(from, 2);
-  if (has_equal_neighbours(x, std::max<Index>(from - 1, 1), i)) return false;
-  Index changes = count_sign_changes(x, from, i);
+  Index changes = 0, i = strict_scan_head(x, from, changes);
+  if (i == 0) return false;
   Index max_count = max.count, min_count = min.count;
   const auto append = [&](const GroupExtrema& g, __m256d position) DRIFTLAB_AVX2_TARGET {
     _mm256_storeu_pd(max.pos + max_count, pack(position, g.max));
@@ -181,13 +201,15 @@ DRIFTLAB_AVX2_TARGET bool scan_dense_avx2(const double* x, Index from, Index to,
     append(a, position);
     append(b, _mm256_add_pd(position, four));
   }
-  if (_mm256_movemask_pd(equal) != 0 || has_equal_neighbours(x, i, to)) return false;
+  if (_mm256_movemask_pd(equal) != 0) return false;
   alignas(32) std::array<std::int64_t, 4> lanes;
   _mm256_store_si256(reinterpret_cast<__m256i*>(lanes.data()), lane_changes);
-  sign_changes += changes + lanes[0] + lanes[1] + lanes[2] + lanes[3] + count_sign_changes(x, i, to);
-  max.count = max_count;
-  min.count = min_count;
-  append_strict_extrema(x, i - 1, to - 1, max, min);
+  Appender body_max{max.pos, max.val, max_count}, body_min{min.pos, min.val, min_count};
+  if (!strict_scan_tail(x, i, to, changes + lanes[0] + lanes[1] + lanes[2] + lanes[3], body_max,
+                        body_min, sign_changes))
+    return false;
+  max.count = body_max.count;
+  min.count = body_min.count;
   return true;
 }
 
@@ -199,9 +221,8 @@ DRIFTLAB_AVX2_TARGET bool scan_dense_avx2(const double* x, Index from, Index to,
 DRIFTLAB_AVX2_TARGET bool scan_sparse_avx2(const double* x, Index from, Index to, Appender& max,
                                            Appender& min, Index& sign_changes) {
   constexpr Index kWord = 64;
-  Index i = std::max<Index>(from, 2);
-  if (has_equal_neighbours(x, std::max<Index>(from - 1, 1), i)) return false;
-  Index changes = count_sign_changes(x, from, i);
+  Index changes = 0, i = strict_scan_head(x, from, changes);
+  if (i == 0) return false;
   double *max_pos = max.pos, *max_val = max.val, *min_pos = min.pos, *min_val = min.val;
   Index max_count = max.count, min_count = min.count;
   __m256d equal = _mm256_setzero_pd();
@@ -229,11 +250,11 @@ DRIFTLAB_AVX2_TARGET bool scan_sparse_avx2(const double* x, Index from, Index to
       min_val[min_count++] = c[k];
     }
   }
-  if (_mm256_movemask_pd(equal) != 0 || has_equal_neighbours(x, i, to)) return false;
-  sign_changes += changes + count_sign_changes(x, i, to);
-  max.count = max_count;
-  min.count = min_count;
-  append_strict_extrema(x, i - 1, to - 1, max, min);
+  if (_mm256_movemask_pd(equal) != 0) return false;
+  Appender body_max{max_pos, max_val, max_count}, body_min{min_pos, min_val, min_count};
+  if (!strict_scan_tail(x, i, to, changes, body_max, body_min, sign_changes)) return false;
+  max.count = body_max.count;
+  min.count = body_min.count;
   return true;
 }
 #endif
@@ -253,10 +274,9 @@ bool scan_strict(const double* x, Index from, Index to, bool sparse, Appender& m
                   : scan_dense_avx2(x, from, to, max, min, sign_changes);
   }
 #endif
-  if (has_equal_neighbours(x, std::max<Index>(from - 1, 1), to)) return false;
-  append_strict_extrema(x, std::max<Index>(from - 1, 1), to - 1, max, min);
-  sign_changes += count_sign_changes(x, from, to);
-  return true;
+  Index changes = 0;
+  const Index i = strict_scan_head(x, from, changes);
+  return i != 0 && strict_scan_tail(x, i, to, changes, max, min, sign_changes);
 }
 
 // Interior extrema and zero crossings of a signal scanned block by block, in order. A flat run of
