@@ -456,11 +456,13 @@ double power_of_two_below(double q) {
 // numbers): fills the second derivatives M. The tridiagonal system for M is eliminated with the
 // Thomas recurrence in homogeneous form: pivot_i = Q_i / Q_{i-1}, ratio_i = P_i / Q_i,
 // M'_i = R_i / Q_i with P, Q, R linear recurrences, so no division sits on the dependency chain.
-// (P, Q, R) are rescaled by a power of two every kRescaleEvery rows (Q grows by at most 6n per
-// row, so this holds for n < 2^40). Chords are recomputed rather than stored: a fit touches two
-// arrays besides the knots, which matters because the knots of the first IMFs do not fit in cache.
-// The recurrences are exposed a row at a time so that fit_splines can interleave two independent
-// splines: each row waits on the previous one, two chains in flight overlap.
+// (P, Q, R) are rescaled by a power of two every kRescaleEvery rows (a row grows Q by at most
+// 6 n, or 4 h^3 for a row multiplied through by its spacings in eliminate_pair, so 8 rows stay in
+// range for spacings h < 2^40). Chords are recomputed rather than stored: a fit touches two arrays
+// besides the knots, which matters because the knots of the first IMFs do not fit in cache. The
+// recurrences are exposed a row at a time (and two splines' plain rows together) so that
+// fit_splines can interleave two independent splines: each row waits on the previous one, two
+// chains in flight overlap.
 class SplineFit {
  public:
   // Recurrence state carried from row to row. The callers keep it in local variables: as members
