@@ -204,13 +204,10 @@ DRIFTLAB_AVX2_TARGET bool scan_dense_avx2(const double* x, Index from, Index to,
   if (_mm256_movemask_pd(equal) != 0) return false;
   alignas(32) std::array<std::int64_t, 4> lanes;
   _mm256_store_si256(reinterpret_cast<__m256i*>(lanes.data()), lane_changes);
-  Appender body_max{max.pos, max.val, max_count}, body_min{min.pos, min.val, min_count};
-  if (!strict_scan_tail(x, i, to, changes + lanes[0] + lanes[1] + lanes[2] + lanes[3], body_max,
-                        body_min, sign_changes))
-    return false;
-  max.count = body_max.count;
-  min.count = body_min.count;
-  return true;
+  max.count = max_count;
+  min.count = min_count;
+  return strict_scan_tail(x, i, to, changes + lanes[0] + lanes[1] + lanes[2] + lanes[3], max, min,
+                          sign_changes);
 }
 
 // scan_strict (below) for sparse extrema, 64 candidates c[k] at a time as bit masks: F_k when
@@ -251,21 +248,22 @@ DRIFTLAB_AVX2_TARGET bool scan_sparse_avx2(const double* x, Index from, Index to
     }
   }
   if (_mm256_movemask_pd(equal) != 0) return false;
-  Appender body_max{max_pos, max_val, max_count}, body_min{min_pos, min_val, min_count};
-  if (!strict_scan_tail(x, i, to, changes, body_max, body_min, sign_changes)) return false;
-  max.count = body_max.count;
-  min.count = body_min.count;
-  return true;
+  max.count = max_count;
+  min.count = min_count;
+  return strict_scan_tail(x, i, to, changes, max, min, sign_changes);
 }
 #endif
 
 // Extrema expected further apart than kSparseSpacing samples on average take the bit-mask scan.
 constexpr Index kSparseSpacing = 4;
 
+bool sparse_extrema(const ExtremaSet& e, Index n) { return (e.max.count + e.min.count) * kSparseSpacing < n; }
+
 // For the pairs (x[i - 1], x[i]), i in [from, to), 1 <= from < to: appends the extrema x[i - 1]
 // (i >= 2, as append_strict_extrema) and adds the number of sign-bit changes to sign_changes.
-// Returns false, having changed nothing, when x[i - 1] == x[i] for some i in [max(from - 1, 1), to)
-// (a flat run needs the turn search's bookkeeping).
+// Returns false, leaving sign_changes alone, when x[i - 1] == x[i] for some i in
+// [max(from - 1, 1), to) (a flat run needs the turn search's bookkeeping); the appenders are then
+// to be discarded.
 bool scan_strict(const double* x, Index from, Index to, bool sparse, Appender& max, Appender& min,
                  Index& sign_changes) {
 #ifdef DRIFTLAB_AVX2_INTRINSICS
@@ -424,7 +422,11 @@ constexpr std::array<double, kSmallSteps> small_step_inverses() {
 constexpr std::array<double, kSmallSteps> kSmallStepInverses = small_step_inverses();
 
 // 1/h for a knot spacing h (a whole number of samples); small spacings from a table.
-double inverse_step(double h) { return h < kSmallSteps ? kSmallStepInverses[static_cast<int>(h)] : 1.0 / h; }
+double inverse_step(Index h) {
+  return h < kSmallSteps ? kSmallStepInverses[h] : 1.0 / static_cast<double>(h);
+}
+
+double inverse_step(double h) { return inverse_step(static_cast<Index>(h)); }
 
 // A cubic spline in the second-derivative form: knots (x[k], y[k]) and second derivatives m[k],
 // k < knots. On [x_j, x_{j+1}], with h = x_{j+1} - x_j and dt = t - x_j,
@@ -695,8 +697,7 @@ DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Ind
     const auto right = static_cast<Index>(x[j + 1]);
     const Index next_knot = j >= last_piece ? to : right, end = std::min(next_knot, to);
     const Index step = right - left;
-    const double inverse = step < kSmallSteps ? kSmallStepInverses[step] : 1.0 / static_cast<double>(step);
-    const Cubic g = cubic(static_cast<double>(step), inverse, y[j], y[j + 1], m[j], m[j + 1]);
+    const Cubic g = cubic(static_cast<double>(step), inverse_step(step), y[j], y[j + 1], m[j], m[j + 1]);
     const auto store = [&g](double* o, Group t) { store_cubic(o, t, g.y0, g.b, g.c, g.d); };
     double* o = out + (a - from);
     Group t = static_cast<double>(a - left) + kGroupOffsets;
@@ -739,9 +740,9 @@ DRIFTLAB_SIMD_CLONES void subtract_mean(double* h, const double* upper, const do
 // the pieces from block to block as in evaluate_block. With kWithChangeRatio, adds sum h^2 and
 // sum mean^2 (before the subtraction) to sums[0] and sums[1].
 template <bool kWithChangeRatio>
-[[gnu::always_inline]] inline void subtract_mean_by_intervals(const Spline& upper, const Spline& lower, Index& upper_piece,
-                                Index& lower_piece, double* h, Index from, Index to,
-                                double* sums) {
+[[gnu::always_inline]] inline void subtract_mean_by_intervals(const Spline& upper, const Spline& lower,
+                                                              Index& upper_piece, Index& lower_piece,
+                                                              double* h, Index from, Index to, double* sums) {
   Index ju = upper_piece, jl = lower_piece;
   while (piece_end(upper, ju, to) <= from) ++ju;
   while (piece_end(lower, jl, to) <= from) ++jl;
@@ -909,10 +910,11 @@ class Sifter {
     const bool with_change_ratio = config_.stop_rule == StopRule::CauchySd;
     const ExtremaSet& e = sets_[current_];
     const bool dense = (e.max.count + e.min.count) * kDenseSpacing > n;
-    const Index upper_groups = groups_per_piece(e.max.count, n), lower_groups = groups_per_piece(e.min.count, n);
+    const Index upper_groups = groups_per_piece(e.max.count, n);
+    const Index lower_groups = groups_per_piece(e.min.count, n);
     ExtremaSet& next = sets_[1 - current_];
     next.max.count = next.min.count = next.zero_crossings = 0;
-    ExtremaScanner scanner(next, (e.max.count + e.min.count) * kSparseSpacing < n);
+    ExtremaScanner scanner(next, sparse_extrema(e, n));
     double sums[2] = {0.0, 0.0};  // sum h^2, sum mean^2 (Cauchy SD only)
     Index upper_piece = 0, lower_piece = 0;
     for (Index from = 0; from < n; from += kBlock) {
@@ -933,7 +935,7 @@ class Sifter {
       scanner.scan(h, std::max<Index>(from, 1), to);
     }
     current_ = 1 - current_;
-    sparse_residue_ = (next.max.count + next.min.count) * kSparseSpacing < n;
+    sparse_residue_ = sparse_extrema(next, n);
     return with_change_ratio ? sums[1] / sums[0] : 0.0;
   }
 

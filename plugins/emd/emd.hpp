@@ -96,10 +96,11 @@
 //            per knot). Extrema under 9 samples apart on average have their envelopes evaluated
 //            piece by piece, 4 samples at a time, into block buffers, with as many groups per
 //            piece as an average piece needs; sparser ones have the mean removed interval by
-//            interval. Extrema are found without branches on the data: with AVX2, 4 candidates at
-//            a time packed by a lane permutation (under 4 samples apart) or from 64-sample bit
-//            masks (sparser); elsewhere one candidate at a time. The vectorized loops are compiled
-//            for AVX2 and baseline x86-64 (framework/simd.hpp), with the same results.
+//            interval. Extrema are found with AVX2 4 candidates at a time, packed by a lane
+//            permutation (under 4 samples apart), or from 64-sample bit masks (sparser); without
+//            AVX2 one candidate at a time with no branch on the data; blocks with flat runs search
+//            for each turn. The vectorized loops are compiled for AVX2 and baseline x86-64
+//            (framework/simd.hpp), with the same results.
 //            O(N K) memory for the output plus O(N) workspace allocated once per call.
 //   eemd     I times emd, spread over `threads`; memory O(N K (threads + 1)).
 //   ceemdan  I (K + 1) single-IMF extractions plus one EMD of each member's noise, spread over

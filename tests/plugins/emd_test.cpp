@@ -285,8 +285,8 @@ TEST(Emd, OneSiftMatchesANaiveDenseSplineReferenceForBothEndPolicies) {
 }
 
 // Signals longer than the sifter's 2048-sample blocks, at extrema densities that take each of its
-// paths: white noise (dense), a 2 kHz-ish tone with noise (mid), slow tones (sparse), and
-// quantized noise (flat runs: equal neighbours in the first extrema search).
+// paths: white noise (dense), an 83 Hz tone (12 samples a period) with a little noise (mid), slow
+// tones (sparse), and quantized noise (flat runs: equal neighbours in the first extrema search).
 std::vector<Eigen::VectorXd> multi_block_signals() {
   constexpr Eigen::Index n = 5000;
   const Eigen::VectorXd noise = white_noise(n, 21);
