@@ -14,6 +14,7 @@
 #include <cstring>
 #include <exception>
 #include <initializer_list>
+#include <memory>
 #include <mutex>
 #include <numbers>
 #include <random>
@@ -36,8 +37,27 @@ constexpr int kMaxEndKnots = 2;
 constexpr Index kPad = kMaxEndKnots;
 constexpr Index kWrittenPast = 3;  // extrema slots written past the last extremum by a scan
 
+// Sifting storage, written before it is read: allocated without zeroing, so that pages never
+// written (the capacity is sized for the densest possible extrema) are never touched. reserve()
+// does not keep the contents.
+class Buffer {
+ public:
+  void reserve(std::size_t capacity) {
+    if (capacity <= capacity_) return;
+    values_ = std::make_unique_for_overwrite<double[]>(capacity);
+    capacity_ = capacity;
+  }
+  std::size_t capacity() const { return capacity_; }
+  double* data() const { return values_.get(); }
+  double& operator[](Index i) const { return values_[i]; }
+
+ private:
+  std::unique_ptr<double[]> values_;
+  std::size_t capacity_ = 0;
+};
+
 struct Extrema {
-  std::vector<double> pos, val;  // interior extrema at [kPad, kPad + count), end knots around them
+  Buffer pos, val;  // interior extrema at [kPad, kPad + count), end knots around them
   Index count = 0;
 };
 
@@ -439,11 +459,11 @@ struct Spline {
 };
 
 struct SplineScratch {
-  std::vector<double> second, ratio;
+  Buffer second, ratio;
 
   void reserve(std::size_t capacity) {
-    second.resize(capacity);
-    ratio.resize(capacity);
+    second.reserve(capacity);
+    ratio.reserve(capacity);
   }
 };
 
@@ -853,11 +873,11 @@ class Sifter {
  private:
   void reserve(Index n) {
     const auto capacity = static_cast<std::size_t>(n / 2 + 2 + 2 * kPad + kWrittenPast);
-    if (upper_scratch_.ratio.size() >= capacity) return;
+    if (upper_scratch_.ratio.capacity() >= capacity) return;
     for (ExtremaSet& set : sets_) {
       for (Extrema* e : {&set.max, &set.min}) {
-        e->pos.resize(capacity);
-        e->val.resize(capacity);
+        e->pos.reserve(capacity);
+        e->val.reserve(capacity);
       }
     }
     upper_scratch_.reserve(capacity);
@@ -1103,7 +1123,8 @@ Result eemd(const Eigen::VectorXd& x, const EnsembleConfig& config) {
     EmdWorkspace emd;
     Eigen::VectorXd member;
   };
-  std::vector<Worker> workers(std::max(1u, config.threads), Worker{EmdWorkspace(config.sift), {}});
+  std::vector<Worker> workers;  // built in place: a sifter's buffers are not copied
+  for (unsigned w = 0; w < std::max(1u, config.threads); ++w) workers.push_back({EmdWorkspace(config.sift), {}});
   Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(n, cap);
   std::vector<long> sifts(cap, 0);
   int widest = 0;
@@ -1153,7 +1174,8 @@ Result ceemdan(const Eigen::VectorXd& x, const CeemdanConfig& config) {
     Eigen::VectorXd mode, y, first;
     long sifts = 0;
   };
-  std::vector<Worker> workers(std::max(1u, ens.threads), Worker(ens.sift));
+  std::vector<Worker> workers;  // built in place: a sifter's buffers are not copied
+  for (unsigned w = 0; w < std::max(1u, ens.threads); ++w) workers.emplace_back(ens.sift);
   Sifter residue_check(ens.sift);
   Eigen::VectorXd scratch(n);
 
