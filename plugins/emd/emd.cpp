@@ -21,6 +21,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #ifdef DRIFTLAB_AVX2_INTRINSICS
@@ -467,192 +468,196 @@ struct SplineScratch {
   }
 };
 
-// 2^-e for the binary exponent e of a normal q (|q| in [2^e, 2^(e+1))): an exact rescaling to
-// [1, 2) built from the bits, so no libm call sits in the elimination loop.
-double power_of_two_below(double q) {
-  const std::uint64_t exponent_bits = bits(q) & 0x7ff0000000000000ULL;
-  return std::bit_cast<double>(0x7fe0000000000000ULL - exponent_bits);
-}
+constexpr Index kGroup = 4;
+using Group = double __attribute__((vector_size(kGroup * sizeof(double))));  // GCC/Clang vector
 
-// Not-a-knot cubic spline through (x[k], y[k]), k < n, n >= 2 (x strictly increasing whole
-// numbers): fills the second derivatives M. The tridiagonal system for M is eliminated with the
-// Thomas recurrence in homogeneous form: pivot_i = Q_i / Q_{i-1}, ratio_i = P_i / Q_i,
-// M'_i = R_i / Q_i with P, Q, R linear recurrences, so no division sits on the dependency chain.
-// (P, Q, R) are rescaled by a power of two every kRescaleEvery rows (a row grows Q by at most
-// 6 n, or 4 h^3 for a row multiplied through by its spacings in eliminate_pair, so 8 rows stay in
-// range for spacings h < 2^40). Chords are recomputed rather than stored: a fit touches two arrays
-// besides the knots, which matters because the knots of the first IMFs do not fit in cache. The
-// recurrences are exposed a row at a time (and two splines' plain rows together) so that
-// fit_splines can interleave two independent splines: each row waits on the previous one, two
-// chains in flight overlap.
-class SplineFit {
- public:
-  // Recurrence state carried from row to row. The callers keep it in local variables: as members
-  // it would be stored and reloaded around every store into m and ratio (which the compiler must
-  // assume may alias it), putting memory latency on the dependency chain.
-  struct Elimination {
-    double p = 0.0, q = 1.0, r = 0.0, previous_inverse = 0.0, previous_slope = 0.0;
-  };
+using GroupBits = std::uint64_t __attribute__((vector_size(kGroup * sizeof(std::uint64_t))));
 
-  SplineFit(const double* x, const double* y, Index n, SplineScratch& scratch)
-      : x_(x), y_(y), n_(n), last_(n >= 4 ? n - 2 : 0), m_(scratch.second.data()),
-        ratio_(scratch.ratio.data()) {
-    if (n == 2) {
-      m_[0] = m_[1] = 0.0;
-    } else if (n == 3) {
-      m_[0] = m_[1] = m_[2] = 2.0 * (slope(1) - slope(0)) / (x[2] - x[0]);
-    }
+// One sweep of the homogeneous Thomas elimination through the rows of a spline's tridiagonal
+// system, in either direction, for a scalar or for vector lanes (V = double or Group). A row i
+// with neighbours i-1 and i+1 in the order of the sweep, multiplied through by h_{i-1} h_i (the
+// spacings in sweep order, negative in a backward sweep, which scales the row by -1 and changes
+// nothing), reads sub = h_{i-1}^2 h_i, diag = 2 (h_{i-1} + h_i) h_{i-1} h_i, super = h_i^2 h_{i-1},
+// rhs = 6 (dy_i h_{i-1} - dy_{i-1} h_i). With pivot_i = Q_i / Q_{i-1}, the eliminated row is
+// m_i + ratio_i m_next = second_i, ratio_i = P_i / Q_i, second_i = R_i / Q_i, where P, Q, R are
+// linear recurrences: no division sits on the dependency chain. (P, Q, R) are rescaled by a power
+// of two every kRescaleEvery rows (a row grows Q by at most 4 h^3, or 6 n for the first row, so 8
+// rows stay in range for spacings h < 2^40).
+template <class V>
+struct Sweep {
+  V p, q, r;     // state after the last row
+  V x, y;        // the knot of the next row
+  V before, rise;  // spacing and rise from the last row's knot to it
+
+  // Eliminates the next row, whose far neighbour is (next_x, next_y).
+  void row(V next_x, V next_y, V& ratio, V& second) {
+    const V after = next_x - x, next_rise = next_y - y, both = before * after, sum = before + after;
+    const V sub = before * both, diag = (sum + sum) * both, super = after * both;
+    const V rhs = 6.0 * (next_rise * before - rise * after);
+    const V next_p = super * q, next_q = diag * q - sub * p, next_r = rhs * q - sub * r;
+    const V inverse_q = 1.0 / next_q;
+    ratio = next_p * inverse_q;
+    second = next_r * inverse_q;
+    p = next_p;
+    q = next_q;
+    r = next_r;
+    x = next_x;
+    y = next_y;
+    before = after;
+    rise = next_rise;
   }
 
-  Spline spline() const { return {x_, y_, m_, n_}; }
-
-  // Rows 1..rows() are eliminated, then substituted back from rows() - 1 down to 1 (starting from
-  // m_next = last_second()), then finish(). A spline of 2 or 3 knots is complete on construction
-  // (rows() == 0).
-  Index rows() const { return last_; }
-
-  Elimination start() const {
-    Elimination state;
-    if (last_ > 0) {
-      state.previous_inverse = inverse_step(x_[1] - x_[0]);
-      state.previous_slope = (y_[1] - y_[0]) * state.previous_inverse;
-    }
-    return state;
+  // Lane l of a vector sweep (V = Group), as a scalar sweep, and back.
+  Sweep<double> lane(int l) const { return {p[l], q[l], r[l], x[l], y[l], before[l], rise[l]}; }
+  void set_lane(int l, const Sweep<double>& s) {
+    p[l] = s.p;
+    q[l] = s.q;
+    r[l] = s.r;
+    x[l] = s.x;
+    y[l] = s.y;
+    before[l] = s.before;
+    rise[l] = s.rise;
   }
 
-  void eliminate(Index i, Elimination& state) const {
-    const double before = x_[i] - x_[i - 1], after = x_[i + 1] - x_[i];
-    const double inverse = inverse_step(after), chord_slope = (y_[i + 1] - y_[i]) * inverse;
-    double sub = before, diag = 2.0 * (before + after), super = after;
-    if (i == 1) {
-      diag += before * (before + after) * inverse;
-      super -= before * before * inverse;
-    }
-    if (i == last_) {
-      sub -= after * after * state.previous_inverse;
-      diag += after * (before + after) * state.previous_inverse;
-    }
-    const double p = super * state.q;
-    double q = diag * state.q - sub * state.p;
-    double r = 6.0 * (chord_slope - state.previous_slope) * state.q - sub * state.r;
-    const double inverse_q = 1.0 / q;
-    ratio_[i] = p * inverse_q;
-    m_[i] = r * inverse_q;
-    state.p = p;
-    if (i % kRescaleEvery == 0) {
-      const double scale = power_of_two_below(q);
-      state.p *= scale;
-      q *= scale;
-      r *= scale;
-    }
-    state.q = q;
-    state.r = r;
-    state.previous_inverse = inverse;
-    state.previous_slope = chord_slope;
+  // Divides P, Q, R by 2^e for the binary exponent e of (each lane of) Q: exact, built from the
+  // bits (Q normal), so no libm call sits in the elimination loop.
+  void rescale() {
+    using Bits = std::conditional_t<std::is_same_v<V, double>, std::uint64_t, GroupBits>;
+    const Bits exponent_bits = __builtin_bit_cast(Bits, q) & 0x7ff0000000000000ULL;
+    const V scale = __builtin_bit_cast(V, 0x7fe0000000000000ULL - exponent_bits);
+    p *= scale;
+    q *= scale;
+    r *= scale;
   }
-
-  // Rows [first, end) of two splines at once (2 <= first, end <= both rows(), none of them a
-  // spline's last row), one vector lane each, continuing the states a_state and b_state. Each row
-  // is multiplied through by h_{i-1} h_i, which leaves ratio and M' unchanged and needs no
-  // reciprocal of a spacing: sub = h_{i-1}^2 h_i, diag = 2 (h_{i-1} + h_i) h_{i-1} h_i,
-  // super = h_i^2 h_{i-1}, rhs = 6 (dy_i h_{i-1} - dy_{i-1} h_i).
-  static void eliminate_pair(const SplineFit& a, const SplineFit& b, Index first, Index end,
-                             Elimination& a_state, Elimination& b_state) {
-    using Pair = double __attribute__((vector_size(2 * sizeof(double))));
-    if (first >= end) return;
-    const auto pair = [&](const double* u, const double* v, Index i) { return Pair{u[i], v[i]}; };
-    Pair x = pair(a.x_, b.x_, first), y = pair(a.y_, b.y_, first);
-    Pair before = x - pair(a.x_, b.x_, first - 1), rise = y - pair(a.y_, b.y_, first - 1);
-    Pair p{a_state.p, b_state.p}, q{a_state.q, b_state.q}, r{a_state.r, b_state.r};
-    for (Index i = first; i < end; ++i) {
-      const Pair next_x = pair(a.x_, b.x_, i + 1), next_y = pair(a.y_, b.y_, i + 1);
-      const Pair after = next_x - x, next_rise = next_y - y, both = before * after;
-      const Pair sub = before * both, diag = 2.0 * (before + after) * both, super = after * both;
-      const Pair rhs = 6.0 * (next_rise * before - rise * after);
-      const Pair next_p = super * q;
-      Pair next_q = diag * q - sub * p, next_r = rhs * q - sub * r;
-      const Pair inverse_q = 1.0 / next_q, ratio = next_p * inverse_q, second = next_r * inverse_q;
-      a.ratio_[i] = ratio[0];
-      b.ratio_[i] = ratio[1];
-      a.m_[i] = second[0];
-      b.m_[i] = second[1];
-      p = next_p;
-      if (i % kRescaleEvery == 0) {
-        const Pair scale{power_of_two_below(next_q[0]), power_of_two_below(next_q[1])};
-        p *= scale;
-        next_q *= scale;
-        next_r *= scale;
-      }
-      q = next_q;
-      r = next_r;
-      x = next_x;
-      y = next_y;
-      before = after;
-      rise = next_rise;
-    }
-    for (int lane = 0; lane < 2; ++lane) {
-      Elimination& state = lane == 0 ? a_state : b_state;
-      state.p = p[lane];
-      state.q = q[lane];
-      state.r = r[lane];
-      state.previous_inverse = inverse_step(before[lane]);
-      state.previous_slope = rise[lane] * state.previous_inverse;
-    }
-  }
-
-  double last_second() const { return last_ > 0 ? m_[last_] : 0.0; }
-
-  // m_i -= ratio_i m_{i+1}, with m_{i+1} passed in (and m_i passed out) in a register.
-  void substitute(Index i, double& m_next) const {
-    m_next = m_[i] - ratio_[i] * m_next;
-    m_[i] = m_next;
-  }
-
-  void finish() const {
-    if (last_ == 0) return;
-    const double ha = x_[n_ - 2] - x_[n_ - 3], hb = x_[n_ - 1] - x_[n_ - 2];
-    m_[n_ - 1] = ((ha + hb) * m_[n_ - 2] - hb * m_[n_ - 3]) * inverse_step(ha);
-    const double h0 = x_[1] - x_[0], h1 = x_[2] - x_[1];
-    m_[0] = ((h0 + h1) * m_[1] - h0 * m_[2]) * inverse_step(h1);
-  }
-
- private:
-  static constexpr Index kRescaleEvery = 8;
-
-  double slope(Index j) const { return (y_[j + 1] - y_[j]) * inverse_step(x_[j + 1] - x_[j]); }
-
-  const double *x_, *y_;
-  Index n_, last_;
-  double *m_, *ratio_;
 };
 
-// Fits two independent splines with their recurrences interleaved row by row.
-void fit_splines(const SplineFit& a, const SplineFit& b) {
-  SplineFit::Elimination sa = a.start(), sb = b.start();
-  // Rows 1 .. common - 1 are plain rows of both splines but the first; row `common` is the last
-  // row of one of them.
-  const Index common = std::min(a.rows(), b.rows());
-  Index next = 1;
-  if (common >= 2) {
-    a.eliminate(1, sa);
-    b.eliminate(1, sb);
-    SplineFit::eliminate_pair(a, b, 2, common, sa, sb);
-    next = common;
-  }
-  for (Index i = next; i <= a.rows(); ++i) a.eliminate(i, sa);
-  for (Index i = next; i <= b.rows(); ++i) b.eliminate(i, sb);
-  double ma = a.last_second(), mb = b.last_second();
-  Index ia = a.rows() - 1, ib = b.rows() - 1;
-  for (; ia >= 1 && ib >= 1; --ia, --ib) {
-    a.substitute(ia, ma);
-    b.substitute(ib, mb);
-  }
-  for (; ia >= 1; --ia) a.substitute(ia, ma);
-  for (; ib >= 1; --ib) b.substitute(ib, mb);
-  a.finish();
-  b.finish();
+constexpr Index kRescaleEvery = 8;
+
+// The first row of a sweep, next to an end knot e, with the not-a-knot condition folded in (the
+// end's second derivative eliminated): row knot `at`, far neighbour `next`, all in sweep order.
+Sweep<double> first_row(const double* x, const double* y, Index e, Index at, Index next, double& ratio,
+                        double& second) {
+  const double before = x[at] - x[e], after = x[next] - x[at];
+  const double rise = y[at] - y[e], next_rise = y[next] - y[at];
+  const double diag = 2.0 * (before + after) + before * (before + after) / after;
+  const double super = after - before * before / after;
+  const double rhs = 6.0 * (next_rise / after - rise / before);
+  ratio = super / diag;
+  second = rhs / diag;
+  return {super, diag, rhs, x[next], y[next], after, next_rise};
 }
 
+// One spline's knots (x[k], y[k]), k < n, x strictly increasing whole numbers, and where its fit
+// writes: the second derivatives m (n values) and, for the rows solved one at a time, ratio.
+struct SplineSystem {
+  const double *x, *y;
+  Index n;
+  double *m, *ratio;
+};
+
+// Rows eliminated in vector lanes: ratio and second of lane l at step t in [4 t + l].
+struct LaneScratch {
+  Buffer ratio, second;
+
+  void reserve(std::size_t capacity) {
+    ratio.reserve(2 * capacity);
+    second.reserve(2 * capacity);
+  }
+};
+
+// Not-a-knot cubic splines through two knot sets (n >= 2 each), fitted together: fills m. The
+// tridiagonal system of each spline with n >= 4 (rows 1..R, R = n - 2, for M_1..M_R; M_0 and
+// M_{n-1} eliminated by the not-a-knot conditions) is eliminated from both ends at once, forward
+// from row 1 and backward from row R, the four sweeps of the two splines in the four lanes of a
+// vector (each waits on its previous row, four chains in flight overlap). The sweeps meet at rows
+// meet, meet + 1 (meet = R - common - 1; the rows between the lanes' common reach and meet are
+// swept forward one at a time), whose two eliminated equations give M_meet and M_{meet+1}; the
+// back substitution then runs from there towards both ends, again four chains in four lanes.
+DRIFTLAB_SIMD_CLONES void fit_splines(const SplineSystem& a, const SplineSystem& b, LaneScratch& scratch) {
+  double *lane_ratio = scratch.ratio.data(), *lane_second = scratch.second.data();
+  const std::array<const SplineSystem*, 2> systems{&a, &b};
+  for (const SplineSystem* s : systems) {
+    if (s->n == 2) {
+      s->m[0] = s->m[1] = 0.0;
+    } else if (s->n == 3) {
+      const double left = (s->y[1] - s->y[0]) / (s->x[1] - s->x[0]);
+      const double right = (s->y[2] - s->y[1]) / (s->x[2] - s->x[1]);
+      s->m[0] = s->m[1] = s->m[2] = 2.0 * (right - left) / (s->x[2] - s->x[0]);
+    }
+  }
+  const Index common = a.n >= 4 && b.n >= 4 ? std::min(a.n - 4, b.n - 4) / 2 : 0;
+  std::array<Sweep<double>, 4> sweeps;  // a forward, b forward, a backward, b backward
+  for (int which = 0; which < 2; ++which) {
+    const SplineSystem& s = *systems[which];
+    if (s.n < 4) continue;
+    const Index last = s.n - 2;
+    sweeps[which] = first_row(s.x, s.y, 0, 1, 2, s.ratio[1], s.m[1]);
+    sweeps[2 + which] = first_row(s.x, s.y, last + 1, last, last - 1, s.ratio[last], s.m[last]);
+  }
+  if (common > 0) {
+    Sweep<Group> sweep;
+    for (int l = 0; l < kGroup; ++l) sweep.set_lane(l, sweeps[l]);
+    // Step t eliminates row t + 2 forward (far neighbour t + 3) and row R - 1 - t backward (far
+    // neighbour R - 2 - t = n - 4 - t).
+    const double *ax = a.x, *ay = a.y, *bx = b.x, *by = b.y;
+    for (Index t = 0; t < common; ++t) {
+      const Index f = t + 3, fa = a.n - 4 - t, fb = b.n - 4 - t;
+      Group ratio, second;
+      sweep.row(Group{ax[f], bx[f], ax[fa], bx[fb]}, Group{ay[f], by[f], ay[fa], by[fb]}, ratio, second);
+      std::memcpy(lane_ratio + kGroup * t, &ratio, sizeof ratio);
+      std::memcpy(lane_second + kGroup * t, &second, sizeof second);
+      if (t % kRescaleEvery == 0) sweep.rescale();
+    }
+    for (int l = 0; l < kGroup; ++l) sweeps[l] = sweep.lane(l);
+  }
+  // The rows between the lanes' reach, forward; then the meeting, and the back substitution of
+  // those rows. chain: M of the row next to the one substituted, per lane.
+  Group chain{};
+  for (int which = 0; which < 2; ++which) {
+    const SplineSystem& s = *systems[which];
+    if (s.n < 4) continue;
+    Sweep<double>& forward = sweeps[which];
+    const Sweep<double>& backward = sweeps[2 + which];
+    const Index meet = s.n - 3 - common;
+    for (Index i = common + 2; i <= meet; ++i) {
+      forward.row(s.x[i + 1], s.y[i + 1], s.ratio[i], s.m[i]);
+      forward.rescale();
+    }
+    const double ratio = forward.p / forward.q, second = forward.r / forward.q;
+    const double back_ratio = backward.p / backward.q, back_second = backward.r / backward.q;
+    const double m_meet = (second - ratio * back_second) / (1.0 - ratio * back_ratio);
+    double down = back_second - back_ratio * m_meet;
+    for (Index i = meet; i >= common + 2; --i) {
+      down = s.m[i] - s.ratio[i] * down;
+      s.m[i] = down;
+    }
+    chain[which] = down;
+    chain[2 + which] = m_meet;
+  }
+  double *am = a.m, *bm = b.m, *am_back = a.m + a.n - 3, *bm_back = b.m + b.n - 3;
+  for (Index t = common - 1; t >= 0; --t) {
+    Group ratio, second;
+    std::memcpy(&ratio, lane_ratio + kGroup * t, sizeof ratio);
+    std::memcpy(&second, lane_second + kGroup * t, sizeof second);
+    chain = second - ratio * chain;
+    am[t + 2] = chain[0];
+    bm[t + 2] = chain[1];
+    am_back[-t] = chain[2];
+    bm_back[-t] = chain[3];
+  }
+  for (int which = 0; which < 2; ++which) {
+    const SplineSystem& s = *systems[which];
+    if (s.n < 4) continue;
+    const Index last = s.n - 2;
+    s.m[1] -= s.ratio[1] * chain[which];
+    s.m[last] -= s.ratio[last] * chain[2 + which];
+    const double *x = s.x;
+    const double ha = x[last] - x[last - 1], hb = x[last + 1] - x[last];
+    s.m[last + 1] = ((ha + hb) * s.m[last] - hb * s.m[last - 1]) * inverse_step(ha);
+    const double h0 = x[1] - x[0], h1 = x[2] - x[1];
+    s.m[0] = ((h0 + h1) * s.m[1] - h0 * s.m[2]) * inverse_step(h1);
+  }
+}
 // Values of a spline at the samples t in [from, to) into out[t - from], writing up to
 // groups * kGroup - 1 values past `to`. Piece j serves t in [x_j, x_{j+1}) (the last piece also
 // beyond its right knot); `piece` is the piece serving `from` on entry (or an earlier one) and the
@@ -660,8 +665,6 @@ void fit_splines(const SplineFit& a, const SplineFit& b) {
 // least `groups` groups whatever its length, overwriting the next piece's first samples when it is
 // shorter: the densely packed knots of the first IMFs (pieces of 1 to 8 samples) then cost no
 // mispredicted branch.
-constexpr Index kGroup = 4;
-using Group = double __attribute__((vector_size(kGroup * sizeof(double))));  // GCC/Clang vector
 constexpr Group kGroupOffsets = {0.0, 1.0, 2.0, 3.0};
 
 // First sample past piece j of a spline: its right knot, or `beyond` for the last piece (which
@@ -882,6 +885,7 @@ class Sifter {
     }
     upper_scratch_.reserve(capacity);
     lower_scratch_.reserve(capacity);
+    lane_scratch_.reserve(capacity);
   }
 
   // Adds the end knots around the interior extrema; returns the index of the first knot.
@@ -915,11 +919,13 @@ class Sifter {
     const Index lower_first = add_end_knots(e.min, min_start, min_finish, n);
     const Index upper_knots = max_start.count + e.max.count + max_finish.count;
     const Index lower_knots = min_start.count + e.min.count + min_finish.count;
-    SplineFit upper(&e.max.pos[upper_first], &e.max.val[upper_first], upper_knots, upper_scratch_);
-    SplineFit lower(&e.min.pos[lower_first], &e.min.val[lower_first], lower_knots, lower_scratch_);
-    fit_splines(upper, lower);
-    upper_ = upper.spline();
-    lower_ = lower.spline();
+    const SplineSystem upper{&e.max.pos[upper_first], &e.max.val[upper_first], upper_knots,
+                             upper_scratch_.second.data(), upper_scratch_.ratio.data()};
+    const SplineSystem lower{&e.min.pos[lower_first], &e.min.val[lower_first], lower_knots,
+                             lower_scratch_.second.data(), lower_scratch_.ratio.data()};
+    fit_splines(upper, lower, lane_scratch_);
+    upper_ = {upper.x, upper.y, upper.m, upper.n};
+    lower_ = {lower.x, lower.y, lower.m, lower.n};
   }
 
   // One sift: h <- h - (upper + lower) / 2, then the extrema of the new h, block by block so that
@@ -966,6 +972,7 @@ class Sifter {
   std::array<ExtremaSet, 2> sets_;
   int current_ = 0;
   SplineScratch upper_scratch_, lower_scratch_;
+  LaneScratch lane_scratch_;
   Spline upper_, lower_;  // envelopes of the current candidate (knots in sets_[current_])
   std::vector<double> upper_values_ = std::vector<double>(kBlock + kMaxGroups * kGroup),
                       lower_values_ = std::vector<double>(kBlock + kMaxGroups * kGroup);  // one block each

@@ -18,7 +18,8 @@
 //   3. h <- h - (u + l) / 2.
 // Splines use the NOT-A-KNOT end condition (third derivative continuous across the second and the
 // next-to-last knot, as MATLAB's spline, scipy's CubicSpline and libeemd), solved as a tridiagonal
-// system (Thomas algorithm, diagonally dominant, no pivoting) on the knots only. With 3 knots the
+// system on the knots only (Thomas algorithm, diagonally dominant, no pivoting, eliminated from
+// both ends towards the middle: the twisted factorization). With 3 knots the
 // envelope is the parabola through them, with 2 knots the line.
 // Knots sit at integer sample positions; the envelopes are evaluated on the sample grid, so the
 // sampling rate plays no part in the decomposition.
@@ -91,9 +92,9 @@
 //   emd      O(S K N) time: one sift is one streaming pass over the samples in cache-sized blocks
 //            (envelope evaluation walking the knots in order, mean removal, the Cauchy sums, then
 //            the extrema and zero crossings of the new candidate while the block is still in
-//            cache) plus O(number of extrema) for the splines (the two envelopes' rows eliminated
-//            together in two vector lanes, their back substitutions interleaved, one stored value
-//            per knot). Extrema under 9 samples apart on average have their envelopes evaluated
+//            cache) plus O(number of extrema) for the splines (the two envelopes' systems
+//            eliminated from both ends at once, four sweeps in four vector lanes, and substituted
+//            back the same way; one stored value per knot). Extrema under 9 samples apart on average have their envelopes evaluated
 //            piece by piece, 4 samples at a time, into block buffers, with as many groups per
 //            piece as an average piece needs; sparser ones have the mean removed interval by
 //            interval. Extrema are found with AVX2 4 candidates at a time, packed by a lane
