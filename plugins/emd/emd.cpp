@@ -664,7 +664,9 @@ DRIFTLAB_SIMD_CLONES void fit_splines(const SplineSystem& a, const SplineSystem&
 // one serving `to` on return. Each piece is evaluated kGroup samples at a time (vectorized), at
 // least `groups` groups whatever its length, overwriting the next piece's first samples when it is
 // shorter: the densely packed knots of the first IMFs (pieces of 1 to 8 samples) then cost no
-// mispredicted branch.
+// mispredicted branch. Whole pieces inside the block go four at a time, their cubics formed in
+// vector lanes and evaluated at the same offsets (groups = 2..5; a transpose turns the offsets'
+// vectors into the pieces' groups).
 constexpr Group kGroupOffsets = {0.0, 1.0, 2.0, 3.0};
 
 // First sample past piece j of a spline: its right knot, or `beyond` for the last piece (which
@@ -673,14 +675,17 @@ constexpr Group kGroupOffsets = {0.0, 1.0, 2.0, 3.0};
   return j + 2 >= spline.knots ? beyond : static_cast<Index>(spline.x[j + 1]);
 }
 
-// Piece j of a spline as y0 + dt (b + dt (c + dt d)), dt = t - x_j.
-struct Cubic {
-  double y0, b, c, d;
+// Piece j of a spline as y0 + dt (b + dt (c + dt d)), dt = t - x_j (of one piece, or of one piece
+// per lane).
+template <class V>
+struct CubicOf {
+  V y0, b, c, d;
 };
+using Cubic = CubicOf<double>;
 
 // The piece of length `step` (inverse = 1 / step) between knots (y0, m0) and (y1, m1).
-[[gnu::always_inline]] inline Cubic cubic(double step, double inverse, double y0, double y1, double m0,
-                                          double m1) {
+template <class V>
+[[gnu::always_inline]] inline CubicOf<V> cubic(V step, V inverse, V y0, V y1, V m0, V m1) {
   constexpr double kSixth = 1.0 / 6.0;
   return {y0, (y1 - y0) * inverse - step * (2.0 * m0 + m1) * kSixth, 0.5 * m0, (m1 - m0) * inverse * kSixth};
 }
@@ -690,7 +695,7 @@ struct Cubic {
 [[gnu::always_inline]] inline Cubic piece_of(const Spline& spline, Index j) {
   const double *x = spline.x, *y = spline.y, *m = spline.m;
   const double step = x[j + 1] - x[j];
-  return cubic(step, 1.0 / step, y[j], y[j + 1], m[j], m[j + 1]);
+  return cubic<double>(step, 1.0 / step, y[j], y[j + 1], m[j], m[j + 1]);
 }
 
 // The same cubic in s = t - (x_j + delta).
@@ -706,6 +711,79 @@ struct Cubic {
   std::memcpy(o, &value, sizeof value);
 }
 
+// The 4x4 transpose of rows v[0..3]: lane i of v[k] becomes lane k of v[i].
+[[gnu::always_inline]] inline void transpose(Group* v) {
+  using Mask = long __attribute__((vector_size(kGroup * sizeof(long))));
+  constexpr Mask kEven{0, 4, 2, 6}, kOdd{1, 5, 3, 7}, kLow{0, 1, 4, 5}, kHigh{2, 3, 6, 7};
+  const Group t0 = __builtin_shuffle(v[0], v[1], kEven), t1 = __builtin_shuffle(v[0], v[1], kOdd);
+  const Group t2 = __builtin_shuffle(v[2], v[3], kEven), t3 = __builtin_shuffle(v[2], v[3], kOdd);
+  v[0] = __builtin_shuffle(t0, t2, kLow);
+  v[1] = __builtin_shuffle(t1, t3, kLow);
+  v[2] = __builtin_shuffle(t0, t2, kHigh);
+  v[3] = __builtin_shuffle(t1, t3, kHigh);
+}
+
+// Pieces j .. j+3 of a spline, each starting at its left knot (out[0] is sample `from`), kGroups
+// groups each, in order (a piece's first groups overwrite what the previous one wrote past its
+// end). Their cubics are formed together, one lane each, and evaluated at the same offsets; a
+// piece longer than kGroups groups gets the rest with its last group ending at its right knot.
+template <int kGroups>
+[[gnu::always_inline]] inline void evaluate_four(const Spline& spline, Index j, Index from, double* out) {
+  Group x0, x1, y0, y1, m0, m1;
+  std::memcpy(&x0, spline.x + j, sizeof x0);
+  std::memcpy(&x1, spline.x + j + 1, sizeof x1);
+  std::memcpy(&y0, spline.y + j, sizeof y0);
+  std::memcpy(&y1, spline.y + j + 1, sizeof y1);
+  std::memcpy(&m0, spline.m + j, sizeof m0);
+  std::memcpy(&m1, spline.m + j + 1, sizeof m1);
+  const Group step = x1 - x0;
+  const CubicOf<Group> g = cubic(step, 1.0 / step, y0, y1, m0, m1);
+  Group values[kGroups][kGroup];  // [group][offset in group] across the pieces, then transposed
+  for (int k = 0; k < kGroups; ++k) {
+    for (int i = 0; i < kGroup; ++i) {
+      const double t = static_cast<double>(k * kGroup + i);
+      values[k][i] = g.y0 + t * (g.b + t * (g.c + t * g.d));
+    }
+    transpose(values[k]);
+  }
+  for (int lane = 0; lane < kGroup; ++lane) {
+    double* o = out + (static_cast<Index>(x0[lane]) - from);
+    for (int k = 0; k < kGroups; ++k) std::memcpy(o + k * kGroup, &values[k][lane], sizeof(Group));
+  }
+  for (int lane = 0; lane < kGroup; ++lane) {
+    const auto length = static_cast<Index>(step[lane]);
+    if (length <= kGroups * kGroup) continue;
+    double* o = out + (static_cast<Index>(x0[lane]) - from);
+    const auto store = [&](Index offset) {
+      const Group t = static_cast<double>(offset) + kGroupOffsets;
+      store_cubic(o + offset, t, g.y0[lane], g.b[lane], g.c[lane], g.d[lane]);
+    };
+    for (Index offset = kGroups * kGroup; offset + kGroup < length; offset += kGroup) store(offset);
+    store(length - kGroup);
+  }
+}
+
+// Evaluates whole pieces j, j+1, ... four at a time while they end before `to` (and none is the
+// last piece); returns the first piece not evaluated.
+template <int kGroups>
+[[gnu::always_inline]] inline Index evaluate_whole_pieces(const Spline& spline, Index j, Index from, Index to,
+                                                          double* out) {
+  for (; j + kGroup <= spline.knots - 2 && spline.x[j + kGroup] < static_cast<double>(to); j += kGroup)
+    evaluate_four<kGroups>(spline, j, from, out);
+  return j;
+}
+
+[[gnu::always_inline]] inline Index evaluate_whole_pieces(const Spline& spline, Index j, Index from, Index to,
+                                                          Index groups, double* out) {
+  switch (groups) {
+    case 2: return evaluate_whole_pieces<2>(spline, j, from, to, out);
+    case 3: return evaluate_whole_pieces<3>(spline, j, from, to, out);
+    case 4: return evaluate_whole_pieces<4>(spline, j, from, to, out);
+    case 5: return evaluate_whole_pieces<5>(spline, j, from, to, out);
+    default: return j;
+  }
+}
+
 DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Index from, Index to,
                                          Index groups, double* out) {
   const double *x = spline.x, *y = spline.y, *m = spline.m;
@@ -717,10 +795,15 @@ DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Ind
   // positions are whole numbers, handled as integers.
   auto left = static_cast<Index>(x[j]);
   for (Index a = from;; ++j) {
+    if (a == left) {
+      j = evaluate_whole_pieces(spline, j, from, to, groups, out);
+      a = left = static_cast<Index>(x[j]);
+    }
     const auto right = static_cast<Index>(x[j + 1]);
     const Index next_knot = j >= last_piece ? to : right, end = std::min(next_knot, to);
     const Index step = right - left;
-    const Cubic g = cubic(static_cast<double>(step), inverse_step(step), y[j], y[j + 1], m[j], m[j + 1]);
+    const Cubic g =
+        cubic<double>(static_cast<double>(step), inverse_step(step), y[j], y[j + 1], m[j], m[j + 1]);
     const auto store = [&g](double* o, Group t) { store_cubic(o, t, g.y0, g.b, g.c, g.d); };
     double* o = out + (a - from);
     Group t = static_cast<double>(a - left) + kGroupOffsets;
@@ -1131,7 +1214,8 @@ Result eemd(const Eigen::VectorXd& x, const EnsembleConfig& config) {
     Eigen::VectorXd member;
   };
   std::vector<Worker> workers;  // built in place: a sifter's buffers are not copied
-  for (unsigned w = 0; w < std::max(1u, config.threads); ++w) workers.push_back({EmdWorkspace(config.sift), {}});
+  for (unsigned w = 0; w < std::max(1u, config.threads); ++w)
+    workers.push_back({EmdWorkspace(config.sift), {}});
   Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(n, cap);
   std::vector<long> sifts(cap, 0);
   int widest = 0;

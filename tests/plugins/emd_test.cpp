@@ -309,12 +309,17 @@ TEST(Emd, OneSiftMatchesTheNaiveReferenceForEnvelopesOfFewKnots) {
 
 // Signals longer than the sifter's 2048-sample blocks, at extrema densities that take each of its
 // paths: white noise (dense), an 83 Hz tone (12 samples a period) with a little noise (mid), slow
-// tones (sparse), and quantized noise (flat runs: equal neighbours in the first extrema search).
+// tones (sparse), quantized noise (flat runs: equal neighbours in the first extrema search), and
+// noise with quiet stretches (dense on average, with envelope pieces of ~50 samples).
 std::vector<Eigen::VectorXd> multi_block_signals() {
   constexpr Eigen::Index n = 5000;
   const Eigen::VectorXd noise = white_noise(n, 21);
+  Eigen::VectorXd gaps = noise;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (i % 300 >= 250) gaps[i] = 0.01 * static_cast<double>(i % 300 - 250);
+  }
   return {noise, tone(n, 83.0, 0.4) + 0.05 * white_noise(n, 22), tone(n, 9.0, 0.2) + tone(n, 2.0, 1.0, 0.5),
-          (2.0 * noise).array().round().matrix()};
+          (2.0 * noise).array().round().matrix(), gaps};
 }
 
 // Extrema by definition and sign-bit changes between neighbours.
