@@ -746,8 +746,10 @@ template <int kGroups>
     }
     transpose(values[k]);
   }
+#pragma GCC unroll 4
   for (int lane = 0; lane < kGroup; ++lane) {
     double* o = out + (static_cast<Index>(x0[lane]) - from);
+#pragma GCC unroll 8
     for (int k = 0; k < kGroups; ++k) std::memcpy(o + k * kGroup, &values[k][lane], sizeof(Group));
   }
   for (int lane = 0; lane < kGroup; ++lane) {
