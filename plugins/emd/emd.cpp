@@ -481,8 +481,8 @@ using GroupBits = std::uint64_t __attribute__((vector_size(kGroup * sizeof(std::
 // rhs = 6 (dy_i h_{i-1} - dy_{i-1} h_i). With pivot_i = Q_i / Q_{i-1}, the eliminated row is
 // m_i + ratio_i m_next = second_i, ratio_i = P_i / Q_i, second_i = R_i / Q_i, where P, Q, R are
 // linear recurrences: no division sits on the dependency chain. (P, Q, R) are rescaled by a power
-// of two every kRescaleEvery rows (a row grows Q by at most 4 h^3, or 6 n for the first row, so 8
-// rows stay in range for spacings h < 2^40).
+// of two every kRescaleEvery rows (a plain row grows |Q| by at most 4 h^3, the first row, which is
+// not multiplied through, by O(h^2), so 8 rows stay in range for spacings h < 2^40).
 template <class V>
 struct Sweep {
   V p, q, r;     // state after the last row

@@ -94,10 +94,11 @@
 //            the extrema and zero crossings of the new candidate while the block is still in
 //            cache) plus O(number of extrema) for the splines (the two envelopes' systems
 //            eliminated from both ends at once, four sweeps in four vector lanes, and substituted
-//            back the same way; one stored value per knot). Extrema under 9 samples apart on average have their envelopes evaluated
-//            piece by piece, 4 samples at a time, into block buffers, with as many groups per
-//            piece as an average piece needs; sparser ones have the mean removed interval by
-//            interval. Extrema are found with AVX2 4 candidates at a time, packed by a lane
+//            back the same way; one stored value per knot). Extrema under 9 samples apart on
+//            average have their envelopes evaluated piece by piece, four pieces at a time in
+//            vector lanes, into block buffers, each piece 4 samples at a time with as many groups
+//            as a piece 1.25 times the average needs; sparser ones have the mean removed interval
+//            by interval. Extrema are found with AVX2 4 candidates at a time, packed by a lane
 //            permutation (under 4 samples apart), or from 64-sample bit masks (sparser); without
 //            AVX2 one candidate at a time with no branch on the data; blocks with flat runs search
 //            for each turn. The vectorized loops are compiled for AVX2 and baseline x86-64
