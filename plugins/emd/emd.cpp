@@ -651,13 +651,14 @@ DRIFTLAB_SIMD_CLONES void fit_splines(const SplineSystem& a, const SplineSystem&
     const Index last = s.n - 2;
     s.m[1] -= s.ratio[1] * chain[which];
     s.m[last] -= s.ratio[last] * chain[2 + which];
-    const double *x = s.x;
+    const double* x = s.x;
     const double ha = x[last] - x[last - 1], hb = x[last + 1] - x[last];
     s.m[last + 1] = ((ha + hb) * s.m[last] - hb * s.m[last - 1]) * inverse_step(ha);
     const double h0 = x[1] - x[0], h1 = x[2] - x[1];
     s.m[0] = ((h0 + h1) * s.m[1] - h0 * s.m[2]) * inverse_step(h1);
   }
 }
+
 // Values of a spline at the samples t in [from, to) into out[t - from], writing up to
 // groups * kGroup - 1 values past `to`. Piece j serves t in [x_j, x_{j+1}) (the last piece also
 // beyond its right knot); `piece` is the piece serving `from` on entry (or an earlier one) and the
