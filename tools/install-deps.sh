@@ -9,6 +9,7 @@ packages=(
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   zlib1g-dev python3-numpy
+  gnuplot-nox
 )
 if [[ "${DRIFTLAB_WITH_MRPT:-OFF}" == "ON" ]]; then
   packages+=(libmrpt-dev)

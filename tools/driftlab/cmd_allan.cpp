@@ -20,7 +20,7 @@
 #include "models/allan/noise_fit.hpp"
 #include "models/allan/tau_grid.hpp"
 #include "tools/driftlab/cli.hpp"
-#include "tools/driftlab/svg_plot.hpp"
+#include "tools/driftlab/plot.hpp"
 
 namespace driftlab::cli {
 namespace {

@@ -25,7 +25,7 @@
 #include "framework/params_io.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
-#include "tools/driftlab/svg_plot.hpp"
+#include "tools/driftlab/plot.hpp"
 
 namespace driftlab::cli {
 namespace {

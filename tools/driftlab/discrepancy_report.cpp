@@ -5,7 +5,7 @@
 #include <sstream>
 
 #include "framework/units.hpp"
-#include "tools/driftlab/svg_plot.hpp"
+#include "tools/driftlab/plot.hpp"
 
 namespace driftlab::cli {
 namespace {

@@ -1,0 +1,392 @@
+#include "tools/driftlab/plot.hpp"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <map>
+
+extern char** environ;
+
+namespace driftlab::cli {
+namespace {
+
+constexpr std::array<const char*, 8> kColors = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e",
+                                                "#9467bd", "#8c564b", "#e377c2", "#17becf"};
+constexpr std::size_t kReduceLinesAbove = 4;    // points per pixel column before lines are reduced
+constexpr std::size_t kReduceMarkersAbove = 2000;
+constexpr int kMarginPx = 110;                  // left + right margins of a panel, for pixel columns
+
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
+// A gnuplot single-quoted string: only '' is special; line breaks would end the command.
+std::string quoted(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) {
+    if (c == '\'') out += "''";
+    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) out += ' ';
+    else out += c;
+  }
+  return out + "'";
+}
+
+bool usable(double v, bool log) { return std::isfinite(v) && (!log || v > 0); }
+
+struct Range {
+  double lo = std::numeric_limits<double>::infinity(), hi = -std::numeric_limits<double>::infinity();
+  bool log = false;
+  void add(double v) {
+    if (!usable(v, log)) return;
+    const double u = log ? std::log10(v) : v;
+    lo = std::min(lo, u), hi = std::max(hi, u);
+  }
+  bool empty() const { return !(hi >= lo); }
+  // Index of the cell of v among `cells` equal cells of the range.
+  long cell(double v, long cells) const {
+    const double u = log ? std::log10(v) : v;
+    if (!(hi > lo)) return 0;
+    return std::clamp(static_cast<long>((u - lo) / (hi - lo) * static_cast<double>(cells)), 0L, cells - 1);
+  }
+};
+
+struct Point {
+  double x, y, low, high, z;
+};
+
+// The series' points in order; a NaN x marks a break in the line.
+std::vector<Point> points_of(const PlotSeries& s, bool log_x, bool log_y) {
+  const std::size_t n = std::min(s.x.size(), s.y.size());
+  const bool interval = s.y_low.size() == n && s.y_high.size() == n && n > 0;
+  const bool coloured = s.z.size() == n && n > 0;
+  std::vector<Point> out;
+  out.reserve(n);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!usable(s.x[i], log_x) || !usable(s.y[i], log_y) || (coloured && !std::isfinite(s.z[i]))) {
+      if (!out.empty() && !std::isnan(out.back().x)) out.push_back({nan, nan, nan, nan, nan});
+      continue;
+    }
+    Point p{s.x[i], s.y[i], s.y[i], s.y[i], coloured ? s.z[i] : 0.0};
+    if (interval) {
+      p.low = usable(s.y_low[i], log_y) ? s.y_low[i] : s.y[i];
+      p.high = usable(s.y_high[i], log_y) ? s.y_high[i] : s.y[i];
+    }
+    out.push_back(p);
+  }
+  while (!out.empty() && std::isnan(out.back().x)) out.pop_back();
+  return out;
+}
+
+// Lines: each run of consecutive points in one pixel column becomes its min and max, in order.
+std::vector<Point> reduce_line(const std::vector<Point>& pts, const Range& xr, long columns) {
+  std::vector<Point> out;
+  std::size_t i = 0;
+  while (i < pts.size()) {
+    if (std::isnan(pts[i].x)) {
+      out.push_back(pts[i++]);
+      continue;
+    }
+    const long c = xr.cell(pts[i].x, columns);
+    std::size_t lo = i, hi = i, j = i;
+    while (j < pts.size() && !std::isnan(pts[j].x) && xr.cell(pts[j].x, columns) == c) {
+      if (pts[j].y < pts[lo].y) lo = j;
+      if (pts[j].y > pts[hi].y) hi = j;
+      ++j;
+    }
+    out.push_back(pts[std::min(lo, hi)]);
+    if (lo != hi) out.push_back(pts[std::max(lo, hi)]);
+    i = j;
+  }
+  return out;
+}
+
+// Markers: the first point that lands on each pixel.
+std::vector<Point> reduce_markers(const std::vector<Point>& pts, const Range& xr, const Range& yr, long columns,
+                                  long rows) {
+  std::vector<bool> seen(static_cast<std::size_t>(columns * rows), false);
+  std::vector<Point> out;
+  for (const auto& p : pts) {
+    if (std::isnan(p.x)) continue;
+    const auto k = static_cast<std::size_t>(xr.cell(p.x, columns) * rows + yr.cell(p.y, rows));
+    if (seen[k]) continue;
+    seen[k] = true;
+    out.push_back(p);
+  }
+  return out;
+}
+
+std::string color_of(const PlotSeries& s, std::size_t index) {
+  return s.color.empty() ? kColors[index % kColors.size()] : s.color;
+}
+
+const char* legend_position(PlotPanel::Legend legend) {
+  switch (legend) {
+    case PlotPanel::Legend::TopRight: return "top right";
+    case PlotPanel::Legend::TopLeft: return "top left";
+    case PlotPanel::Legend::BottomRight: return "bottom right";
+    case PlotPanel::Legend::BottomLeft: return "bottom left";
+    case PlotPanel::Legend::None: break;
+  }
+  return "";
+}
+
+void panel_script(std::string& script, const PlotPanel& panel, std::size_t index, long columns, long rows,
+                  bool any_right_axis) {
+  Range xr, yr, y2r;
+  xr.log = panel.log_x, yr.log = panel.log_y, y2r.log = panel.log_y2;
+  std::vector<std::vector<Point>> data;
+  for (const auto& s : panel.series) {
+    auto pts = points_of(s, panel.log_x, s.right_axis ? panel.log_y2 : panel.log_y);
+    for (const auto& p : pts) {
+      xr.add(p.x);
+      (s.right_axis ? y2r : yr).add(p.low), (s.right_axis ? y2r : yr).add(p.high);
+    }
+    data.push_back(std::move(pts));
+  }
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    const auto& s = panel.series[k];
+    if (!s.y_low.empty() || !s.y_high.empty()) continue;
+    if (s.style == PlotSeries::Style::Markers) {
+      if (data[k].size() > kReduceMarkersAbove)
+        data[k] = reduce_markers(data[k], xr, s.right_axis ? y2r : yr, columns, rows);
+    } else if (data[k].size() > kReduceLinesAbove * static_cast<std::size_t>(columns)) {
+      data[k] = reduce_line(data[k], xr, columns);
+    }
+  }
+
+  const std::string tag = "$p" + std::to_string(index) + "s";
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    script += tag + std::to_string(k) + " << EOD\n";
+    for (const auto& p : data[k]) {
+      if (std::isnan(p.x)) {
+        script += "\n";
+        continue;
+      }
+      script += number(p.x) + " " + number(p.y) + " " + number(p.low) + " " + number(p.high) + " " + number(p.z) + "\n";
+    }
+    script += "EOD\n";
+  }
+
+  script += "reset\nset encoding utf8\nset lmargin 12\nset bmargin 3.5\nset tmargin 2.2\n";
+  script += any_right_axis ? "set rmargin 12\n" : "set rmargin 4\n";
+  script += "set grid xtics ytics lc rgb '#dddddd' lw 1 dt solid\nset border lc rgb '#444444'\n";
+  script += "set title " + quoted(panel.title) + " noenhanced\n";
+  script += "set xlabel " + quoted(panel.x_label) + " noenhanced offset 0,0.3\n";
+  script += "set ylabel " + quoted(panel.y_label) + " noenhanced\n";
+  script += "set format x '%g'\nset format y '%g'\nset xtics nomirror out\nset ytics out\n";
+  if (panel.log_x) script += "set logscale x\nset format x '10^{%L}'\nset mxtics 10\n";
+  if (panel.log_y) script += "set logscale y\nset format y '10^{%L}'\nset mytics 10\n";
+  const bool right = std::any_of(panel.series.begin(), panel.series.end(), [](const auto& s) { return s.right_axis; });
+  if (right) {
+    script += "set ytics nomirror\nset y2tics out\nset format y2 '%g'\nset y2label " + quoted(panel.y2_label) +
+              " noenhanced\n";
+    if (panel.log_y2) script += "set logscale y2\nset format y2 '10^{%L}'\n";
+  }
+  const bool coloured = std::any_of(panel.series.begin(), panel.series.end(),
+                                    [](const auto& s) { return !s.z.empty() && s.z.size() == s.y.size(); });
+  if (coloured)
+    script += "set palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', 0.75 '#5ec962', 1 '#fde725')\n"
+              "set cblabel " + quoted(panel.z_label) + " noenhanced\nset format cb '%g'\n";
+  else
+    script += "unset colorbox\n";
+  if (panel.legend == PlotPanel::Legend::None) script += "unset key\n";
+  else
+    script += std::string("set key inside ") + legend_position(panel.legend) +
+              " opaque box lc rgb '#bbbbbb' samplen 2.5 spacing 1.1 font ',10'\n";
+  if (!panel.log_x) script += "set autoscale xfix\n";
+
+  std::vector<std::string> bands, items;
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    const auto& s = panel.series[k];
+    if (data[k].empty()) continue;
+    const std::string src = tag + std::to_string(k);
+    const std::string axes = s.right_axis ? " axes x1y2" : "";
+    const std::string lc = " lc rgb '" + color_of(s, k) + "'";
+    const std::string title = s.label.empty() ? " notitle" : " title " + quoted(s.label) + " noenhanced";
+    const bool interval = !s.y_low.empty() && s.y_low.size() == s.y.size() && s.y_high.size() == s.y.size();
+    const bool band = interval && s.interval == PlotSeries::Interval::Band;
+    if (band)
+      bands.push_back(src + " using 1:3:4" + axes + " with filledcurves fs transparent solid 0.18 noborder" + lc +
+                      " notitle");
+    const bool z = s.z.size() == s.y.size() && !s.z.empty();
+    std::string item;
+    if (s.style == PlotSeries::Style::Markers) {
+      if (interval && !band) item = src + " using 1:2:3:4" + axes + " with yerrorbars pt 7 ps 0.45 lw 1" + lc;
+      else if (z) item = src + " using 1:2:5" + axes + " with points pt 7 ps 0.35 lc palette";
+      else item = src + " using 1:2" + axes + " with points pt 7 ps 0.45" + lc;
+    } else {
+      const std::string dash = s.style == PlotSeries::Style::Dashed ? " dt (6,4)" : "";
+      if (interval && !band)
+        items.push_back(src + " using 1:2:3:4" + axes + " with yerrorbars pt 7 ps 0.3 lw 1" + lc + " notitle");
+      item = src + " using 1:2" + axes + " with lines lw 1.3" + dash + lc;
+    }
+    items.push_back(item + title);
+  }
+  if (bands.empty() && items.empty()) {
+    script += "set xrange [1:10]\nset yrange [1:10]\nset label 1 'no data' at graph 0.5,0.5 center\n"
+              "plot NaN notitle\n";
+    return;
+  }
+  std::string plot = "plot ";
+  bool first = true;
+  for (const auto* list : {&bands, &items})
+    for (const auto& i : *list) {
+      plot += (first ? "" : ", \\\n  ") + i;
+      first = false;
+    }
+  script += plot + "\n";
+}
+
+std::string gnuplot_executable() {
+  const char* env = std::getenv("DRIFTLAB_GNUPLOT");
+  return env != nullptr && *env != '\0' ? env : "gnuplot";
+}
+
+struct Pipe {
+  int fd[2] = {-1, -1};
+  Pipe() {
+    if (::pipe2(fd, O_CLOEXEC) != 0) throw PlotError(std::string("cannot create a pipe for gnuplot: ") + std::strerror(errno));
+  }
+  ~Pipe() {
+    close_end(0);
+    close_end(1);
+  }
+  void close_end(int e) {
+    if (fd[e] >= 0) ::close(fd[e]);
+    fd[e] = -1;
+  }
+  Pipe(const Pipe&) = delete;
+  Pipe& operator=(const Pipe&) = delete;
+};
+
+// Blocks SIGPIPE in this thread while it writes to gnuplot, so a gnuplot that dies early shows up
+// as EPIPE; a SIGPIPE raised meanwhile is consumed before the mask is restored.
+class SigpipeBlock {
+ public:
+  SigpipeBlock() {
+    sigemptyset(&pipe_);
+    sigaddset(&pipe_, SIGPIPE);
+    pthread_sigmask(SIG_BLOCK, &pipe_, &old_);
+  }
+  ~SigpipeBlock() {
+    const timespec zero{0, 0};
+    while (sigtimedwait(&pipe_, nullptr, &zero) > 0) {
+    }
+    pthread_sigmask(SIG_SETMASK, &old_, nullptr);
+  }
+  SigpipeBlock(const SigpipeBlock&) = delete;
+  SigpipeBlock& operator=(const SigpipeBlock&) = delete;
+
+ private:
+  sigset_t pipe_, old_;
+};
+
+std::string run_gnuplot(const std::string& script) {
+  const std::string exe = gnuplot_executable();
+  Pipe in, out, err;
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, in.fd[0], 0);
+  posix_spawn_file_actions_adddup2(&actions, out.fd[1], 1);
+  posix_spawn_file_actions_adddup2(&actions, err.fd[1], 2);
+  std::vector<std::string> env_text = {"LC_ALL=C"};
+  for (char** e = environ; *e != nullptr; ++e)
+    if (std::strncmp(*e, "LC_ALL=", 7) != 0 && std::strncmp(*e, "GNUPLOT_", 8) != 0) env_text.emplace_back(*e);
+  std::vector<char*> env;
+  for (auto& e : env_text) env.push_back(e.data());
+  env.push_back(nullptr);
+  std::string arg0 = exe, arg1 = "--default-settings";
+  char* argv[] = {arg0.data(), arg1.data(), nullptr};
+  pid_t pid = 0;
+  const int spawned = posix_spawnp(&pid, exe.c_str(), &actions, nullptr, argv, env.data());
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0)
+    throw PlotError("cannot run gnuplot '" + exe + "': " + std::strerror(spawned) +
+                    " (install Debian's gnuplot-nox, see tools/install-deps.sh, or set DRIFTLAB_GNUPLOT)");
+  in.close_end(0), out.close_end(1), err.close_end(1);
+
+  std::string svg, messages;
+  {
+    SigpipeBlock block;
+    std::size_t written = 0;
+    std::array<char, 65536> buf;
+    while (out.fd[0] >= 0 || err.fd[0] >= 0) {
+      std::array<pollfd, 3> fds{};
+      nfds_t n = 0;
+      const auto watch = [&](int fd, short events) {
+        if (fd >= 0) fds[n++] = {fd, events, 0};
+      };
+      watch(out.fd[0], POLLIN), watch(err.fd[0], POLLIN), watch(in.fd[1], POLLOUT);
+      if (::poll(fds.data(), n, -1) < 0) {
+        if (errno == EINTR) continue;
+        break;
+      }
+      for (nfds_t i = 0; i < n; ++i) {
+        if (fds[i].revents == 0) continue;
+        const int fd = fds[i].fd;
+        if (fd == in.fd[1]) {
+          const ssize_t w = ::write(fd, script.data() + written, std::min<std::size_t>(script.size() - written, buf.size()));
+          if (w > 0) written += static_cast<std::size_t>(w);
+          if (w < 0 && errno != EINTR && errno != EAGAIN) in.close_end(1);
+          if (written == script.size()) in.close_end(1);
+          continue;
+        }
+        const ssize_t r = ::read(fd, buf.data(), buf.size());
+        if (r > 0) (fd == out.fd[0] ? svg : messages).append(buf.data(), static_cast<std::size_t>(r));
+        else if (r == 0 || errno != EINTR) (fd == out.fd[0] ? out : err).close_end(0);
+      }
+    }
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (messages.size() > 2000) messages.resize(2000);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw PlotError("gnuplot '" + exe + "' failed (" +
+                    (WIFEXITED(status) ? "exit code " + std::to_string(WEXITSTATUS(status))
+                                       : "signal " + std::to_string(WTERMSIG(status))) +
+                    "): " + messages);
+  if (svg.find("</svg>") == std::string::npos) throw PlotError("gnuplot '" + exe + "' wrote no SVG: " + messages);
+  return svg;
+}
+
+}  // namespace
+
+std::string render_svg(const Figure& figure) {
+  const long columns = std::max(1, figure.columns);
+  const long rows = std::max<long>(1, (static_cast<long>(figure.panels.size()) + columns - 1) / columns);
+  const long title_px = figure.title.empty() ? 0 : 30;
+  const long height = rows * figure.panel_height + title_px;
+  const long pixel_columns = std::max(50L, figure.width / columns - kMarginPx);
+  const long pixel_rows = std::max(50L, static_cast<long>(figure.panel_height) - 70);
+  const bool any_right = std::any_of(figure.panels.begin(), figure.panels.end(), [](const PlotPanel& p) {
+    return std::any_of(p.series.begin(), p.series.end(), [](const PlotSeries& s) { return s.right_axis; });
+  });
+
+  std::string script = "set terminal svg size " + std::to_string(figure.width) + "," + std::to_string(height) +
+                       " dynamic enhanced font 'sans,11'\nset output\nset encoding utf8\n";
+  script += "set multiplot layout " + std::to_string(rows) + "," + std::to_string(columns) + " rowsfirst";
+  if (!figure.title.empty()) script += " title " + quoted(figure.title) + " noenhanced font ',13'";
+  script += "\n";
+  for (std::size_t p = 0; p < figure.panels.size(); ++p)
+    panel_script(script, figure.panels[p], p, pixel_columns, pixel_rows, any_right);
+  script += "unset multiplot\n";
+  return run_gnuplot(script);
+}
+
+}  // namespace driftlab::cli

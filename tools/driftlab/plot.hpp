@@ -1,0 +1,67 @@
+// Figures for command outputs (--plot) and HTML reports, drawn by gnuplot (Debian `gnuplot-nox`)
+// run as a child process: the script and the data go to its stdin, the SVG comes from its stdout;
+// no shell, no temporary files. Same figure in, same SVG out.
+//
+// A Figure is a grid of panels (`columns` wide, filled row by row; one column = stacked panels
+// sharing their left edge). A panel holds series drawn as lines, dashed lines or markers, with
+// optional intervals (vertical error bars or a shaded band), optionally against a second y axis
+// on the right, optionally coloured point by point by a third variable (with a colour bar).
+//
+// Contracts:
+// - Every text (titles, labels, legend entries) is shown literally: no gnuplot enhanced-text
+//   markup, no XML; write units in plain text or UTF-8 ("rate (°/h)", "tau (s)", "√Hz").
+// - Non-finite points, and points <= 0 on a log axis, are left out (a line breaks there); on a log
+//   y axis an interval's lower end <= 0 is drawn from the point itself.
+// - Long series are reduced before they reach gnuplot: lines to the min and max of each pixel
+//   column (in their original order), markers to one point per pixel. Series with intervals are
+//   drawn as given.
+// - The gnuplot executable is $DRIFTLAB_GNUPLOT when set and non-empty, else `gnuplot` on PATH.
+//   A missing executable, a failing run or an empty result throws PlotError.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "framework/error.hpp"
+
+namespace driftlab::cli {
+
+// gnuplot is missing, failed (message carries its diagnostics) or produced no SVG.
+class PlotError : public Error {
+ public:
+  using Error::Error;
+};
+
+struct PlotSeries {
+  std::string label;                  // legend entry; empty = not in the legend
+  std::vector<double> x, y;
+  std::vector<double> y_low, y_high;  // optional interval per point (same length as y)
+  enum class Style { Line, Dashed, Markers } style = Style::Line;
+  enum class Interval { Bars, Band } interval = Interval::Bars;  // how y_low/y_high are drawn
+  bool right_axis = false;            // drawn against the panel's second y axis
+  std::vector<double> z;              // optional colour value per point (same length as y; Markers)
+  std::string color;                  // "#rrggbb"; empty = the palette colour of its index
+};
+
+struct PlotPanel {
+  std::string title, x_label, y_label;  // labels carry units, e.g. "tau (s)"
+  bool log_x = false, log_y = false;
+  std::vector<PlotSeries> series;
+  std::string y2_label;                 // right axis, used by series with right_axis
+  bool log_y2 = false;
+  std::string z_label;                  // colour bar of the series with z values
+  enum class Legend { TopRight, TopLeft, BottomRight, BottomLeft, None } legend = Legend::TopRight;
+};
+
+struct Figure {
+  std::vector<PlotPanel> panels;  // row by row
+  int width = 900;                // px, whole figure
+  int panel_height = 260;         // px, each row
+  int columns = 1;
+  std::string title;              // above all panels; may be empty
+};
+
+// The figure as a standalone SVG document (viewBox width x rows * panel_height).
+std::string render_svg(const Figure& figure);
+
+}  // namespace driftlab::cli
