@@ -8,6 +8,7 @@ void register_sample_entropy_plugins(Registry&);
 void register_kalman_plugins(Registry&);
 void register_emd_plugins(Registry&);
 void register_effect_plugins(Registry&);
+void register_vmd_plugins(Registry&);
 
 void register_builtin_plugins(Registry& registry) {
   register_ga_plugins(registry);
@@ -16,6 +17,7 @@ void register_builtin_plugins(Registry& registry) {
   register_kalman_plugins(registry);
   register_emd_plugins(registry);
   register_effect_plugins(registry);
+  register_vmd_plugins(registry);
 }
 
 }  // namespace driftlab

@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   zlib1g-dev python3-numpy
   gnuplot-nox
+  libfftw3-dev libgsl-dev
 )
 if [[ "${DRIFTLAB_WITH_MRPT:-OFF}" == "ON" ]]; then
   packages+=(libmrpt-dev)

@@ -30,7 +30,7 @@ TEST(BuiltinPlugins, AreExactlyTheDocumentedSet) {
   register_builtin_plugins(registry);
   EXPECT_THAT(names(registry),
               ::testing::ElementsAre("classifier/sample_entropy", "decomposition/ceemdan", "decomposition/eemd",
-                                     "decomposition/emd", "effect/hysteresis", "effect/mode_split_drift",
+                                     "decomposition/emd", "decomposition/vmd", "effect/hysteresis", "effect/mode_split_drift",
                                      "effect/periodic_disturbance", "effect/scale_factor_temperature",
                                      "effect/temperature_rate", "effect/thermal_lag", "effect/warmup_transient",
                                      "filter/kalman", "optimizer/ga", "regressor/rbf"));
