@@ -17,7 +17,8 @@ double quantize(double value, double resolution) {
   return resolution > 0.0 ? std::round(value / resolution) * resolution : value;
 }
 
-// Reads {start_<unit>, segments: [...]} with values in `unit_suffix` (c or dps) times `scale`.
+}  // namespace
+
 Profile read_profile_section(YamlFields& y, const YAML::Node& node, const std::string& path,
                              const std::string& unit_suffix, double scale, double fallback_start) {
   const std::string start_key = "start_" + unit_suffix;
@@ -61,8 +62,6 @@ Profile read_profile_section(YamlFields& y, const YAML::Node& node, const std::s
   }
   return profile;
 }
-
-}  // namespace
 
 Profile::Profile(double start, std::vector<ProfileSegment> segments) : values_{start} {
   for (const auto& s : segments) {

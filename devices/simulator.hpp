@@ -84,6 +84,13 @@ SimulationProfile default_oven_profile();
 SimulationProfile load_profile_file(const std::filesystem::path& path);
 SimulationProfile parse_profile(const std::string& yaml_text, const std::string& file);
 
+class YamlFields;
+// One profile section {start_<suffix>, segments: [{hold_s} | {to_<suffix>, duration_s |
+// rate_<suffix>_per_min}]}, values in the file unit times `scale` (e.g. suffix "dps", scale
+// rad/deg); problems are reported through `y`. Also used by other formats (the nav scenario).
+Profile read_profile_section(YamlFields& y, const YAML::Node& node, const std::string& path,
+                             const std::string& unit_suffix, double scale, double fallback_start);
+
 struct SimulationOptions {
   double sample_rate_hz = 100.0;
   std::optional<double> duration_s;  // default: the profile's duration

@@ -12,8 +12,11 @@ packages=(
   gnuplot-nox
   libfftw3-dev libgsl-dev
 )
-if [[ "${DRIFTLAB_WITH_MRPT:-OFF}" == "ON" ]]; then
-  packages+=(libmrpt-dev)
+# The MRPT bridge (tools/mrpt): libmrpt-obs-dev alone pulls the obs, bayes, poses, math, io and
+# serialization modules (~170 MB); mrpt-apps gives rawlog-edit, which the bridge's tests use.
+# Never the umbrella libmrpt-dev (~880 MB: Qt, wx, VTK, ROS). DRIFTLAB_WITH_MRPT=OFF leaves them out.
+if [[ "${DRIFTLAB_WITH_MRPT:-AUTO}" != "OFF" ]]; then
+  packages+=(libmrpt-obs-dev mrpt-apps)
 fi
 
 missing=()

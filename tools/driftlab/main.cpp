@@ -14,6 +14,8 @@ void add_entropy_command(CLI::App& app, CommandEnv& env);
 void add_allan_command(CLI::App& app, CommandEnv& env);
 void add_decompose_command(CLI::App& app, CommandEnv& env);
 void add_discrepancy_command(CLI::App& app, CommandEnv& env);
+void add_mrpt_command(CLI::App& app, CommandEnv& env);
+void add_nav_command(CLI::App& app, CommandEnv& env);
 }  // namespace driftlab::cli
 
 int main(int argc, char** argv) {
@@ -38,6 +40,8 @@ int main(int argc, char** argv) {
   add_allan_command(app, env);
   add_decompose_command(app, env);
   add_discrepancy_command(app, env);
+  add_mrpt_command(app, env);
+  add_nav_command(app, env);
 
   try {
     app.parse(argc, argv);

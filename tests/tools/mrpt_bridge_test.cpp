@@ -1,0 +1,376 @@
+// The MRPT bridge (issue 14): rawlog round trips, rawlog-edit reading our exports, compensation of a
+// rawlog, the navigation EKF and bad rawlogs. Built always; without MRPT every test is skipped.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <regex>
+#include <sstream>
+#include <string>
+
+#include "tests/tools/cli_harness.hpp"
+
+#if DRIFTLAB_HAVE_MRPT
+#include <zlib.h>
+
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/obs/CObservationIMU.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include "framework/error.hpp"
+#include "tools/mrpt/nav_ekf.hpp"
+#include "tools/mrpt/rawlog_io.hpp"
+#endif
+
+#define SKIP_WITHOUT_MRPT() \
+  if (!DRIFTLAB_HAVE_MRPT) GTEST_SKIP() << "built without MRPT (libmrpt-obs-dev): the MRPT bridge is not built"
+
+namespace {
+
+namespace fs = std::filesystem;
+using driftlab::testing_cli::run_driftlab;
+using driftlab::testing_cli::scratch_dir;
+
+// A CSV whose times have at most 7 decimals (MRPT's 100 ns ticks), irregular steps included.
+[[maybe_unused]] void write_test_csv(const fs::path& path, int n, bool odometry) {
+  std::ofstream out(path);
+  out << "t_s,rate_rps,temp_c,wx_rps,acc_z_mps2" << (odometry ? ",odom_dx_m,odom_dy_m,odom_dphi_rad,odom_speed_mps" : "")
+      << "\n";
+  std::mt19937_64 random(42);
+  std::normal_distribution<double> normal;
+  char line[512];
+  double t = 0.0;
+  for (int i = 0; i < n; ++i) {
+    t = i == 0 ? 0.0 : t + (i % 7 == 0 ? 0.0250001 : 0.01);
+    t = std::round(t * 1e7) / 1e7;
+    std::snprintf(line, sizeof line, "%.7f,%.17g,%.17g,%.17g,%.17g", t, 1e-3 * normal(random), -10.0 + 0.01 * i,
+                  1e-4 * normal(random), 9.81 + 0.01 * normal(random));
+    out << line;
+    if (odometry) {
+      std::snprintf(line, sizeof line, ",%.17g,%.17g,%.17g,%.17g", 0.1 + 0.01 * normal(random), 0.001 * normal(random),
+                    0.002 * normal(random), 10.0 + normal(random));
+      out << line;
+    }
+    out << "\n";
+  }
+}
+
+}  // namespace
+
+#if DRIFTLAB_HAVE_MRPT
+namespace {
+
+using namespace driftlab::mrpt_bridge;
+
+// Time and every IMU field exactly; the odometry heading increment to 1e-12 rad (MRPT's
+// CActionRobotMovement2D changes it in the last digits: -0.0038133712345678901 comes back as
+// -0.0038133712345680415).
+void expect_tables_equal(const ImuTable& a, const ImuTable& b) {
+  constexpr double kOdometryHeadingTolerance = 1e-12;  // rad
+  ASSERT_EQ(a.time_s.size(), b.time_s.size());
+  for (Eigen::Index i = 0; i < a.time_s.size(); ++i) ASSERT_EQ(a.time_s[i], b.time_s[i]) << "t_s row " << i;
+  ASSERT_EQ(a.columns.size(), b.columns.size());
+  for (std::size_t c = 0; c < a.columns.size(); ++c) {
+    ASSERT_EQ(a.columns[c].name, b.columns[c].name);
+    for (Eigen::Index i = 0; i < a.time_s.size(); ++i) {
+      if (a.columns[c].name == "odom_dphi_rad")
+        ASSERT_NEAR(a.columns[c].values[i], b.columns[c].values[i], kOdometryHeadingTolerance) << "row " << i;
+      else
+        ASSERT_EQ(a.columns[c].values[i], b.columns[c].values[i]) << a.columns[c].name << " row " << i;
+    }
+  }
+}
+
+// Decompresses a gzip'ed rawlog into a plain one (MRPT reads both).
+void gunzip(const fs::path& in, const fs::path& out) {
+  gzFile f = gzopen(in.c_str(), "rb");
+  ASSERT_NE(f, nullptr);
+  std::ofstream o(out, std::ios::binary);
+  char buffer[65536];
+  int got = 0;
+  while ((got = gzread(f, buffer, sizeof buffer)) > 0) o.write(buffer, got);
+  gzclose(f);
+}
+
+std::string read_bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The IMU observations of a rawlog, in order (either format).
+std::vector<mrpt::obs::CObservationIMU::Ptr> read_imu(const fs::path& path, std::size_t* objects = nullptr) {
+  mrpt::io::CFileGZInputStream in(path.string());
+  auto archive = mrpt::serialization::archiveFrom(in);
+  std::vector<mrpt::obs::CObservationIMU::Ptr> result;
+  std::size_t count = 0;
+  try {
+    for (;;) {
+      auto object = archive.ReadObject();
+      ++count;
+      if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(object)) {
+        for (const auto& o : *sf)
+          if (auto imu = std::dynamic_pointer_cast<mrpt::obs::CObservationIMU>(o)) result.push_back(imu);
+      } else if (auto imu = std::dynamic_pointer_cast<mrpt::obs::CObservationIMU>(object)) {
+        result.push_back(imu);
+      }
+    }
+  } catch (const mrpt::serialization::CExceptionEOF&) {
+  }
+  if (objects) *objects = count;
+  return result;
+}
+
+}  // namespace
+#endif
+
+TEST(MrptBridge, CsvToRawlogToCsvRoundTripIsExactInBothFormats) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  const auto dir = scratch_dir("mrpt_round_trip");
+  for (const bool odometry : {false, true}) {
+    const auto csv = dir / (odometry ? "pairs.csv" : "obs.csv");
+    write_test_csv(csv, 500, odometry);
+    const auto original = read_imu_csv(csv);
+    export_rawlog(original, dir / "out.rawlog");
+    RawlogStats stats;
+    const auto back = import_rawlog(dir / "out.rawlog", "", &stats);
+    EXPECT_EQ(stats.format, odometry ? "actions/sensory-frame" : "observations-only");
+    EXPECT_EQ(stats.imu_observations, 500u);
+    expect_tables_equal(original, back);
+    // and through the command line: the CSV text itself survives
+    const auto r1 = run_driftlab("mrpt export " + csv.string() + " --out " + (dir / "cli.rawlog").string());
+    ASSERT_EQ(r1.exit_code, 0) << r1.err;
+    const auto r2 = run_driftlab("mrpt import " + (dir / "cli.rawlog").string() + " --out " + (dir / "back.csv").string());
+    ASSERT_EQ(r2.exit_code, 0) << r2.err;
+    expect_tables_equal(original, read_imu_csv(dir / "back.csv"));
+  }
+  fs::remove_all(dir);
+#endif
+}
+
+TEST(MrptBridge, ExportWritesImuWzInRadPerSecondAndTemperatureInCelsius) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  const auto dir = scratch_dir("mrpt_units");
+  {
+    std::ofstream out(dir / "dps.csv");
+    out << "t_s,rate_dps,temp_c\n0,180,21.5\n0.5,-90,22.25\n";
+  }
+  const auto r = run_driftlab("mrpt export " + (dir / "dps.csv").string() + " --label FMVMG --out " +
+                              (dir / "dps.rawlog").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto imu = read_imu(dir / "dps.rawlog");
+  ASSERT_EQ(imu.size(), 2u);
+  EXPECT_DOUBLE_EQ(imu[0]->get(mrpt::obs::IMU_WZ), M_PI);
+  EXPECT_DOUBLE_EQ(imu[1]->get(mrpt::obs::IMU_WZ), -M_PI / 2);
+  EXPECT_EQ(imu[1]->get(mrpt::obs::IMU_TEMPERATURE), 22.25);
+  EXPECT_EQ(imu[0]->sensorLabel, "FMVMG");
+  EXPECT_EQ((imu[1]->timestamp - imu[0]->timestamp).count(), 5000000);  // 0.5 s in 100 ns ticks
+  fs::remove_all(dir);
+#endif
+}
+
+TEST(MrptBridge, RawlogEditReadsTheExportAndCountsTheImuObservations) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  if (std::system("command -v rawlog-edit >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "rawlog-edit (Debian package mrpt-apps) is not installed";
+  const auto dir = scratch_dir("mrpt_rawlog_edit");
+  for (const bool odometry : {false, true}) {
+    write_test_csv(dir / "in.csv", 321, odometry);
+    export_rawlog(read_imu_csv(dir / "in.csv"), dir / "in.rawlog");
+    const std::string command = "rawlog-edit --info -i " + (dir / "in.rawlog").string() + " >" +
+                                (dir / "info.txt").string() + " 2>&1";
+    ASSERT_EQ(std::system(command.c_str()), 0);
+    const std::string info = driftlab::testing_cli::read_text(dir / "info.txt");
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(info, m, std::regex(R"(Sensor \(Label/Occurs/Rate/Durat\.\)\s*:\s*GYRO\s*/\s*(\d+))")))
+        << info;
+    EXPECT_EQ(m[1].str(), "321") << info;
+    EXPECT_NE(info.find(odometry ? "Actions/SensoryFrame format       : Yes" : "Observations format               : Yes"),
+              std::string::npos)
+        << info;
+    const std::string list = "rawlog-edit --list-timestamps -i " + (dir / "in.rawlog").string() + " --text-file-output " +
+                             (dir / "ts.txt").string() + " >/dev/null 2>&1";
+    ASSERT_EQ(std::system(list.c_str()), 0);
+    std::istringstream lines(driftlab::testing_cli::read_text(dir / "ts.txt"));
+    std::string line;
+    int imu_lines = 0;
+    while (std::getline(lines, line)) imu_lines += line.find("GYRO mrpt::obs::CObservationIMU") != std::string::npos;
+    EXPECT_EQ(imu_lines, 321);
+    fs::remove(dir / "ts.txt");
+  }
+  fs::remove_all(dir);
+#endif
+}
+
+TEST(MrptBridge, CompensationChangesOnlyTheImuRateByExactlyTheCorrection) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  const auto dir = scratch_dir("mrpt_compensate");
+  write_test_csv(dir / "in.csv", 300, true);
+  export_rawlog(read_imu_csv(dir / "in.csv"), dir / "in.rawlog");
+  // A stateful corrector (like a causal model): the k-th call subtracts a known amount.
+  std::vector<double> corrections;
+  const auto stats = compensate_rawlog(dir / "in.rawlog", dir / "out.rawlog", [&](double t, double rate, double temp) {
+    const double c = 1e-4 * (1.0 + t) + 1e-6 * temp + 1e-9 * static_cast<double>(corrections.size());
+    corrections.push_back(c);
+    return rate - c;
+  });
+  EXPECT_EQ(stats.compensated, 300u);
+  std::size_t objects_in = 0, objects_out = 0;
+  const auto before = read_imu(dir / "in.rawlog", &objects_in);
+  const auto after = read_imu(dir / "out.rawlog", &objects_out);
+  EXPECT_EQ(objects_in, objects_out);
+  ASSERT_EQ(before.size(), after.size());
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    EXPECT_EQ(after[i]->get(mrpt::obs::IMU_WZ), before[i]->get(mrpt::obs::IMU_WZ) - corrections[i]) << i;
+    // everything else identical: restore the rate and compare the serialized objects
+    after[i]->set(mrpt::obs::IMU_WZ, before[i]->get(mrpt::obs::IMU_WZ));
+    EXPECT_EQ(after[i]->timestamp, before[i]->timestamp);
+    EXPECT_EQ(after[i]->sensorLabel, before[i]->sensorLabel);
+    EXPECT_EQ(after[i]->rawMeasurements, before[i]->rawMeasurements);
+    EXPECT_EQ(after[i]->dataIsPresent, before[i]->dataIsPresent);
+  }
+  // the odometry actions and frames are copied unchanged: with the rates restored, the files'
+  // other columns import identically
+  auto a = import_rawlog(dir / "in.rawlog"), b = import_rawlog(dir / "out.rawlog");
+  for (auto* t : {&a, &b}) t->columns.erase(t->columns.begin());  // drop rate_rps
+  expect_tables_equal(a, b);
+  // the input is never the output
+  EXPECT_THROW(compensate_rawlog(dir / "in.rawlog", dir / "in.rawlog", [](double, double r, double) { return r; }),
+               driftlab::ConfigError);
+  fs::remove_all(dir);
+#endif
+}
+
+TEST(MrptBridge, TruncatedAndMalformedRawlogsNameTheFileAndTheObjectIndex) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  const auto dir = scratch_dir("mrpt_bad");
+  write_test_csv(dir / "in.csv", 50, false);
+  export_rawlog(read_imu_csv(dir / "in.csv"), dir / "in.rawlog");
+  gunzip(dir / "in.rawlog", dir / "plain.rawlog");
+  const std::string plain = read_bytes(dir / "plain.rawlog");
+  const std::size_t object_size = plain.size() / 50;  // all 50 objects serialize to the same size
+  ASSERT_EQ(plain.size(), 50 * object_size);
+  {  // cut inside object 20
+    std::ofstream out(dir / "truncated.rawlog", std::ios::binary);
+    out.write(plain.data(), static_cast<std::streamsize>(20 * object_size + object_size / 2));
+  }
+  try {
+    import_rawlog(dir / "truncated.rawlog");
+    FAIL() << "no error";
+  } catch (const driftlab::DataError& e) {
+    EXPECT_EQ(e.where().file, (dir / "truncated.rawlog").string());
+    EXPECT_NE(std::string(e.what()).find("object 20"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
+  {  // garbage in place of object 7's class name
+    std::string bad = plain;
+    for (std::size_t i = 7 * object_size; i < 7 * object_size + 24; ++i) bad[i] = static_cast<char>(0xA5);
+    std::ofstream out(dir / "malformed.rawlog", std::ios::binary);
+    out << bad;
+  }
+  const auto r = run_driftlab("mrpt import " + (dir / "malformed.rawlog").string() + " --out " +
+                              (dir / "m.csv").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find((dir / "malformed.rawlog").string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("object 7"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "m.csv"));
+  {  // a truncated gzip'ed file
+    const std::string gz = read_bytes(dir / "in.rawlog");
+    std::ofstream out(dir / "truncated_gz.rawlog", std::ios::binary);
+    out.write(gz.data(), static_cast<std::streamsize>(gz.size() / 2));
+  }
+  const auto g = run_driftlab("mrpt import " + (dir / "truncated_gz.rawlog").string() + " --out " +
+                              (dir / "g.csv").string());
+  EXPECT_EQ(g.exit_code, 3) << g.err;
+  EXPECT_NE(g.err.find("truncated_gz.rawlog"), std::string::npos) << g.err;
+  EXPECT_NE(g.err.find("object "), std::string::npos) << g.err;
+  {  // not a rawlog at all
+    std::ofstream out(dir / "text.rawlog");
+    out << "hello, this is not a rawlog\n";
+  }
+  EXPECT_THROW(import_rawlog(dir / "text.rawlog"), driftlab::DataError);
+  fs::remove_all(dir);
+#endif
+}
+
+TEST(MrptBridge, SeveralImuSensorsNeedALabelChoice) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  const auto dir = scratch_dir("mrpt_labels");
+  write_test_csv(dir / "in.csv", 10, false);
+  auto table = read_imu_csv(dir / "in.csv");
+  export_rawlog(table, dir / "a.rawlog");
+  table.sensor_label = "SECOND";
+  export_rawlog(table, dir / "b.rawlog");
+  {
+    std::ofstream out(dir / "both.rawlog", std::ios::binary);
+    gunzip(dir / "a.rawlog", dir / "a.plain");
+    gunzip(dir / "b.rawlog", dir / "b.plain");
+    out << read_bytes(dir / "a.plain") << read_bytes(dir / "b.plain");
+  }
+  EXPECT_THROW(import_rawlog(dir / "both.rawlog"), driftlab::ConfigError);
+  EXPECT_EQ(import_rawlog(dir / "both.rawlog", "SECOND").sensor_label, "SECOND");
+  fs::remove_all(dir);
+#endif
+}
+
+TEST(MrptNavEkf, EstimatesAKnownConstantGyroBiasWithinTwoSigma) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  // 20 min at 20 Hz, 10 m/s, weaving turns; the gyro reads true rate + 200 deg/h + white noise;
+  // a position fix (sigma 2 m) every 2 s. The bias is observable through the position track.
+  const double fs = 20.0, dt = 1.0 / fs, bias = 200.0 * M_PI / 180.0 / 3600.0;
+  NavNoise noise;
+  noise.arw_rad_sqrt_s = 0.1 * M_PI / 180.0 / 60.0;  // 0.1 deg/sqrt(h)
+  noise.speed_sigma_mps = 0.02;
+  noise.fix_sigma_m = 2.0;
+  NavState start;
+  start.covariance(3, 3) = std::pow(1000.0 * M_PI / 180.0 / 3600.0, 2);  // prior: 1000 deg/h
+  NavEkf ekf(noise, start);
+  std::mt19937_64 random(3);
+  std::normal_distribution<double> normal;
+  double x = 0, y = 0, psi = 0;
+  for (int k = 1; k <= static_cast<int>(1200 * fs); ++k) {
+    const double t = k * dt;
+    const double w = 0.2 * std::sin(2 * M_PI * t / 60.0);
+    const double mid = psi + 0.5 * w * dt;
+    x += 10.0 * dt * std::cos(mid);
+    y += 10.0 * dt * std::sin(mid);
+    psi += w * dt;
+    const double measured = w + bias + noise.arw_rad_sqrt_s * std::sqrt(fs) * normal(random);
+    std::optional<Eigen::Vector2d> fix;
+    if (k % static_cast<int>(2 * fs) == 0) fix = Eigen::Vector2d(x + 2.0 * normal(random), y + 2.0 * normal(random));
+    ekf.step(dt, measured, 10.0 + noise.speed_sigma_mps * normal(random), fix);
+    const auto s = ekf.state();
+    ASSERT_GT(s.heading_rad, -M_PI);
+    ASSERT_LE(s.heading_rad, M_PI);
+  }
+  const auto s = ekf.state();
+  const double sigma = std::sqrt(s.covariance(3, 3));
+  EXPECT_LT(sigma, 0.25 * bias) << "the bias must be well observed for the test to mean something";
+  EXPECT_NEAR(s.bias_rad_s, bias, 2.0 * sigma) << "estimate " << s.bias_rad_s * 180 / M_PI * 3600 << " deg/h, sigma "
+                                               << sigma * 180 / M_PI * 3600 << " deg/h";
+#endif
+}
+
+TEST(MrptNavEkf, HeadingIsWrappedIntoMinusPiToPi) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  EXPECT_DOUBLE_EQ(wrap_angle(3 * M_PI / 2), -M_PI / 2);
+  EXPECT_DOUBLE_EQ(wrap_angle(-M_PI), M_PI);
+  EXPECT_DOUBLE_EQ(wrap_angle(M_PI), M_PI);
+  NavEkf ekf(NavNoise{}, NavState{});
+  for (int k = 0; k < 100; ++k) ekf.step(0.1, 1.0, 0.0);  // 10 rad of turning
+  EXPECT_NEAR(ekf.state().heading_rad, wrap_angle(10.0), 1e-12);
+#endif
+}

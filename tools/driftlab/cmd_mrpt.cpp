@@ -1,0 +1,135 @@
+// `driftlab mrpt import|export|compensate|info`: the MRPT rawlog bridge (tools/mrpt/rawlog_io.hpp).
+#include <iomanip>
+#include <iostream>
+#include <memory>
+
+#include "framework/error.hpp"
+#include "framework/units.hpp"
+#if __has_include("models/calibration/calibration_model.hpp")
+#include "models/calibration/calibration_model.hpp"
+#define DRIFTLAB_HAVE_CALIBRATION 1
+#endif
+#include "tools/driftlab/cli.hpp"
+#include "tools/mrpt/rawlog_io.hpp"
+
+namespace driftlab::cli {
+namespace {
+
+struct MrptOptions {
+  std::string input, out, model, sensor_label = "";
+  std::string label = "GYRO";
+  double start_unix_s = mrpt_bridge::kDefaultStartUnixS;
+};
+
+void import_command(const MrptOptions& o, CommandEnv& env) {
+  check_output(o.out, {o.input});
+  env.progress("mrpt import", 0.0);
+  mrpt_bridge::RawlogStats stats;
+  const auto table = mrpt_bridge::import_rawlog(o.input, o.sensor_label, &stats);
+  mrpt_bridge::write_imu_csv(table, o.out);
+  env.progress("mrpt import", 1.0);
+  std::cout << o.out << ": " << table.time_s.size() << " IMU samples of sensor '" << table.sensor_label << "' from "
+            << o.input << " (" << stats.format << ", " << stats.objects << " objects, " << stats.odometry_actions
+            << " odometry actions); columns t_s";
+  for (const auto& c : table.columns) std::cout << "," << c.name;
+  std::cout << std::setprecision(17) << "; t_s = 0 at Unix time " << table.start_unix_s << " s\n";
+}
+
+void export_command(const MrptOptions& o, CommandEnv& env) {
+  check_output(o.out, {o.input});
+  env.progress("mrpt export", 0.0);
+  auto table = mrpt_bridge::read_imu_csv(o.input);
+  table.sensor_label = o.label;
+  table.start_unix_s = o.start_unix_s;
+  mrpt_bridge::export_rawlog(table, o.out);
+  env.progress("mrpt export", 1.0);
+  std::cout << o.out << ": " << table.time_s.size() << " CObservationIMU '" << table.sensor_label << "' ("
+            << (table.has_odometry() ? "action/observation pairs with CActionRobotMovement2D odometry"
+                                     : "observations only")
+            << ")\n";
+  if (!table.ignored_columns.empty()) {
+    std::cout << "  not exported (no CObservationIMU field):";
+    for (const auto& c : table.ignored_columns) std::cout << " " << c;
+    std::cout << "\n";
+  }
+}
+
+void compensate_command(const MrptOptions& o, CommandEnv& env) {
+  check_output(o.out, {o.input, o.model});
+#ifndef DRIFTLAB_HAVE_CALIBRATION
+  (void)env;
+  throw ConfigError(Location{o.model, 0, "--model"}, "this build has no calibration library (models/calibration)");
+#else
+  const auto model = calibration::read_calibration_model(o.model);
+  calibration::CausalCompensator compensator(model);
+  std::size_t extrapolated = 0;
+  env.progress("mrpt compensate", 0.0);
+  const auto stats = mrpt_bridge::compensate_rawlog(
+      o.input, o.out,
+      [&](double t, double rate, double temp) {
+        const double out = compensator.step(t, rate, temp);
+        if (compensator.last_extrapolated()) ++extrapolated;
+        return out;
+      },
+      o.sensor_label);
+  env.progress("mrpt compensate", 1.0);
+  std::cout << o.out << ": " << stats.compensated << " of " << stats.imu_observations
+            << " IMU observations compensated (IMU_WZ only) with " << o.model << "; " << stats.objects
+            << " objects copied in order; largest correction " << stats.max_abs_correction_rad_s * kDegPerRad * 3600.0
+            << " deg/h\n";
+  if (extrapolated > 0)
+    std::cerr << "driftlab: warning: " << extrapolated
+              << " observations had a temperature outside the model's calibrated range (extrapolated)\n";
+#endif
+}
+
+void info_command(const MrptOptions& o) {
+  const auto stats = mrpt_bridge::rawlog_stats(o.input);
+  std::cout << o.input << ": " << stats.format << ", " << stats.objects << " objects, " << stats.sensory_frames
+            << " sensory frames, " << stats.odometry_actions << " odometry actions, " << stats.imu_observations
+            << " IMU observations; IMU labels:";
+  for (const auto& l : stats.imu_labels) std::cout << " '" << l << "'";
+  std::cout << "\n";
+}
+
+}  // namespace
+
+void add_mrpt_command(CLI::App& app, CommandEnv& env) {
+  auto o = std::make_shared<MrptOptions>();
+  auto* mrpt = app.add_subcommand("mrpt", "MRPT rawlog bridge: import, export, compensate, info");
+  mrpt->require_subcommand(1);
+
+  auto* imp = mrpt->add_subcommand("import", "IMU observations of a rawlog (either format) -> CSV (t_s, rate_rps, temp_c, ...)");
+  imp->add_option("rawlog", o->input, "input rawlog (actions/sensory-frame or observations-only; gzip'ed or plain)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  imp->add_option("--out", o->out, "output CSV (written atomically); t_s is s since the first IMU observation")->required();
+  imp->add_option("--sensor-label", o->sensor_label, "IMU sensor label to import (needed when there are several)");
+  imp->callback([o, &env] { import_command(*o, env); });
+
+  auto* exp = mrpt->add_subcommand("export", "CSV -> rawlog of CObservationIMU (IMU_WZ rad/s, IMU_TEMPERATURE degC)");
+  exp->add_option("csv", o->input,
+                  "input CSV: t_s, rate_rps or rate_dps, temp_c, other IMU columns; odom_dx_m, odom_dy_m, "
+                  "odom_dphi_rad [, odom_speed_mps] give action/observation pairs")
+      ->required()
+      ->check(CLI::ExistingFile);
+  exp->add_option("--out", o->out, "output rawlog (gzip'ed, written atomically)")->required();
+  exp->add_option("--label", o->label, "sensor label of the observations")->capture_default_str();
+  exp->add_option("--start-unix", o->start_unix_s, "Unix time of t_s = 0, s (default 2026-01-01T00:00:00Z)")
+      ->capture_default_str();
+  exp->callback([o, &env] { export_command(*o, env); });
+
+  auto* comp = mrpt->add_subcommand(
+      "compensate", "apply a calibration model (driftlab calibrate) to IMU_WZ of every IMU observation; all else is kept");
+  comp->add_option("rawlog", o->input, "input rawlog")->required()->check(CLI::ExistingFile);
+  comp->add_option("--model", o->model, "calibration model JSON (driftlab-calibration/1)")->required()->check(CLI::ExistingFile);
+  comp->add_option("--out", o->out, "output rawlog (gzip'ed, written atomically; never the input)")->required();
+  comp->add_option("--sensor-label", o->sensor_label, "IMU sensor label to compensate (needed when there are several)");
+  comp->callback([o, &env] { compensate_command(*o, env); });
+
+  auto* info = mrpt->add_subcommand("info", "counts of a rawlog: format, objects, IMU observations and labels");
+  info->add_option("rawlog", o->input, "input rawlog")->required()->check(CLI::ExistingFile);
+  info->callback([o] { info_command(*o); });
+}
+
+}  // namespace driftlab::cli
