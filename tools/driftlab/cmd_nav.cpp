@@ -17,7 +17,7 @@
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
 #include "tools/driftlab/devices_dir.hpp"
-#include "tools/driftlab/svg_plot.hpp"
+#include "tools/driftlab/plot.hpp"
 #include "tools/mrpt/nav_scenario.hpp"
 #include "tools/mrpt/rawlog_io.hpp"
 #if __has_include("models/calibration/calibration_model.hpp")
