@@ -9,6 +9,7 @@ void register_kalman_plugins(Registry&);
 void register_emd_plugins(Registry&);
 void register_effect_plugins(Registry&);
 void register_vmd_plugins(Registry&);
+void register_polynomial_plugins(Registry&);
 
 void register_builtin_plugins(Registry& registry) {
   register_ga_plugins(registry);
@@ -18,6 +19,7 @@ void register_builtin_plugins(Registry& registry) {
   register_emd_plugins(registry);
   register_effect_plugins(registry);
   register_vmd_plugins(registry);
+  register_polynomial_plugins(registry);
 }
 
 }  // namespace driftlab

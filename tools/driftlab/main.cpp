@@ -16,6 +16,8 @@ void add_decompose_command(CLI::App& app, CommandEnv& env);
 void add_discrepancy_command(CLI::App& app, CommandEnv& env);
 void add_mrpt_command(CLI::App& app, CommandEnv& env);
 void add_nav_command(CLI::App& app, CommandEnv& env);
+void add_calibrate_command(CLI::App& app, CommandEnv& env);
+void add_compensate_command(CLI::App& app, CommandEnv& env);
 }  // namespace driftlab::cli
 
 int main(int argc, char** argv) {
@@ -42,6 +44,8 @@ int main(int argc, char** argv) {
   add_discrepancy_command(app, env);
   add_mrpt_command(app, env);
   add_nav_command(app, env);
+  add_calibrate_command(app, env);
+  add_compensate_command(app, env);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,169 @@
+// Deployable temperature calibration of a single-axis gyro (issue 13): the model object, its JSON
+// file ("driftlab-calibration/1") and the causal, constant-memory compensator.
+//
+// The model, for a measured rate w_m (rad/s) and a case temperature T (degC) at time t (s):
+//
+//   T_m   = first-order lag of T with time constant lag_tau_s (T itself when 0)   model temperature
+//   y1    = lag(T, derivative_tau_s), y2 = lag(y1, derivative_tau_s)
+//   D     = (y1 - y2) / derivative_tau_s        causal dT/dt estimate, K/s (exact for a ramp after
+//                                               the filter settles; delayed by ~2 derivative_tau_s)
+//   s     : hysteresis branch state in [-1, 1] driven by the increments dT of y1:
+//           s <- sgn(dT) + (s - sgn(dT)) exp(-|dT| / hysteresis_width_k)   (+1 heating, -1 cooling)
+//   T_c   = T_m limited by the extrapolation policy to the valid range [valid_min_c, valid_max_c]
+//   bias  = sum_i bias_rad_s[i] (T_c - T0)^i  + temperature_rate_rad_s_per_k_s * D
+//           + hysteresis_rad_s * s  + rbf(T_c, D, s)                                       (rad/s)
+//   sf    = 1 + sum_j scale_factor_per_k[j] (T_c - T0)^j      (j from 0: constant scale error)
+//   w     = (w_m - bias) / sf                                  compensated rate, rad/s
+//
+// A "poly" model has only the polynomial (and optionally the scale factor); "physical" adds the
+// lag, dT/dt and hysteresis terms; "rbf" adds a Gaussian RBF network on (T_c, D, s) fitted to what
+// the physical terms leave. Every filter is causal and needs O(1) state: the compensator can run
+// sample by sample in firmware. All the filters start at the first sample's temperature.
+//
+// Extrapolation (outside [valid_min_c, valid_max_c] of the model temperature):
+//   clamp     the polynomial, scale factor and RBF are evaluated at the nearest range edge (PX4)
+//   linear    the polynomial continues along its tangent at the edge (scale factor and RBF clamp)
+//   evaluate  the polynomial is evaluated as is (scale factor and RBF clamp)
+// Either way last_extrapolated() says so, and `driftlab compensate` writes it per row.
+//
+// Errors: read_calibration_model throws ConfigError naming the file and the JSON key (a missing
+// file, bad JSON, wrong format tag, missing or mistyped key, inconsistent sizes);
+// CausalCompensator::step throws DataError on a non-increasing time stamp or a non-finite input.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace driftlab::calibration {
+
+inline constexpr const char* kFormat = "driftlab-calibration/1";
+
+enum class ModelKind { Polynomial, Physical, Rbf };
+std::string to_string(ModelKind kind);  // "poly", "physical", "rbf"
+
+enum class Extrapolation { Clamp, Linear, Evaluate };
+std::string to_string(Extrapolation policy);  // "clamp", "linear", "evaluate"
+
+// Gaussian RBF network on standardized inputs u = (x - mean) / scale, x = (T_c degC, D K/s, s 1):
+// rbf(x) = bias_rad_s + sum_k weights_rad_s[k] exp(-|u - centres.row(k)|^2 / (2 sigma^2)).
+struct RbfTerm {
+  std::vector<double> mean, scale;  // per input (3)
+  Eigen::MatrixXd centres;          // K x 3, standardized units
+  double sigma = 1.0;               // standardized units
+  std::vector<double> weights_rad_s;
+  double bias_rad_s = 0.0;
+};
+
+// Allan noise terms of the compensated calibration residual (IEEE-952 names), for the Kalman stage
+// and the Kalibr export. 0 = not estimated.
+struct NoiseTerms {
+  double arw_rad_sqrt_s = 0.0;                 // N, rad/s/sqrt(Hz) = rad/sqrt(s)
+  double bias_instability_rad_s = 0.0;         // B, rad/s
+  double rate_random_walk_rad_s_sqrt_s = 0.0;  // K, rad/s^2/sqrt(Hz) = rad/s/sqrt(s)
+  double sample_rate_hz = 0.0;                 // of the calibration records
+};
+
+// How the model was obtained and how well it did on data it was not fitted to.
+struct FitSummary {
+  std::vector<std::string> records;      // calibration files
+  std::size_t samples = 0;               // rows used
+  double bin_s = 0.0;                    // fitting rows are means over bins of this length, s
+  std::string selection;                 // how order / time constants were chosen
+  std::size_t holdout_blocks = 0;        // contiguous time blocks per record
+  double holdout_rms_rad_s = 0.0;        // pooled RMS of held-out bin residuals (blocked CV)
+  double train_rms_rad_s = 0.0;          // in-sample RMS of bin residuals
+  bool heating_only = false;             // fitted on heating samples only (PX4 practice)
+  bool scale_factor_fitted = false;      // a true-rate column was present and varied
+};
+
+struct CalibrationModel {
+  ModelKind kind = ModelKind::Polynomial;
+  std::string device;                    // free text (device name or file)
+  std::string axis = "z";                // the axis this model applies to (x, y, z), for exports
+  double reference_temp_c = 25.0;        // T0, degC
+  double valid_min_c = 0.0, valid_max_c = 0.0;  // range of the calibration model temperature, degC
+  Extrapolation extrapolation = Extrapolation::Clamp;
+
+  std::vector<double> bias_rad_s;        // a_i, rad/s per K^i, i = 0..order
+  std::vector<double> bias_sigma_rad_s;  // 1-sigma of a_i (same units)
+
+  double lag_tau_s = 0.0;                // 0: T_m = T
+  double derivative_tau_s = 30.0;        // smoothing of D and of the hysteresis path, s, > 0
+  double temperature_rate_rad_s_per_k_s = 0.0;  // coefficient of D, rad/s per K/s
+  double temperature_rate_sigma = 0.0;
+  double hysteresis_rad_s = 0.0;         // coefficient of s (cooling branch: -s), rad/s
+  double hysteresis_sigma_rad_s = 0.0;
+  double hysteresis_width_k = 0.0;       // 0: no hysteresis term
+  std::optional<RbfTerm> rbf;
+
+  std::vector<double> scale_factor_per_k;  // k_j, 1/K^j, j = 0..; empty: no scale-factor model
+
+  NoiseTerms noise;
+  FitSummary fit;
+
+  int order() const { return static_cast<int>(bias_rad_s.size()) - 1; }
+  bool uses_state() const { return lag_tau_s > 0 || temperature_rate_rad_s_per_k_s != 0.0 ||
+                                   hysteresis_width_k > 0 || rbf.has_value(); }
+  // Polynomial part of the bias at model temperature T (degC), with the extrapolation policy.
+  double polynomial_bias_rad_s(double temp_c) const;
+  // Scale factor sf at T (clamped to the valid range); 1 without a scale-factor model.
+  double scale_factor(double temp_c) const;
+  // Throws ConfigError (no file) when the model is inconsistent (empty polynomial, bad range, ...).
+  void validate() const;
+};
+
+CalibrationModel read_calibration_model(const std::filesystem::path& json);
+void write_calibration_model(const CalibrationModel& model, const std::filesystem::path& json);
+std::string to_json_text(const CalibrationModel& model);  // what write_calibration_model writes
+
+// The causal filters of the model: model temperature, dT/dt estimate, hysteresis state.
+class CausalState {
+ public:
+  CausalState(double lag_tau_s, double derivative_tau_s, double hysteresis_width_k);
+  void step(double t_s, double temp_c);  // throws DataError on non-increasing time
+  double model_temp_c() const { return tm_; }
+  double temp_rate_k_s() const { return rate_; }
+  double hysteresis_state() const { return s_; }
+  bool started() const { return started_; }
+
+ private:
+  double lag_tau_, deriv_tau_, width_;
+  bool started_ = false;
+  double t_prev_ = 0.0, x_prev_ = 0.0, tm_ = 0.0, y1_ = 0.0, y2_ = 0.0, rate_ = 0.0, s_ = 0.0;
+  double dt_cached_ = -1.0, a_lag_ = 0.0, a_der_ = 0.0;
+};
+
+class CausalCompensator {
+ public:
+  explicit CausalCompensator(const CalibrationModel& model);
+  // time (s), measured rate (rad/s), case temperature (degC) -> compensated rate (rad/s)
+  double step(double t_s, double rate_rad_s, double temp_c);
+  double last_bias_rad_s() const { return bias_; }    // the correction subtracted at the last step
+  bool last_extrapolated() const { return extrapolated_; }  // model temperature outside the range
+  double last_model_temp_c() const { return state_.model_temp_c(); }
+
+ private:
+  double rbf_value(double tc) const;
+
+  CalibrationModel model_;
+  CausalState state_;
+  bool stateful_;
+  bool started_ = false;  // stateless models still check the time order
+  double t_prev_ = 0.0;
+  double bias_ = 0.0;
+  bool extrapolated_ = false;
+};
+
+// Batch form: the same compensator run over a whole record (equal to streaming by construction).
+struct Compensated {
+  Eigen::VectorXd rate_rad_s, bias_rad_s;
+  std::vector<char> extrapolated;
+};
+Compensated compensate(const CalibrationModel& model, const Eigen::VectorXd& time_s,
+                       const Eigen::VectorXd& rate_rad_s, const Eigen::VectorXd& temp_c);
+
+}  // namespace driftlab::calibration

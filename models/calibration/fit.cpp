@@ -1,0 +1,389 @@
+#include "models/calibration/fit.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "framework/error.hpp"
+#include "plugins/ga/ga.hpp"
+#include "plugins/polynomial/polynomial.hpp"
+#include "plugins/rbf/rbf.hpp"
+
+namespace driftlab::calibration {
+namespace {
+
+constexpr int kScaleFactorOrder = 2;        // k_0 + k_1 dT + k_2 dT^2
+constexpr double kVaryingTrueRate = 1e-3;   // rad/s: a true rate with a larger std drives a scale-factor fit
+
+// Bins of one record: which bin each sample falls in (bins without samples are dropped).
+struct Binning {
+  std::vector<int> bin_of;   // per sample
+  std::vector<double> count; // per bin
+  int bins = 0;
+};
+
+Binning make_bins(const Record& r, double bin_s) {
+  Binning b;
+  b.bin_of.resize(static_cast<std::size_t>(r.time_s.size()));
+  long last = -1;
+  for (Eigen::Index i = 0; i < r.time_s.size(); ++i) {
+    const long k = static_cast<long>(std::floor((r.time_s[i] - r.time_s[0]) / bin_s));
+    if (k != last) {
+      ++b.bins;
+      b.count.push_back(0.0);
+      last = k;
+    }
+    b.bin_of[static_cast<std::size_t>(i)] = b.bins - 1;
+    b.count.back() += 1.0;
+  }
+  return b;
+}
+
+// Per-bin means of the causal features for one (lag, width) candidate.
+struct Features {
+  Eigen::VectorXd tm, d, s;
+  Eigen::MatrixXd w_powers;  // true rate x (Tm - T0)^j, j = 0..kScaleFactorOrder (unscaled)
+  double tm_min = std::numeric_limits<double>::infinity(), tm_max = -std::numeric_limits<double>::infinity();
+};
+
+Features features(const Record& r, const Binning& b, double lag_s, double deriv_s, double width_k, double t0,
+                  bool with_w) {
+  Features f;
+  f.tm = Eigen::VectorXd::Zero(b.bins);
+  f.d = Eigen::VectorXd::Zero(b.bins);
+  f.s = Eigen::VectorXd::Zero(b.bins);
+  if (with_w) f.w_powers = Eigen::MatrixXd::Zero(b.bins, kScaleFactorOrder + 1);
+  CausalState state(lag_s, deriv_s, width_k);
+  for (Eigen::Index i = 0; i < r.time_s.size(); ++i) {
+    state.step(r.time_s[i], r.temp_c[i]);
+    const int k = b.bin_of[static_cast<std::size_t>(i)];
+    const double tm = state.model_temp_c();
+    f.tm[k] += tm;
+    f.d[k] += state.temp_rate_k_s();
+    f.s[k] += state.hysteresis_state();
+    f.tm_min = std::min(f.tm_min, tm);
+    f.tm_max = std::max(f.tm_max, tm);
+    if (with_w) {
+      double p = r.true_rate_rad_s.size() ? r.true_rate_rad_s[i] : 0.0;
+      for (int j = 0; j <= kScaleFactorOrder; ++j) {
+        f.w_powers(k, j) += p;
+        p *= tm - t0;
+      }
+    }
+  }
+  const Eigen::Map<const Eigen::VectorXd> n(b.count.data(), b.bins);
+  f.tm.array() /= n.array();
+  f.d.array() /= n.array();
+  f.s.array() /= n.array();
+  if (with_w) f.w_powers.array().colwise() /= n.array();
+  return f;
+}
+
+struct Candidate {
+  double lag_s = 0.0, width_k = 0.0;
+  bool rate_term = false;
+  int order = 1;
+  double cv = std::numeric_limits<double>::infinity();
+};
+
+// All records' bins stacked, with the rows kept (heating-only mask) and record ends.
+struct Stack {
+  std::vector<Features> per_record;
+  Eigen::VectorXd y;
+  std::vector<Eigen::Index> rows;  // kept rows into the stacked bins
+  std::vector<Eigen::Index> group_ends;
+  double tm_min = std::numeric_limits<double>::infinity(), tm_max = -std::numeric_limits<double>::infinity();
+};
+
+Eigen::VectorXd stacked(const std::vector<Features>& fs, Eigen::VectorXd Features::*member) {
+  Eigen::Index n = 0;
+  for (const auto& f : fs) n += (f.*member).size();
+  Eigen::VectorXd out(n);
+  Eigen::Index at = 0;
+  for (const auto& f : fs) {
+    out.segment(at, (f.*member).size()) = f.*member;
+    at += (f.*member).size();
+  }
+  return out;
+}
+
+struct Design {
+  Eigen::MatrixXd A;
+  double scale = 1.0;  // temperature scale of the polynomial columns, K
+  int order = 0;
+  bool rate_term = false, hysteresis = false;
+  int sf_columns = 0;
+};
+
+Design design(const std::vector<Features>& fs, const std::vector<Eigen::Index>& rows, double t0, int order,
+              bool rate_term, bool hysteresis, bool with_sf) {
+  const Eigen::VectorXd tm_all = stacked(fs, &Features::tm);
+  const Eigen::VectorXd d_all = stacked(fs, &Features::d);
+  const Eigen::VectorXd s_all = stacked(fs, &Features::s);
+  const Eigen::VectorXd tm = tm_all(rows);
+  Design out;
+  out.order = order;
+  out.rate_term = rate_term;
+  out.hysteresis = hysteresis;
+  out.scale = std::max({std::abs(tm.maxCoeff() - t0), std::abs(tm.minCoeff() - t0), 1.0});
+  const Eigen::MatrixXd V = polynomial::scaled_powers(tm, t0, out.scale, order);
+  const int extra = (rate_term ? 1 : 0) + (hysteresis ? 1 : 0) + (with_sf ? kScaleFactorOrder + 1 : 0);
+  out.A.resize(static_cast<Eigen::Index>(rows.size()), order + 1 + extra);
+  out.A.leftCols(order + 1) = V;
+  int c = order + 1;
+  if (rate_term) out.A.col(c++) = d_all(rows);
+  if (hysteresis) out.A.col(c++) = s_all(rows);
+  if (with_sf) {
+    Eigen::Index n = 0;
+    for (const auto& f : fs) n += f.w_powers.rows();
+    Eigen::MatrixXd W(n, kScaleFactorOrder + 1);
+    Eigen::Index at = 0;
+    for (const auto& f : fs) {
+      W.middleRows(at, f.w_powers.rows()) = f.w_powers;
+      at += f.w_powers.rows();
+    }
+    for (int j = 0; j <= kScaleFactorOrder; ++j) {
+      out.A.col(c++) = W(rows, Eigen::all).col(j) / std::pow(out.scale, j);
+    }
+    out.sf_columns = kScaleFactorOrder + 1;
+  }
+  return out;
+}
+
+double lag1_inflation(const Eigen::VectorXd& r) {
+  if (r.size() < 3) return 1.0;
+  const double num = r.head(r.size() - 1).dot(r.tail(r.size() - 1));
+  const double den = r.squaredNorm();
+  const double rho = den > 0 ? std::clamp(num / den, 0.0, 0.99) : 0.0;
+  return std::sqrt((1.0 + rho) / (1.0 - rho));
+}
+
+}  // namespace
+
+CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOptions& o) {
+  if (records.empty()) throw ConfigError({"", 0, "data"}, "no calibration records");
+  if (o.min_order < 0 || o.max_order < o.min_order || o.max_order > 12) {
+    throw ConfigError({"", 0, "order"}, "polynomial orders need 0 <= min_order <= max_order <= 12");
+  }
+  if (!(o.bin_s > 0)) throw ConfigError({"", 0, "bin_s"}, "bin length must be > 0 s");
+  if (!(o.derivative_tau_s > 0)) throw ConfigError({"", 0, "derivative_tau_s"}, "must be > 0 s");
+
+  const double t0 = o.reference_temp_c;
+  bool with_sf = false;
+  for (const auto& r : records) {
+    if (r.time_s.size() != r.rate_rad_s.size() || r.time_s.size() != r.temp_c.size()) {
+      throw DataError({r.name, 0, "rate"}, "time, rate and temperature differ in length");
+    }
+    if (r.true_rate_rad_s.size() && r.true_rate_rad_s.size() != r.time_s.size()) {
+      throw DataError({r.name, 0, "true_rate"}, "true rate differs in length");
+    }
+    if (r.true_rate_rad_s.size() > 1) {
+      const double mean = r.true_rate_rad_s.mean();
+      const double sd = std::sqrt((r.true_rate_rad_s.array() - mean).square().mean());
+      if (sd > kVaryingTrueRate) with_sf = true;
+    }
+  }
+
+  // Bins, targets and the heating mask (from the dT/dt estimate without lag).
+  std::vector<Binning> bins;
+  Stack st;
+  std::vector<double> y_all, heating;
+  Eigen::Index offset = 0;
+  for (const auto& r : records) {
+    bins.push_back(make_bins(r, o.bin_s));
+    const Binning& b = bins.back();
+    if (static_cast<std::size_t>(b.bins) < 2 * o.holdout_blocks) {
+      throw DataError({r.name, 0, "t_s"}, "record too short: " + std::to_string(b.bins) + " bins of " +
+                                              std::to_string(o.bin_s) + " s for " + std::to_string(o.holdout_blocks) +
+                                              " held-out blocks (need at least two bins per block)");
+    }
+    std::vector<double> y(static_cast<std::size_t>(b.bins), 0.0);
+    for (Eigen::Index i = 0; i < r.time_s.size(); ++i) {
+      const double w = r.true_rate_rad_s.size() ? r.true_rate_rad_s[i] : 0.0;
+      y[static_cast<std::size_t>(b.bin_of[static_cast<std::size_t>(i)])] += r.rate_rad_s[i] - (with_sf ? 0.0 : w);
+    }
+    const Features f0 = features(r, b, 0.0, o.derivative_tau_s, 0.0, t0, false);
+    for (int k = 0; k < b.bins; ++k) {
+      y_all.push_back(y[static_cast<std::size_t>(k)] / b.count[static_cast<std::size_t>(k)]);
+      if (!o.heating_only || f0.d[k] > 0) st.rows.push_back(offset + k);
+    }
+    offset += b.bins;
+    st.group_ends.push_back(static_cast<Eigen::Index>(st.rows.size()));
+  }
+  const Eigen::VectorXd y_stack = Eigen::Map<const Eigen::VectorXd>(y_all.data(), static_cast<Eigen::Index>(y_all.size()));
+  const Eigen::VectorXd y = y_stack(st.rows);
+  if (static_cast<std::size_t>(y.size()) < 2 * o.holdout_blocks * records.size()) {
+    throw DataError({records.front().name, 0, "temperature"},
+                    o.heating_only ? "too few heating bins to fit (dT/dt > 0)" : "too few bins to fit");
+  }
+
+  const auto features_for = [&](double lag, double width) {
+    std::vector<Features> fs;
+    for (std::size_t i = 0; i < records.size(); ++i) {
+      fs.push_back(features(records[i], bins[i], lag, o.derivative_tau_s, width, t0, with_sf));
+    }
+    return fs;
+  };
+
+  // ---- search -----------------------------------------------------------------------------
+  const bool physical = o.kind != ModelKind::Polynomial;
+  const std::vector<double> lags = physical ? o.lag_grid_s : std::vector<double>{0.0};
+  const std::vector<double> widths = physical ? o.hysteresis_width_grid_k : std::vector<double>{0.0};
+  const std::vector<bool> rate_terms = physical ? std::vector<bool>{false, true} : std::vector<bool>{false};
+  Candidate best;
+  std::size_t done = 0;
+  const std::size_t total = lags.size() * widths.size();
+  for (double lag : lags) {
+    for (double width : widths) {
+      const auto fs = features_for(lag, width);
+      for (bool rate_term : rate_terms) {
+        for (int p = o.min_order; p <= o.max_order; ++p) {
+          const Design dz = design(fs, st.rows, t0, p, rate_term, width > 0, with_sf);
+          double cv = std::numeric_limits<double>::infinity();
+          try {
+            cv = polynomial::blocked_cv_rmse(dz.A, y, o.holdout_blocks, st.group_ends);
+          } catch (const std::invalid_argument&) {
+          }
+          if (cv < best.cv) best = {lag, width, rate_term, p, cv};
+        }
+      }
+      o.progress(physical ? "calibrate: physical model search" : "calibrate: polynomial order", double(++done) / total);
+    }
+  }
+  if (!std::isfinite(best.cv)) throw DataError({records.front().name, 0, "rate"}, "no candidate model could be fitted");
+
+  // ---- final linear fit -------------------------------------------------------------------
+  const auto fs = features_for(best.lag_s, best.width_k);
+  const Design dz = design(fs, st.rows, t0, best.order, best.rate_term, best.width_k > 0, with_sf);
+  polynomial::LinearFit lf;
+  try {
+    lf = polynomial::least_squares(dz.A, y);
+  } catch (const std::invalid_argument& e) {
+    throw DataError({records.front().name, 0, "rate"}, std::string("least-squares fit failed: ") + e.what());
+  }
+  const Eigen::VectorXd residual = y - dz.A * lf.coefficients;
+  const double inflate = lag1_inflation(residual);
+
+  CalibrationModel m;
+  m.kind = o.kind;
+  m.device = o.device;
+  m.axis = o.axis;
+  m.reference_temp_c = t0;
+  m.extrapolation = o.extrapolation;
+  {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const auto& f : fs) {
+      lo = std::min(lo, f.tm_min);
+      hi = std::max(hi, f.tm_max);
+    }
+    if (o.heating_only) {  // the range of the bins used
+      const Eigen::VectorXd tm = stacked(fs, &Features::tm)(st.rows);
+      lo = tm.minCoeff();
+      hi = tm.maxCoeff();
+    }
+    m.valid_min_c = lo;
+    m.valid_max_c = hi;
+  }
+  double si = 1.0;
+  int c = 0;
+  for (int i = 0; i <= best.order; ++i, ++c) {
+    m.bias_rad_s.push_back(lf.coefficients[c] / si);
+    m.bias_sigma_rad_s.push_back(inflate * lf.standard_errors[c] / si);
+    si *= dz.scale;
+  }
+  m.lag_tau_s = best.lag_s;
+  m.derivative_tau_s = o.derivative_tau_s;
+  if (best.rate_term) {
+    m.temperature_rate_rad_s_per_k_s = lf.coefficients[c];
+    m.temperature_rate_sigma = inflate * lf.standard_errors[c];
+    ++c;
+  }
+  if (best.width_k > 0) {
+    m.hysteresis_width_k = best.width_k;
+    m.hysteresis_rad_s = lf.coefficients[c];
+    m.hysteresis_sigma_rad_s = inflate * lf.standard_errors[c];
+    ++c;
+  }
+  if (with_sf) {
+    for (int j = 0; j <= kScaleFactorOrder; ++j, ++c) m.scale_factor_per_k.push_back(lf.coefficients[c] / std::pow(dz.scale, j));
+  }
+
+  m.fit.bin_s = o.bin_s;
+  m.fit.holdout_blocks = o.holdout_blocks;
+  m.fit.holdout_rms_rad_s = best.cv;
+  m.fit.train_rms_rad_s = lf.rms_residual;
+  m.fit.heating_only = o.heating_only;
+  m.fit.scale_factor_fitted = with_sf;
+  for (const auto& r : records) {
+    m.fit.records.push_back(r.name);
+    m.fit.samples += static_cast<std::size_t>(r.time_s.size());
+  }
+  m.fit.selection = physical ? "order, lag_tau_s, dT/dt term and hysteresis width by blocked CV over orders " +
+                                   std::to_string(o.min_order) + ".." + std::to_string(o.max_order)
+                             : "order by blocked CV over " + std::to_string(o.min_order) + ".." + std::to_string(o.max_order);
+
+  // ---- RBF on the physical residual ----------------------------------------------------------
+  if (o.kind == ModelKind::Rbf) {
+    Eigen::MatrixXd X(y.size(), 3);
+    X.col(0) = stacked(fs, &Features::tm)(st.rows).cwiseMax(m.valid_min_c).cwiseMin(m.valid_max_c);
+    X.col(1) = stacked(fs, &Features::d)(st.rows);
+    X.col(2) = stacked(fs, &Features::s)(st.rows);
+    const auto split = rbf::blocked_holdout(X.rows(), 0.2, 10, o.seed);
+    const Eigen::MatrixXd Xt = X(split.train, Eigen::all), Xh = X(split.holdout, Eigen::all);
+    const Eigen::VectorXd rt = residual(split.train), rh = residual(split.holdout);
+    rbf::Config base;
+    base.seed = o.seed;
+    base.kmeans_sample = 2000;
+    const auto decode = [&](const Eigen::VectorXd& v) {
+      rbf::Config cfg = base;
+      cfg.sigma = v[0];
+      cfg.regularization = std::pow(10.0, v[1]);
+      cfg.centres = static_cast<std::size_t>(std::llround(v[2]));
+      return cfg;
+    };
+    std::size_t evals = 0;
+    const std::size_t expected = o.ga_population * (o.ga_generations + 1);
+    const auto objective = [&](const Eigen::VectorXd& v) {
+      double e = std::numeric_limits<double>::infinity();
+      try {
+        e = rbf::rmse(rbf::fit(Xt, rt, decode(v)).network.predict(Xh), rh);
+      } catch (const std::invalid_argument&) {
+      }
+      o.progress("calibrate: RBF tuning (GA)", std::min(1.0, double(++evals) / expected));
+      return e;
+    };
+    ga::Config gc;
+    gc.population = o.ga_population;
+    gc.generations = o.ga_generations;
+    gc.seed = o.seed;
+    gc.threads = 1;  // the progress counter is not thread safe
+    const double max_centres = std::min<double>(40.0, static_cast<double>(split.train.size()) / 4.0);
+    const auto result = ga::minimize(objective, {{0.1, 3.0, false}, {-8.0, -1.0, false}, {3.0, std::max(3.0, max_centres), true}}, gc);
+    const double no_rbf = rbf::rmse(Eigen::VectorXd::Zero(rh.size()), rh);
+    if (std::isfinite(result.best_value) && result.best_value < no_rbf) {
+      const auto net = rbf::fit(X, residual, decode(result.best)).network;
+      RbfTerm t;
+      for (int k = 0; k < 3; ++k) {
+        t.mean.push_back(net.mean()[k]);
+        t.scale.push_back(net.scale()[k]);
+      }
+      t.centres = net.centres();
+      t.sigma = net.sigma();
+      t.weights_rad_s.assign(net.weights().data(), net.weights().data() + net.weights().size());
+      t.bias_rad_s = net.bias();
+      m.rbf = std::move(t);
+      m.fit.selection += "; RBF on the physical residual, GA-tuned (holdout RMSE " + std::to_string(result.best_value) +
+                         " vs " + std::to_string(no_rbf) + " rad/s without it)";
+    } else {
+      // Honest fallback: the network did not help on held-out bins, so the model stays physical.
+      m.rbf = RbfTerm{{0, 0, 0}, {1, 1, 1}, Eigen::MatrixXd::Zero(0, 3), 1.0, {}, 0.0};
+      m.fit.selection += "; RBF did not improve the held-out residual (" + std::to_string(no_rbf) +
+                         " rad/s), network left empty";
+    }
+  }
+  m.validate();
+  return m;
+}
+
+}  // namespace driftlab::calibration

@@ -1,0 +1,63 @@
+// Fitting a CalibrationModel from one or more oven records (`driftlab calibrate`).
+//
+// Every candidate model is scored the way it will be used: the causal filters of the compensator
+// (calibration_model.hpp: model temperature lag, dT/dt estimate, hysteresis state) are run over the
+// full-rate record, the features and the target are averaged over bins of bin_s seconds (noise
+// down, rows few), and the linear coefficients are fitted by least squares on the bins
+// (regressor/polynomial's kernel). The model terms are linear in their coefficients, so bin means
+// of the features give the exact bin means of the fitted bias.
+//
+// Selection, on held-out contiguous time blocks of each record (blocked cross-validation):
+//   poly      order in [min_order, max_order]
+//   physical  order x lag_tau_s (lag_grid_s) x with/without dT/dt x hysteresis width
+//             (hysteresis_width_grid_k; 0 = no hysteresis term)
+//   rbf       the physical model, plus a Gaussian RBF network on (T_c, D, s) fitted to the physical
+//             residual; its width, ridge and number of centres are tuned by the GA (plugins/ga) on
+//             a blocked holdout (rbf::blocked_holdout), then refitted on all bins
+// Target: rate - true_rate when a true-rate column exists; when the true rate varies (a rate
+// table, std > 1e-3 rad/s), the scale factor (1 + sum_j k_j (T - T0)^j, j = 0..2) is fitted jointly.
+// Heating only (PX4 practice): only bins whose dT/dt estimate is > 0 are used.
+// Coefficient uncertainties: least-squares standard errors on the bins, inflated by
+// sqrt((1 + rho) / (1 - rho)) for the lag-1 autocorrelation rho of the bin residuals.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "models/calibration/calibration_model.hpp"
+
+namespace driftlab::calibration {
+
+struct Record {
+  std::string name;                  // file name, for the model's fit summary and messages
+  Eigen::VectorXd time_s, rate_rad_s, temp_c;
+  Eigen::VectorXd true_rate_rad_s;   // empty when unknown (static: 0)
+};
+
+struct FitOptions {
+  ModelKind kind = ModelKind::Polynomial;
+  std::string device, axis = "z";
+  double reference_temp_c = 25.0;            // T0, degC
+  Extrapolation extrapolation = Extrapolation::Clamp;
+  int min_order = 1, max_order = 5;          // polynomial orders scored
+  std::size_t holdout_blocks = 8;            // contiguous held-out blocks per record
+  double bin_s = 1.0;                        // fitting bins, s
+  bool heating_only = false;
+  double derivative_tau_s = 30.0;            // smoothing of dT/dt and of the hysteresis path, s
+  std::vector<double> lag_grid_s{0, 5, 15, 30, 60, 120, 240, 480};
+  std::vector<double> hysteresis_width_grid_k{0, 0.5, 1, 2, 4};
+  std::size_t ga_population = 16, ga_generations = 10;  // RBF tuning
+  std::uint64_t seed = 1;
+  unsigned threads = 1;
+  // Progress: (stage label, fraction in [0, 1]).
+  std::function<void(const std::string&, double)> progress = [](const std::string&, double) {};
+};
+
+// Throws DataError (naming the record) for records too short for the bins and blocks, and
+// ConfigError for inconsistent options.
+CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOptions& options);
+
+}  // namespace driftlab::calibration

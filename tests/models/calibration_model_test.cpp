@@ -1,0 +1,177 @@
+#include "models/calibration/calibration_model.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "framework/error.hpp"
+#include "models/calibration/fit.hpp"
+
+namespace driftlab::calibration {
+namespace {
+
+constexpr double kRounding = 1e-12;  // double evaluation of the same expression
+
+std::filesystem::path scratch(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / ("driftlab_calmodel_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  return dir / name;
+}
+
+CalibrationModel poly_model() {
+  CalibrationModel m;
+  m.reference_temp_c = 25.0;
+  m.valid_min_c = -10.0;
+  m.valid_max_c = 50.0;
+  m.bias_rad_s = {1e-3, 2e-5, -3e-7};
+  m.bias_sigma_rad_s = {1e-6, 1e-7, 1e-9};
+  return m;
+}
+
+CalibrationModel full_model() {
+  CalibrationModel m = poly_model();
+  m.kind = ModelKind::Rbf;
+  m.device = "fmvmg";
+  m.axis = "x";
+  m.extrapolation = Extrapolation::Linear;
+  m.lag_tau_s = 120.0;
+  m.derivative_tau_s = 20.0;
+  m.temperature_rate_rad_s_per_k_s = 3e-3;
+  m.hysteresis_rad_s = -2e-5;
+  m.hysteresis_width_k = 1.5;
+  RbfTerm r;
+  r.mean = {20, 0, 0};
+  r.scale = {15, 0.01, 0.5};
+  r.centres = Eigen::MatrixXd::Random(4, 3);
+  r.sigma = 0.7;
+  r.weights_rad_s = {1e-5, -2e-5, 3e-6, 4e-6};
+  r.bias_rad_s = 1e-6;
+  m.rbf = r;
+  m.scale_factor_per_k = {1e-4, 2e-5, 1e-8};
+  m.noise = {1e-4, 2e-5, 3e-7, 100.0};
+  m.fit.records = {"a.csv", "b.csv"};
+  m.fit.samples = 1234;
+  m.fit.selection = "test";
+  m.fit.holdout_rms_rad_s = 1e-5;
+  return m;
+}
+
+TEST(CalibrationModelJson, RoundTripsEveryField) {
+  const auto path = scratch("full.json");
+  const CalibrationModel m = full_model();
+  write_calibration_model(m, path);
+  const CalibrationModel r = read_calibration_model(path);
+  EXPECT_EQ(r.kind, ModelKind::Rbf);
+  EXPECT_EQ(r.axis, "x");
+  EXPECT_EQ(r.extrapolation, Extrapolation::Linear);
+  EXPECT_EQ(r.bias_rad_s, m.bias_rad_s);
+  EXPECT_EQ(r.bias_sigma_rad_s, m.bias_sigma_rad_s);
+  EXPECT_EQ(r.lag_tau_s, m.lag_tau_s);
+  EXPECT_EQ(r.hysteresis_width_k, m.hysteresis_width_k);
+  ASSERT_TRUE(r.rbf);
+  EXPECT_EQ(r.rbf->centres, m.rbf->centres);
+  EXPECT_EQ(r.rbf->weights_rad_s, m.rbf->weights_rad_s);
+  EXPECT_EQ(r.scale_factor_per_k, m.scale_factor_per_k);
+  EXPECT_EQ(r.noise.arw_rad_sqrt_s, m.noise.arw_rad_sqrt_s);
+  EXPECT_EQ(r.fit.records, m.fit.records);
+  EXPECT_EQ(to_json_text(r), to_json_text(m)) << "a read-back model writes the same file";
+}
+
+std::string error_of(const std::string& text) {
+  const auto path = scratch("bad.json");
+  std::ofstream(path) << text;
+  try {
+    read_calibration_model(path);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(CalibrationModelJson, BadFilesNameTheFileAndTheKey) {
+  const std::string good = to_json_text(poly_model());
+  EXPECT_NE(error_of("{ not json").find("not valid JSON"), std::string::npos);
+  EXPECT_NE(error_of("{\"format\": \"other/1\"}").find("format"), std::string::npos);
+  std::string missing = good;
+  missing.replace(missing.find("\"reference_temp_c\""), 18, "\"reference_temp\"");
+  const std::string e = error_of(missing);
+  EXPECT_NE(e.find("reference_temp_c"), std::string::npos) << e;
+  EXPECT_NE(e.find("bad.json"), std::string::npos) << e;
+  std::string mistyped = good;
+  mistyped.replace(mistyped.find("\"clamp\""), 7, "\"wild\"");
+  EXPECT_NE(error_of(mistyped).find("extrapolation"), std::string::npos);
+  EXPECT_THROW(read_calibration_model(scratch("absent.json")), ConfigError);
+}
+
+TEST(CausalCompensator, SubtractsThePolynomialAndFlagsAndClampsOutsideTheRange) {
+  const CalibrationModel m = poly_model();
+  CausalCompensator c(m);
+  const auto p = [&](double t) { return m.bias_rad_s[0] + m.bias_rad_s[1] * (t - 25) + m.bias_rad_s[2] * (t - 25) * (t - 25); };
+  EXPECT_NEAR(c.step(0.0, 0.01, 30.0), 0.01 - p(30.0), kRounding);
+  EXPECT_FALSE(c.last_extrapolated());
+  EXPECT_NEAR(c.step(1.0, 0.01, 70.0), 0.01 - p(50.0), kRounding) << "clamp holds the edge value";
+  EXPECT_TRUE(c.last_extrapolated());
+  CalibrationModel lin = m;
+  lin.extrapolation = Extrapolation::Linear;
+  const double slope = m.bias_rad_s[1] + 2 * m.bias_rad_s[2] * (50.0 - 25.0);
+  EXPECT_NEAR(lin.polynomial_bias_rad_s(60.0), p(50.0) + 10.0 * slope, kRounding);
+  CalibrationModel ev = m;
+  ev.extrapolation = Extrapolation::Evaluate;
+  EXPECT_NEAR(ev.polynomial_bias_rad_s(60.0), p(60.0), kRounding);
+}
+
+TEST(CausalCompensator, RejectsTimeThatDoesNotIncrease) {
+  CausalCompensator c(poly_model());
+  c.step(1.0, 0.0, 20.0);
+  EXPECT_THROW(c.step(1.0, 0.0, 20.0), DataError);
+}
+
+TEST(CausalState, TracksARampWithTheLagAndEstimatesItsRate) {
+  constexpr double kRamp = 0.02;  // K/s
+  CausalState s(100.0, 10.0, 1.0);
+  for (int i = 0; i <= 20000; ++i) s.step(0.1 * i, 20.0 + kRamp * 0.1 * i);
+  const double t = 2000.0;
+  constexpr double kSettled = 1e-7;  // the 2 K start transient decays to 2 K x exp(-20) = 4e-9 K
+  EXPECT_NEAR(s.model_temp_c(), 20.0 + kRamp * (t - 100.0), kSettled) << "a first-order lag delays a ramp by tau";
+  EXPECT_NEAR(s.temp_rate_k_s(), kRamp, 1e-9);
+  EXPECT_NEAR(s.hysteresis_state(), 1.0, 1e-9) << "heating branch";
+}
+
+TEST(CausalCompensator, BatchEqualsStepByStep) {
+  const CalibrationModel m = full_model();
+  Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(500, 0, 499);
+  Eigen::VectorXd temp = (20.0 + 10.0 * (t.array() / 80.0).sin()).matrix();
+  Eigen::VectorXd rate = Eigen::VectorXd::Constant(500, 0.01);
+  const auto batch = compensate(m, t, rate, temp);
+  CausalCompensator c(m);
+  for (int i = 0; i < 500; ++i) ASSERT_EQ(c.step(t[i], rate[i], temp[i]), batch.rate_rad_s[i]);
+}
+
+TEST(FitCalibration, RecoversAPolynomialBiasFromANoisyRecordOfBothDirections) {
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> noise(0.0, 1e-3);
+  Record r;
+  r.name = "synthetic";
+  const Eigen::Index n = 20000;
+  r.time_s = Eigen::VectorXd::LinSpaced(n, 0, (n - 1) * 0.5);
+  r.temp_c = (15.0 + 35.0 * (r.time_s.array() * (2 * M_PI / 10000.0)).sin()).matrix();
+  r.rate_rad_s.resize(n);
+  const std::vector<double> truth{2e-3, -4e-5, 6e-7};
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double d = r.temp_c[i] - 25.0;
+    r.rate_rad_s[i] = truth[0] + truth[1] * d + truth[2] * d * d + noise(rng);
+  }
+  FitOptions o;
+  o.kind = ModelKind::Polynomial;
+  const CalibrationModel m = fit_calibration({r}, o);
+  EXPECT_GE(m.order(), 2);
+  for (int i = 0; i <= 2; ++i) EXPECT_NEAR(m.bias_rad_s[i], truth[i], 5 * m.bias_sigma_rad_s[i] + 1e-12) << i;
+  EXPECT_NEAR(m.valid_min_c, -20.0, 0.01);
+  EXPECT_NEAR(m.valid_max_c, 50.0, 0.01);
+}
+
+}  // namespace
+}  // namespace driftlab::calibration
