@@ -10,6 +10,7 @@ void register_emd_plugins(Registry&);
 void register_effect_plugins(Registry&);
 void register_vmd_plugins(Registry&);
 void register_polynomial_plugins(Registry&);
+void register_wavelet_plugins(Registry&);
 
 void register_builtin_plugins(Registry& registry) {
   register_ga_plugins(registry);
@@ -20,6 +21,7 @@ void register_builtin_plugins(Registry& registry) {
   register_effect_plugins(registry);
   register_vmd_plugins(registry);
   register_polynomial_plugins(registry);
+  register_wavelet_plugins(registry);
 }
 
 }  // namespace driftlab
