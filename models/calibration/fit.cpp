@@ -161,6 +161,21 @@ double lag1_inflation(const Eigen::VectorXd& r) {
 
 }  // namespace
 
+Record slice(const Record& r, double from_s, double to_s) {
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index i = 0; i < r.time_s.size(); ++i) {
+    if (r.time_s[i] >= from_s && r.time_s[i] < to_s) rows.push_back(i);
+  }
+  Record out;
+  out.name = r.name;
+  out.time_s = r.time_s(rows);
+  out.rate_rad_s = r.rate_rad_s(rows);
+  out.temp_c = r.temp_c(rows);
+  if (r.true_rate_rad_s.size()) out.true_rate_rad_s = r.true_rate_rad_s(rows);
+  if (r.systematic_rad_s.size()) out.systematic_rad_s = r.systematic_rad_s(rows);
+  return out;
+}
+
 CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOptions& o) {
   if (records.empty()) throw ConfigError({"", 0, "data"}, "no calibration records");
   if (o.min_order < 0 || o.max_order < o.min_order || o.max_order > 12) {

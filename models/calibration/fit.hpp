@@ -35,7 +35,12 @@ struct Record {
   std::string name;                  // file name, for the model's fit summary and messages
   Eigen::VectorXd time_s, rate_rad_s, temp_c;
   Eigen::VectorXd true_rate_rad_s;   // empty when unknown (static: 0)
+  Eigen::VectorXd systematic_rad_s;  // empty, or the simulator's true systematic rate (evidence only)
 };
+
+// The samples of `r` with t in [from_s, to_s) (for calibrating on the first part of a record and
+// testing on the rest).
+Record slice(const Record& r, double from_s, double to_s);
 
 struct FitOptions {
   ModelKind kind = ModelKind::Polynomial;
@@ -44,11 +49,11 @@ struct FitOptions {
   Extrapolation extrapolation = Extrapolation::Clamp;
   int min_order = 1, max_order = 5;          // polynomial orders scored
   std::size_t holdout_blocks = 8;            // contiguous held-out blocks per record
-  double bin_s = 1.0;                        // fitting bins, s
+  double bin_s = 10.0;                       // fitting bins, s
   bool heating_only = false;
   double derivative_tau_s = 30.0;            // smoothing of dT/dt and of the hysteresis path, s
-  std::vector<double> lag_grid_s{0, 5, 15, 30, 60, 120, 240, 480};
-  std::vector<double> hysteresis_width_grid_k{0, 0.5, 1, 2, 4};
+  std::vector<double> lag_grid_s{0, 15, 30, 60, 120, 240, 480, 960};
+  std::vector<double> hysteresis_width_grid_k{0, 0.5, 1, 2, 4, 8};
   std::size_t ga_population = 16, ga_generations = 10;  // RBF tuning
   std::uint64_t seed = 1;
   unsigned threads = 1;

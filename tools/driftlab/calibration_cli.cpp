@@ -39,6 +39,7 @@ calibration::Record load_calibration_record(const std::string& path, const Calib
   r.rate_rad_s = ts.channel(role::kRate).values;
   r.temp_c = ts.channel(role::kTemperature).values;
   if (ts.has(role::kTrueRate)) r.true_rate_rad_s = ts.channel(role::kTrueRate).values;
+  if (ts.has("systematic")) r.systematic_rad_s = ts.channel("systematic").values;
   return r;
 }
 

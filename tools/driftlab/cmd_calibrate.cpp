@@ -8,7 +8,9 @@
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "models/calibration/fit.hpp"
+#include "framework/pipeline.hpp"
 #include "tools/driftlab/calibration_cli.hpp"
+#include "tools/driftlab/calibration_report.hpp"
 #include "tools/driftlab/cli.hpp"
 
 namespace driftlab::cli {
@@ -24,15 +26,19 @@ struct CalibrateOptions {
   double reference_temp_c = 25.0;
   int min_order = 1, max_order = 5;
   std::size_t blocks = 8;
-  double bin_s = 1.0;
+  double bin_s = 10.0;
   double derivative_tau_s = 30.0;
   bool heating_only = false;
   std::size_t ga_population = 16, ga_generations = 10;
   std::uint64_t seed = 1;
+  std::vector<std::string> evaluate;  // held-out records
+  double train_until_s = 0.0;         // > 0: calibrate on t < this of the --data record, test on the rest
+  std::string report;                 // report directory
+  std::string paper_pipeline;         // optional offline reference pipeline (e.g. models/pipelines/li2023.yaml)
+  std::string command_line;
 };
 
-void calibrate_command(const CalibrateOptions& o, const CommandEnv& env) {
-  check_output(o.out, o.data.paths);
+calibration::FitOptions fit_options(const CalibrateOptions& o, const CommandEnv& env) {
   calibration::FitOptions f;
   f.kind = parse_model_kind(o.model);
   f.extrapolation = parse_extrapolation(o.extrapolation);
@@ -50,11 +56,110 @@ void calibrate_command(const CalibrateOptions& o, const CommandEnv& env) {
   f.seed = o.seed;
   f.threads = env.threads;
   f.progress = [&env](const std::string& label, double fraction) { env.progress(label, fraction); };
-  const auto records = load_calibration_records(o.data);
-  const auto model = calibration::fit_calibration(records, f);
+  return f;
+}
+
+TimeSeries as_time_series(const calibration::Record& r) {
+  TimeSeries ts(r.time_s);
+  ts.set_channel({role::kRate, "rad/s", r.name, r.rate_rad_s});
+  ts.set_channel({role::kTemperature, "degC", r.name, r.temp_c});
+  return ts;
+}
+
+void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
+  std::vector<std::string> inputs = o.data.paths;
+  inputs.insert(inputs.end(), o.evaluate.begin(), o.evaluate.end());
+  check_output(o.out, inputs);
+  if (o.train_until_s > 0 && o.data.paths.size() != 1) {
+    throw ConfigError({"", 0, "--train-until"}, "--train-until splits a single --data record");
+  }
+  auto records = load_calibration_records(o.data);
+  std::vector<calibration::Record> held_out;
+  if (o.train_until_s > 0) {
+    const auto whole = records.front();
+    records = {calibration::slice(whole, -INFINITY, o.train_until_s)};
+    held_out.push_back(calibration::slice(whole, o.train_until_s, INFINITY));
+    held_out.back().name += " (t >= " + std::to_string(o.train_until_s) + " s)";
+    records.front().name += " (t < " + std::to_string(o.train_until_s) + " s)";
+    if (held_out.back().time_s.size() < 2) throw DataError({whole.name, 0, "t_s"}, "nothing left after --train-until");
+  }
+  for (const auto& p : o.evaluate) held_out.push_back(load_calibration_record(p, o.data));
+
+  const calibration::FitOptions base = fit_options(o, env);
+  const auto model = calibration::fit_calibration(records, base);
   calibration::write_calibration_model(model, o.out);
   print_model_summary(std::cout, model);
   std::cout << "wrote " << o.out << "\n";
+  if (o.report.empty()) {
+    if (!held_out.empty()) std::cout << "note: held-out records are scored only with --report DIR\n";
+    return;
+  }
+
+  ReportInput in;
+  in.command = o.command_line;
+  for (const auto& r : records) in.calibration_records.push_back(r.name);
+  in.evaluations = held_out;
+  bool any_truth = false;
+  for (const auto& r : held_out) any_truth = any_truth || r.true_rate_rad_s.size();
+  in.truth_note = any_truth ? "the true_rate column of each held-out record (the rate-table input)"
+                            : "zero: the held-out records are static (no true-rate column); the residual is the "
+                              "compensated output itself (Earth rate and any constant offset included)";
+  in.models.push_back({"none", "raw output", std::nullopt});
+  {
+    calibration::FitOptions px4 = base;
+    px4.kind = calibration::ModelKind::Polynomial;
+    px4.min_order = px4.max_order = 3;
+    px4.heating_only = true;
+    px4.extrapolation = calibration::Extrapolation::Clamp;
+    try {
+      in.models.push_back({"PX4-style poly", "order 3, heating samples only, clamped outside the range",
+                           calibration::fit_calibration(records, px4)});
+    } catch (const DataError& e) {
+      std::cerr << "note: no PX4-style baseline: " << e.what() << "\n";
+    }
+  }
+  for (const auto kind : {calibration::ModelKind::Polynomial, calibration::ModelKind::Physical,
+                          calibration::ModelKind::Rbf}) {
+    calibration::FitOptions f = base;
+    f.kind = kind;
+    const std::string name = calibration::to_string(kind);
+    in.models.push_back({name, "ours: heating and cooling, causal, " + o.extrapolation + " outside the range",
+                         kind == model.kind && !o.heating_only ? model : calibration::fit_calibration(records, f)});
+  }
+  if (!o.paper_pipeline.empty()) {
+    const auto& registry = env.registry();
+    const auto pipeline = load_pipeline(o.paper_pipeline, registry);
+    for (std::size_t e = 0; e < held_out.size(); ++e) {
+      nlohmann::json report;
+      PipelineRunOptions po;
+      po.threads = env.threads;
+      po.progress = [&env](std::size_t i, std::size_t n, const std::string& step, double f) {
+        env.progress("paper pipeline [" + std::to_string(i + 1) + "/" + std::to_string(n) + "] " + step, f);
+      };
+      const auto outputs = run_pipeline(pipeline, registry, as_time_series(held_out[e]), po, report);
+      const auto it = outputs.find("compensated");
+      if (it == outputs.end()) throw ConfigError({o.paper_pipeline, 0, "outputs"}, "needs an output named 'compensated'");
+      in.external.push_back({"paper pipeline (offline)", "fitted in-sample on this very record, non-causal",
+                             e, it->second.sum()});
+    }
+  }
+  const auto j = write_calibration_report(in, o.report);
+  for (const auto& ev : j["evaluations"]) {
+    std::cout << "held-out " << ev["record"].get<std::string>() << ":\n";
+    for (const auto& m : ev["methods"]) {
+      char line[200];
+      std::snprintf(line, sizeof line, "  %-26s residual drift %9.3f deg/h   B %s deg/h   extrapolated %5.1f %%\n",
+                    m["name"].get<std::string>().c_str(), m["residual_drift_dph"].get<double>(),
+                    m["B_dph"].is_null() ? "-" : std::to_string(m["B_dph"].get<double>()).c_str(),
+                    100.0 * m["extrapolated_fraction"].get<double>());
+      std::cout << line;
+    }
+    if (ev.contains("intrinsic_floor_drift_dph")) {
+      std::cout << "  intrinsic floor (measured - systematic): " << ev["intrinsic_floor_drift_dph"].get<double>()
+                << " deg/h\n";
+    }
+  }
+  std::cout << "wrote " << (std::filesystem::path(o.report) / "report.json").string() << " and report.html\n";
 }
 
 }  // namespace
@@ -98,7 +203,21 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--ga-population", o->ga_population, "RBF tuning: GA population")->check(CLI::Range(2, 1000))->capture_default_str();
   cmd->add_option("--ga-generations", o->ga_generations, "RBF tuning: GA generations")->check(CLI::Range(1, 1000))->capture_default_str();
   cmd->add_option("--seed", o->seed, "seed of the RBF tuning (k-means, holdout, GA)")->capture_default_str();
-  cmd->callback([o, &env] {
+  cmd->add_option("--evaluate", o->evaluate, "held-out record(s) to score in the report (other seed / profile)");
+  cmd->add_option("--train-until", o->train_until_s,
+                  "calibrate on t < this (s) of the single --data record and score the rest in the report")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--report", o->report,
+                  "write DIR/report.json and DIR/report.html: no compensation, PX4-style polynomial, poly, "
+                  "physical and rbf scored on the held-out records");
+  cmd->add_option("--paper-pipeline", o->paper_pipeline,
+                  "also run this pipeline offline on each held-out record as a reference (e.g. "
+                  "models/pipelines/li2023.yaml; slow on long records)");
+  cmd->callback([o, &env, cmd] {
+    o->command_line = "driftlab calibrate";
+    for (const auto* opt : cmd->get_options()) {
+      for (const auto& v : opt->results()) o->command_line += " " + opt->get_name() + " " + v;
+    }
     if (o->min_order > o->max_order) throw ConfigError({"", 0, "--min-order"}, "--min-order exceeds --max-order");
     calibrate_command(*o, env);
   });

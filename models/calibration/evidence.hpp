@@ -1,0 +1,35 @@
+// Scores of a compensated record against its truth (issue 13 evidence):
+//   residual drift  rms over blocks of block_s seconds (60 s) of the block means of
+//                   (output - truth); blocks without samples are skipped (burst records).
+//   B, N            from the overlapping Allan deviation of (output - truth) on an octave grid:
+//                   B = min ADEV / sqrt(2 ln 2 / pi) (IEEE-952 flicker floor, the paper's reading),
+//                   N = ADEV at tau = 1 s (white rate noise: sigma(tau) = N / sqrt(tau)).
+// Units: rad/s (B, drift), rad/sqrt(s) (N).
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+
+namespace driftlab::calibration {
+
+double residual_drift_rad_s(const Eigen::VectorXd& time_s, const Eigen::VectorXd& output,
+                            const Eigen::VectorXd& truth, double block_s = 60.0);
+
+struct AllanFigures {
+  double bias_instability_rad_s = 0.0;  // B
+  double arw_rad_sqrt_s = 0.0;          // N
+  double min_adev_tau_s = 0.0;          // where the minimum is
+};
+// Empty when the record is too short (< 3 s) or not evenly sampled enough for an Allan analysis.
+std::optional<AllanFigures> allan_figures(const Eigen::VectorXd& error_rad_s, double sample_rate_hz);
+
+// N and K (rate random walk) fitted to the Allan curve (IEEE-952 five-term fit), for the model's
+// noise terms (Kalman stage, Kalibr export). Empty when the fit is impossible.
+struct FittedNoise {
+  double arw_rad_sqrt_s = 0.0, arw_sigma = 0.0;
+  double bias_instability_rad_s = 0.0;
+  double rate_random_walk_rad_s_sqrt_s = 0.0, rate_random_walk_sigma = 0.0;
+};
+std::optional<FittedNoise> fit_noise(const Eigen::VectorXd& error_rad_s, double sample_rate_hz);
+
+}  // namespace driftlab::calibration

@@ -1,0 +1,42 @@
+// The `driftlab calibrate --report DIR` evidence: the competing models fitted on the same
+// calibration data, scored on held-out records (report.json + report.html).
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "models/calibration/calibration_model.hpp"
+#include "models/calibration/fit.hpp"
+
+namespace driftlab::cli {
+
+struct CompetingModel {
+  std::string name;         // "PX4-style poly", "poly", "physical", "rbf"
+  std::string description;  // how it was fitted
+  std::optional<calibration::CalibrationModel> model;  // empty: no compensation
+};
+
+// An externally computed output for a record (e.g. the offline paper pipeline), same length.
+struct ExternalOutput {
+  std::string name, description;
+  std::size_t record = 0;
+  Eigen::VectorXd rate_rad_s;
+};
+
+struct ReportInput {
+  std::string command;                           // the command line, for the report
+  std::vector<std::string> calibration_records;  // what was fitted
+  std::vector<CompetingModel> models;
+  std::vector<calibration::Record> evaluations;  // held-out records
+  std::vector<ExternalOutput> external;
+  std::string truth_note;                        // what "truth" is for these records
+};
+
+// Scores every model on every held-out record and writes DIR/report.json and DIR/report.html
+// (figures need gnuplot; without it the HTML says so). Returns the JSON.
+nlohmann::json write_calibration_report(const ReportInput& input, const std::filesystem::path& dir);
+
+}  // namespace driftlab::cli
