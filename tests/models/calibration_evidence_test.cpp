@@ -1,0 +1,111 @@
+// The checks of issue 13 on simulated oven runs of the FMVMG device file: calibrate on one run,
+// score on another seed with another chamber profile (warm start, other ramp rates, partial range).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "devices/device_file.hpp"
+#include "devices/simulator.hpp"
+#include "models/calibration/calibration_model.hpp"
+#include "models/calibration/evidence.hpp"
+#include "models/calibration/fit.hpp"
+
+namespace driftlab::calibration {
+namespace {
+
+constexpr double kRadPerSecPerDph = std::numbers::pi / 180.0 / 3600.0;
+constexpr double kSampleRateHz = 2.0;  // enough for 60-s block means; keeps every test to well under a second
+
+devices::DeviceDefinition fmvmg(bool with_effects) {
+  auto d = devices::load_device_file(std::string(DRIFTLAB_SOURCE_DIR) + "/devices/fmvmg.yaml");
+  // The intrinsic noise the temperature drift is compensated down to (issue 12 sets the device's
+  // bias instability to ~1-2 deg/h). Fixed here, so these checks do not depend on that change.
+  d.error_model.noise.bias_instability_rad_s = 1.5 * kRadPerSecPerDph;
+  d.error_model.noise.rate_random_walk_rad_s_sqrt_s = 0.5 * kRadPerSecPerDph / 60.0;
+  if (with_effects) {  // non-polynomial drift: lag, dT/dt and hysteresis
+    d.error_model.effects.thermal_lag = error_model::ThermalLag{400.0};
+    d.error_model.effects.temperature_rate = error_model::TemperatureRate{30.0 * kRadPerSecPerDph * 60.0};
+    d.error_model.effects.hysteresis = error_model::Hysteresis{40.0 * kRadPerSecPerDph, 2.0};
+  }
+  return d;
+}
+
+Record run(const devices::DeviceDefinition& device, const devices::SimulationProfile& profile, std::uint64_t seed) {
+  const auto s = devices::simulate(device, profile, {.sample_rate_hz = kSampleRateHz, .seed = seed});
+  return {"seed " + std::to_string(seed), s.time_s, s.rate_rad_s, s.temp_c, s.true_rate_rad_s, s.systematic_rate_rad_s};
+}
+
+// Warm start at 25 degC, 2 degC/min up to 50, 0.5 degC/min down to -10, 1.5 degC/min back to 30.
+devices::SimulationProfile other_profile() {
+  devices::SimulationProfile p;
+  p.chamber_c = devices::Profile(25.0);
+  p.chamber_c.hold(600).ramp_at_rate(50, 2.0 / 60).hold(900).ramp_at_rate(-10, 0.5 / 60).hold(900).ramp_at_rate(30, 1.5 / 60);
+  return p;
+}
+
+double drift(const Record& r, const std::optional<CalibrationModel>& m) {
+  const Eigen::VectorXd out = m ? compensate(*m, r.time_s, r.rate_rad_s, r.temp_c).rate_rad_s : r.rate_rad_s;
+  return residual_drift_rad_s(r.time_s, out, r.true_rate_rad_s);
+}
+
+CalibrationModel fit(const Record& r, ModelKind kind) {
+  FitOptions o;
+  o.kind = kind;
+  return fit_calibration({r}, o);
+}
+
+TEST(CalibrationEvidence, APolynomialModelCutsTheHeldOutDriftOfAnotherSeedAndProfileFiveTimes) {
+  const auto device = fmvmg(false);
+  const Record cal = run(device, devices::default_oven_profile(), 1);
+  const Record test = run(device, other_profile(), 2);
+  const double raw = drift(test, std::nullopt), compensated = drift(test, fit(cal, ModelKind::Polynomial));
+  EXPECT_GT(raw / compensated, 5.0) << "raw " << raw / kRadPerSecPerDph << " deg/h, compensated "
+                                    << compensated / kRadPerSecPerDph << " deg/h";
+}
+
+TEST(CalibrationEvidence, ThePhysicalModelBeatsThePolynomialWhereTheDriftIsNotPolynomial) {
+  const auto device = fmvmg(true);
+  const Record cal = run(device, devices::default_oven_profile(), 1);
+  const Record test = run(device, other_profile(), 2);
+  const double poly = drift(test, fit(cal, ModelKind::Polynomial));
+  const double physical = drift(test, fit(cal, ModelKind::Physical));
+  const double rbf = drift(test, fit(cal, ModelKind::Rbf));
+  EXPECT_LT(physical, 0.8 * poly) << "physical " << physical / kRadPerSecPerDph << " vs poly " << poly / kRadPerSecPerDph;
+  EXPECT_LT(rbf, 0.8 * poly) << "rbf " << rbf / kRadPerSecPerDph << " vs poly " << poly / kRadPerSecPerDph;
+}
+
+TEST(CalibrationEvidence, ThePhysicalModelDoesNoWorseWhereTheDriftIsPolynomial) {
+  // No effects: the device's bias(T) is smooth. Held-out noise makes two fits differ a little.
+  constexpr double kNoiseTolerance = 1.05;
+  const auto device = fmvmg(false);
+  const Record cal = run(device, devices::default_oven_profile(), 1);
+  const Record test = run(device, other_profile(), 2);
+  const double poly = drift(test, fit(cal, ModelKind::Polynomial));
+  const double physical = drift(test, fit(cal, ModelKind::Physical));
+  EXPECT_LT(physical, kNoiseTolerance * poly) << physical / kRadPerSecPerDph << " vs " << poly / kRadPerSecPerDph;
+}
+
+TEST(CalibrationEvidence, OutsideThePartialCalibratedRangeThePolicyHoldsAndIsReported) {
+  const auto device = fmvmg(false);
+  devices::SimulationProfile partial;
+  partial.chamber_c = devices::Profile(10.0);
+  partial.chamber_c.hold(600).ramp_at_rate(40, 1.0 / 60).hold(600).ramp_at_rate(10, 1.0 / 60).hold(600);
+  const CalibrationModel m = fit(run(device, partial, 1), ModelKind::Polynomial);
+  const Record test = run(device, devices::default_oven_profile(), 2);  // -30 .. 60 degC
+  const auto c = compensate(m, test.time_s, test.rate_rad_s, test.temp_c);
+  int outside = 0;
+  for (Eigen::Index i = 0; i < test.time_s.size(); ++i) {
+    const bool out = test.temp_c[i] < m.valid_min_c || test.temp_c[i] > m.valid_max_c;
+    ASSERT_EQ(static_cast<bool>(c.extrapolated[static_cast<std::size_t>(i)]), out) << i;
+    if (out) {
+      ++outside;
+      const double edge = test.temp_c[i] < m.valid_min_c ? m.valid_min_c : m.valid_max_c;
+      ASSERT_EQ(c.bias_rad_s[i], m.polynomial_bias_rad_s(edge)) << "clamp: the edge value";
+    }
+  }
+  EXPECT_GT(outside, test.time_s.size() / 4);
+}
+
+}  // namespace
+}  // namespace driftlab::calibration
