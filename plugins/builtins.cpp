@@ -11,6 +11,7 @@ void register_effect_plugins(Registry&);
 void register_vmd_plugins(Registry&);
 void register_polynomial_plugins(Registry&);
 void register_wavelet_plugins(Registry&);
+void register_tfpf_plugins(Registry&);
 
 void register_builtin_plugins(Registry& registry) {
   register_ga_plugins(registry);
@@ -22,6 +23,7 @@ void register_builtin_plugins(Registry& registry) {
   register_vmd_plugins(registry);
   register_polynomial_plugins(registry);
   register_wavelet_plugins(registry);
+  register_tfpf_plugins(registry);
 }
 
 }  // namespace driftlab

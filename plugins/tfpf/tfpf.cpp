@@ -1,0 +1,194 @@
+#include "plugins/tfpf/tfpf.hpp"
+
+#include <fftw3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "plugins/vmd/fftw_plans.hpp"
+
+namespace driftlab::tfpf {
+namespace {
+
+using Complex = std::complex<double>;
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kLow = 0.05, kHigh = 0.45;  // scaled IF range, cycles per sample
+constexpr double kMadToSigma = 0.6744897501960817;
+constexpr double kShareShort = 0.1, kShareLong = 0.9;
+
+void require(bool condition, const std::string& message) {
+  if (!condition) throw std::invalid_argument("tfpf: " + message);
+}
+
+bool odd_at_least_3(int v) { return v >= 3 && v % 2 == 1; }
+
+void validate(const Config& c) {
+  require(odd_at_least_3(c.window), "window must be odd and >= 3");
+  require(odd_at_least_3(c.short_window), "short_window must be odd and >= 3");
+  require(odd_at_least_3(c.long_window), "long_window must be odd and >= 3");
+  require(c.long_window >= c.short_window, "long_window must be >= short_window");
+}
+
+double median_of(std::vector<double> v) {
+  const std::size_t n = v.size();
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(n / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  if (n % 2 == 1) return *mid;
+  return 0.5 * (*mid + *std::max_element(v.begin(), mid));
+}
+
+Eigen::Index reflect(Eigen::Index i, Eigen::Index n) {
+  Eigen::Index r = i % (2 * n);
+  if (r < 0) r += 2 * n;
+  return r < n ? r : 2 * n - 1 - r;
+}
+
+class Plan {
+ public:
+  Plan(int size, Complex* in, Complex* out) {
+    const std::lock_guard<std::mutex> lock(fftw::planner_mutex());
+    plan_ = fftw_plan_dft_1d(size, reinterpret_cast<fftw_complex*>(in), reinterpret_cast<fftw_complex*>(out),
+                             FFTW_FORWARD, FFTW_ESTIMATE | FFTW_PRESERVE_INPUT);
+    if (!plan_) throw std::runtime_error("tfpf: FFTW could not create a plan");
+  }
+  ~Plan() {
+    const std::lock_guard<std::mutex> lock(fftw::planner_mutex());
+    fftw_destroy_plan(plan_);
+  }
+  Plan(const Plan&) = delete;
+  Plan& operator=(const Plan&) = delete;
+  void run() const { fftw_execute(plan_); }
+
+ private:
+  fftw_plan plan_ = nullptr;
+};
+
+}  // namespace
+
+NoiseEstimate estimate_noise(const Eigen::VectorXd& x) {
+  NoiseEstimate out;
+  const Eigen::Index n = x.size();
+  if (n < 3) return out;
+  std::vector<double> d(static_cast<std::size_t>(n - 1));
+  for (Eigen::Index i = 0; i + 1 < n; ++i) d[static_cast<std::size_t>(i)] = x[i + 1] - x[i];
+  const double centre = median_of(d);
+  for (double& v : d) v = std::abs(v - centre);
+  out.sigma = median_of(d) / kMadToSigma / std::sqrt(2.0);
+  const double variance = (x.array() - x.mean()).square().mean();
+  out.share = variance > 0.0 ? std::clamp(out.sigma * out.sigma / variance, 0.0, 1.0) : 0.0;
+  return out;
+}
+
+int window_for_noise_share(double share, int short_window, int long_window, Eigen::Index n) {
+  double length = 0.0;
+  if (share <= kShareShort) {
+    length = short_window;
+  } else if (share >= kShareLong) {
+    length = long_window;
+  } else {
+    const double t = (share - kShareShort) / (kShareLong - kShareShort);
+    length = short_window * std::pow(static_cast<double>(long_window) / short_window, t);
+  }
+  int odd = 2 * static_cast<int>(std::lround((length - 1.0) / 2.0)) + 1;
+  const auto largest = static_cast<int>(std::min<Eigen::Index>(n % 2 == 1 ? n : n - 1, 1 << 30));
+  return std::max(3, std::min(odd, largest));
+}
+
+Result filter(const Eigen::VectorXd& x, const Config& config) {
+  validate(config);
+  const Eigen::Index n = x.size();
+  if (n < 3) throw std::domain_error("tfpf: the signal needs at least 3 samples, got " + std::to_string(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (!std::isfinite(x[i])) throw std::domain_error("tfpf: sample " + std::to_string(i) + " is not finite");
+  }
+  Result result;
+  const NoiseEstimate noise = estimate_noise(x);
+  result.noise_sigma = noise.sigma;
+  result.noise_share = noise.share;
+  result.window = config.rule == WindowRule::Fixed
+                      ? std::min(config.window, static_cast<int>(n % 2 == 1 ? n : n - 1))
+                      : window_for_noise_share(noise.share, config.short_window, config.long_window, n);
+  result.window = std::max(result.window, 3);
+
+  const double lo = x.minCoeff(), hi = x.maxCoeff();
+  if (!(hi > lo)) {
+    result.filtered = x;
+    return result;
+  }
+  const double range = hi - lo;
+  const Eigen::Index h = (result.window - 1) / 2;
+
+  // Scaled, reflected, FM phase (steps 1-3).
+  const Eigen::Index total = n + 2 * h;
+  std::vector<double> phase(static_cast<std::size_t>(total));
+  double previous = 0.0, accumulated = 0.0;
+  for (Eigen::Index i = 0; i < total; ++i) {
+    const double scaled = kLow + (kHigh - kLow) * (x[reflect(i - h, n)] - lo) / range;
+    if (i > 0) accumulated += kPi * (previous + scaled);
+    phase[static_cast<std::size_t>(i)] = accumulated;
+    previous = scaled;
+  }
+
+  // Lag window.
+  std::vector<double> w(static_cast<std::size_t>(h + 1));
+  for (Eigen::Index m = 0; m <= h; ++m) {
+    w[static_cast<std::size_t>(m)] =
+        config.lag_window == LagWindow::Rectangular ? 1.0
+                                                    : 0.5 * (1.0 + std::cos(kPi * static_cast<double>(m) / static_cast<double>(h + 1)));
+  }
+
+  int fft_size = 64;
+  while (fft_size < 4 * (h + 1)) fft_size *= 2;
+  std::vector<Complex> in(static_cast<std::size_t>(fft_size), Complex(0.0, 0.0));
+  std::vector<Complex> out(static_cast<std::size_t>(fft_size));
+  const Plan plan(fft_size, in.data(), out.data());
+  std::vector<double> dphi(static_cast<std::size_t>(h + 1));
+  const double grid = 1.0 / fft_size;
+
+  result.filtered.resize(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Eigen::Index centre = k + h;  // index into the extended phase
+    for (Eigen::Index m = 0; m <= h; ++m) {
+      const double d = phase[static_cast<std::size_t>(centre + m)] - phase[static_cast<std::size_t>(centre - m)];
+      dphi[static_cast<std::size_t>(m)] = d;
+      in[static_cast<std::size_t>(m)] = w[static_cast<std::size_t>(m)] * Complex(std::cos(d), std::sin(d));
+    }
+    plan.run();
+    // W(f_k) = 2 Re S(f_k) - w[0]: the maximum of Re S is the maximum of W.
+    int best = 0;
+    double best_value = out[0].real();
+    for (int b = 1; b < fft_size; ++b) {
+      if (out[static_cast<std::size_t>(b)].real() > best_value) {
+        best_value = out[static_cast<std::size_t>(b)].real();
+        best = b;
+      }
+    }
+    // Newton on W'(f) = 0 within one grid step of the coarse peak (step 5).
+    const double f0 = best * grid;
+    double f = f0;
+    for (int iteration = 0; iteration < 8; ++iteration) {
+      double first = 0.0, second = 0.0;
+      for (Eigen::Index m = 1; m <= h; ++m) {
+        const double omega = 2.0 * kPi * static_cast<double>(m);
+        const double arg = dphi[static_cast<std::size_t>(m)] - omega * f;
+        const double wm = w[static_cast<std::size_t>(m)];
+        first += wm * omega * std::sin(arg);
+        second -= wm * omega * omega * std::cos(arg);
+      }
+      if (!(second < 0.0)) break;
+      const double next = std::clamp(f - first / second, f0 - grid, f0 + grid);
+      const bool done = std::abs(next - f) < 1e-13;
+      f = next;
+      if (done) break;
+    }
+    result.filtered[k] = lo + (0.5 * f - kLow) * range / (kHigh - kLow);
+  }
+  return result;
+}
+
+}  // namespace driftlab::tfpf
