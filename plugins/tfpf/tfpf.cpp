@@ -1,16 +1,14 @@
 #include "plugins/tfpf/tfpf.hpp"
 
-#include <fftw3.h>
-
 #include <algorithm>
 #include <cmath>
 #include <complex>
-#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "plugins/vmd/fftw_plans.hpp"
+#include "plugins/signal/fftw_plan.hpp"
+#include "plugins/signal/robust.hpp"
 
 namespace driftlab::tfpf {
 namespace {
@@ -18,7 +16,6 @@ namespace {
 using Complex = std::complex<double>;
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kLow = 0.05, kHigh = 0.45;  // scaled IF range, cycles per sample
-constexpr double kMadToSigma = 0.6744897501960817;
 constexpr double kShareShort = 0.1, kShareLong = 0.9;
 
 void require(bool condition, const std::string& message) {
@@ -34,40 +31,6 @@ void validate(const Config& c) {
   require(c.long_window >= c.short_window, "long_window must be >= short_window");
 }
 
-double median_of(std::vector<double> v) {
-  const std::size_t n = v.size();
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(n / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  if (n % 2 == 1) return *mid;
-  return 0.5 * (*mid + *std::max_element(v.begin(), mid));
-}
-
-Eigen::Index reflect(Eigen::Index i, Eigen::Index n) {
-  Eigen::Index r = i % (2 * n);
-  if (r < 0) r += 2 * n;
-  return r < n ? r : 2 * n - 1 - r;
-}
-
-class Plan {
- public:
-  Plan(int size, Complex* in, Complex* out) {
-    const std::lock_guard<std::mutex> lock(fftw::planner_mutex());
-    plan_ = fftw_plan_dft_1d(size, reinterpret_cast<fftw_complex*>(in), reinterpret_cast<fftw_complex*>(out),
-                             FFTW_FORWARD, FFTW_ESTIMATE | FFTW_PRESERVE_INPUT);
-    if (!plan_) throw std::runtime_error("tfpf: FFTW could not create a plan");
-  }
-  ~Plan() {
-    const std::lock_guard<std::mutex> lock(fftw::planner_mutex());
-    fftw_destroy_plan(plan_);
-  }
-  Plan(const Plan&) = delete;
-  Plan& operator=(const Plan&) = delete;
-  void run() const { fftw_execute(plan_); }
-
- private:
-  fftw_plan plan_ = nullptr;
-};
-
 }  // namespace
 
 NoiseEstimate estimate_noise(const Eigen::VectorXd& x) {
@@ -76,9 +39,9 @@ NoiseEstimate estimate_noise(const Eigen::VectorXd& x) {
   if (n < 3) return out;
   std::vector<double> d(static_cast<std::size_t>(n - 1));
   for (Eigen::Index i = 0; i + 1 < n; ++i) d[static_cast<std::size_t>(i)] = x[i + 1] - x[i];
-  const double centre = median_of(d);
+  const double centre = signal::median(d);
   for (double& v : d) v = std::abs(v - centre);
-  out.sigma = median_of(d) / kMadToSigma / std::sqrt(2.0);
+  out.sigma = signal::median(d) / signal::kMadToSigma / std::sqrt(2.0);
   const double variance = (x.array() - x.mean()).square().mean();
   out.share = variance > 0.0 ? std::clamp(out.sigma * out.sigma / variance, 0.0, 1.0) : 0.0;
   return out;
@@ -102,10 +65,7 @@ int window_for_noise_share(double share, int short_window, int long_window, Eige
 Result filter(const Eigen::VectorXd& x, const Config& config) {
   validate(config);
   const Eigen::Index n = x.size();
-  if (n < 3) throw std::domain_error("tfpf: the signal needs at least 3 samples, got " + std::to_string(n));
-  for (Eigen::Index i = 0; i < n; ++i) {
-    if (!std::isfinite(x[i])) throw std::domain_error("tfpf: sample " + std::to_string(i) + " is not finite");
-  }
+  signal::require_finite_samples(x, 3, "tfpf");
   Result result;
   const NoiseEstimate noise = estimate_noise(x);
   result.noise_sigma = noise.sigma;
@@ -128,7 +88,7 @@ Result filter(const Eigen::VectorXd& x, const Config& config) {
   std::vector<double> phase(static_cast<std::size_t>(total));
   double previous = 0.0, accumulated = 0.0;
   for (Eigen::Index i = 0; i < total; ++i) {
-    const double scaled = kLow + (kHigh - kLow) * (x[reflect(i - h, n)] - lo) / range;
+    const double scaled = kLow + (kHigh - kLow) * (x[signal::reflect(i - h, n)] - lo) / range;
     if (i > 0) accumulated += kPi * (previous + scaled);
     phase[static_cast<std::size_t>(i)] = accumulated;
     previous = scaled;
@@ -146,7 +106,11 @@ Result filter(const Eigen::VectorXd& x, const Config& config) {
   while (fft_size < 4 * (h + 1)) fft_size *= 2;
   std::vector<Complex> in(static_cast<std::size_t>(fft_size), Complex(0.0, 0.0));
   std::vector<Complex> out(static_cast<std::size_t>(fft_size));
-  const Plan plan(fft_size, in.data(), out.data());
+  const fftw::Plan plan([&] {
+    return fftw_plan_dft_1d(fft_size, reinterpret_cast<fftw_complex*>(in.data()),
+                            reinterpret_cast<fftw_complex*>(out.data()), FFTW_FORWARD,
+                            FFTW_ESTIMATE | FFTW_PRESERVE_INPUT);
+  });
   std::vector<double> dphi(static_cast<std::size_t>(h + 1));
   const double grid = 1.0 / fft_size;
 
@@ -158,7 +122,7 @@ Result filter(const Eigen::VectorXd& x, const Config& config) {
       dphi[static_cast<std::size_t>(m)] = d;
       in[static_cast<std::size_t>(m)] = w[static_cast<std::size_t>(m)] * Complex(std::cos(d), std::sin(d));
     }
-    plan.run();
+    fftw_execute(plan.get());
     // W(f_k) = 2 Re S(f_k) - w[0]: the maximum of Re S is the maximum of W.
     int best = 0;
     double best_value = out[0].real();

@@ -1,19 +1,16 @@
 #include "plugins/vmd/vmd.hpp"
 
-#include <fftw3.h>
-
 #include <algorithm>
 #include <cmath>
 #include <complex>
-#include <memory>
-#include <mutex>
 #include <numeric>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "framework/seeded_random.hpp"
-#include "plugins/vmd/fftw_plans.hpp"
+#include "plugins/signal/fftw_plan.hpp"
+#include "plugins/signal/robust.hpp"
 
 namespace driftlab::vmd {
 namespace {
@@ -32,34 +29,13 @@ void validate(const Config& c) {
   require(c.max_iterations >= 1, "max_iterations must be >= 1");
 }
 
-// Owns one FFTW plan; creation and destruction under the process-wide planner lock.
-class Plan {
- public:
-  Plan(fftw_plan plan) : plan_(plan) {
-    if (!plan_) throw std::runtime_error("vmd: FFTW could not create a plan");
-  }
-  ~Plan() {
-    const std::lock_guard<std::mutex> lock(fftw::planner_mutex());
-    fftw_destroy_plan(plan_);
-  }
-  Plan(const Plan&) = delete;
-  Plan& operator=(const Plan&) = delete;
-  fftw_plan get() const { return plan_; }
-
- private:
-  fftw_plan plan_;
-};
-
 fftw_complex* as_fftw(Complex* p) { return reinterpret_cast<fftw_complex*>(p); }
 
 // Half-sample symmetric extension to 2N samples (step 1 of the header).
 std::vector<double> mirror(const Eigen::VectorXd& x) {
   const Eigen::Index n = x.size();
-  const Eigen::Index half = n / 2;
   std::vector<double> out(static_cast<std::size_t>(2 * n));
-  for (Eigen::Index i = 0; i < half; ++i) out[static_cast<std::size_t>(i)] = x[half - 1 - i];
-  for (Eigen::Index i = 0; i < n; ++i) out[static_cast<std::size_t>(half + i)] = x[i];
-  for (Eigen::Index j = 0; j < n - half; ++j) out[static_cast<std::size_t>(half + n + j)] = x[n - 1 - j];
+  for (Eigen::Index i = 0; i < 2 * n; ++i) out[static_cast<std::size_t>(i)] = x[signal::reflect(i - n / 2, n)];
   return out;
 }
 
@@ -84,10 +60,7 @@ std::vector<double> initial_centres(const Config& c, Eigen::Index n) {
 Result decompose(const Eigen::VectorXd& x, const Config& config) {
   validate(config);
   const Eigen::Index n = x.size();
-  if (n < 4) throw std::domain_error("vmd: the signal needs at least 4 samples, got " + std::to_string(n));
-  for (Eigen::Index i = 0; i < n; ++i) {
-    if (!std::isfinite(x[i])) throw std::domain_error("vmd: sample " + std::to_string(i) + " is not finite");
-  }
+  signal::require_finite_samples(x, 4, "vmd");
 
   const Eigen::Index m = 2 * n;         // extended length
   const Eigen::Index bins = m / 2 + 1;  // non-negative frequencies
@@ -98,15 +71,15 @@ Result decompose(const Eigen::VectorXd& x, const Config& config) {
   std::vector<Complex> f_hat(nb);
   std::vector<double> time_buffer(static_cast<std::size_t>(m));
   std::vector<Complex> spectrum_buffer(nb);
-  std::unique_ptr<Plan> forward, backward;
-  {
-    const std::lock_guard<std::mutex> lock(fftw::planner_mutex());
-    forward = std::make_unique<Plan>(fftw_plan_dft_r2c_1d(static_cast<int>(m), time_buffer.data(),
-                                                          as_fftw(spectrum_buffer.data()), FFTW_ESTIMATE));
-    backward = std::make_unique<Plan>(fftw_plan_dft_c2r_1d(static_cast<int>(m), as_fftw(spectrum_buffer.data()),
-                                                           time_buffer.data(), FFTW_ESTIMATE));
-  }
-  fftw_execute_dft_r2c(forward->get(), extended.data(), as_fftw(f_hat.data()));
+  const fftw::Plan forward([&] {
+    return fftw_plan_dft_r2c_1d(static_cast<int>(m), time_buffer.data(), as_fftw(spectrum_buffer.data()),
+                                FFTW_ESTIMATE);
+  });
+  const fftw::Plan backward([&] {
+    return fftw_plan_dft_c2r_1d(static_cast<int>(m), as_fftw(spectrum_buffer.data()), time_buffer.data(),
+                                FFTW_ESTIMATE);
+  });
+  fftw_execute_dft_r2c(forward.get(), extended.data(), as_fftw(f_hat.data()));
 
   std::vector<double> freq(nb);
   for (std::size_t b = 0; b < nb; ++b) freq[b] = static_cast<double>(b) / static_cast<double>(m);
@@ -164,7 +137,7 @@ Result decompose(const Eigen::VectorXd& x, const Config& config) {
     const std::size_t k = order[column];
     std::copy_n(u_hat.data() + k * nb, nb, spectrum_buffer.data());
     // The DC and Nyquist bins of a real signal's spectrum are real; c2r uses their real parts.
-    fftw_execute_dft_c2r(backward->get(), as_fftw(spectrum_buffer.data()), time_buffer.data());
+    fftw_execute_dft_c2r(backward.get(), as_fftw(spectrum_buffer.data()), time_buffer.data());
     const auto col = static_cast<Eigen::Index>(column);
     for (Eigen::Index i = 0; i < n; ++i) result.modes(i, col) = time_buffer[static_cast<std::size_t>(half + i)] * scale;
     result.centre_frequencies[col] = omega[k];

@@ -9,10 +9,10 @@
 #include <stdexcept>
 #include <string>
 
+#include "plugins/signal/robust.hpp"
+
 namespace driftlab::wavelet {
 namespace {
-
-constexpr double kMadToSigma = 0.6744897501960817;  // median of |Z|, Z standard normal
 
 void require(bool condition, const std::string& message) {
   if (!condition) throw std::invalid_argument("wavelet: " + message);
@@ -37,23 +37,6 @@ struct WorkspaceDeleter {
   void operator()(gsl_wavelet_workspace* w) const { gsl_wavelet_workspace_free(w); }
 };
 
-// Half-sample symmetric reflection of index i into [0, n), period 2n.
-Eigen::Index reflect(Eigen::Index i, Eigen::Index n) {
-  Eigen::Index r = i % (2 * n);
-  if (r < 0) r += 2 * n;
-  return r < n ? r : 2 * n - 1 - r;
-}
-
-double median_of(std::vector<double>& v) {
-  const std::size_t n = v.size();
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(n / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  if (n % 2 == 1) return *mid;
-  const double upper = *mid;
-  const double lower = *std::max_element(v.begin(), mid);
-  return 0.5 * (lower + upper);
-}
-
 }  // namespace
 
 bool valid_order(Family family, int order) {
@@ -75,7 +58,7 @@ bool valid_order(Family family, int order) {
 double mad_sigma(std::vector<double> coefficients) {
   if (coefficients.empty()) return 0.0;
   for (double& c : coefficients) c = std::abs(c);
-  return median_of(coefficients) / kMadToSigma;
+  return signal::median(std::move(coefficients)) / signal::kMadToSigma;
 }
 
 double universal_threshold(std::size_t n) {
@@ -144,10 +127,7 @@ Result denoise(const Eigen::VectorXd& x, const Config& config) {
           "order " + std::to_string(config.order) + " is not implemented for this wavelet family");
   require(config.levels >= 1, "levels must be >= 1");
   const Eigen::Index n = x.size();
-  if (n < 8) throw std::domain_error("wavelet: the signal needs at least 8 samples, got " + std::to_string(n));
-  for (Eigen::Index i = 0; i < n; ++i) {
-    if (!std::isfinite(x[i])) throw std::domain_error("wavelet: sample " + std::to_string(i) + " is not finite");
-  }
+  signal::require_finite_samples(x, 8, "wavelet");
 
   Eigen::Index m = 1;
   int total_levels = 0;
@@ -157,7 +137,7 @@ Result denoise(const Eigen::VectorXd& x, const Config& config) {
   }
   const Eigen::Index before = (m - n) / 2;
   std::vector<double> data(static_cast<std::size_t>(m));
-  for (Eigen::Index i = 0; i < m; ++i) data[static_cast<std::size_t>(i)] = x[reflect(i - before, n)];
+  for (Eigen::Index i = 0; i < m; ++i) data[static_cast<std::size_t>(i)] = x[signal::reflect(i - before, n)];
 
   // Orders are validated above, so GSL's allocation cannot fail on them; a null means no memory.
   std::unique_ptr<gsl_wavelet, WaveletDeleter> w(gsl_wavelet_alloc(gsl_type(config.family), static_cast<std::size_t>(config.order)));

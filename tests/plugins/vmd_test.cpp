@@ -9,12 +9,13 @@
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
-#include "framework/seeded_random.hpp"
+#include "tests/plugins/seeded_noise.hpp"
 
 namespace driftlab {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using testing_noise::kPi;
+using testing_noise::standard_normal;
 
 Eigen::VectorXd sampled(Eigen::Index n, double fs, const std::function<double(double)>& f) {
   Eigen::VectorXd x(n);
@@ -28,16 +29,6 @@ double rms(const Eigen::VectorXd& v) { return std::sqrt(v.squaredNorm() / static
 double interior_rms(const Eigen::VectorXd& v, double margin_fraction) {
   const auto margin = static_cast<Eigen::Index>(margin_fraction * static_cast<double>(v.size()));
   return rms(v.segment(margin, v.size() - 2 * margin));
-}
-
-Eigen::VectorXd standard_normal(Eigen::Index n, std::uint64_t seed) {
-  SeededRandom random(seed);
-  Eigen::VectorXd out(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double u1 = 1.0 - random.uniform(), u2 = random.uniform();
-    out[i] = std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
-  }
-  return out;
 }
 
 // Dragomiretskiy & Zosso 2014, Sec. V-A, f_Sig1: cos(4 pi t) + 1/4 cos(48 pi t) + 1/16 cos(576 pi t)

@@ -10,22 +10,13 @@
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
-#include "framework/seeded_random.hpp"
+#include "tests/plugins/seeded_noise.hpp"
 
 namespace driftlab {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-Eigen::VectorXd standard_normal(Eigen::Index n, std::uint64_t seed) {
-  SeededRandom random(seed);
-  Eigen::VectorXd out(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double u1 = 1.0 - random.uniform(), u2 = random.uniform();
-    out[i] = std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
-  }
-  return out;
-}
+using testing_noise::kPi;
+using testing_noise::standard_normal;
 
 double mse(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return (a - b).squaredNorm() / static_cast<double>(a.size());
