@@ -1,0 +1,67 @@
+// `driftlab export`: writes a calibration model in a firmware / navigation format
+// (models/calibration/exports.hpp): c-header, px4, ardupilot, kalibr, json.
+#include <iostream>
+#include <memory>
+
+#include "framework/atomic_file.hpp"
+#include "framework/error.hpp"
+#include "models/calibration/exports.hpp"
+#include "tools/driftlab/cli.hpp"
+
+namespace driftlab::cli {
+namespace {
+
+struct ExportOptions {
+  std::string model, format, out;
+  calibration::ExportOptions e;
+};
+
+void export_command(const ExportOptions& o) {
+  check_output(o.out, {o.model});
+  const auto model = calibration::read_calibration_model(o.model);
+  calibration::ExportResult r;
+  if (o.format == "c-header") {
+    r = calibration::export_c_header(model, o.e);
+  } else if (o.format == "px4") {
+    r = calibration::export_px4_params(model, o.e);
+  } else if (o.format == "ardupilot") {
+    r = calibration::export_ardupilot_params(model, o.e);
+  } else if (o.format == "kalibr") {
+    r = calibration::export_kalibr_imu_yaml(model, o.e);
+  } else {
+    r.text = calibration::to_json_text(model);
+  }
+  write_file_atomically(o.out, r.text);
+  for (const auto& n : r.notes) std::cerr << "note: " << n << "\n";
+  std::cout << "wrote " << o.out << " (" << o.format << ")\n";
+}
+
+}  // namespace
+
+void add_export_command(CLI::App& app, CommandEnv&) {
+  auto o = std::make_shared<ExportOptions>();
+  auto* cmd = app.add_subcommand(
+      "export", "export a calibration model: C99 header, PX4 TC_G* .params, ArduPilot INS_TCAL*, Kalibr imu.yaml, JSON");
+  cmd->add_option("--model", o->model, "driftlab-calibration/1 model JSON")->required();
+  cmd->add_option("--format", o->format,
+                  "c-header (exact C99 evaluator), px4 (QGC .params), ardupilot (35 degC reference, 1e6 scaling), "
+                  "kalibr (imu.yaml noise terms), json")
+      ->required()
+      ->check(CLI::IsMember({"c-header", "px4", "ardupilot", "kalibr", "json"}));
+  cmd->add_option("--out", o->out, "output file (written atomically)")->required();
+  cmd->add_flag("--strict", o->e.strict,
+                "refuse (exit 2) when PX4/ArduPilot cannot represent the model exactly, instead of exporting the best "
+                "cubic with its stated error");
+  cmd->add_option("--prefix", o->e.symbol_prefix, "C identifier prefix of the header")->capture_default_str();
+  cmd->add_option("--px4-index", o->e.px4_sensor_index, "PX4 gyro index i of TC_G<i>_*")
+      ->check(CLI::Range(0, 3))
+      ->capture_default_str();
+  cmd->add_option("--ardupilot-imu", o->e.ardupilot_imu, "ArduPilot IMU number n of INS_TCAL<n>_*")
+      ->check(CLI::Range(1, 3))
+      ->capture_default_str();
+  cmd->add_option("--update-rate", o->e.kalibr_update_rate_hz, "Kalibr update_rate, Hz (default: the model's)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->callback([o] { export_command(*o); });
+}
+
+}  // namespace driftlab::cli
