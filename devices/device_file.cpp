@@ -5,13 +5,11 @@
 #include <sstream>
 
 #include "devices/yaml_fields.hpp"
+#include "framework/effect_catalogue.hpp"
 #include "framework/units.hpp"
 
 namespace driftlab::devices {
 namespace {
-
-constexpr double kRadPerSecPerDph = kRadPerDeg / 3600.0;
-constexpr double kPpm = 1e-6;
 
 const std::vector<std::string> kRoles{"rate", "temperature", "drive_frequency"};
 
@@ -263,59 +261,16 @@ class DeviceReader {
   std::vector<Diagnostic>& problems_;
 };
 
-struct EffectConversion {
-  EffectInfo info;
-  std::vector<double> to_si;  // one factor per key
-};
-
-const std::vector<EffectConversion>& effect_table() {
-  static const std::vector<EffectConversion> table{
-      {{"thermal_lag", "the resonator (die) lags the temperature sensor by an extra first-order lag",
-        {{"tau_s", "s", "time constant"}}},
-       {1.0}},
-      {{"temperature_rate", "bias proportional to the die's dT/dt",
-        {{"coefficient_dph_per_c_per_min", "deg/h per degC/min", "bias per unit heating rate"}}},
-       {kRadPerSecPerDph * 60.0}},
-      {{"hysteresis", "heating/cooling branch offset that saturates a few degC after each reversal",
-        {{"height_dph", "deg/h", "gap between the branches (cooling above)"},
-         {"width_c", "degC", "temperature travel to reach 1 - 1/e of the switch"}}},
-       {kRadPerSecPerDph, 1.0}},
-      {{"warmup_transient", "power-on exponential from the start of the record",
-        {{"amplitude_dph", "deg/h", "value at t = 0"}, {"tau_s", "s", "decay time"}}},
-       {kRadPerSecPerDph, 1.0}},
-      {{"periodic_disturbance", "a sinusoid on the rate",
-        {{"amplitude_dph", "deg/h", "amplitude"}, {"period_s", "s", "period"}, {"phase_deg", "deg", "phase at t = 0"}}},
-       {kRadPerSecPerDph, 1.0, kRadPerDeg}},
-      {{"scale_factor_temperature", "extra scale-factor drift: s *= 1 + sum c_i (T - T0)^(i+1)",
-        {{"coefficients_ppm", "ppm/K, ppm/K^2, ...", "polynomial coefficients", true}}},
-       {kPpm}},
-  };
-  return table;
-}
-
 std::vector<std::string> effect_names() {
   std::vector<std::string> names;
-  for (const auto& e : effect_table()) names.push_back(e.info.name);
+  for (const auto& e : effect_catalogue()) names.push_back(e.name);
   return names;
-}
-
-void store_effect(const std::string& name, const std::vector<std::vector<double>>& v, error_model::Effects& e) {
-  if (name == "thermal_lag") e.thermal_lag = error_model::ThermalLag{v[0][0]};
-  else if (name == "temperature_rate") e.temperature_rate = error_model::TemperatureRate{v[0][0]};
-  else if (name == "hysteresis") e.hysteresis = error_model::Hysteresis{v[0][0], v[1][0]};
-  else if (name == "warmup_transient") e.warmup_transient = error_model::WarmupTransient{v[0][0], v[1][0]};
-  else if (name == "periodic_disturbance") e.periodic_disturbance = error_model::PeriodicDisturbance{v[0][0], v[1][0], v[2][0]};
-  else if (name == "scale_factor_temperature") e.scale_factor_temperature = error_model::ScaleFactorTemperature{v[0]};
 }
 
 std::string number_text(double value) {
   std::ostringstream out;
   out << value;
   return out.str();
-}
-
-bool requires_positive(const std::string& key) {
-  return key == "tau_s" || key == "width_c" || key == "period_s";
 }
 
 }  // namespace
@@ -354,43 +309,33 @@ std::vector<std::filesystem::path> list_device_files(const std::filesystem::path
   return files;
 }
 
-const std::vector<EffectInfo>& effect_catalogue() {
-  static const std::vector<EffectInfo> infos = [] {
-    std::vector<EffectInfo> out;
-    for (const auto& e : effect_table()) out.push_back(e.info);
-    return out;
-  }();
-  return infos;
-}
-
 void parse_effects(const YAML::Node& node, const std::string& file, const std::string& path,
                    error_model::Effects& effects, std::vector<Diagnostic>& problems) {
   YamlFields y(file, problems);
   if (!y.map(node, path, effect_names())) return;
-  for (const auto& entry : effect_table()) {
-    const YAML::Node params = y.child(node, path, entry.info.name, false);
+  for (const auto& entry : effect_catalogue()) {
+    const YAML::Node params = y.child(node, path, entry.name, false);
     if (!params.IsDefined()) continue;
-    const std::string p = YamlFields::join(path, entry.info.name);
+    const std::string p = YamlFields::join(path, entry.name);
     std::vector<std::string> keys;
-    for (const auto& k : entry.info.keys) keys.push_back(k.key);
+    for (const auto& k : entry.keys) keys.push_back(k.key);
     if (!y.map(params, p, keys)) continue;
     std::vector<std::vector<double>> values;
     bool complete = true;
-    for (std::size_t i = 0; i < entry.info.keys.size(); ++i) {
-      const auto& key = entry.info.keys[i];
+    for (const auto& key : entry.keys) {
       std::vector<double> v;
       if (key.list) {
         v = y.numbers(params, p, key.key, true).value_or(std::vector<double>{});
         if (v.empty()) complete = false;
-      } else if (auto x = y.number(params, p, key.key, true, requires_positive(key.key) ? Bounds::positive() : Bounds{})) {
+      } else if (auto x = y.number(params, p, key.key, true, key.positive ? Bounds::positive() : Bounds{})) {
         v.push_back(*x);
       } else {
         complete = false;
       }
-      for (double& x : v) x *= entry.to_si[i];
+      for (double& x : v) x *= key.to_si;
       values.push_back(std::move(v));
     }
-    if (complete) store_effect(entry.info.name, values, effects);
+    if (complete) error_model::set_effect(effects, entry.name, values);
   }
 }
 
@@ -437,27 +382,16 @@ void apply_effect_option(const std::string& text, error_model::Effects& effects)
 
 std::vector<std::string> describe_effects(const error_model::Effects& e) {
   std::vector<std::string> out;
-  auto emit = [&](const std::string& text) { out.push_back(text); };
-  if (e.thermal_lag) emit("thermal_lag{tau_s=" + number_text(e.thermal_lag->tau_s) + "}");
-  if (e.temperature_rate)
-    emit("temperature_rate{coefficient_dph_per_c_per_min=" +
-         number_text(e.temperature_rate->coefficient_rad_s_per_k_s / (kRadPerSecPerDph * 60.0)) + "}");
-  if (e.hysteresis)
-    emit("hysteresis{height_dph=" + number_text(e.hysteresis->height_rad_s / kRadPerSecPerDph) +
-         ", width_c=" + number_text(e.hysteresis->width_k) + "}");
-  if (e.warmup_transient)
-    emit("warmup_transient{amplitude_dph=" + number_text(e.warmup_transient->amplitude_rad_s / kRadPerSecPerDph) +
-         ", tau_s=" + number_text(e.warmup_transient->tau_s) + "}");
-  if (e.periodic_disturbance)
-    emit("periodic_disturbance{amplitude_dph=" +
-         number_text(e.periodic_disturbance->amplitude_rad_s / kRadPerSecPerDph) +
-         ", period_s=" + number_text(e.periodic_disturbance->period_s) +
-         ", phase_deg=" + number_text(e.periodic_disturbance->phase_rad / kRadPerDeg) + "}");
-  if (e.scale_factor_temperature) {
-    std::string list;
-    for (double c : e.scale_factor_temperature->coefficients_per_k)
-      list += (list.empty() ? "" : ", ") + number_text(c / kPpm);
-    emit("scale_factor_temperature{coefficients_ppm=[" + list + "]}");
+  for (const auto& [name, si_values] : error_model::effect_parameters(e)) {
+    const auto& keys = effect_info(name).keys;
+    std::string text = name + "{";
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      text += (i ? ", " : "") + keys[i].key + "=";
+      std::string list;
+      for (double v : si_values[i]) list += (list.empty() ? "" : ", ") + number_text(v / keys[i].to_si);
+      text += keys[i].list ? "[" + list + "]" : list;
+    }
+    out.push_back(text + "}");
   }
   return out;
 }

@@ -25,7 +25,7 @@
 //     noise: {arw_dph_rthz (N, deg/h/sqrt(Hz)), bias_instability_dph (B, deg/h),
 //             rate_random_walk_dph_rth (K, deg/h/sqrt(h)), flicker_correlation_times_s: [min, max],
 //             flicker_poles_per_decade}
-//   effects: {NAME: {key: value, ...}, ...}           optional; see effect_catalogue()
+//   effects: {NAME: {key: value, ...}, ...}           optional; framework/effect_catalogue.hpp
 //
 // Cross-checks: the implied suspension-beam length (device_model.hpp) must fit within the die; the
 // rate range must contain 0; channel roles unique.
@@ -80,20 +80,7 @@ DeviceDefinition parse_device(const std::string& yaml_text, const std::string& f
 // Sorted *.yaml files of a directory. Throws ConfigError when it is not a directory.
 std::vector<std::filesystem::path> list_device_files(const std::filesystem::path& dir);
 
-// ---- effects (issue 6): the same table drives the `effects:` section and `--effect` --------------
-struct EffectKey {
-  std::string key;   // e.g. "tau_s"
-  std::string unit;  // as documented, e.g. "s"
-  std::string doc;
-  bool list = false;  // a list of numbers
-};
-struct EffectInfo {
-  std::string name;  // e.g. "thermal_lag" (plugin effect/thermal_lag in the discrepancy workflow)
-  std::string doc;
-  std::vector<EffectKey> keys;  // all required
-};
-const std::vector<EffectInfo>& effect_catalogue();
-
+// ---- effects: the `effects:` section and `--effect`, both from framework/effect_catalogue.hpp ----
 // Reads an `effects:` mapping into `effects` (added or replaced), reporting problems.
 void parse_effects(const YAML::Node& node, const std::string& file, const std::string& path,
                    error_model::Effects& effects, std::vector<Diagnostic>& problems);

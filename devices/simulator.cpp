@@ -4,7 +4,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "devices/systematic_rate.hpp"
 #include "devices/yaml_fields.hpp"
+#include "framework/signal.hpp"
 #include "framework/units.hpp"
 
 namespace driftlab::devices {
@@ -166,28 +168,19 @@ SimulationRecord simulate(const DeviceDefinition& device, const SimulationProfil
   const auto n = static_cast<Eigen::Index>(std::floor(duration * fs + 1e-9));
   if (n < 2) throw ConfigError({"", 0, "duration"}, "the run has fewer than 2 samples; raise fs or the duration");
 
-  const DeviceModel model(device.physics);
   const error_model::Config& config = device.error_model;
-  const error_model::Effects& effects = config.effects;
 
   SimulationRecord r;
   r.time_s.resize(n);
   for (Eigen::Index k = 0; k < n; ++k) r.time_s[k] = static_cast<double>(k) / fs;
   r.chamber_temp_c = profile.chamber_c.sample(r.time_s);
   r.true_rate_rad_s = profile.true_rate.sample(r.time_s);
-  const Eigen::VectorXd die = error_model::first_order_lag(r.time_s, r.chamber_temp_c, device.thermal.die_time_constant_s);
-  const Eigen::VectorXd sensor = error_model::first_order_lag(r.time_s, die, device.thermal.sensor_time_constant_s);
-  r.die_temp_c = effects.thermal_lag ? error_model::first_order_lag(r.time_s, die, effects.thermal_lag->tau_s) : die;
-
-  r.systematic_rate_rad_s = error_model::additive_effects(effects, r.time_s, r.die_temp_c);
-  Eigen::VectorXd drive_hz(n);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const double temp = r.die_temp_c[k];
-    error_model::DeviceResponse response = model.response(temp);
-    response.scale_factor *= error_model::effect_scale_factor(effects, config.reference_temp_c, temp);
-    r.systematic_rate_rad_s[k] += error_model::systematic_rate(config, response, temp, r.true_rate_rad_s[k]);
-    drive_hz[k] = response.drive_frequency_hz;
-  }
+  const Eigen::VectorXd die = signal::first_order_lag(r.time_s, r.chamber_temp_c, device.thermal.die_time_constant_s);
+  const Eigen::VectorXd sensor = signal::first_order_lag(r.time_s, die, device.thermal.sensor_time_constant_s);
+  SystematicRate systematic = systematic_rate(DeviceModel(device.physics), config, r.time_s, die, r.true_rate_rad_s);
+  r.die_temp_c = std::move(systematic.resonator_temp_c);
+  r.systematic_rate_rad_s = std::move(systematic.rate_rad_s);
+  Eigen::VectorXd drive_hz = std::move(systematic.drive_frequency_hz);
 
   const ChannelSpec* rate_channel = device.find_channel(role::kRate);
   const ChannelSpec* temp_channel = device.find_channel(role::kTemperature);

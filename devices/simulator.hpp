@@ -4,15 +4,14 @@
 //   T_chamber(t)   piecewise-linear chamber profile (soak and ramp segments)
 //   T_die          = lag(T_chamber, thermal.die_time_constant_s)          first-order lag
 //   T_sensor       = lag(T_die, thermal.sensor_time_constant_s)           case sensor lags the die
-//   T_res          = lag(T_die, effects.thermal_lag.tau_s) when that effect is on, else T_die;
-//                    the resonator temperature that drives the physics (reported as die_temp_c)
 //   W_true(t)      piecewise-linear rate-table profile (static 0 by default)
-//   W_sys          = s_dev(T_res) s_emp(T_res) s_eff(T_res) W_true + b_dev(T_res) + P_b + effects
+//   W_sys, T_res   = systematic_rate(T_die, W_true) (systematic_rate.hpp, the one home of the
+//                    chain; T_res, the resonator temperature, is reported as die_temp_c)
 //   rate           = quantize(clip(W_sys + N + B + K noise, rate range), rate resolution)
 //   temp           = quantize(T_sensor + white noise, temperature resolution)
 //   drive_freq     = quantize(f_x(T_res) + white noise, resolution)       when the device has it
 //
-// Lags are exact for inputs linear between samples (error_model::first_order_lag) and start in
+// Lags are exact for inputs linear between samples (signal::first_order_lag) and start in
 // equilibrium with the first chamber value (the part is soaked before the record starts). The
 // rate output bandwidth is fs/2 (no sense low-pass filter is modelled). Random streams: rate noise
 // from error_model::rate_noise(seed); temperature and drive-frequency noise from their own streams,

@@ -13,7 +13,7 @@ const std::vector<Spelling>& spellings() {
   static const std::vector<Spelling> table = [] {
     const Unit rad_s{"rad/s", Quantity::AngularRate, 1.0, 0.0};
     const Unit deg_s{"deg/s", Quantity::AngularRate, kRadPerDeg, 0.0};
-    const Unit deg_h{"deg/h", Quantity::AngularRate, kRadPerDeg / 3600.0, 0.0};
+    const Unit deg_h{"deg/h", Quantity::AngularRate, kRadPerSecPerDph, 0.0};
     const Unit mrad_s{"mrad/s", Quantity::AngularRate, 1e-3, 0.0};
     const Unit deg_c{"degC", Quantity::Temperature, 1.0, 0.0};
     const Unit kelvin{"K", Quantity::Temperature, 1.0, -273.15};

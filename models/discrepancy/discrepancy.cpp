@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "framework/error.hpp"
+#include "framework/signal.hpp"
 #include "models/allan/confidence.hpp"
 #include "models/allan/noise_fit.hpp"
 #include "models/allan/tau_grid.hpp"
@@ -127,7 +128,7 @@ class Workflow {
       const Channel& c = record.channel(role);
       Eigen::VectorXd means = block_means(blocks_, c.values);
       if (std::string(role) == role::kTemperature)
-        means += options.sensor_time_constant_s * error_model::time_derivative(blocks_.time_s, means);
+        means += options.sensor_time_constant_s * signal::time_derivative(blocks_.time_s, means);
       block_record_.set_channel({c.role, c.unit, c.source, means});
       smooth_record_.set_channel(
           {c.role, c.unit, c.source, std::string(role) == role::kTrueRate ? c.values : interpolate(blocks_, means, t)});

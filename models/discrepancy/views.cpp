@@ -6,6 +6,7 @@
 #include <limits>
 #include <numbers>
 
+#include "framework/signal.hpp"
 #include "models/allan/deviation.hpp"
 #include "models/allan/tau_grid.hpp"
 
@@ -72,7 +73,7 @@ Views residual_views(const Blocks& blocks, const Eigen::VectorXd& block_temperat
   v.time_s = blocks.time_s;
   v.residual_rad_s = block_residual_rad_s;
   v.temperature_c = block_temperature_c;
-  v.temperature_rate_k_s = error_model::time_derivative(blocks.time_s, block_temperature_c);
+  v.temperature_rate_k_s = signal::time_derivative(blocks.time_s, block_temperature_c);
   const Eigen::Index n = blocks.size();
 
   std::vector<bool> heating(static_cast<std::size_t>(n)), cooling(heating), all(heating.size(), true);

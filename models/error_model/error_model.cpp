@@ -1,9 +1,12 @@
 #include "models/error_model/error_model.hpp"
 
+#include "framework/effect_catalogue.hpp"
 #include "framework/seeded_random.hpp"
+#include "framework/signal.hpp"
 
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 namespace driftlab::error_model {
 double polynomial(const std::vector<double>& coefficients, double x) {
@@ -43,50 +46,41 @@ double systematic_rate(const Config& config, const DeviceResponse& device, doubl
   return scale * true_rate_rad_s + device.bias_rad_s + polynomial(config.bias_polynomial_rad_s, x);
 }
 
-Eigen::VectorXd first_order_lag(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, double tau_s) {
-  if (tau_s <= 0.0 || x.size() == 0) return x;
-  Eigen::VectorXd y(x.size());
-  y[0] = x[0];
-  for (Eigen::Index k = 0; k + 1 < x.size(); ++k) {
-    const double h = time_s[k + 1] - time_s[k];
-    const double a = std::exp(-h / tau_s);
-    const double ramp_gain = 1.0 - tau_s * (1.0 - a) / h;
-    y[k + 1] = a * y[k] + (1.0 - a) * x[k] + (x[k + 1] - x[k]) * ramp_gain;
-  }
-  return y;
+void set_effect(Effects& effects, std::string_view name, const std::vector<std::vector<double>>& v) {
+  const auto& info = effect_info(name);
+  bool complete = v.size() == info.keys.size();
+  for (std::size_t i = 0; complete && i < v.size(); ++i) complete = info.keys[i].list ? !v[i].empty() : v[i].size() == 1;
+  if (!complete) throw std::logic_error("effect '" + std::string(name) + "': wrong number of values");
+  if (name == "thermal_lag") effects.thermal_lag = ThermalLag{v[0][0]};
+  else if (name == "temperature_rate") effects.temperature_rate = TemperatureRate{v[0][0]};
+  else if (name == "hysteresis") effects.hysteresis = Hysteresis{v[0][0], v[1][0]};
+  else if (name == "warmup_transient") effects.warmup_transient = WarmupTransient{v[0][0], v[1][0]};
+  else if (name == "periodic_disturbance") effects.periodic_disturbance = PeriodicDisturbance{v[0][0], v[1][0], v[2][0]};
+  else if (name == "scale_factor_temperature") effects.scale_factor_temperature = ScaleFactorTemperature{v[0]};
+  else throw std::logic_error("effect '" + std::string(name) + "' has no error-model term");
 }
 
-Eigen::VectorXd time_derivative(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x) {
-  const Eigen::Index n = x.size();
-  Eigen::VectorXd d = Eigen::VectorXd::Zero(n);
-  if (n < 2) return d;
-  d[0] = (x[1] - x[0]) / (time_s[1] - time_s[0]);
-  d[n - 1] = (x[n - 1] - x[n - 2]) / (time_s[n - 1] - time_s[n - 2]);
-  for (Eigen::Index k = 1; k + 1 < n; ++k) d[k] = (x[k + 1] - x[k - 1]) / (time_s[k + 1] - time_s[k - 1]);
-  return d;
-}
-
-Eigen::VectorXd hysteresis_state(const Eigen::VectorXd& temp_c, double width_k) {
-  Eigen::VectorXd s = Eigen::VectorXd::Zero(temp_c.size());
-  double state = 0.0;
-  for (Eigen::Index k = 1; k < temp_c.size(); ++k) {
-    const double step = temp_c[k] - temp_c[k - 1];
-    if (step != 0.0) {
-      const double target = step > 0.0 ? 1.0 : -1.0;
-      state = target + (state - target) * std::exp(-std::abs(step) / width_k);
-    }
-    s[k] = state;
-  }
-  return s;
+std::vector<EffectParameters> effect_parameters(const Effects& e) {
+  std::vector<EffectParameters> out;
+  if (e.thermal_lag) out.push_back({"thermal_lag", {{e.thermal_lag->tau_s}}});
+  if (e.temperature_rate) out.push_back({"temperature_rate", {{e.temperature_rate->coefficient_rad_s_per_k_s}}});
+  if (e.hysteresis) out.push_back({"hysteresis", {{e.hysteresis->height_rad_s}, {e.hysteresis->width_k}}});
+  if (e.warmup_transient)
+    out.push_back({"warmup_transient", {{e.warmup_transient->amplitude_rad_s}, {e.warmup_transient->tau_s}}});
+  if (const auto& p = e.periodic_disturbance)
+    out.push_back({"periodic_disturbance", {{p->amplitude_rad_s}, {p->period_s}, {p->phase_rad}}});
+  if (e.scale_factor_temperature)
+    out.push_back({"scale_factor_temperature", {e.scale_factor_temperature->coefficients_per_k}});
+  return out;
 }
 
 Eigen::VectorXd additive_effects(const Effects& effects, const Eigen::VectorXd& time_s,
                                  const Eigen::VectorXd& die_temp_c) {
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(time_s.size());
   if (effects.temperature_rate)
-    sum += effects.temperature_rate->coefficient_rad_s_per_k_s * time_derivative(time_s, die_temp_c);
+    sum += effects.temperature_rate->coefficient_rad_s_per_k_s * signal::time_derivative(time_s, die_temp_c);
   if (effects.hysteresis)
-    sum -= 0.5 * effects.hysteresis->height_rad_s * hysteresis_state(die_temp_c, effects.hysteresis->width_k);
+    sum -= 0.5 * effects.hysteresis->height_rad_s * signal::hysteresis_state(die_temp_c, effects.hysteresis->width_k);
   if (const auto& w = effects.warmup_transient) {
     const double t0 = time_s.size() > 0 ? time_s[0] : 0.0;
     sum += (w->amplitude_rad_s * (-(time_s.array() - t0) / w->tau_s).exp()).matrix();

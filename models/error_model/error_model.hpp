@@ -42,6 +42,8 @@
 #include <cstdint>
 #include <optional>
 #include <random>
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace driftlab::error_model {
@@ -125,19 +127,23 @@ double empirical_scale_factor(const Config& config, double die_temp_c);
 double systematic_rate(const Config& config, const DeviceResponse& device, double die_temp_c,
                        double true_rate_rad_s);
 
+// ---- effects as the effect catalogue names them (framework/effect_catalogue.hpp) ------------
+
+// Switches on catalogue effect `name` with its key values in SI, one entry per catalogue key in
+// catalogue order (a list for list keys, one value otherwise). Throws std::logic_error for a name
+// outside the catalogue or a wrong number of values (a programming error: callers check the catalogue).
+void set_effect(Effects& effects, std::string_view name, const std::vector<std::vector<double>>& si_values);
+
+struct EffectParameters {
+  std::string name;                            // catalogue name
+  std::vector<std::vector<double>> si_values;  // per catalogue key, SI
+};
+// The switched-on effects in catalogue order with their values in SI (the inverse of set_effect).
+std::vector<EffectParameters> effect_parameters(const Effects& effects);
+
 // ---- effect time series (vectors of equal length n, time stamps increasing) -------------------
-
-// First-order lag y' = (x - y)/tau with x linear between samples, exact per step; y(0) = x(0).
-// tau = 0 returns x. O(n).
-Eigen::VectorXd first_order_lag(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, double tau_s);
-
-// Central-difference derivative dx/dt (one-sided at the ends). O(n).
-Eigen::VectorXd time_derivative(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x);
-
-// Hysteresis branch state s in [-1, 1], starting at 0: after each temperature step dT,
-// s <- sgn(dT) + (s - sgn(dT)) exp(-|dT| / width). Heating drives s to +1, cooling to -1.
-// The offset is -height/2 * s (cooling branch above). Depends only on the temperature path.
-Eigen::VectorXd hysteresis_state(const Eigen::VectorXd& temp_c, double width_k);
+// The time-series primitives (first-order lag, derivative, hysteresis branch state) are
+// framework/signal.hpp, shared with the effect plugins that fit the same terms.
 
 // Sum of the additive effect terms (temperature rate, hysteresis, warm-up, periodic), rad/s, for
 // the die temperature series. Thermal lag and scale factor are not additive: the simulator applies

@@ -5,16 +5,16 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "models/error_model/error_model.hpp"
+#include "framework/signal.hpp"
 
 namespace driftlab::effects {
 
 Eigen::VectorXd lagged_temperature(const Eigen::VectorXd& time_s, const Eigen::VectorXd& temp_c, double tau_s) {
-  return error_model::first_order_lag(time_s, temp_c, tau_s);
+  return signal::first_order_lag(time_s, temp_c, tau_s);
 }
 
 Eigen::VectorXd temperature_rate(const Eigen::VectorXd& time_s, const Eigen::VectorXd& temp_c) {
-  return error_model::time_derivative(time_s, temp_c);
+  return signal::time_derivative(time_s, temp_c);
 }
 
 Eigen::VectorXd play(const Eigen::VectorXd& x, double half_width) {
@@ -24,7 +24,7 @@ Eigen::VectorXd play(const Eigen::VectorXd& x, double half_width) {
 }
 
 Eigen::VectorXd hysteresis_basis(const Eigen::VectorXd& temp_c, double width_k, double deadband_k) {
-  return -0.5 * error_model::hysteresis_state(play(temp_c, deadband_k), width_k);
+  return -0.5 * signal::hysteresis_state(play(temp_c, deadband_k), width_k);
 }
 
 Eigen::VectorXd warmup_basis(const Eigen::VectorXd& time_s, double start_time_s, double tau_s) {

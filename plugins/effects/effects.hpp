@@ -1,12 +1,13 @@
 // Candidate physical terms of the discrepancy workflow (issue 6): pure kernels that turn a record's
 // channels into basis columns. Each term is linear in its amplitude(s) c and, where it has one, a
 // 1-D nonlinear parameter theta (time constant, width, period) that the workflow searches. The
-// time-series primitives are those of the gyro error model, so a fitted term and the simulator's
-// term of the same name (models/error_model/error_model.hpp, additive_effects) are the same function:
+// time-series primitives are framework/signal.hpp, which the simulator's effect terms
+// (models/error_model/error_model.hpp, additive_effects) use too, so a fitted term and the
+// simulated term of the same name are the same function:
 //
-//   thermal_lag        T_model = lag(T, tau)                          (error_model::first_order_lag)
-//   temperature_rate   basis dT/dt, coefficient rad/s per K/s         (error_model::time_derivative)
-//   hysteresis         basis -s(T)/2, s the branch state in [-1, 1]   (error_model::hysteresis_state)
+//   thermal_lag        T_model = lag(T, tau)                          (signal::first_order_lag)
+//   temperature_rate   basis dT/dt, coefficient rad/s per K/s         (signal::time_derivative)
+//   hysteresis         basis -s(T)/2, s the branch state in [-1, 1]   (signal::hysteresis_state)
 //                      with width w; coefficient = height, rad/s. The state is computed on the
 //                      temperature after a play (backlash) operator of half-width `deadband`:
 //                      sensor noise makes tiny reversals that would otherwise pull s towards 0

@@ -1,12 +1,14 @@
 // effect/*: candidate terms of the discrepancy workflow (kernels and formulas in effects.hpp).
-// Reported parameters use the keys and units of a device file's `effects:` section
-// (devices/device_file.hpp), so a named effect can be pasted into the device file.
+// Reported parameters use the keys and units of the effect catalogue (framework/effect_catalogue.hpp),
+// which a device file's `effects:` section also reads, so a named effect can be pasted into a
+// device file; the catalogue's one-line doc is each plugin's summary.
 #include <algorithm>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
 #include <type_traits>
 
+#include "framework/effect_catalogue.hpp"
 #include "framework/error.hpp"
 #include "framework/registry.hpp"
 #include "framework/units.hpp"
@@ -14,9 +16,6 @@
 
 namespace driftlab {
 namespace {
-
-constexpr double kRadPerSecPerDph = kRadPerDeg / 3600.0;
-constexpr double kPpm = 1e-6;
 
 const Eigen::VectorXd& channel(const TimeSeries& record, const char* role) { return record.channel(role).values; }
 
@@ -39,7 +38,7 @@ class ThermalLag final : public Effect {
   }
   std::vector<EffectValue> describe(const TimeSeries&, const EffectContext&, const Eigen::VectorXd& theta,
                                     const Eigen::VectorXd&) const override {
-    return {{"tau_s", "s", {theta[0]}}};
+    return {effect_value("thermal_lag", "tau_s", {theta[0]})};
   }
 
  private:
@@ -56,7 +55,7 @@ class TemperatureRate final : public Effect {
   }
   std::vector<EffectValue> describe(const TimeSeries&, const EffectContext&, const Eigen::VectorXd&,
                                     const Eigen::VectorXd& c) const override {
-    return {{"coefficient_dph_per_c_per_min", "deg/h per degC/min", {c[0] / (kRadPerSecPerDph * 60.0)}}};
+    return {effect_value("temperature_rate", "coefficient_dph_per_c_per_min", {c[0]})};
   }
 };
 
@@ -72,7 +71,7 @@ class Hysteresis final : public Effect {
   }
   std::vector<EffectValue> describe(const TimeSeries&, const EffectContext&, const Eigen::VectorXd& theta,
                                     const Eigen::VectorXd& c) const override {
-    return {{"height_dph", "deg/h", {c[0] / kRadPerSecPerDph}}, {"width_c", "degC", {theta[0]}}};
+    return {effect_value("hysteresis", "height_dph", {c[0]}), effect_value("hysteresis", "width_c", {theta[0]})};
   }
 
  private:
@@ -90,7 +89,8 @@ class WarmupTransient final : public Effect {
   }
   std::vector<EffectValue> describe(const TimeSeries&, const EffectContext&, const Eigen::VectorXd& theta,
                                     const Eigen::VectorXd& c) const override {
-    return {{"amplitude_dph", "deg/h", {c[0] / kRadPerSecPerDph}}, {"tau_s", "s", {theta[0]}}};
+    return {effect_value("warmup_transient", "amplitude_dph", {c[0]}),
+            effect_value("warmup_transient", "tau_s", {theta[0]})};
   }
 
  private:
@@ -111,9 +111,9 @@ class PeriodicDisturbance final : public Effect {
   std::vector<EffectValue> describe(const TimeSeries&, const EffectContext&, const Eigen::VectorXd& theta,
                                     const Eigen::VectorXd& c) const override {
     const auto s = effects::sinusoid_from_coefficients(c[0], c[1]);
-    return {{"amplitude_dph", "deg/h", {s.amplitude / kRadPerSecPerDph}},
-            {"period_s", "s", {theta[0]}},
-            {"phase_deg", "deg", {s.phase_rad / kRadPerDeg}}};
+    return {effect_value("periodic_disturbance", "amplitude_dph", {s.amplitude}),
+            effect_value("periodic_disturbance", "period_s", {theta[0]}),
+            effect_value("periodic_disturbance", "phase_deg", {s.phase_rad})};
   }
 
  private:
@@ -137,9 +137,7 @@ class ScaleFactorTemperature final : public Effect {
   }
   std::vector<EffectValue> describe(const TimeSeries&, const EffectContext&, const Eigen::VectorXd&,
                                     const Eigen::VectorXd& c) const override {
-    EffectValue v{"coefficients_ppm", "ppm/K^i", {}};
-    for (Eigen::Index i = 0; i < c.size(); ++i) v.values.push_back(c[i] / kPpm);
-    return {v};
+    return {effect_value("scale_factor_temperature", "coefficients_ppm", {c.data(), c.data() + c.size()})};
   }
 
  private:
@@ -195,23 +193,23 @@ void register_effect_plugins(Registry& registry) {
   const std::string workflow = "; fitted by the discrepancy workflow (models/discrepancy)";
   registry.add(
       {.name = "effect/thermal_lag",
-       .summary = "the resonator lags the temperature sensor: the model's bias(T) follows lag(T, tau)",
+       .summary = effect_info("thermal_lag").doc,
        .reference = "first-order thermal lag (Newton cooling), exact for piecewise-linear input: "
-                    "error_model::first_order_lag" +
+                    "signal::first_order_lag" +
                     workflow,
        .params = ParamTable{{param::real("tau_min_s", 10.0, "s", "shortest time constant searched").greater_than(0),
                              param::real("tau_max_s", 5000.0, "s", "longest time constant searched").greater_than(0)},
                             {lower_below_upper("tau_min_s", "tau_max_s")}},
        .make = make<ThermalLag>()});
   registry.add({.name = "effect/temperature_rate",
-                .summary = "bias proportional to the temperature rate dT/dt (thermal gradients across the die)",
-                .reference = "temperature-rate bias sensitivity; error_model::time_derivative" + workflow,
+                .summary = effect_info("temperature_rate").doc,
+                .reference = "temperature-rate bias sensitivity; signal::time_derivative" + workflow,
                 .params = ParamTable{},
                 .make = make<TemperatureRate>()});
   registry.add(
       {.name = "effect/hysteresis",
-       .summary = "heating/cooling branch offset that saturates a few degC after each reversal",
-       .reference = "branch state error_model::hysteresis_state on the play operator (Visintin 1994, "
+       .summary = effect_info("hysteresis").doc,
+       .reference = "branch state signal::hysteresis_state on the play operator (Visintin 1994, "
                     "Differential Models of Hysteresis, ch. III)" +
                     workflow,
        .params =
@@ -225,7 +223,7 @@ void register_effect_plugins(Registry& registry) {
        .make = make<Hysteresis>()});
   registry.add(
       {.name = "effect/warmup_transient",
-       .summary = "power-on exponential from the start of the record: amplitude, time constant",
+       .summary = effect_info("warmup_transient").doc,
        .reference = "exponential warm-up drift (power-on transient)" + workflow,
        .params = ParamTable{{param::real("tau_min_s", 30.0, "s", "shortest decay time searched").greater_than(0),
                              param::real("tau_max_s", 20000.0, "s", "longest decay time searched").greater_than(0)},
@@ -233,7 +231,7 @@ void register_effect_plugins(Registry& registry) {
        .make = make<WarmupTransient>()});
   registry.add(
       {.name = "effect/periodic_disturbance",
-       .summary = "a sinusoid on the rate (HVAC, chamber control cycling): amplitude, period, phase",
+       .summary = effect_info("periodic_disturbance").doc,
        .reference = "least-squares sinusoid (Lomb 1976; Scargle 1982)" + workflow,
        .params =
            ParamTable{{param::real("period_min_s", 20.0, "s",
@@ -245,8 +243,7 @@ void register_effect_plugins(Registry& registry) {
        .make = make<PeriodicDisturbance>()});
   registry.add(
       {.name = "effect/scale_factor_temperature",
-       .summary = "scale-factor drift with temperature beyond the model: s *= 1 + sum c_i (T - T0)^i "
-                  "(needs a true-rate channel)",
+       .summary = effect_info("scale_factor_temperature").doc,
        .reference = "scale-factor temperature sensitivity (IEEE Std 952-1997 model equation)" + workflow,
        .params = ParamTable{{param::integer("degree", 1, "1", "polynomial degree in T - T0").at_least(1).at_most(3)}},
        .make = make<ScaleFactorTemperature>()});

@@ -14,7 +14,7 @@ namespace {
 
 const std::string kDevices = std::string(DRIFTLAB_SOURCE_DIR) + "/devices/";
 const std::string kFixtures = std::string(DRIFTLAB_TEST_DATA) + "/devices/";
-constexpr double kDph = kRadPerDeg / 3600.0;
+constexpr double kDph = kRadPerSecPerDph;
 
 TEST(DeviceFile, LoadsTheFmvmgWithThePapersNumbers) {
   const DeviceDefinition d = load_device_file(kDevices + "fmvmg.yaml");

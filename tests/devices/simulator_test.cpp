@@ -13,7 +13,7 @@
 namespace driftlab::devices {
 namespace {
 
-constexpr double kDph = kRadPerDeg / 3600.0;  // rad/s per deg/h
+constexpr double kDph = kRadPerSecPerDph;  // rad/s per deg/h
 
 DeviceDefinition fmvmg() { return load_device_file(std::string(DRIFTLAB_SOURCE_DIR) + "/devices/fmvmg.yaml"); }
 

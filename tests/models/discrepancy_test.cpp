@@ -19,15 +19,15 @@
 #include <map>
 #include <set>
 
+#include "framework/effect_catalogue.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
+#include "framework/signal.hpp"
 #include "tests/models/oven_records.hpp"
-#include "tools/driftlab/discrepancy_device.hpp"
+#include "devices/discrepancy_options.hpp"
 
 namespace driftlab {
 namespace {
-
-using testing_oven::kRadPerSecPerDph;
 
 constexpr std::uint64_t kSeed = 2026;
 
@@ -80,7 +80,7 @@ struct RecordRun {
 RecordRun run_record(std::uint64_t index, const std::vector<std::string>& hidden, bool with_drive_frequency = false) {
   const auto device = fmvmg(with_drive_frequency);
   RecordRun r{testing_oven::make_record(device, kSeed, index, hidden), {}};
-  r.result = discrepancy::find_missing_effects(r.record.series, candidates().list, cli::device_options(device));
+  r.result = discrepancy::find_missing_effects(r.record.series, candidates().list, devices::discrepancy_options(device));
   return r;
 }
 
@@ -229,11 +229,47 @@ TEST(HiddenThermalLag, IsSeenThroughTheDriveFrequencyWhenTheRecordHasIt) {
   EXPECT_NEAR(value(run.result.steps.front(), "drive_frequency_tc_ppm_per_k").values[0], -30.0, 1e-9);
 }
 
+TEST(OneSystematicRate, TheWorkflowsDevicePriorIsTheSimulatorsSystematicRateWithEveryEffectOn) {
+  const auto plain = fmvmg(false);
+  auto device = plain;
+  // Every catalogue effect at a realistic size, in file units (slow enough for 40-s blocks).
+  const std::map<std::string, std::vector<double>> file_values{
+      {"thermal_lag", {300}},           {"temperature_rate", {60}},                {"hysteresis", {200, 2}},
+      {"warmup_transient", {300, 600}}, {"periodic_disturbance", {100, 1200, 30}}, {"scale_factor_temperature", {40}}};
+  for (const auto& info : effect_catalogue()) {
+    std::vector<std::vector<double>> si;
+    for (std::size_t i = 0; i < info.keys.size(); ++i) si.push_back({file_values.at(info.name)[i] * info.keys[i].to_si});
+    error_model::set_effect(device.error_model.effects, info.name, si);
+  }
+  testing_oven::Draw draw(kSeed, 400000);
+  std::array<double, 3> rates{};
+  const auto profile = testing_oven::oven_profile(draw, rates);
+  devices::SimulationOptions sim_options;
+  sim_options.sample_rate_hz = 1.0;
+  sim_options.seed = 7;
+  const auto sim = devices::simulate(device, profile, sim_options);
+  const auto options = devices::discrepancy_options(device);
+  const Eigen::VectorXd die =
+      signal::first_order_lag(sim.time_s, sim.chamber_temp_c, device.thermal.die_time_constant_s);
+  const Eigen::VectorXd prior = options.prior(sim.time_s, die, sim.true_rate_rad_s);
+  EXPECT_EQ((prior - sim.systematic_rate_rad_s).cwiseAbs().maxCoeff(), 0.0);  // one function, bit for bit
+
+  // The workflow, given the same device, names nothing and leaves the gap that the same noise
+  // realization leaves on the device without effects (each noise term has its own stream).
+  const auto result = discrepancy::find_missing_effects(sim.to_time_series(), candidates().list, options);
+  EXPECT_THAT(named(result), ::testing::IsEmpty());
+  const auto plain_sim = devices::simulate(plain, profile, sim_options);
+  const auto noise_only = discrepancy::find_missing_effects(plain_sim.to_time_series(), candidates().list,
+                                                            devices::discrepancy_options(plain));
+  constexpr double kBlockAveraging = 0.05;  // the prior sees block means of temperature, the data average the rate
+  EXPECT_LE(result.gap_final_rad_s, (1.0 + kBlockAveraging) * noise_only.gap_final_rad_s);
+}
+
 TEST(DiscrepancyWorkflow, RejectsBadOptionsAndRecordsWithoutTemperature) {
   const auto device = fmvmg(false);
   TimeSeries record(Eigen::VectorXd::LinSpaced(100, 0.0, 99.0));
   record.set_channel({role::kRate, "rad/s", "rate_dps", Eigen::VectorXd::Zero(100)});
-  auto options = cli::device_options(device);
+  auto options = devices::discrepancy_options(device);
   EXPECT_THROW(discrepancy::find_missing_effects(record, candidates().list, options), DataError);
   record.set_channel({role::kTemperature, "degC", "temp_c", Eigen::VectorXd::LinSpaced(100, 0.0, 10.0)});
   options.bias_degree = 9;

@@ -94,28 +94,6 @@ TEST(ErrorModel, SameSeedSameNoiseAndEachTermHasItsOwnStream) {
                 .cwiseAbs().maxCoeff(), kRoundingTolerance);
 }
 
-TEST(ErrorModel, FirstOrderLagOfARampTrailsByRateTimesTau) {
-  constexpr double kExactDiscretization = 1e-10;  // the step is exact for inputs linear between samples
-  const double tau = 50.0, rate = 0.02;
-  const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(2001, 0.0, 1000.0);
-  const Eigen::VectorXd x = rate * t;
-  const Eigen::VectorXd y = first_order_lag(t, x, tau);
-  for (Eigen::Index k = 0; k < t.size(); k += 100)
-    EXPECT_NEAR(y[k], rate * (t[k] - tau * (1.0 - std::exp(-t[k] / tau))), kExactDiscretization) << t[k];
-  EXPECT_EQ(first_order_lag(t, x, 0.0), x);
-}
-
-TEST(ErrorModel, HysteresisSwitchesBranchOnReversalAndSaturates) {
-  const double width = 2.0;
-  Eigen::VectorXd temp(401);
-  for (int k = 0; k <= 200; ++k) temp[k] = 0.1 * k;            // heat 0 -> 20
-  for (int k = 201; k <= 400; ++k) temp[k] = 20.0 - 0.1 * (k - 200);  // cool 20 -> 0
-  const Eigen::VectorXd s = hysteresis_state(temp, width);
-  EXPECT_NEAR(s[200], 1.0, 1e-4);                     // 20 K of travel = 10 widths
-  EXPECT_NEAR(s[220], -1.0 + 2.0 * std::exp(-1.0), 1e-4);  // 2 K = one width after reversal
-  EXPECT_NEAR(s[400], -1.0, 1e-4);
-}
-
 TEST(ErrorModel, AdditiveEffectsFollowTheirDefinitions) {
   constexpr double kRoundingTolerance = 1e-15;
   const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(101, 0.0, 100.0);

@@ -39,7 +39,6 @@
 
 namespace driftlab::testing_oven {
 
-inline constexpr double kRadPerSecPerDph = kRadPerDeg / 3600.0;
 inline const std::array<std::string, 6> kEffectNames{"thermal_lag",          "temperature_rate",
                                                      "hysteresis",           "warmup_transient",
                                                      "periodic_disturbance", "scale_factor_temperature"};

@@ -11,15 +11,16 @@
 #include <set>
 
 #include "devices/device_file.hpp"
+#include "framework/effect_catalogue.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
+#include "framework/units.hpp"
 #include "models/error_model/error_model.hpp"
 
 namespace driftlab {
 namespace {
 
 constexpr double kRoundingTolerance = 1e-12;  // a few operations on O(1) values
-constexpr double kPi = std::numbers::pi;
 
 Eigen::VectorXd seconds(Eigen::Index n, double dt) {
   return Eigen::VectorXd::LinSpaced(n, 0.0, dt * static_cast<double>(n - 1));
@@ -159,7 +160,7 @@ TEST_F(EffectPlugins, EveryEffectGivesOneBasisColumnPerCoefficientAndFiniteValue
 
 TEST_F(EffectPlugins, ReportTheDeviceFileKeysOfTheEffectsTheSimulatorKnows) {
   const TimeSeries record = oven_record();
-  for (const auto& entry : devices::effect_catalogue()) {
+  for (const auto& entry : effect_catalogue()) {
     const auto e = make("effect/" + entry.name);
     const Eigen::VectorXd theta =
         Eigen::VectorXd::Constant(static_cast<Eigen::Index>(e->nonlinear_parameters().size()), 100.0);
@@ -173,7 +174,7 @@ TEST_F(EffectPlugins, ReportTheDeviceFileKeysOfTheEffectsTheSimulatorKnows) {
 
 TEST_F(EffectPlugins, ReportTemperatureRateAndHysteresisInDeviceFileUnits) {
   const TimeSeries record = oven_record();
-  const double rad_s_per_dph = kPi / 180.0 / 3600.0;
+  const double rad_s_per_dph = kRadPerSecPerDph;
   const auto rate = make("effect/temperature_rate")
                         ->describe(record, {}, {}, Eigen::VectorXd::Constant(1, 60.0 * rad_s_per_dph * 60.0));
   EXPECT_NEAR(rate[0].values[0], 60.0, 1e-9);  // 60 deg/h per degC/min

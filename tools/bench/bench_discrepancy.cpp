@@ -15,7 +15,7 @@
 #include "framework/registry.hpp"
 #include "framework/units.hpp"
 #include "models/discrepancy/discrepancy.hpp"
-#include "tools/driftlab/discrepancy_device.hpp"
+#include "devices/discrepancy_options.hpp"
 
 namespace {
 
@@ -26,9 +26,9 @@ constexpr double kDuration = 5.0 * 3600.0;
 void BM_Discrepancy(benchmark::State& state) {
   auto device = devices::load_device_file(std::string(DRIFTLAB_SOURCE_DIR) + "/devices/fmvmg.yaml");
   std::erase_if(device.channels, [](const auto& c) { return c.role == role::kDriveFrequency; });
-  const auto options = cli::device_options(device);
+  const auto options = devices::discrepancy_options(device);
   device.error_model.effects.thermal_lag = error_model::ThermalLag{300.0};
-  device.error_model.effects.hysteresis = error_model::Hysteresis{200.0 * kRadPerDeg / 3600.0, 2.0};
+  device.error_model.effects.hysteresis = error_model::Hysteresis{200.0 * kRadPerSecPerDph, 2.0};
   devices::SimulationOptions sim;
   sim.sample_rate_hz = static_cast<double>(state.range(0)) / kDuration;
   sim.duration_s = kDuration;

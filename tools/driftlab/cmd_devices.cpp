@@ -13,8 +13,6 @@
 namespace driftlab::cli {
 namespace {
 
-constexpr double kRadPerSecPerDph = kRadPerDeg / 3600.0;
-
 std::string in_unit(double internal, const std::string& unit) {
   const auto u = find_unit(unit);
   std::ostringstream out;

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "devices/device_file.hpp"
+#include "devices/discrepancy_options.hpp"
 #include "framework/atomic_file.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
@@ -14,13 +15,10 @@
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
 #include "tools/driftlab/devices_dir.hpp"
-#include "tools/driftlab/discrepancy_device.hpp"
 #include "tools/driftlab/discrepancy_report.hpp"
 
 namespace driftlab::cli {
 namespace {
-
-constexpr double kDphPerRadS = kDegPerRad * 3600.0;
 
 struct DiscrepancyOptions {
   DataOptions data;
@@ -38,7 +36,7 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
   std::string device_path;
   if (!o.device.empty()) {
     device_path = resolve_device_file(o.device, o.devices_dir).string();
-    options = device_options(devices::load_device_file(device_path));
+    options = devices::discrepancy_options(devices::load_device_file(device_path));
     inputs.push_back(device_path);
   }
   if (o.bias_degree >= 0) options.bias_degree = o.bias_degree;
@@ -74,15 +72,15 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
                          {"model_final_dps", result.model_final_rad_s, "deg/s"}});
   if (!o.html.empty()) write_file_atomically(o.html, discrepancy_html(result, info));
 
-  std::cout << "gap " << result.gap_initial_rad_s * kDphPerRadS << " -> " << result.gap_final_rad_s * kDphPerRadS
-            << " deg/h (noise floor " << result.noise_floor_rad_s * kDphPerRadS << " deg/h, " << result.blocks
+  std::cout << "gap " << result.gap_initial_rad_s * kDphPerRadPerSec << " -> " << result.gap_final_rad_s * kDphPerRadPerSec
+            << " deg/h (noise floor " << result.noise_floor_rad_s * kDphPerRadPerSec << " deg/h, " << result.blocks
             << " blocks of " << result.block_s << " s)\n";
   if (result.steps.empty()) std::cout << "nothing significant is missing\n";
   for (const auto& step : result.steps) {
     std::cout << "named " << step.effect << " (delta BIC " << step.delta_bic << "):";
     for (const auto& p : step.parameters)
       for (std::size_t i = 0; i < p.values.size(); ++i) std::cout << " " << p.key << "=" << p.values[i];
-    std::cout << "; gap " << step.gap_before_rad_s * kDphPerRadS << " -> " << step.gap_after_rad_s * kDphPerRadS
+    std::cout << "; gap " << step.gap_before_rad_s * kDphPerRadPerSec << " -> " << step.gap_after_rad_s * kDphPerRadPerSec
               << " deg/h\n";
   }
 }

@@ -7,6 +7,7 @@
 #include "devices/device_file.hpp"
 #include "devices/simulator.hpp"
 #include "framework/csv.hpp"
+#include "framework/effect_catalogue.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
 #include "tools/driftlab/devices_dir.hpp"
@@ -77,7 +78,7 @@ void simulate_command(const SimulateOptions& o, CommandEnv& env) {
 
 std::string effect_help() {
   std::string text = "switch on an effect the device file leaves out, NAME:key=value,...; repeatable. Effects:";
-  for (const auto& e : devices::effect_catalogue()) {
+  for (const auto& e : effect_catalogue()) {
     text += "\n  " + e.name + ":";
     for (std::size_t i = 0; i < e.keys.size(); ++i)
       text += (i ? "," : "") + e.keys[i].key + "=" + (e.keys[i].list ? "[..]" : "X");

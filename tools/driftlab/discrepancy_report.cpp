@@ -10,10 +10,8 @@
 namespace driftlab::cli {
 namespace {
 
-constexpr double kDphPerRadS = kDegPerRad * 3600.0;
-constexpr double kSecondsPerHour = 3600.0;
 
-double dph(double rad_s) { return rad_s * kDphPerRadS; }
+double dph(double rad_s) { return rad_s * kDphPerRadPerSec; }
 
 nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
@@ -114,8 +112,8 @@ Figure residual_figure(const discrepancy::Result& r) {
        "residual (deg/h)",
        false,
        false,
-       {{"initial model", to_vector(a.time_s, 1.0 / kSecondsPerHour), to_vector(a.residual_rad_s, kDphPerRadS)},
-        {"final model", to_vector(b.time_s, 1.0 / kSecondsPerHour), to_vector(b.residual_rad_s, kDphPerRadS)}}});
+       {{"initial model", to_vector(a.time_s, 1.0 / kSecondsPerHour), to_vector(a.residual_rad_s, kDphPerRadPerSec)},
+        {"final model", to_vector(b.time_s, 1.0 / kSecondsPerHour), to_vector(b.residual_rad_s, kDphPerRadPerSec)}}});
   f.panels.push_back({"residual by temperature, heating and cooling (mean +- s/sqrt(n) per bin)",
                       "temperature (degC)",
                       "residual (deg/h)",

@@ -1,0 +1,44 @@
+#include "framework/signal.hpp"
+
+#include <cmath>
+
+namespace driftlab::signal {
+
+Eigen::VectorXd first_order_lag(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, double tau_s) {
+  if (tau_s <= 0.0 || x.size() == 0) return x;
+  Eigen::VectorXd y(x.size());
+  y[0] = x[0];
+  for (Eigen::Index k = 0; k + 1 < x.size(); ++k) {
+    const double h = time_s[k + 1] - time_s[k];
+    const double a = std::exp(-h / tau_s);
+    const double ramp_gain = 1.0 - tau_s * (1.0 - a) / h;
+    y[k + 1] = a * y[k] + (1.0 - a) * x[k] + (x[k + 1] - x[k]) * ramp_gain;
+  }
+  return y;
+}
+
+Eigen::VectorXd time_derivative(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x) {
+  const Eigen::Index n = x.size();
+  Eigen::VectorXd d = Eigen::VectorXd::Zero(n);
+  if (n < 2) return d;
+  d[0] = (x[1] - x[0]) / (time_s[1] - time_s[0]);
+  d[n - 1] = (x[n - 1] - x[n - 2]) / (time_s[n - 1] - time_s[n - 2]);
+  for (Eigen::Index k = 1; k + 1 < n; ++k) d[k] = (x[k + 1] - x[k - 1]) / (time_s[k + 1] - time_s[k - 1]);
+  return d;
+}
+
+Eigen::VectorXd hysteresis_state(const Eigen::VectorXd& temp_c, double width_k) {
+  Eigen::VectorXd s = Eigen::VectorXd::Zero(temp_c.size());
+  double state = 0.0;
+  for (Eigen::Index k = 1; k < temp_c.size(); ++k) {
+    const double step = temp_c[k] - temp_c[k - 1];
+    if (step != 0.0) {
+      const double target = step > 0.0 ? 1.0 : -1.0;
+      state = target + (state - target) * std::exp(-std::abs(step) / width_k);
+    }
+    s[k] = state;
+  }
+  return s;
+}
+
+}  // namespace driftlab::signal
