@@ -40,6 +40,8 @@
 // residue is small; with tau = 0 it holds what no mode's band captured.
 //
 // Cost: O(K M) per iteration plus 2 FFTs of size M at the start and K inverse FFTs at the end.
+// The per-bin update runs on separate real and imaginary arrays in an AVX2 clone
+// (framework/simd.hpp); its sums are kept in four fixed lanes, so both clones give the same bits.
 // Errors: std::invalid_argument for a bad configuration, std::domain_error for bad data (too
 // short, non-finite).
 #pragma once
