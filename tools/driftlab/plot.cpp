@@ -26,7 +26,8 @@ constexpr std::array<const char*, 8> kColors = {"#1f77b4", "#d62728", "#2ca02c",
                                                 "#9467bd", "#8c564b", "#e377c2", "#17becf"};
 constexpr std::size_t kReduceLinesAbove = 4;    // points per pixel column before lines are reduced
 constexpr std::size_t kReduceMarkersAbove = 2000;
-constexpr int kMarginPx = 110;                  // left + right margins of a panel, for pixel columns
+constexpr double kCharWidthPx = 6.6;            // gnuplot's character width at 11 pt, for margins
+constexpr double kVerticalMarginsPx = 86;       // title, x tick labels and x label of a panel
 
 std::string number(double v) {
   char buf[32];
@@ -92,7 +93,8 @@ std::vector<Point> points_of(const PlotSeries& s, bool log_x, bool log_y) {
   return out;
 }
 
-// Lines: each run of consecutive points in one pixel column becomes its min and max, in order.
+// Lines: each run of consecutive points in one pixel column becomes its min and max, in order; the
+// first and last points stay, so the line spans the same x range.
 std::vector<Point> reduce_line(const std::vector<Point>& pts, const Range& xr, long columns) {
   std::vector<Point> out;
   std::size_t i = 0;
@@ -112,6 +114,9 @@ std::vector<Point> reduce_line(const std::vector<Point>& pts, const Range& xr, l
     if (lo != hi) out.push_back(pts[std::max(lo, hi)]);
     i = j;
   }
+  const auto same = [](const Point& a, const Point& b) { return a.x == b.x && a.y == b.y; };
+  if (!pts.empty() && !same(out.front(), pts.front())) out.insert(out.begin(), pts.front());
+  if (!pts.empty() && !same(out.back(), pts.back())) out.push_back(pts.back());
   return out;
 }
 
@@ -134,19 +139,111 @@ std::string color_of(const PlotSeries& s, std::size_t index) {
   return s.color.empty() ? kColors[index % kColors.size()] : s.color;
 }
 
-const char* legend_position(PlotPanel::Legend legend) {
-  switch (legend) {
-    case PlotPanel::Legend::TopRight: return "top right";
-    case PlotPanel::Legend::TopLeft: return "top left";
-    case PlotPanel::Legend::BottomRight: return "bottom right";
-    case PlotPanel::Legend::BottomLeft: return "bottom left";
-    case PlotPanel::Legend::None: break;
+// Panel geometry, in px of the SVG's viewBox (gnuplot's margins are in characters of ~6.6 x 15 px).
+struct Geometry {
+  double plot_width, plot_height;
+};
+
+// An axis range in data units, with the tick step (0: gnuplot's own, used on log axes).
+struct Axis {
+  double lo = 0, hi = 1, step = 0;
+  bool log = false;
+  double u(double v) const { return log ? std::log10(v) : v; }
+  double fraction(double v) const { return (u(v) - u(lo)) / (u(hi) - u(lo)); }
+  void raise_top(double fraction_of_height) {
+    const double span = u(hi) - u(lo), top = u(hi) + span * fraction_of_height / (1 - fraction_of_height);
+    hi = log ? std::pow(10.0, top) : top;
   }
-  return "";
+};
+
+double nice_step(double raw) {
+  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
+  const double r = raw / mag;
+  return (r < 1.5 ? 1 : r < 3.5 ? 2 : r < 7.5 ? 5 : 10) * mag;
 }
 
-void panel_script(std::string& script, const PlotPanel& panel, std::size_t index, long columns, long rows,
+// The data range with about `ticks` ticks; `extend` widens it to whole steps (whole decades when
+// log), `pad` adds that fraction of the span at both ends.
+Axis make_axis(const Range& r, bool log, double ticks, bool extend, double pad) {
+  double lo = r.empty() ? 0 : r.lo, hi = r.empty() ? 1 : r.hi;
+  if (hi - lo <= 1e-12 * std::max(1.0, std::abs(lo))) {
+    const double half = log ? 0.5 : lo != 0 ? std::abs(lo) * 0.1 : 1.0;
+    lo -= half, hi += half;
+  }
+  lo -= pad * (hi - lo), hi += pad * (hi - lo);
+  Axis a;
+  a.log = log;
+  if (log) {
+    if (extend) lo = std::floor(lo + 1e-9), hi = std::ceil(hi - 1e-9);
+    a.lo = std::pow(10.0, lo), a.hi = std::pow(10.0, hi);
+    return a;
+  }
+  a.step = nice_step((hi - lo) / std::max(2.0, ticks));
+  if (extend) lo = std::floor(lo / a.step + 1e-9) * a.step, hi = std::ceil(hi / a.step - 1e-9) * a.step;
+  a.lo = lo, a.hi = hi;
+  return a;
+}
+
+std::string range_commands(const char* name, const Axis& a) {
+  std::string out = std::string("set ") + name + "range [" + number(a.lo) + ":" + number(a.hi) + "]\n";
+  if (a.step > 0) out += std::string("set ") + name + "tics " + number(a.step) + "\n";
+  return out;
+}
+
+std::size_t display_length(const std::string& s) {
+  return static_cast<std::size_t>(std::count_if(s.begin(), s.end(), [](char c) { return (c & 0xC0) != 0x80; }));
+}
+
+// The legend's place: the requested corner, or (Auto) the corner where the least data lies; when
+// every corner holds data, top right above the data, whose y axes get that much headroom.
+std::string legend_command(const PlotPanel& panel, const std::vector<std::vector<Point>>& data, const Axis& x,
+                           Axis& y, Axis& y2, const Geometry& g) {
+  std::size_t labelled = 0, longest = 0;
+  for (const auto& s : panel.series)
+    if (!s.label.empty()) ++labelled, longest = std::max(longest, display_length(s.label));
+  const bool only_the_title = labelled == 1 && std::any_of(panel.series.begin(), panel.series.end(), [&](const auto& s) {
+                                return !s.label.empty() && s.label == panel.title;
+                              });
+  if (panel.legend == PlotPanel::Legend::None || labelled == 0 || only_the_title) return "unset key\n";
+  const std::string style = " opaque box lc rgb '#bbbbbb' samplen 2.5 spacing 1.1 font ',10'\n";
+  const char* names[] = {"top right", "top left", "bottom right", "bottom left"};
+  if (panel.legend != PlotPanel::Legend::Auto)
+    return std::string("set key inside ") + names[static_cast<int>(panel.legend)] + style;
+
+  const double kw = std::min(0.9, (static_cast<double>(longest) * 6.0 + 60.0) / g.plot_width);
+  const double kh = std::min(0.9, (static_cast<double>(labelled) * 14.0 + 12.0) / g.plot_height);
+  std::array<std::size_t, 4> crowd{};
+  const auto count = [&](double fx, double fy) {
+    const bool right = fx > 1 - kw, left = fx < kw, top = fy > 1 - kh, bottom = fy < kh;
+    crowd[0] += right && top, crowd[1] += left && top, crowd[2] += right && bottom, crowd[3] += left && bottom;
+  };
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    const Axis& ya = panel.series[k].right_axis ? y2 : y;
+    const bool line = panel.series[k].style != PlotSeries::Style::Markers;
+    const auto& pts = data[k];
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      if (std::isnan(pts[i].x)) continue;
+      const double fx = x.fraction(pts[i].x);
+      for (double v : {pts[i].y, pts[i].low, pts[i].high}) count(fx, ya.fraction(v));
+      if (!line || i + 1 == pts.size() || std::isnan(pts[i + 1].x) || pts.size() > 1000) continue;
+      constexpr int kSteps = 16;  // a few points along each segment of a short line
+      for (int j = 1; j < kSteps; ++j) {
+        const double t = static_cast<double>(j) / kSteps;
+        count(fx + t * (x.fraction(pts[i + 1].x) - fx),
+              ya.fraction(pts[i].y) + t * (ya.fraction(pts[i + 1].y) - ya.fraction(pts[i].y)));
+      }
+    }
+  }
+  const auto best = static_cast<std::size_t>(std::min_element(crowd.begin(), crowd.end()) - crowd.begin());
+  if (crowd[best] == 0) return std::string("set key inside ") + names[best] + style;
+  y.raise_top(kh + 0.02);
+  y2.raise_top(kh + 0.02);
+  return std::string("set key inside top right") + style;
+}
+
+void panel_script(std::string& script, const PlotPanel& panel, std::size_t index, const Geometry& g,
                   bool any_right_axis) {
+  const auto columns = static_cast<long>(g.plot_width), rows = static_cast<long>(g.plot_height);
   Range xr, yr, y2r;
   xr.log = panel.log_x, yr.log = panel.log_y, y2r.log = panel.log_y2;
   std::vector<std::vector<Point>> data;
@@ -182,20 +279,29 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
     script += "EOD\n";
   }
 
+  const bool markers = std::any_of(panel.series.begin(), panel.series.end(),
+                                   [](const auto& s) { return s.style == PlotSeries::Style::Markers; });
+  const Axis x = make_axis(xr, panel.log_x, g.plot_width / 90.0, false, markers ? 0.02 : 0.0);
+  Axis y = make_axis(yr, panel.log_y, g.plot_height / 38.0, true, 0.0);
+  Axis y2 = make_axis(y2r, panel.log_y2, g.plot_height / 38.0, true, 0.0);
+  const std::string key = legend_command(panel, data, x, y, y2, g);
+
   script += "reset\nset encoding utf8\nset lmargin 12\nset bmargin 3.5\nset tmargin 2.2\n";
   script += any_right_axis ? "set rmargin 12\n" : "set rmargin 4\n";
   script += "set grid xtics ytics lc rgb '#dddddd' lw 1 dt solid\nset border lc rgb '#444444'\n";
-  script += "set title " + quoted(panel.title) + " noenhanced\n";
+  script += "set title " + quoted(panel.title) + " noenhanced font ',12'\n";
   script += "set xlabel " + quoted(panel.x_label) + " noenhanced offset 0,0.3\n";
   script += "set ylabel " + quoted(panel.y_label) + " noenhanced\n";
   script += "set format x '%g'\nset format y '%g'\nset xtics nomirror out\nset ytics out\n";
   if (panel.log_x) script += "set logscale x\nset format x '10^{%L}'\nset mxtics 10\n";
   if (panel.log_y) script += "set logscale y\nset format y '10^{%L}'\nset mytics 10\n";
+  script += range_commands("x", x) + range_commands("y", y);
   const bool right = std::any_of(panel.series.begin(), panel.series.end(), [](const auto& s) { return s.right_axis; });
   if (right) {
     script += "set ytics nomirror\nset y2tics out\nset format y2 '%g'\nset y2label " + quoted(panel.y2_label) +
               " noenhanced\n";
     if (panel.log_y2) script += "set logscale y2\nset format y2 '10^{%L}'\n";
+    script += range_commands("y2", y2);
   }
   const bool coloured = std::any_of(panel.series.begin(), panel.series.end(),
                                     [](const auto& s) { return !s.z.empty() && s.z.size() == s.y.size(); });
@@ -204,11 +310,7 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
               "set cblabel " + quoted(panel.z_label) + " noenhanced\nset format cb '%g'\n";
   else
     script += "unset colorbox\n";
-  if (panel.legend == PlotPanel::Legend::None) script += "unset key\n";
-  else
-    script += std::string("set key inside ") + legend_position(panel.legend) +
-              " opaque box lc rgb '#bbbbbb' samplen 2.5 spacing 1.1 font ',10'\n";
-  if (!panel.log_x) script += "set autoscale xfix\n";
+  script += key;
 
   std::vector<std::string> bands, items;
   for (std::size_t k = 0; k < data.size(); ++k) {
@@ -238,8 +340,7 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
     items.push_back(item + title);
   }
   if (bands.empty() && items.empty()) {
-    script += "set xrange [1:10]\nset yrange [1:10]\nset label 1 'no data' at graph 0.5,0.5 center\n"
-              "plot NaN notitle\n";
+    script += "set label 1 'no data' at graph 0.5,0.5 center\nplot NaN notitle\n";
     return;
   }
   std::string plot = "plot ";
@@ -319,6 +420,7 @@ std::string run_gnuplot(const std::string& script) {
     throw PlotError("cannot run gnuplot '" + exe + "': " + std::strerror(spawned) +
                     " (install Debian's gnuplot-nox, see tools/install-deps.sh, or set DRIFTLAB_GNUPLOT)");
   in.close_end(0), out.close_end(1), err.close_end(1);
+  ::fcntl(in.fd[1], F_SETFL, ::fcntl(in.fd[1], F_GETFL) | O_NONBLOCK);
 
   std::string svg, messages;
   {
@@ -372,8 +474,6 @@ std::string render_svg(const Figure& figure) {
   const long rows = std::max<long>(1, (static_cast<long>(figure.panels.size()) + columns - 1) / columns);
   const long title_px = figure.title.empty() ? 0 : 30;
   const long height = rows * figure.panel_height + title_px;
-  const long pixel_columns = std::max(50L, figure.width / columns - kMarginPx);
-  const long pixel_rows = std::max(50L, static_cast<long>(figure.panel_height) - 70);
   const bool any_right = std::any_of(figure.panels.begin(), figure.panels.end(), [](const PlotPanel& p) {
     return std::any_of(p.series.begin(), p.series.end(), [](const PlotSeries& s) { return s.right_axis; });
   });
@@ -383,8 +483,9 @@ std::string render_svg(const Figure& figure) {
   script += "set multiplot layout " + std::to_string(rows) + "," + std::to_string(columns) + " rowsfirst";
   if (!figure.title.empty()) script += " title " + quoted(figure.title) + " noenhanced font ',13'";
   script += "\n";
-  for (std::size_t p = 0; p < figure.panels.size(); ++p)
-    panel_script(script, figure.panels[p], p, pixel_columns, pixel_rows, any_right);
+  const Geometry g{std::max(50.0, figure.width / static_cast<double>(columns) - (any_right ? 24 : 16) * kCharWidthPx),
+                   std::max(40.0, figure.panel_height - kVerticalMarginsPx)};
+  for (std::size_t p = 0; p < figure.panels.size(); ++p) panel_script(script, figure.panels[p], p, g, any_right);
   script += "unset multiplot\n";
   return run_gnuplot(script);
 }

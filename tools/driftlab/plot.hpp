@@ -50,7 +50,9 @@ struct PlotPanel {
   std::string y2_label;                 // right axis, used by series with right_axis
   bool log_y2 = false;
   std::string z_label;                  // colour bar of the series with z values
-  enum class Legend { TopRight, TopLeft, BottomRight, BottomLeft, None } legend = Legend::TopRight;
+  // Auto: the corner with the least data, else above the data (the y range grows to make room).
+  // No legend when no series is labelled, or the only label repeats the panel's title.
+  enum class Legend { TopRight, TopLeft, BottomRight, BottomLeft, Auto, None } legend = Legend::Auto;
 };
 
 struct Figure {
