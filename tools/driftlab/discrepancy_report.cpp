@@ -5,7 +5,7 @@
 #include <sstream>
 
 #include "framework/units.hpp"
-#include "tools/driftlab/plot.hpp"
+#include "tools/driftlab/html_report.hpp"
 
 namespace driftlab::cli {
 namespace {
@@ -266,7 +266,7 @@ std::string discrepancy_html(const discrepancy::Result& r, const DiscrepancyRepo
     }
     h << "</table>\n";
   }
-  h << "<h2>Where the model misses: before and after</h2>\n" << render_svg(residual_figure(r)) << "\n";
+  h << "<h2>Where the model misses: before and after</h2>\n" << inline_svg(render_svg(residual_figure(r)), "residual-") << "\n";
   h << "<h2>Last round of scores</h2>\n<table><tr><th>effect</th><th>&Delta;&chi;&sup2;</th><th>&Delta;BIC</th>"
        "<th>parameters added</th></tr>\n";
   for (const auto& s : r.final_scores) {

@@ -34,22 +34,6 @@ void replace_all(std::string& s, const std::string& from, const std::string& to)
   for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
 }
 
-// An SVG document made fit to sit inside HTML next to others: no XML prolog, no namespace URIs (the
-// HTML parser supplies them), no tooltip title, and ids made unique per figure.
-std::string inline_svg(std::string svg, int number_of_figure) {
-  const std::size_t start = svg.find("<svg");
-  if (start != std::string::npos) svg.erase(0, start);
-  for (const char* attribute : {" xmlns=\"http://www.w3.org/2000/svg\"", " xmlns:xlink=\"http://www.w3.org/1999/xlink\""})
-    replace_all(svg, attribute, "");
-  replace_all(svg, "<title>Gnuplot</title>", "");
-  for (std::size_t at = svg.find(" id=\"gnuplot_"); at != std::string::npos; at = svg.find(" id=\"gnuplot_", at))
-    svg.erase(at, svg.find('"', at + 5) + 1 - at);
-  const std::string prefix = "f" + std::to_string(number_of_figure) + "-";
-  for (const char* token : {" id='", " id=\"", "href='#", "href=\"#", "url(#"})
-    replace_all(svg, token, token + prefix);
-  return svg;
-}
-
 }  // namespace
 
 std::string html_escape(const std::string& text) {
@@ -66,6 +50,19 @@ std::string html_escape(const std::string& text) {
     }
   }
   return out;
+}
+
+std::string inline_svg(std::string svg, const std::string& id_prefix) {
+  const std::size_t start = svg.find("<svg");
+  if (start != std::string::npos) svg.erase(0, start);
+  for (const char* attribute : {" xmlns=\"http://www.w3.org/2000/svg\"", " xmlns:xlink=\"http://www.w3.org/1999/xlink\""})
+    replace_all(svg, attribute, "");
+  replace_all(svg, "<title>Gnuplot</title>", "");
+  for (std::size_t at = svg.find(" id=\"gnuplot_"); at != std::string::npos; at = svg.find(" id=\"gnuplot_", at))
+    svg.erase(at, svg.find('"', at + 5) + 1 - at);
+  for (const char* token : {" id='", " id=\"", "href='#", "href=\"#", "url(#"})
+    replace_all(svg, token, token + id_prefix);
+  return svg;
 }
 
 HtmlReport::HtmlReport(std::string title) : title_(std::move(title)) {}
@@ -114,7 +111,7 @@ HtmlReport& HtmlReport::figure(const Figure& f, const std::string& caption) {
 
 HtmlReport& HtmlReport::figure_svg(const std::string& svg, const std::string& caption) {
   ++figures_;
-  body_ += "<figure id=\"figure-" + std::to_string(figures_) + "\">\n" + inline_svg(svg, figures_) +
+  body_ += "<figure id=\"figure-" + std::to_string(figures_) + "\">\n" + inline_svg(svg, "f" + std::to_string(figures_) + "-") +
            "<figcaption><b>Figure " + std::to_string(figures_) + ".</b> " + html_escape(caption) +
            "</figcaption>\n</figure>\n";
   return *this;
