@@ -168,6 +168,23 @@ TEST(Plot, DrawsBandsErrorBarsASecondAxisAndAColourScale) {
   EXPECT_EQ(plot_elements(svg), 6u);  // band + line, bars, rate, temperature, coloured
 }
 
+TEST(Plot, StreamsAFigureLargerThanThePipeBuffersBothWays) {
+  Figure f;
+  for (int p = 0; p < 12; ++p) {
+    PlotSeries s = line("points with intervals", {}, {}, PlotSeries::Style::Markers);
+    for (int i = 0; i < 2000; ++i) {
+      s.x.push_back(i);
+      s.y.push_back(std::sin(i * 0.01 + p));
+      s.y_low.push_back(s.y.back() - 0.1);
+      s.y_high.push_back(s.y.back() + 0.1);
+    }
+    f.panels.push_back({"panel " + std::to_string(p), "x", "y", false, false, {s}});
+  }
+  const std::string svg = render_svg(f);
+  EXPECT_GT(svg.size(), 1'000'000u);
+  EXPECT_THAT(svg, HasSubstr("panel 11"));
+}
+
 TEST(Plot, DrawsAPanelWithoutDataAsEmpty) {
   Figure f;
   f.panels.push_back({"nothing yet", "x", "y", true, true, {line("none", {}, {})}});
