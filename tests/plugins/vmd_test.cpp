@@ -79,6 +79,25 @@ TEST(Vmd, SeparatesATrendFromTwoTonesWithTheDcMode) {
   EXPECT_LT(interior_rms(r.modes.col(2) - trend, 0.1), kRelativeModeError * rms(trend));
 }
 
+// f_Sig3 of the paper: 1 / (1.2 + cos(2 pi t)) + cos(32 pi t + 0.2 cos(64 pi t)) / (1.5 + sin(2 pi t)),
+// an intrawave frequency-modulated carrier at 16 Hz with an amplitude envelope over a smooth
+// background; K = 2, the paper's Fig. 7 recovers both.
+TEST(Vmd, RecoversThePapersIntrawaveFmSignal) {
+  const double fs = 1000.0;
+  const Eigen::VectorXd background = sampled(1000, fs, [](double t) { return 1.0 / (1.2 + std::cos(2.0 * kPi * t)); });
+  const Eigen::VectorXd carrier = sampled(1000, fs, [](double t) {
+    return std::cos(32.0 * kPi * t + 0.2 * std::cos(64.0 * kPi * t)) / (1.5 + std::sin(2.0 * kPi * t));
+  });
+  const vmd::Result r = vmd::decompose(background + carrier, {.modes = 2, .alpha = 2000.0, .dc = true});
+  EXPECT_NEAR(r.centre_frequencies[0] * fs, 16.0, 0.5);
+  // Measured: carrier 9.0 %, background 2.4 % rms error. The carrier's phase modulation puts
+  // sidebands at 16 +- 32 Hz, where its Wiener filter passes only 1 / (1 + 2000 0.032^2) = 1/3:
+  // that loss, not the algorithm, bounds the carrier's error.
+  constexpr double kCarrierError = 0.12, kBackgroundError = 0.04;
+  EXPECT_LT(interior_rms(r.modes.col(0) - carrier, 0.05), kCarrierError * rms(carrier));
+  EXPECT_LT(interior_rms(r.modes.col(1) - background, 0.05), kBackgroundError * rms(background));
+}
+
 TEST(Vmd, ModesSumBackToTheSignalWhenTheDualAscentEnforcesIt) {
   const double fs = 100.0;
   const Eigen::VectorXd x = sampled(2000, fs, [](double t) {
