@@ -2,7 +2,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -84,6 +86,56 @@ TEST(DiscrepancyCommand, WithoutADeviceFitsABiasPolynomialAndEstimatesTheNoiseTe
   EXPECT_NEAR(report["model"]["noise"]["arw_dph_rthz"].get<double>(), 99.6, kArwTolerance);
   ASSERT_EQ(report["named_effects"].size(), 1u) << report.dump(2);
   EXPECT_EQ(report["named_effects"][0]["effect"], "periodic_disturbance");
+}
+
+// Keeps the header and the rows whose time stamp (first column, s) passes `keep`.
+std::filesystem::path filtered(const std::filesystem::path& csv, const std::string& name,
+                               const std::function<bool(double)>& keep) {
+  std::ifstream in(csv);
+  const auto out_path = csv.parent_path() / name;
+  std::ofstream out(out_path);
+  std::string line;
+  std::getline(in, line);
+  out << line << "\n";
+  while (std::getline(in, line))
+    if (keep(std::stod(line.substr(0, line.find(','))))) out << line << "\n";
+  return out_path;
+}
+
+TEST(DiscrepancyCommand, TakesSearchBoundsFromTheCommandLineValidatedByTheParameterTables) {
+  const auto dir = scratch_dir("discrepancy_set");
+  const auto csv = simulated(dir, "");
+  const std::string base = "discrepancy --data " + csv.string() + " --device fmvmg --report " + (dir / "r.json").string();
+  const auto bad = run_driftlab(base + " --set effect/thermal_lag.tau_max_s=-3 --set thermal_lag.tau_typo=1");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_THAT(bad.err, HasSubstr("--set effect/thermal_lag.tau_max_s: value -3 is out of range"));
+  EXPECT_THAT(bad.err, HasSubstr("--set effect/thermal_lag.tau_typo: unknown parameter"));
+  EXPECT_THAT(run_driftlab(base + " --set effect/thermal_lag.tau_min_s=9000").err, HasSubstr("tau_min_s < tau_max_s"));
+  EXPECT_THAT(run_driftlab(base + " --effects hysteresis --set thermal_lag.tau_max_s=100").err,
+              HasSubstr("effect/thermal_lag is not a candidate"));
+  EXPECT_EQ(run_driftlab(base + " --set effect/thermal_lag.tau_max_s=20000 --set periodic_disturbance.period_min_s=60")
+                .exit_code,
+            0);
+}
+
+TEST(DiscrepancyCommand, ReadsARecordOfRegularBurstsWithoutFlagsAndRefusesIrregularGaps) {
+  const auto dir = scratch_dir("discrepancy_bursts");
+  const auto csv = simulated(dir, "periodic_disturbance:amplitude_dph=150,period_s=2400,phase_deg=30");
+  // One minute every five, like a logger that wakes up for a burst.
+  const auto bursts = filtered(csv, "bursts.csv", [](double t) { return std::fmod(t, 300.0) < 60.0; });
+  const auto r = run_driftlab("discrepancy --data " + bursts.string() + " --device fmvmg --report " +
+                              (dir / "bursts.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("named periodic_disturbance"));
+
+  const auto holes = filtered(csv, "holes.csv", [](double t) { return t < 3000.0 || (t > 4000 && t < 6500) || t > 12000; });
+  const std::string holes_args =
+      "discrepancy --data " + holes.string() + " --device fmvmg --report " + (dir / "holes.json").string();
+  const auto refused = run_driftlab(holes_args);
+  EXPECT_EQ(refused.exit_code, 3);
+  EXPECT_THAT(refused.err, HasSubstr("not regular bursts"));
+  EXPECT_THAT(refused.err, HasSubstr("--max-gap 0"));
+  EXPECT_EQ(run_driftlab(holes_args + " --max-gap 0").exit_code, 0);
 }
 
 TEST(DiscrepancyCommand, RejectsMissingDataAMissingReportAndOverwritingTheInput) {

@@ -3,7 +3,9 @@
 // effect/* plugin of the registry (built-in and external), or those given with --effects.
 // Outputs: report.json and report.html (discrepancy_report.hpp), series.csv
 // (t_s, measured_dps, model_initial_dps, model_final_dps).
+#include <algorithm>
 #include <iostream>
+#include <map>
 #include <memory>
 
 #include "devices/device_file.hpp"
@@ -23,7 +25,8 @@ namespace {
 struct DiscrepancyOptions {
   DataOptions data;
   std::string device, devices_dir, report, series, html;
-  std::vector<std::string> effects;
+  std::vector<std::string> effects, sets;
+  bool max_gap_given = false;
   int bias_degree = -1;
   double block_s = 0.0;
   double significance = 10.0;
@@ -47,18 +50,53 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
     if (!out.empty()) check_output(out, inputs);
 
   const Registry& registry = env.registry();
-  std::vector<std::unique_ptr<Effect>> owned;
-  std::vector<discrepancy::Candidate> candidates;
   std::vector<std::string> names = o.effects;
   if (names.empty())
     for (const auto* info : registry.list("effect")) names.push_back(info->name);
-  for (auto name : names) {
+  for (auto& name : names)
     if (name.rfind("effect/", 0) != 0) name = "effect/" + name;
-    owned.push_back(registry.create_as<Effect>({name, params_from_assignments(registry, name, {})}));
+  // --set NAME.key=value: search bounds and options of the candidates, validated by their tables.
+  std::map<std::string, std::vector<std::string>> assignments;
+  for (const auto& set : o.sets) {
+    const auto dot = set.find('.');
+    const auto eq = set.find('=');
+    if (dot == std::string::npos || eq == std::string::npos || dot > eq)
+      throw ConfigError({"", 0, "--set " + set}, "expected effect/NAME.key=value, e.g. effect/thermal_lag.tau_max_s=8000");
+    std::string name = set.substr(0, dot);
+    if (name.rfind("effect/", 0) != 0) name = "effect/" + name;
+    if (std::find(names.begin(), names.end(), name) == names.end())
+      throw ConfigError({"", 0, "--set " + set}, name + " is not a candidate (see --effects and `driftlab plugins list`)");
+    assignments[name].push_back(set.substr(dot + 1));
+  }
+  std::vector<std::unique_ptr<Effect>> owned;
+  std::vector<discrepancy::Candidate> candidates;
+  for (const auto& name : names) {
+    ParamValues params;
+    try {
+      params = params_from_assignments(registry, name, assignments[name]);
+    } catch (const ConfigError& e) {
+      auto problems = e.problems();
+      for (auto& p : problems) p.where = {"", 0, "--set " + name + "." + p.where.field};
+      throw ConfigError(std::move(problems));
+    }
+    owned.push_back(registry.create_as<Effect>({name, std::move(params)}));
     candidates.push_back({name.substr(7), owned.back().get()});
   }
 
-  const TimeSeries record = load_record(o.data, {role::kRate, role::kTemperature});
+  // Gaps: unless --max-gap is given, a record of regular bursts is accepted as it is (the block
+  // means handle it); irregular gaps are refused with where the first one is.
+  DataOptions data = o.data;
+  if (!o.max_gap_given) data.max_gap_factor = 0.0;
+  const TimeSeries record = load_record(data, {role::kRate, role::kTemperature});
+  if (!o.max_gap_given) {
+    const auto gaps = discrepancy::gap_pattern(record.time(), o.data.max_gap_factor);
+    if (gaps.gaps > 0 && !gaps.regular())
+      throw DataError({o.data.path, 0, "time"},
+                      std::to_string(gaps.gaps) + " gap(s) longer than " + std::to_string(o.data.max_gap_factor) +
+                          " x the median step, the first after t = " + std::to_string(gaps.first_gap_time_s) +
+                          " s, and not regular bursts (burst periods " + std::to_string(gaps.shortest_period_s) +
+                          " .. " + std::to_string(gaps.longest_period_s) + " s); give --max-gap 0 to accept them");
+  }
   env.progress("discrepancy", 0.0);
   const auto result = discrepancy::find_missing_effects(record, candidates, options);
   env.progress("discrepancy", 1.0);
@@ -103,6 +141,9 @@ void add_discrepancy_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--series", options->series, "series.csv: t_s, measured_dps, model_initial_dps, model_final_dps");
   cmd->add_option("--html", options->html, "report.html with residual plots before and after");
   cmd->add_option("--effects", options->effects, "candidate effects (default: every effect/* plugin)");
+  cmd->add_option("--set", options->sets,
+                  "candidate parameter, effect/NAME.key=value (e.g. effect/thermal_lag.tau_max_s=8000); repeatable; "
+                  "validated by the plugin's table (`driftlab plugins describe effect/NAME`)");
   cmd->add_option(
          "--bias-degree", options->bias_degree,
          "degree of the fitted bias correction polynomial (default: the device file's, at least 1; 2 without a device)")
@@ -115,7 +156,10 @@ void add_discrepancy_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--max-effects", options->max_effects, "stop after naming this many effects")
       ->check(CLI::Range(0, 20))
       ->capture_default_str();
-  cmd->callback([options, &env] { discrepancy_command(*options, env); });
+  cmd->callback([options, cmd, &env] {
+    options->max_gap_given = cmd->get_option("--max-gap")->count() > 0;
+    discrepancy_command(*options, env);
+  });
 }
 
 }  // namespace driftlab::cli
