@@ -1,5 +1,6 @@
 #include "tools/driftlab/calibration_report.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -23,8 +24,15 @@ Scored score(const std::string& name, const std::string& description, const cali
   Scored s{name, description};
   const Eigen::VectorXd truth = r.true_rate_rad_s.size() ? r.true_rate_rad_s : Eigen::VectorXd::Zero(r.time_s.size());
   s.drift_dph = calibration::residual_drift_rad_s(r.time_s, out, truth) * kDph;
-  const double fs = (r.time_s.size() - 1) / (r.time_s[r.time_s.size() - 1] - r.time_s[0]);
-  if (const auto a = calibration::allan_figures(out - truth, fs)) {
+  const double fs = static_cast<double>(r.time_s.size() - 1) / (r.time_s[r.time_s.size() - 1] - r.time_s[0]);
+  // Allan figures need an evenly sampled record: none for records with gaps (bursts).
+  std::vector<double> steps(static_cast<std::size_t>(r.time_s.size() - 1));
+  for (Eigen::Index i = 1; i < r.time_s.size(); ++i) steps[static_cast<std::size_t>(i - 1)] = r.time_s[i] - r.time_s[i - 1];
+  std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
+  const double median_step = steps[steps.size() / 2];
+  const double max_step = (r.time_s.tail(r.time_s.size() - 1) - r.time_s.head(r.time_s.size() - 1)).maxCoeff();
+  const bool even = max_step <= 3.0 * median_step;
+  if (const auto a = even ? calibration::allan_figures(out - truth, fs) : std::nullopt) {
     s.b_dph = a->bias_instability_rad_s * kDph;
     s.n_dph_rthz = a->arw_rad_sqrt_s * kDph;
   }
@@ -88,6 +96,7 @@ nlohmann::json write_calibration_report(const ReportInput& in, const std::filesy
       {"B_dph", "bias instability: min overlapping Allan deviation of (output - true rate) / 0.664, deg/h"},
       {"N_dph_rthz", "Allan deviation at tau = 1 s, deg/h/sqrt(Hz); every causal model keeps the full bandwidth fs/2"},
       {"extrapolated_fraction", "share of samples whose model temperature was outside the calibrated range"}};
+  j["notes"] = in.notes;
   j["models"] = nlohmann::json::array();
   for (const auto& m : in.models) j["models"].push_back(model_json(m));
 
@@ -99,6 +108,7 @@ nlohmann::json write_calibration_report(const ReportInput& in, const std::filesy
     return s;
   }());
   html.paragraph("Truth: " + in.truth_note);
+  for (const auto& n : in.notes) html.paragraph("Note: " + n);
   {
     HtmlTable t{"Competing models, all fitted on the calibration records", {"name", "kind", "order", "valid range (degC)", "extrapolation", "fitted on", "held-out CV residual (deg/h)"}};
     for (const auto& m : in.models) {
@@ -152,7 +162,8 @@ nlohmann::json write_calibration_report(const ReportInput& in, const std::filesy
                                {"extrapolated_fraction", s.extrapolated}});
       t.rows.push_back({s.name, s.drift_dph, s.b_dph, s.n_dph_rthz, 100.0 * s.extrapolated});
     }
-    t.note = "Residual drift: rms of 60-s block means of (output - true rate). " +
+    t.note = "Residual drift: rms of 60-s block means of (output - true rate). B and N need an evenly sampled "
+             "record (none for burst records). " +
              (r.systematic_rad_s.size()
                   ? "Intrinsic floor (measured - true systematic rate): " +
                         std::to_string(ej["intrinsic_floor_drift_dph"].get<double>()) + " deg/h."

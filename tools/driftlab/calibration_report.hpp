@@ -33,6 +33,7 @@ struct ReportInput {
   std::vector<calibration::Record> evaluations;  // held-out records
   std::vector<ExternalOutput> external;
   std::string truth_note;                        // what "truth" is for these records
+  std::vector<std::string> notes;                // e.g. a baseline that could not be fitted
 };
 
 // Scores every model on every held-out record and writes DIR/report.json and DIR/report.html

@@ -115,7 +115,13 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
       in.models.push_back({"PX4-style poly", "order 3, heating samples only, clamped outside the range",
                            calibration::fit_calibration(records, px4)});
     } catch (const DataError& e) {
-      std::cerr << "note: no PX4-style baseline: " << e.what() << "\n";
+      // A record without a heating leg (e.g. a cooling-only run): the same cubic on all samples.
+      in.notes.push_back(std::string("PX4-style baseline not fitted on heating only (") + e.what() +
+                         "); fitted on all samples instead");
+      std::cerr << "note: " << in.notes.back() << "\n";
+      px4.heating_only = false;
+      in.models.push_back({"PX4-style poly", "order 3, all samples (no heating leg), clamped outside the range",
+                           calibration::fit_calibration(records, px4)});
     }
   }
   for (const auto kind : {calibration::ModelKind::Polynomial, calibration::ModelKind::Physical,
