@@ -10,9 +10,7 @@ Eigen::VectorXd first_order_lag(const Eigen::VectorXd& time_s, const Eigen::Vect
   y[0] = x[0];
   for (Eigen::Index k = 0; k + 1 < x.size(); ++k) {
     const double h = time_s[k + 1] - time_s[k];
-    const double a = std::exp(-h / tau_s);
-    const double ramp_gain = 1.0 - tau_s * (1.0 - a) / h;
-    y[k + 1] = a * y[k] + (1.0 - a) * x[k] + (x[k + 1] - x[k]) * ramp_gain;
+    y[k + 1] = lag_step(y[k], x[k], x[k + 1], h, tau_s, std::exp(-h / tau_s));
   }
   return y;
 }
@@ -31,14 +29,16 @@ Eigen::VectorXd hysteresis_state(const Eigen::VectorXd& temp_c, double width_k) 
   Eigen::VectorXd s = Eigen::VectorXd::Zero(temp_c.size());
   double state = 0.0;
   for (Eigen::Index k = 1; k < temp_c.size(); ++k) {
-    const double step = temp_c[k] - temp_c[k - 1];
-    if (step != 0.0) {
-      const double target = step > 0.0 ? 1.0 : -1.0;
-      state = target + (state - target) * std::exp(-std::abs(step) / width_k);
-    }
+    state = hysteresis_step(state, temp_c[k] - temp_c[k - 1], width_k);
     s[k] = state;
   }
   return s;
+}
+
+double hysteresis_step(double state, double step_k, double width_k) {
+  if (step_k == 0.0) return state;
+  const double target = step_k > 0.0 ? 1.0 : -1.0;
+  return target + (state - target) * std::exp(-std::abs(step_k) / width_k);
 }
 
 }  // namespace driftlab::signal

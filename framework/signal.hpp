@@ -13,6 +13,12 @@ namespace driftlab::signal {
 // (starts in equilibrium). tau <= 0 returns x.
 Eigen::VectorXd first_order_lag(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, double tau_s);
 
+// One exact step of first_order_lag, for streaming use: from y at the previous input x_prev to the
+// next input x, h seconds later, with a = exp(-h / tau_s) (callers with a fixed step compute it once).
+inline double lag_step(double y, double x_prev, double x, double h, double tau_s, double a) {
+  return a * y + (1.0 - a) * x_prev + (x - x_prev) * (1.0 - tau_s * (1.0 - a) / h);
+}
+
 // Central-difference derivative dx/dt (one-sided at the ends), unit of x per second.
 Eigen::VectorXd time_derivative(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x);
 
@@ -20,5 +26,8 @@ Eigen::VectorXd time_derivative(const Eigen::VectorXd& time_s, const Eigen::Vect
 // s <- sgn(dT) + (s - sgn(dT)) exp(-|dT| / width). Heating drives s to +1, cooling to -1. Depends
 // only on the temperature path (degC, width in K).
 Eigen::VectorXd hysteresis_state(const Eigen::VectorXd& temp_c, double width_k);
+
+// One step of hysteresis_state, for streaming use: the state after a temperature step (K).
+double hysteresis_step(double state, double step_k, double width_k);
 
 }  // namespace driftlab::signal

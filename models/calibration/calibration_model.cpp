@@ -8,6 +8,8 @@
 
 #include "framework/atomic_file.hpp"
 #include "framework/error.hpp"
+#include "framework/signal.hpp"
+#include "plugins/polynomial/polynomial.hpp"
 
 namespace driftlab::calibration {
 
@@ -31,22 +33,12 @@ std::string to_string(Extrapolation policy) {
 
 namespace {
 
-double horner(const std::vector<double>& a, double u) {
-  double v = 0.0;
-  for (std::size_t i = a.size(); i-- > 0;) v = v * u + a[i];
-  return v;
-}
+double horner(const std::vector<double>& a, double u) { return polynomial::evaluate(a, 0.0, u); }
 
 double horner_derivative(const std::vector<double>& a, double u) {
   double v = 0.0;
   for (std::size_t i = a.size(); i-- > 1;) v = v * u + static_cast<double>(i) * a[i];
   return v;
-}
-
-// Exact step of y' = (x - y)/tau with x linear between samples, given a = exp(-dt/tau).
-inline double lag_step(double y, double x_prev, double x, double dt, double tau, double a) {
-  const double m_tau = (x - x_prev) / dt * tau;
-  return x - m_tau + (y - x_prev + m_tau) * a;
 }
 
 }  // namespace
@@ -359,19 +351,13 @@ void CausalState::step(double t_s, double temp_c) {
     a_lag_ = lag_tau_ > 0 ? std::exp(-dt / lag_tau_) : 0.0;
     a_der_ = std::exp(-dt / deriv_tau_);
   }
-  tm_ = lag_tau_ > 0 ? lag_step(tm_, x_prev_, temp_c, dt, lag_tau_, a_lag_) : temp_c;
+  tm_ = lag_tau_ > 0 ? signal::lag_step(tm_, x_prev_, temp_c, dt, lag_tau_, a_lag_) : temp_c;
   const double y1_prev = y1_;
-  const double y1 = lag_step(y1_, x_prev_, temp_c, dt, deriv_tau_, a_der_);
-  y2_ = lag_step(y2_, y1_prev, y1, dt, deriv_tau_, a_der_);
+  const double y1 = signal::lag_step(y1_, x_prev_, temp_c, dt, deriv_tau_, a_der_);
+  y2_ = signal::lag_step(y2_, y1_prev, y1, dt, deriv_tau_, a_der_);
   y1_ = y1;
   rate_ = (y1_ - y2_) / deriv_tau_;
-  if (width_ > 0) {
-    const double d = y1_ - y1_prev;
-    if (d != 0.0) {
-      const double sg = d > 0 ? 1.0 : -1.0;
-      s_ = sg + (s_ - sg) * std::exp(-std::abs(d) / width_);
-    }
-  }
+  if (width_ > 0) s_ = signal::hysteresis_step(s_, y1_ - y1_prev, width_);
   t_prev_ = t_s;
   x_prev_ = temp_c;
 }

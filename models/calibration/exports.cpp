@@ -26,12 +26,6 @@ std::string short_num(double v) {
 
 int axis_index(const std::string& axis) { return axis == "x" ? 0 : axis == "y" ? 1 : 2; }
 
-// Polynomial part only (no extrapolation: the grid lies inside the valid range).
-double poly_at(const CalibrationModel& m, double t) {
-  double v = 0.0;
-  for (std::size_t i = m.bias_rad_s.size(); i-- > 0;) v = v * (t - m.reference_temp_c) + m.bias_rad_s[i];
-  return v;
-}
 
 // The cubic for PX4/ArduPilot with its notes; throws in strict mode when it is not exact.
 std::vector<double> cubic_for_export(const CalibrationModel& m, double t_ref, const ExportOptions& o,
@@ -84,7 +78,7 @@ std::vector<double> cubic_about(const CalibrationModel& m, double t_ref, double&
     const double t = m.valid_min_c + (m.valid_max_c - m.valid_min_c) * g / (kGrid - 1);
     const double u = (t - t_ref) / half;
     for (int k = 0; k < 4; ++k) A(g, k) = std::pow(u, k);
-    y[g] = poly_at(m, t);
+    y[g] = m.polynomial_bias_rad_s(t);  // the grid lies inside the valid range
   }
   const Eigen::VectorXd b = A.colPivHouseholderQr().solve(y);
   max_error = (A * b - y).cwiseAbs().maxCoeff();
@@ -263,8 +257,7 @@ static inline void P_init(P_state* st) {
 
 /* Exact step of y' = (x - y)/tau for x linear between samples, a = exp(-dt/tau). */
 static inline double P_lag(double y, double x_prev, double x, double dt, double tau, double a) {
-  const double m_tau = (x - x_prev) / dt * tau;
-  return x - m_tau + (y - x_prev + m_tau) * a;
+  return a * y + (1.0 - a) * x_prev + (x - x_prev) * (1.0 - tau * (1.0 - a) / dt);
 }
 
 static inline double P_horner(const double* a, int n, double u) {
