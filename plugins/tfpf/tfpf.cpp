@@ -111,7 +111,6 @@ Result filter(const Eigen::VectorXd& x, const Config& config) {
                             reinterpret_cast<fftw_complex*>(out.data()), FFTW_FORWARD,
                             FFTW_ESTIMATE | FFTW_PRESERVE_INPUT);
   });
-  std::vector<double> dphi(static_cast<std::size_t>(h + 1));
   const double grid = 1.0 / fft_size;
 
   result.filtered.resize(n);
@@ -119,7 +118,6 @@ Result filter(const Eigen::VectorXd& x, const Config& config) {
     const Eigen::Index centre = k + h;  // index into the extended phase
     for (Eigen::Index m = 0; m <= h; ++m) {
       const double d = phase[static_cast<std::size_t>(centre + m)] - phase[static_cast<std::size_t>(centre - m)];
-      dphi[static_cast<std::size_t>(m)] = d;
       in[static_cast<std::size_t>(m)] = w[static_cast<std::size_t>(m)] * Complex(std::cos(d), std::sin(d));
     }
     fftw_execute(plan.get());
@@ -132,17 +130,22 @@ Result filter(const Eigen::VectorXd& x, const Config& config) {
         best = b;
       }
     }
-    // Newton on W'(f) = 0 within one grid step of the coarse peak (step 5).
+    // Newton on W'(f) = 0 within one grid step of the coarse peak (step 5). With
+    // e_m = w[m] exp(j (dphi_m - 2 pi f m)) = in[m] r^m, r = exp(-j 2 pi f) (powers by repeated
+    // multiplication: rounding grows like m ulps), W'(f) ~ sum 2 pi m Im e_m and
+    // W''(f) ~ -sum (2 pi m)^2 Re e_m (the common factor 2 cancels in the step).
     const double f0 = best * grid;
     double f = f0;
     for (int iteration = 0; iteration < 8; ++iteration) {
+      const Complex rotation = std::polar(1.0, -2.0 * kPi * f);
+      Complex power(1.0, 0.0);
       double first = 0.0, second = 0.0;
       for (Eigen::Index m = 1; m <= h; ++m) {
+        power *= rotation;
+        const Complex e = in[static_cast<std::size_t>(m)] * power;
         const double omega = 2.0 * kPi * static_cast<double>(m);
-        const double arg = dphi[static_cast<std::size_t>(m)] - omega * f;
-        const double wm = w[static_cast<std::size_t>(m)];
-        first += wm * omega * std::sin(arg);
-        second -= wm * omega * omega * std::cos(arg);
+        first += omega * e.imag();
+        second -= omega * omega * e.real();
       }
       if (!(second < 0.0)) break;
       const double next = std::clamp(f - first / second, f0 - grid, f0 + grid);

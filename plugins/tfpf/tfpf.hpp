@@ -38,7 +38,8 @@
 //      otherwise   -> L = short_window (long_window / short_window)^((rho - 0.1) / 0.8),
 // rounded to the nearest odd integer and capped at the largest odd number <= N.
 //
-// Cost: O(N F log F) for the coarse search plus O(N h) per Newton step.
+// Cost: O(N F log F) for the coarse search plus O(N h) per Newton step (complex rotations, no
+// trigonometric calls inside the Newton loop).
 // Errors: std::invalid_argument for a bad configuration, std::domain_error for bad data (fewer than
 // 3 samples, non-finite samples).
 #pragma once
