@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "devices/device_file_update.hpp"
 #include "framework/units.hpp"
 
 namespace driftlab::devices {
@@ -101,6 +102,59 @@ TEST(DeviceFile, ReadsTheEffectsSectionAndTheCommandLineFormAlike) {
   EXPECT_EQ(from_option.scale_factor_temperature->coefficients_per_k,
             d.error_model.effects.scale_factor_temperature->coefficients_per_k);
   EXPECT_EQ(describe_effects(from_option), describe_effects(d.error_model.effects));
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+const std::vector<NamedEffect> kNamed{
+    {"thermal_lag", {{"tau_s", "s", {300.25}}}},
+    {"hysteresis", {{"height_dph", "deg/h", {214.5}}, {"width_c", "degC", {2.5}}}}};
+
+TEST(DeviceFileUpdate, AppendsAnEffectsSectionAndKeepsEveryOriginalLine) {
+  const std::string original = read_text(kFixtures + "valid_minimal.yaml") + "# a closing comment\n";
+  const std::string updated = add_effects_to_device_text(original, "new.yaml", kNamed, "named by a test");
+  EXPECT_EQ(updated.substr(0, original.size()), original);  // the original, byte for byte, then the section
+  EXPECT_THAT(updated.substr(original.size()),
+              ::testing::HasSubstr("# named by a test\neffects:\n  thermal_lag: {tau_s: 300.25}\n"
+                                   "  hysteresis: {height_dph: 214.5, width_c: 2.5}\n"));
+  const auto d = parse_device(updated, "new.yaml");
+  ASSERT_TRUE(d.error_model.effects.thermal_lag && d.error_model.effects.hysteresis);
+  EXPECT_DOUBLE_EQ(d.error_model.effects.hysteresis->height_rad_s, 214.5 * kDph);
+}
+
+TEST(DeviceFileUpdate, ReplacesAListedEffectInPlaceAndKeepsTheOthersAndTheComments) {
+  const std::string original = read_text(kFixtures + "valid_minimal.yaml") +
+                               "effects:   # measured in 2025\n"
+                               "  # the lag of the old mount\n"
+                               "  thermal_lag:\n"
+                               "    tau_s: 100\n"
+                               "  periodic_disturbance: {amplitude_dph: 50, period_s: 600, phase_deg: 0}\n"
+                               "# trailer\n";
+  const std::string updated = add_effects_to_device_text(original, "new.yaml", kNamed, "");
+  EXPECT_THAT(updated, ::testing::HasSubstr("effects:   # measured in 2025\n  # the lag of the old mount\n"
+                                            "  thermal_lag: {tau_s: 300.25}\n"
+                                            "  periodic_disturbance: {amplitude_dph: 50, period_s: 600, phase_deg: 0}\n"
+                                            "  hysteresis: {height_dph: 214.5, width_c: 2.5}\n# trailer\n"));
+  const auto d = parse_device(updated, "new.yaml");
+  EXPECT_DOUBLE_EQ(d.error_model.effects.thermal_lag->tau_s, 300.25);
+  EXPECT_TRUE(d.error_model.effects.periodic_disturbance);
+
+  const std::string flow = read_text(kFixtures + "valid_minimal.yaml") + "effects: {thermal_lag: {tau_s: 100}, warmup_transient: {amplitude_dph: 20, tau_s: 50}}\n";
+  const auto from_flow = parse_device(add_effects_to_device_text(flow, "new.yaml", kNamed, ""), "new.yaml");
+  EXPECT_DOUBLE_EQ(from_flow.error_model.effects.thermal_lag->tau_s, 300.25);
+  EXPECT_TRUE(from_flow.error_model.effects.warmup_transient && from_flow.error_model.effects.hysteresis);
+}
+
+TEST(DeviceFileUpdate, RefusesAnEffectADeviceFileCannotHold) {
+  const std::string original = read_text(kFixtures + "valid_minimal.yaml");
+  EXPECT_THROW(add_effects_to_device_text(original, "new.yaml", {{"mode_split_drift", {}}}, ""), ConfigError);
+  EXPECT_THROW(add_effects_to_device_text(original, "new.yaml", {{"hysteresis", {{"height_dph", "deg/h", {1.0}}}}}, ""),
+               ConfigError);
 }
 
 TEST(DeviceFile, RejectsAMalformedEffectOption) {

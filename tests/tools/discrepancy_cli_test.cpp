@@ -8,6 +8,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "tests/tools/cli_harness.hpp"
 
@@ -136,6 +137,57 @@ TEST(DiscrepancyCommand, ReadsARecordOfRegularBurstsWithoutFlagsAndRefusesIrregu
   EXPECT_THAT(refused.err, HasSubstr("not regular bursts"));
   EXPECT_THAT(refused.err, HasSubstr("--max-gap 0"));
   EXPECT_EQ(run_driftlab(holes_args + " --max-gap 0").exit_code, 0);
+}
+
+std::vector<double> rate_column(const std::filesystem::path& csv) {
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  std::vector<double> rate;
+  while (std::getline(in, line)) {
+    const auto first = line.find(',');
+    rate.push_back(std::stod(line.substr(first + 1, line.find(',', first + 1) - first - 1)));
+  }
+  return rate;
+}
+
+TEST(DiscrepancyCommand, UpdatesACopyOfTheDeviceFileWhoseSimulationReproducesTheRecord) {
+  const auto dir = scratch_dir("discrepancy_update");
+  const auto csv = simulated(dir, "hysteresis:height_dph=250,width_c=2");
+  const auto updated = dir / "new.yaml";
+  const auto r = run_driftlab("discrepancy --data " + csv.string() + " --device fmvmg --report " +
+                              (dir / "report.json").string() + " --update-device " + updated.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("named hysteresis"));
+  const std::string original = read_text(std::filesystem::path(DRIFTLAB_SOURCE_DIR) / "devices" / "fmvmg.yaml");
+  const std::string text = read_text(updated);
+  EXPECT_EQ(text.substr(0, original.size()), original);  // the rest of the file, comments included, as it was
+  EXPECT_THAT(text.substr(original.size()), HasSubstr("effects:\n  hysteresis: {height_dph: "));
+  ASSERT_EQ(run_driftlab("devices describe " + updated.string()).exit_code, 0);
+
+  // Same profile and seed: the new device's record differs from the measured one by its systematic
+  // part only; block means of that difference stay well inside the noise floor.
+  const auto resimulated = dir / "resimulated.csv";
+  ASSERT_EQ(run_driftlab("simulate --device " + updated.string() + " --fs 1 --seed 11 --out " + resimulated.string())
+                .exit_code,
+            0);
+  const auto measured = rate_column(csv), again = rate_column(resimulated);
+  ASSERT_EQ(measured.size(), again.size());
+  const auto report = nlohmann::json::parse(read_text(dir / "report.json"));
+  const std::size_t block = static_cast<std::size_t>(report["criterion"]["block_s"].get<double>());
+  double sum_squares = 0.0;
+  std::size_t blocks = 0;
+  for (std::size_t start = 0; start + block <= measured.size(); start += block, ++blocks) {
+    double mean = 0.0;
+    for (std::size_t k = start; k < start + block; ++k) mean += (measured[k] - again[k]) * 3600.0 / block;  // deg/h
+    sum_squares += mean * mean;
+  }
+  EXPECT_LT(std::sqrt(sum_squares / blocks), report["noise_floor"].get<double>());
+
+  EXPECT_EQ(run_driftlab("discrepancy --data " + csv.string() + " --report " + (dir / "r.json").string() +
+                         " --update-device " + (dir / "x.yaml").string())
+                .exit_code,
+            2);  // needs --device
 }
 
 TEST(DiscrepancyCommand, RejectsMissingDataAMissingReportAndOverwritingTheInput) {

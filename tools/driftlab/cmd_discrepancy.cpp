@@ -4,12 +4,16 @@
 // Outputs: report.json and report.html (discrepancy_report.hpp), series.csv
 // (t_s, measured_dps, model_initial_dps, model_final_dps).
 #include <algorithm>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 #include <map>
 #include <memory>
 
 #include "devices/device_file.hpp"
+#include "devices/device_file_update.hpp"
 #include "devices/discrepancy_options.hpp"
+#include "framework/effect_catalogue.hpp"
 #include "framework/atomic_file.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
@@ -24,7 +28,7 @@ namespace {
 
 struct DiscrepancyOptions {
   DataOptions data;
-  std::string device, devices_dir, report, series, html;
+  std::string device, devices_dir, report, series, html, update_device;
   std::vector<std::string> effects, sets;
   bool max_gap_given = false;
   int bias_degree = -1;
@@ -46,13 +50,18 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
   options.block_s = o.block_s;
   options.significance = o.significance;
   options.max_effects = o.max_effects;
-  for (const auto& out : {o.report, o.series, o.html})
+  if (!o.update_device.empty() && device_path.empty())
+    throw ConfigError({"", 0, "--update-device"}, "needs --device: the named effects are added to a copy of that file");
+  for (const auto& out : {o.report, o.series, o.html, o.update_device})
     if (!out.empty()) check_output(out, inputs);
 
   const Registry& registry = env.registry();
   std::vector<std::string> names = o.effects;
+  // With --update-device and no --effects, only effects a device file can hold are candidates
+  // (effect/mode_split_drift would otherwise explain a lag that the file cannot record).
   if (names.empty())
-    for (const auto* info : registry.list("effect")) names.push_back(info->name);
+    for (const auto* info : registry.list("effect"))
+      if (o.update_device.empty() || find_effect_info(info->name.substr(7))) names.push_back(info->name);
   for (auto& name : names)
     if (name.rfind("effect/", 0) != 0) name = "effect/" + name;
   // --set NAME.key=value: search bounds and options of the candidates, validated by their tables.
@@ -109,6 +118,26 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
                          {"model_initial_dps", result.model_initial_rad_s, "deg/s"},
                          {"model_final_dps", result.model_final_rad_s, "deg/s"}});
   if (!o.html.empty()) write_file_atomically(o.html, discrepancy_html(result, info));
+  std::vector<std::string> not_written;
+  if (!o.update_device.empty()) {
+    std::vector<devices::NamedEffect> named;
+    for (const auto& step : result.steps) {
+      if (!find_effect_info(step.effect)) {
+        not_written.push_back(step.effect);
+        continue;
+      }
+      devices::NamedEffect e{step.effect, {}};
+      for (const auto& p : step.parameters) e.values.push_back({p.key, p.unit, p.values});
+      named.push_back(std::move(e));
+    }
+    std::ifstream in(device_path, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    write_file_atomically(o.update_device,
+                          devices::add_effects_to_device_text(
+                              text.str(), o.update_device, named,
+                              "effects named by `driftlab discrepancy` on " + o.data.path));
+  }
 
   std::cout << "gap " << result.gap_initial_rad_s * kDphPerRadPerSec << " -> " << result.gap_final_rad_s * kDphPerRadPerSec
             << " deg/h (noise floor " << result.noise_floor_rad_s * kDphPerRadPerSec << " deg/h, " << result.blocks
@@ -120,6 +149,12 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
       for (std::size_t i = 0; i < p.values.size(); ++i) std::cout << " " << p.key << "=" << p.values[i];
     std::cout << "; gap " << step.gap_before_rad_s * kDphPerRadPerSec << " -> " << step.gap_after_rad_s * kDphPerRadPerSec
               << " deg/h\n";
+  }
+  if (!o.update_device.empty()) {
+    std::cout << "wrote " << o.update_device << " (" << device_path << " with the named effects under effects:)\n";
+    for (const auto& name : not_written)
+      std::cout << "not written: " << name << " (a device file has no such effect: it is the device's own physics "
+                << "seen through another channel)\n";
   }
 }
 
@@ -140,6 +175,9 @@ void add_discrepancy_command(CLI::App& app, CommandEnv& env) {
       ->required();
   cmd->add_option("--series", options->series, "series.csv: t_s, measured_dps, model_initial_dps, model_final_dps");
   cmd->add_option("--html", options->html, "report.html with residual plots before and after");
+  cmd->add_option("--update-device", options->update_device,
+                  "new.yaml: a copy of the --device file with the named effects added under effects: (everything "
+                  "else, comments included, kept); never the --device file itself");
   cmd->add_option("--effects", options->effects, "candidate effects (default: every effect/* plugin)");
   cmd->add_option("--set", options->sets,
                   "candidate parameter, effect/NAME.key=value (e.g. effect/thermal_lag.tau_max_s=8000); repeatable; "
