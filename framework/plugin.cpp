@@ -97,6 +97,19 @@ SignalMap Regressor::run(const SignalMap& inputs, RunContext& ctx) {
           {"residual", Signal::single(std::move(residual), "residual", target.unit)}};
 }
 
+OptimizationResult Optimizer::minimize_objectives(const VectorObjective& f, std::size_t objectives,
+                                                  const std::vector<Bound>& bounds, RunContext& ctx) {
+  if (objectives != 1) {
+    throw ConfigError({"", 0, "optimizer"},
+                      "this optimizer minimizes one objective; " + std::to_string(objectives) +
+                          " were asked for (use a multi-objective optimizer, e.g. optimizer/pagmo with "
+                          "algorithm nsga2)");
+  }
+  OptimizationResult r = minimize([&](const Eigen::VectorXd& x) { return f(x)[0]; }, bounds, ctx);
+  r.best_values = Eigen::VectorXd::Constant(1, r.best_value);
+  return r;
+}
+
 SignalMap Optimizer::run(const SignalMap&, RunContext&) {
   throw ConfigError({"", 0, "plugin"}, "optimizer plugins run nested inside another plugin, not as steps");
 }

@@ -123,15 +123,29 @@ struct OptimizationResult {
   double best_value = 0.0;
   std::vector<double> history;  // best objective value per generation / iteration
   std::int64_t evaluations = 0;
+  // Several objectives (minimize_objectives): the non-dominated points found, one row each, and
+  // the objective vector of `best` (the point the optimizer chose from that set by its documented
+  // rule; best_value is its first objective). Empty for single-objective runs.
+  Eigen::MatrixXd pareto_x;  // points x dimension
+  Eigen::MatrixXd pareto_f;  // points x objectives
+  Eigen::VectorXd best_values;
 };
 
 // Objective to minimize. Must be safe to call from several threads at once.
 using Objective = std::function<double(const Eigen::VectorXd&)>;
+// Several objectives to minimize at once: returns one value per objective.
+using VectorObjective = std::function<Eigen::VectorXd(const Eigen::VectorXd&)>;
 
 class Optimizer : public Plugin {
  public:
   virtual OptimizationResult minimize(const Objective& f, const std::vector<Bound>& bounds,
                                       RunContext& ctx) = 0;
+  // Largest number of objectives minimize_objectives() accepts (1 unless overridden).
+  virtual std::size_t max_objectives() const { return 1; }
+  // Minimizes `objectives` criteria at once. The default handles objectives == 1 through
+  // minimize() and throws ConfigError for more; multi-objective optimizers override it.
+  virtual OptimizationResult minimize_objectives(const VectorObjective& f, std::size_t objectives,
+                                                 const std::vector<Bound>& bounds, RunContext& ctx);
   SignalMap run(const SignalMap& inputs, RunContext& ctx) final;  // throws: nested use only
 };
 
