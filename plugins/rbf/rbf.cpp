@@ -1,5 +1,7 @@
 #include "plugins/rbf/rbf.hpp"
 
+#include "plugins/common/ridge.hpp"
+
 #include "framework/seeded_random.hpp"
 
 #include <Eigen/Cholesky>
@@ -155,25 +157,14 @@ Eigen::MatrixXd with_bias(const Eigen::MatrixXd& A) {
 
 Eigen::VectorXd least_squares(const Eigen::MatrixXd& U, const Eigen::VectorXd& y,
                               const Eigen::MatrixXd& C, const Config& c) {
-  const Eigen::Index k = C.rows() + 1;
-  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(k, k);
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(k);
-  for (Eigen::Index start = 0; start < U.rows(); start += kBlockRows) {
-    const Eigen::Index len = std::min(kBlockRows, U.rows() - start);
-    const Eigen::MatrixXd B = with_bias(activations(U.middleRows(start, len), C, c.sigma));
-    gram.selfadjointView<Eigen::Lower>().rankUpdate(B.transpose());
-    rhs.noalias() += B.transpose() * y.segment(start, len);
+  try {
+    return ridge::solve(
+        U.rows(), C.rows(),
+        [&](Eigen::Index start, Eigen::Index len) { return activations(U.middleRows(start, len), C, c.sigma); }, y,
+        c.regularization);
+  } catch (const std::invalid_argument& e) {
+    fail(e.what());
   }
-  const double n = static_cast<double>(U.rows());
-  gram = gram.selfadjointView<Eigen::Lower>();
-  gram /= n;
-  rhs /= n;
-  gram.diagonal().head(k - 1).array() += c.regularization;
-  Eigen::LDLT<Eigen::MatrixXd> ldlt(gram);
-  if (ldlt.info() != Eigen::Success) fail("normal equations could not be factorized");
-  Eigen::VectorXd w = ldlt.solve(rhs);
-  if (!w.allFinite()) fail("least-squares weights are not finite; raise regularization");
-  return w;
 }
 
 Eigen::VectorXd lms(const Eigen::MatrixXd& U, const Eigen::VectorXd& y, const Eigen::MatrixXd& C,
@@ -229,13 +220,10 @@ void lms_step(Eigen::VectorXd& w, const Eigen::Ref<const Eigen::VectorXd>& a, do
 
 FitResult fit(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Config& config) {
   check(X, y, config);
-  const Eigen::RowVectorXd mean = X.colwise().mean();
-  Eigen::RowVectorXd scale =
-      ((X.rowwise() - mean).colwise().squaredNorm() / static_cast<double>(X.rows())).cwiseSqrt();
-  for (Eigen::Index f = 0; f < scale.size(); ++f) {
-    if (!(scale[f] > 0)) scale[f] = 1.0;
-  }
-  const Eigen::MatrixXd U = (X.rowwise() - mean).array().rowwise() / scale.array();
+  const auto standardizer = ridge::Standardizer::fit(X);
+  const Eigen::RowVectorXd& mean = standardizer.mean;
+  const Eigen::RowVectorXd& scale = standardizer.scale;
+  const Eigen::MatrixXd U = standardizer.apply(X);
   Eigen::MatrixXd C = config.centre_method == CentreMethod::KMeans ? kmeans(U, config)
                                                                    : grid(U, config.grid_points);
   std::vector<double> epoch_rmse;

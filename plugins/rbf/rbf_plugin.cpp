@@ -11,6 +11,7 @@
 #include "framework/error.hpp"
 #include "framework/registry.hpp"
 #include "plugins/rbf/rbf.hpp"
+#include "plugins/tuning/tuning.hpp"
 
 namespace driftlab {
 namespace {
@@ -141,15 +142,7 @@ class RbfPlugin final : public Regressor {
 };
 
 ParamSpec search_range(std::string key, std::vector<double> def, std::string doc) {
-  return param::reals(std::move(key), std::move(def), "1", std::move(doc))
-      .must("two values [low, high] with low <= high",
-            [](const ParamValue& v) -> std::string {
-              const auto& r = std::get<std::vector<double>>(v);
-              if (r.size() != 2) return "needs exactly two values [low, high]";
-              if (!(r[0] <= r[1])) return "low must not exceed high";
-              return "";
-            },
-            std::vector<double>{2.0, 1.0});
+  return tuning::search_range(std::move(key), std::move(def), "1", std::move(doc));
 }
 
 }  // namespace
