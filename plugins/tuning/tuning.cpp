@@ -1,0 +1,103 @@
+#include "plugins/tuning/tuning.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "framework/error.hpp"
+#include "plugins/rbf/rbf.hpp"
+
+namespace driftlab::tuning {
+
+ParamSpec search_range(std::string key, std::vector<double> def, std::string unit, std::string doc) {
+  return param::reals(std::move(key), std::move(def), std::move(unit), std::move(doc))
+      .must("two values [low, high] with low <= high",
+            [](const ParamValue& v) -> std::string {
+              const auto& r = std::get<std::vector<double>>(v);
+              if (r.size() != 2) return "needs exactly two values [low, high]";
+              if (!(r[0] <= r[1])) return "low must not exceed high";
+              return "";
+            },
+            std::vector<double>{2.0, 1.0});
+}
+
+std::vector<ParamSpec> params(const std::string& complexity_key, const std::string& complexity_doc) {
+  return {param::boolean("tune", false,
+                         "tune the hyperparameters with the nested optimizer on a blocked holdout, then fit all samples"),
+          param::nested("optimizer", "optimizer", "optimizer/ga", "optimizer used when tune is true"),
+          param::choice("tune_objectives", "auto", {"auto", "rmse", "rmse_and_" + complexity_key},
+                        "rmse: held-out RMSE alone; rmse_and_" + complexity_key + ": also " + complexity_doc +
+                            " (needs a multi-objective optimizer, e.g. optimizer/pagmo with nsga2); auto: both "
+                            "when the optimizer takes two objectives"),
+          param::real("holdout_fraction", 0.2, "1", "share of samples held out when tuning").greater_than(0).less_than(1),
+          param::integer("holdout_blocks", 10, "1", "evenly spread contiguous held-out runs when tuning").at_least(1),
+          param::integer("tune_max_samples", 20000, "1",
+                         "tuning uses an evenly spaced subsample of at most this many rows (0: all); the final fit "
+                         "uses all")
+              .at_least(0)};
+}
+
+Settings settings(const ParamValues& p, const Optimizer& optimizer, std::string plugin, std::string complexity_name) {
+  Settings s;
+  s.plugin = std::move(plugin);
+  s.complexity_name = std::move(complexity_name);
+  const std::string& wanted = p.text("tune_objectives");
+  const bool multi = optimizer.max_objectives() >= 2;
+  s.objectives = wanted == "rmse" ? 1 : wanted == "auto" ? (multi ? 2 : 1) : 2;
+  if (s.objectives == 2 && !multi) {
+    throw ConfigError({"", 0, "tune_objectives"},
+                      s.plugin + ": tune_objectives " + wanted + " needs a multi-objective optimizer (e.g. "
+                      "optimizer/pagmo with algorithm nsga2); " + p.plugin("optimizer").name + " takes one");
+  }
+  s.holdout_fraction = p.real("holdout_fraction");
+  s.holdout_blocks = static_cast<std::size_t>(p.integer("holdout_blocks"));
+  s.max_samples = static_cast<std::size_t>(p.integer("tune_max_samples"));
+  s.seed = static_cast<std::uint64_t>(p.integer("seed"));
+  return s;
+}
+
+Split split(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Settings& s) {
+  std::vector<Eigen::Index> rows;
+  const auto n = static_cast<std::size_t>(X.rows());
+  const std::size_t keep = s.max_samples == 0 ? n : std::min(n, s.max_samples);
+  for (std::size_t i = 0; i < keep; ++i) rows.push_back(static_cast<Eigen::Index>(i * n / keep));
+  const Eigen::MatrixXd Xs = X(rows, Eigen::all);
+  const Eigen::VectorXd ys = y(rows);
+  const auto h = rbf::blocked_holdout(Xs.rows(), s.holdout_fraction, s.holdout_blocks, s.seed);
+  return {Xs(h.train, Eigen::all), Xs(h.holdout, Eigen::all), ys(h.train), ys(h.holdout)};
+}
+
+Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const VectorObjective& criteria,
+                    const Settings& s, const Split& data, RunContext& ctx) {
+  RunContext inner;
+  inner.seed = ctx.seed;
+  inner.threads = ctx.threads;
+  const auto objective = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
+    const Eigen::VectorXd c = criteria(v);
+    return s.objectives == 1 ? Eigen::VectorXd(c.head(1)) : c;
+  };
+  const OptimizationResult r = optimizer.minimize_objectives(objective, s.objectives, bounds, inner);
+  if (!std::isfinite(r.best_value) || r.best_value >= std::numeric_limits<double>::max()) {
+    throw DataError({"", 0, "features"}, s.plugin + ": no hyperparameters in the search ranges gave a usable fit");
+  }
+  const auto named = [&](const Eigen::VectorXd& v) {
+    nlohmann::json j = nlohmann::json::object();
+    for (std::size_t i = 0; i < bounds.size(); ++i) j[bounds[i].name] = v[static_cast<Eigen::Index>(i)];
+    return j;
+  };
+  std::vector<std::string> objectives{"holdout_rmse"};
+  if (s.objectives == 2) objectives.push_back(s.complexity_name);
+  nlohmann::json best = named(r.best);
+  const Eigen::VectorXd values = r.best_values.size() > 0 ? r.best_values : Eigen::VectorXd::Constant(1, r.best_value);
+  for (std::size_t k = 0; k < objectives.size(); ++k) best[objectives[k]] = values[static_cast<Eigen::Index>(k)];
+  ctx.diagnostics["tuning"] = {
+      {"objectives", objectives},
+      {"holdout", {{"fraction", s.holdout_fraction}, {"blocks", s.holdout_blocks},
+                   {"train_samples", data.X_train.rows()}, {"holdout_samples", data.X_holdout.rows()}}},
+      {"best", best},
+      {"history", r.history},
+      {"evaluations", r.evaluations},
+      {"optimizer", inner.diagnostics}};
+  return r.best;
+}
+
+}  // namespace driftlab::tuning

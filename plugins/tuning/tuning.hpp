@@ -1,0 +1,51 @@
+// Hyperparameter tuning shared by the regressor adapters (regressor/elm, regressor/svr): a blocked
+// holdout (rbf::blocked_holdout), the nested optimizer plugin minimizing one criterion (held-out
+// RMSE) or two (held-out RMSE and a complexity measure the regressor names), and the common
+// parameters. Adapter-level code: it knows the plugin interfaces, not files.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "framework/params.hpp"
+#include "framework/plugin.hpp"
+
+namespace driftlab::tuning {
+
+// The parameters every tunable regressor shares: tune, optimizer, tune_objectives (auto |
+// rmse | rmse_and_<complexity_key>), holdout_fraction, holdout_blocks, tune_max_samples.
+std::vector<ParamSpec> params(const std::string& complexity_key, const std::string& complexity_doc);
+
+// A `[low, high]` search range parameter.
+ParamSpec search_range(std::string key, std::vector<double> def, std::string unit, std::string doc);
+
+struct Settings {
+  std::string plugin;            // e.g. "regressor/elm", for messages
+  std::string complexity_name;   // e.g. "output_weight_norm"
+  std::size_t objectives = 1;    // 1 or 2, resolved from tune_objectives and the optimizer
+  double holdout_fraction = 0.2;
+  std::size_t holdout_blocks = 10;
+  std::size_t max_samples = 0;   // 0: all rows
+  std::uint64_t seed = 1;
+};
+
+// Reads the shared parameters; resolves tune_objectives "auto" to 2 when the optimizer takes two
+// or more objectives, else 1. Throws ConfigError when two are asked of a one-objective optimizer.
+Settings settings(const ParamValues& p, const Optimizer& optimizer, std::string plugin, std::string complexity_name);
+
+struct Split {
+  Eigen::MatrixXd X_train, X_holdout;
+  Eigen::VectorXd y_train, y_holdout;
+};
+// Rows: an evenly spaced subsample of at most max_samples rows (first row kept; all when 0 or
+// enough), then the blocked holdout of rbf::blocked_holdout.
+Split split(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Settings& s);
+
+// criteria(v) returns {held-out RMSE, complexity}; only the first is used with one objective.
+// Returns the chosen decision vector; writes ctx.diagnostics["tuning"] (start, best, front,
+// history, optimizer diagnostics). Throws DataError when no point gave a finite RMSE.
+Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const VectorObjective& criteria,
+                    const Settings& s, const Split& data, RunContext& ctx);
+
+}  // namespace driftlab::tuning
