@@ -12,6 +12,9 @@ void register_vmd_plugins(Registry&);
 void register_polynomial_plugins(Registry&);
 void register_wavelet_plugins(Registry&);
 void register_tfpf_plugins(Registry&);
+void register_pagmo_plugins(Registry&);
+void register_elm_plugins(Registry&);
+void register_svr_plugins(Registry&);
 
 void register_builtin_plugins(Registry& registry) {
   register_ga_plugins(registry);
@@ -24,6 +27,9 @@ void register_builtin_plugins(Registry& registry) {
   register_polynomial_plugins(registry);
   register_wavelet_plugins(registry);
   register_tfpf_plugins(registry);
+  register_pagmo_plugins(registry);
+  register_elm_plugins(registry);
+  register_svr_plugins(registry);
 }
 
 }  // namespace driftlab

@@ -11,6 +11,7 @@ packages=(
   zlib1g-dev python3-numpy
   gnuplot-nox
   libfftw3-dev libgsl-dev
+  libpagmo-dev libdlib-dev   # optimizer/pagmo, regressor/svr
 )
 # The MRPT bridge (tools/mrpt): libmrpt-obs-dev alone pulls the obs, bayes, poses, math, io and
 # serialization modules (~170 MB); mrpt-apps gives rawlog-edit, which the bridge's tests use.
