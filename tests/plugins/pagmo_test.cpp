@@ -123,7 +123,9 @@ TEST(Pagmo, Nsga2ApproachesTheZdt1ParetoFrontAndSpreadsAlongIt) {
   double worst = 0.0;
   for (Eigen::Index i = 0; i < r.pareto_f.rows(); ++i) {
     worst = std::max(worst, r.pareto_f(i, 1) - (1.0 - std::sqrt(r.pareto_f(i, 0))));
-    if (i > 0) EXPECT_LE(r.pareto_f(i - 1, 0), r.pareto_f(i, 0));  // sorted by f1
+    if (i > 0) {
+      EXPECT_LE(r.pareto_f(i - 1, 0), r.pareto_f(i, 0));  // sorted by f1
+    }
   }
   EXPECT_LT(worst, kFrontTolerance);
   EXPECT_LT(r.pareto_f.col(0).minCoeff(), 0.05);
