@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -137,6 +138,22 @@ TEST(Plot, ReducesALongSeriesToAnEnvelopePerPixelColumnKeepingItsExtremes) {
   EXPECT_GE(xs.size(), static_cast<std::size_t>(f.width) / 2);
   EXPECT_LT(svg.size(), 200'000u);
   EXPECT_THAT(svg, HasSubstr(">5</tspan>"));  // the y axis reaches the spike
+}
+
+TEST(Plot, ReducesADenseScatterToOneMarkerPerCell) {
+  PlotSeries s = line("cloud", {}, {}, PlotSeries::Style::Markers);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> uniform(-10, 10);
+  for (int i = 0; i < 200'000; ++i) {
+    s.x.push_back(uniform(rng));
+    s.y.push_back(uniform(rng));
+  }
+  Figure f;
+  f.panels.push_back({"scatter", "x", "y", false, false, {s}});
+  const std::string svg = render_svg(f);
+  const std::size_t cells = (f.width / 3) * (f.panel_height / 3);
+  EXPECT_LT(count(svg, "<use "), cells);
+  EXPECT_GT(count(svg, "<use "), cells / 4);  // the cloud still fills the panel
 }
 
 TEST(Plot, DrawsBandsErrorBarsASecondAxisAndAColourScale) {

@@ -26,6 +26,7 @@ constexpr std::array<const char*, 8> kColors = {"#1f77b4", "#d62728", "#2ca02c",
                                                 "#9467bd", "#8c564b", "#e377c2", "#17becf"};
 constexpr std::size_t kReduceLinesAbove = 4;    // points per pixel column before lines are reduced
 constexpr std::size_t kReduceMarkersAbove = 2000;
+constexpr long kMarkerCellPx = 3;               // about a marker's diameter
 constexpr double kCharWidthPx = 6.6;            // gnuplot's character width at 11 pt, for margins
 constexpr double kVerticalMarginsPx = 86;       // title, x tick labels and x label of a panel
 
@@ -120,7 +121,7 @@ std::vector<Point> reduce_line(const std::vector<Point>& pts, const Range& xr, l
   return out;
 }
 
-// Markers: the first point that lands on each pixel.
+// Markers: the first point that lands on each cell of a columns x rows grid.
 std::vector<Point> reduce_markers(const std::vector<Point>& pts, const Range& xr, const Range& yr, long columns,
                                   long rows) {
   std::vector<bool> seen(static_cast<std::size_t>(columns * rows), false);
@@ -260,7 +261,8 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
     if (!s.y_low.empty() || !s.y_high.empty()) continue;
     if (s.style == PlotSeries::Style::Markers) {
       if (data[k].size() > kReduceMarkersAbove)
-        data[k] = reduce_markers(data[k], xr, s.right_axis ? y2r : yr, columns, rows);
+        data[k] = reduce_markers(data[k], xr, s.right_axis ? y2r : yr, std::max(1L, columns / kMarkerCellPx),
+                                 std::max(1L, rows / kMarkerCellPx));
     } else if (data[k].size() > kReduceLinesAbove * static_cast<std::size_t>(columns)) {
       data[k] = reduce_line(data[k], xr, columns);
     }

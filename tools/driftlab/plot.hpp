@@ -12,8 +12,10 @@
 //   markup, no XML; write units in plain text or UTF-8 ("rate (°/h)", "tau (s)", "√Hz").
 // - Non-finite points, and points <= 0 on a log axis, are left out (a line breaks there); on a log
 //   y axis an interval's lower end <= 0 is drawn from the point itself.
+// - The x axis spans the data (2 % more at each end when a series has markers); y axes extend to
+//   whole ticks (whole decades when log). Tick steps follow the panel's size.
 // - Long series are reduced before they reach gnuplot: lines to the min and max of each pixel
-//   column (in their original order), markers to one point per pixel. Series with intervals are
+//   column (in their original order), markers to one point per 3 x 3 px cell. Series with intervals are
 //   drawn as given.
 // - The gnuplot executable is $DRIFTLAB_GNUPLOT when set and non-empty, else `gnuplot` on PATH.
 //   A missing executable, a failing run or an empty result throws PlotError.
