@@ -242,8 +242,9 @@ std::string legend_command(const PlotPanel& panel, const std::vector<std::vector
   return std::string("set key inside top right") + style;
 }
 
+// `placement`: the commands that put the panel in its cell of the figure (after `reset`).
 void panel_script(std::string& script, const PlotPanel& panel, std::size_t index, const Geometry& g,
-                  bool any_right_axis) {
+                  bool any_right_axis, const std::string& placement) {
   const auto columns = static_cast<long>(g.plot_width), rows = static_cast<long>(g.plot_height);
   Range xr, yr, y2r;
   xr.log = panel.log_x, yr.log = panel.log_y, y2r.log = panel.log_y2;
@@ -288,7 +289,7 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
   Axis y2 = make_axis(y2r, panel.log_y2, g.plot_height / 38.0, true, 0.0);
   const std::string key = legend_command(panel, data, x, y, y2, g);
 
-  script += "reset\nset encoding utf8\nset lmargin 12\nset bmargin 3.5\nset tmargin 2.2\n";
+  script += "reset\n" + placement + "set encoding utf8\nset lmargin 12\nset bmargin 3.5\nset tmargin 2.2\n";
   script += any_right_axis ? "set rmargin 12\n" : "set rmargin 4\n";
   script += "set grid xtics ytics lc rgb '#dddddd' lw 1 dt solid\nset border lc rgb '#444444'\n";
   script += "set title " + quoted(panel.title) + " noenhanced font ',12'\n";
@@ -482,12 +483,21 @@ std::string render_svg(const Figure& figure) {
 
   std::string script = "set terminal svg size " + std::to_string(figure.width) + "," + std::to_string(height) +
                        " dynamic enhanced font 'sans,11'\nset output\nset encoding utf8\n";
-  script += "set multiplot layout " + std::to_string(rows) + "," + std::to_string(columns) + " rowsfirst";
-  if (!figure.title.empty()) script += " title " + quoted(figure.title) + " noenhanced font ',13'";
-  script += "\n";
+  script += "set multiplot\n";
   const Geometry g{std::max(50.0, figure.width / static_cast<double>(columns) - (any_right ? 24 : 16) * kCharWidthPx),
                    std::max(40.0, figure.panel_height - kVerticalMarginsPx)};
-  for (std::size_t p = 0; p < figure.panels.size(); ++p) panel_script(script, figure.panels[p], p, g, any_right);
+  const double cell_height = static_cast<double>(figure.panel_height) / static_cast<double>(height);
+  for (std::size_t p = 0; p < figure.panels.size(); ++p) {
+    const auto row = static_cast<long>(p) / columns, column = static_cast<long>(p) % columns;
+    std::string placement = "set origin " + number(static_cast<double>(column) / static_cast<double>(columns)) + "," +
+                            number(static_cast<double>(rows - 1 - row) * cell_height) + "\nset size " +
+                            number(1.0 / static_cast<double>(columns)) + "," + number(cell_height) + "\n";
+    if (p == 0 && !figure.title.empty())
+      placement += "set label 99 " + quoted(figure.title) + " noenhanced at screen 0.5," +
+                   number(1.0 - 0.55 * static_cast<double>(title_px) / static_cast<double>(height)) +
+                   " center font ',13'\n";
+    panel_script(script, figure.panels[p], p, g, any_right, placement);
+  }
   script += "unset multiplot\n";
   return run_gnuplot(script);
 }
