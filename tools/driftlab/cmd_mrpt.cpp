@@ -5,10 +5,7 @@
 
 #include "framework/error.hpp"
 #include "framework/units.hpp"
-#if __has_include("models/calibration/calibration_model.hpp")
 #include "models/calibration/calibration_model.hpp"
-#define DRIFTLAB_HAVE_CALIBRATION 1
-#endif
 #include "tools/driftlab/cli.hpp"
 #include "tools/mrpt/rawlog_io.hpp"
 
@@ -56,10 +53,6 @@ void export_command(const MrptOptions& o, CommandEnv& env) {
 
 void compensate_command(const MrptOptions& o, CommandEnv& env) {
   check_output(o.out, {o.input, o.model});
-#ifndef DRIFTLAB_HAVE_CALIBRATION
-  (void)env;
-  throw ConfigError(Location{o.model, 0, "--model"}, "this build has no calibration library (models/calibration)");
-#else
   const auto model = calibration::read_calibration_model(o.model);
   calibration::CausalCompensator compensator(model);
   std::size_t extrapolated = 0;
@@ -80,7 +73,6 @@ void compensate_command(const MrptOptions& o, CommandEnv& env) {
   if (extrapolated > 0)
     std::cerr << "driftlab: warning: " << extrapolated
               << " observations had a temperature outside the model's calibrated range (extrapolated)\n";
-#endif
 }
 
 void info_command(const MrptOptions& o) {

@@ -20,10 +20,7 @@
 #include "tools/driftlab/plot.hpp"
 #include "tools/mrpt/nav_scenario.hpp"
 #include "tools/mrpt/rawlog_io.hpp"
-#if __has_include("models/calibration/calibration_model.hpp")
-#include "models/calibration/calibration_model.hpp"
-#define DRIFTLAB_HAVE_CALIBRATION 1
-#endif
+#include "tools/mrpt/nav_calibration.hpp"
 
 namespace driftlab::cli {
 namespace {
@@ -35,6 +32,7 @@ struct NavOptions {
   std::string device, model, scenario, out, devices_dir;
   double every_s = 1.0;
   double bias_prior_dph = 100.0;
+  std::string calibration_kind = "poly";
   bool fixes = false;
   bool no_rawlog = false;
 };
@@ -81,36 +79,29 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
   // The compensated rate: the given model, or one calibrated on a simulated oven run.
   Eigen::VectorXd compensated;
   std::string model_source;
-#ifdef DRIFTLAB_HAVE_CALIBRATION
   calibration::CalibrationModel model;
   if (!o.model.empty()) {
     model = calibration::read_calibration_model(o.model);
     model_source = o.model;
   } else {
-    env.progress("nav: calibrate on a simulated oven run", 0.0);
-    devices::SimulationOptions oven;
-    oven.sample_rate_hz = 10.0;
+    mrpt_bridge::OvenCalibration oven;
+    oven.kind = o.calibration_kind == "physical" ? calibration::ModelKind::Physical
+                                                 : calibration::ModelKind::Polynomial;
     oven.seed = scenario.calibration_seed;
-    const auto record = devices::simulate(device, devices::default_oven_profile(), oven);
-    model = calibration::calibrate_from_record(record.to_time_series());
+    oven.progress = [&env](const std::string& label, double f) { env.progress("nav: calibrate: " + label, f); };
+    std::cerr << "driftlab nav: no --model given: calibrating a " << o.calibration_kind
+              << " model on a simulated oven run of the same device (seed " << scenario.calibration_seed
+              << "; the drive uses seed " << scenario.seed << ")\n";
+    model = mrpt_bridge::calibrate_on_oven_run(device, oven);
     calibration::write_calibration_model(model, out / "model.json");
-    model_source = (out / "model.json").string() + " (calibrated by nav on a simulated oven run of " + device.name +
-                   ": default oven profile, 10 Hz, seed " + std::to_string(scenario.calibration_seed) + ")";
-    std::cerr << "driftlab nav: no --model given: calibrated one on a simulated oven run of the same device (seed "
-              << scenario.calibration_seed << ", drive seed " << scenario.seed << "), written to "
-              << (out / "model.json").string() << "\n";
+    model_source = (out / "model.json").string() + " (" + o.calibration_kind + ", calibrated by nav on a " +
+                   (model.fit.records.empty() ? std::string("simulated oven run") : model.fit.records.front()) + ")";
   }
-  {
-    calibration::CausalCompensator compensator(model);
-    compensated.resize(n);
-    for (Eigen::Index k = 0; k < n; ++k)
-      compensated[k] = compensator.step(drive.gyro.time_s[k], drive.gyro.rate_rad_s[k], drive.gyro.temp_c[k]);
-  }
-#else
-  if (!o.model.empty())
-    throw ConfigError(Location{o.model, 0, "--model"}, "this build has no calibration library (models/calibration)");
-  std::cerr << "driftlab nav: this build has no calibration library: the compensated run is skipped\n";
-#endif
+  std::size_t extrapolated = 0;
+  compensated = mrpt_bridge::compensate_drive(model, drive, &extrapolated);
+  if (extrapolated > 0)
+    std::cerr << "driftlab nav: warning: " << extrapolated
+              << " drive samples had a temperature outside the model's calibrated range (extrapolated)\n";
 
   const auto noise = mrpt_bridge::nav_noise(device, scenario);
   const double bias_prior = o.bias_prior_dph * kRadPerDeg / 3600.0;
@@ -198,7 +189,11 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
     position.series.push_back({run.name, minutes, as_std(pick(run.track.position_error_m, idx))});
   }
   figure.panels = {heading, position};
-  write_file_atomically(out / "nav.svg", render_svg(figure));
+  try {
+    write_file_atomically(out / "nav.svg", render_svg(figure));
+  } catch (const PlotError& e) {  // the numbers stand without the figure
+    std::cerr << "driftlab nav: warning: nav.svg not written: " << e.what() << "\n";
+  }
 
   // The rawlog of the drive (raw rates), with odometry as action/observation pairs.
   if (!o.no_rawlog) {
@@ -258,6 +253,10 @@ void add_nav_command(CLI::App& app, CommandEnv& env) {
       ->capture_default_str();
   cmd->add_option("--bias-prior", o->bias_prior_dph, "prior standard deviation of the gyro bias state, deg/h")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--calibration-kind", o->calibration_kind,
+                  "model nav calibrates when given no --model: poly or physical (see driftlab calibrate)")
+      ->check(CLI::IsMember({"poly", "physical"}))
       ->capture_default_str();
   cmd->add_flag("--no-rawlog", o->no_rawlog, "do not write DIR/drive.rawlog");
   cmd->add_option("--devices-dir", o->devices_dir, "directory of device files");
