@@ -176,7 +176,11 @@ NavTrack run_nav(const DriveRecord& drive, const Eigen::VectorXd& rate, const Na
     track.bias_rad_s[k] = s.bias_rad_s;
     track.heading_sigma_rad[k] = std::sqrt(s.covariance(2, 2));
     track.bias_sigma_rad_s[k] = std::sqrt(s.covariance(3, 3));
-    track.heading_error_rad[k] = wrap_angle(s.heading_rad - drive.heading_rad[k]);
+    // Accumulated (unwrapped) error: each step adds the wrapped change, so an error that grows past
+    // 180 degrees keeps growing instead of folding back.
+    const double wrapped = wrap_angle(s.heading_rad - drive.heading_rad[k]);
+    track.heading_error_rad[k] =
+        k == 0 ? wrapped : track.heading_error_rad[k - 1] + wrap_angle(wrapped - track.heading_error_rad[k - 1]);
     track.position_error_m[k] = std::hypot(s.x_m - drive.x_m[k], s.y_m - drive.y_m[k]);
   };
   record(0);

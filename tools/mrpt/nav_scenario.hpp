@@ -67,7 +67,9 @@ NavNoise nav_noise(const devices::DeviceDefinition& device, const NavScenario& s
 
 struct NavTrack {
   Eigen::VectorXd x_m, y_m, heading_rad, bias_rad_s, heading_sigma_rad, bias_sigma_rad_s;
-  Eigen::VectorXd heading_error_rad, position_error_m;  // estimate - truth (heading wrapped)
+  // estimate - truth; the heading error accumulated (unwrapped: a drift past 180 degrees keeps
+  // counting), the position error as a distance
+  Eigen::VectorXd heading_error_rad, position_error_m;
 };
 // Runs the EKF over the drive with the given yaw rate (rad/s, one per sample); each step uses the
 // mean of two consecutive samples (rate and odometry speed). Starts at the true pose with bias 0
