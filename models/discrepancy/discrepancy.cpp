@@ -114,7 +114,9 @@ class Workflow {
     evenly_sampled_ = true;
     for (Eigen::Index k = 0; k + 1 < t.size(); ++k)
       evenly_sampled_ = evenly_sampled_ && t[k + 1] - t[k] <= kGapFactor * blocks_.sample_interval_s;
-    const Eigen::Index parameters = options.bias_degree + 1;
+    free_scale_factor_ = !options.prior && record.has(role::kTrueRate) &&
+                         record.channel(role::kTrueRate).values.cwiseAbs().maxCoeff() > 0.0;
+    const Eigen::Index parameters = model_columns();
     if (blocks_.size() < 3 * parameters)
       throw DataError({"", 0, "rate"}, "the record has " + std::to_string(blocks_.size()) +
                                            " blocks; the model needs at least " + std::to_string(3 * parameters));
@@ -204,9 +206,24 @@ class Workflow {
       if (!evenly_sampled_)
         throw DataError({"", 0, "rate"},
                         "the record has gaps: give the device's noise terms (--device) to test effects");
+      // The noise terms come from the part of the residual that no candidate reaches: the model
+      // plus every applicable candidate at its best parameters (ordinary least squares on the
+      // blocks), so that a lag, a hysteresis, a dT/dt term, a warm-up or a periodic term is not
+      // counted as noise (it would inflate K and B and hide itself).
       whitener_ = Eigen::MatrixXd::Identity(blocks_.size(), blocks_.size());
       const State ordinary = fitted({});
-      const Eigen::VectorXd residual = record_.channel(role::kRate).values - full_model(ordinary);
+      std::vector<Term> reach;
+      bool mover = false;
+      for (const auto& score : score_all(ordinary)) {
+        if (!score.applicable || !(score.delta_chi2 > 0.0)) continue;
+        const std::size_t c = candidate_index(score.effect);
+        if (candidates_[c].effect->moves_model_temperature()) {
+          if (mover) continue;
+          mover = true;
+        }
+        reach.push_back({c, score.theta});
+      }
+      const Eigen::VectorXd residual = record_.channel(role::kRate).values - full_model(fitted(std::move(reach)));
       noise_ = estimated_noise(residual);
       result.noise_estimated = true;
     }
@@ -253,7 +270,7 @@ class Workflow {
     }
     const Eigen::Index n = rec.size();
     std::vector<Eigen::MatrixXd> bases;
-    Eigen::Index columns = options_.bias_degree + 1;
+    Eigen::Index columns = model_columns();
     for (const auto& t : terms) {
       d.first_column.push_back(columns);
       if (effect(t).moves_model_temperature()) continue;
@@ -263,13 +280,17 @@ class Workflow {
     d.columns.resize(n, columns);
     const Eigen::ArrayXd x = temp.array() - options_.reference_temp_c;
     Eigen::ArrayXd power = Eigen::ArrayXd::Ones(n);
-    for (int i = 0; i <= options_.bias_degree; ++i, power *= x) d.columns.col(i) = power.matrix();
-    Eigen::Index at = options_.bias_degree + 1;
+    const Eigen::VectorXd w = rec.has(role::kTrueRate) ? rec.channel(role::kTrueRate).values : Eigen::VectorXd::Zero(n);
+    const Eigen::Index degree = options_.bias_degree;
+    for (Eigen::Index i = 0; i <= degree; ++i, power *= x) {
+      d.columns.col(i) = power.matrix();
+      if (free_scale_factor_) d.columns.col(degree + 1 + i) = (power * w.array()).matrix();
+    }
+    Eigen::Index at = model_columns();
     for (const auto& b : bases) {
       d.columns.middleCols(at, b.cols()) = b;
       at += b.cols();
     }
-    const Eigen::VectorXd w = rec.has(role::kTrueRate) ? rec.channel(role::kTrueRate).values : Eigen::VectorXd::Zero(n);
     d.offset = options_.prior ? options_.prior(rec.time(), temp, w) : w;
     return d;
   }
@@ -577,12 +598,18 @@ class Workflow {
                           noise_);
   }
 
+  // The model's own columns: the bias polynomial, and without a device prior on a record with a
+  // true rate also a free scale-factor polynomial (w (T - T0)^i): without a device file there is no
+  // scale factor to differ from, so its temperature dependence is part of the model.
+  Eigen::Index model_columns() const { return (options_.bias_degree + 1) * (free_scale_factor_ ? 2 : 1); }
+
   const TimeSeries& record_;
   const std::vector<Candidate>& candidates_;
   const Options& options_;
   Blocks blocks_;
   double block_s_ = 0.0;
   bool evenly_sampled_ = true;
+  bool free_scale_factor_ = false;
   EffectContext context_;
   Eigen::VectorXd y_;
   TimeSeries block_record_, smooth_record_;

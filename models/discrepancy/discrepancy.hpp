@@ -6,7 +6,7 @@
 //   y = prior(t, T_m, w) + sum_{i=0..d} b_i (T_m - T0)^i + sum_effects sum_j c_j basis_j(theta) + noise
 //
 // prior: the device file's systematic rate (physics, polynomials, any effects it already lists),
-// fixed; without a device, w (unit scale factor). b_i: the model's free parameters, a correction
+// fixed; without a device, w (unit scale factor, corrected by the free scale-factor polynomial below). b_i: the model's free parameters, a correction
 // polynomial in temperature. T_m, the model temperature: the die temperature the device file
 // implies, T_d = T + tau_s dT/dt (first-order inverse of the case sensor's lag tau_s behind the
 // die, Options::sensor_time_constant_s), or the one an effect moves it to (thermal lag of T_d,
@@ -50,9 +50,17 @@
 // RMS the noise terms alone would leave after the initial fit, sqrt((tr C - tr((X'C^-1X)^-1 X'X)) / B).
 //
 // Noise terms: the device's (Options::noise). Without them they are estimated from the overlapping
-// Allan deviation of the initial fit's full-rate residual (models/allan noise fit: N, B, K); any
-// systematic miss then inflates B and K, which costs power, not false alarms. A record with gaps
-// needs the noise terms given.
+// Allan deviation (models/allan noise fit: N, B, K) of the part of the full-rate residual that no
+// candidate reaches: the model plus every applicable candidate at its best parameters, fitted by
+// ordinary least squares on the blocks (one temperature-moving candidate, the best). The initial
+// residual alone still holds the structure being looked for (a 310-s lag read as K = 75 deg/h/sqrt(h)
+// and hid itself); the candidates' extra freedom absorbs little noise (measured: no noise-only
+// record names anything, tests/models/discrepancy_test.cpp, WithoutTheDeviceFile). A record with
+// gaps needs the noise terms given.
+//
+// Without a prior (no device file) and with a true-rate channel that moves, the model also has a
+// free scale-factor polynomial w (T - T0)^i, i = 0..d: there is no device scale factor to differ
+// from, so effect/scale_factor_temperature gains nothing then.
 //
 // Cost: O(n) for blocks and the full-rate model; O(B^3) once for the Cholesky factor; per search
 // evaluation O(B^2 q) (whitening the effect's columns) or O(B^2 p) for effects that move the model
