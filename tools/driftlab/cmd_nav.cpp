@@ -153,6 +153,8 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
                            {"odometry_speed_sigma_mps", noise.speed_sigma_mps},
                            {"fix_sigma_m", noise.fix_sigma_m}};
   info["bias_prior_sigma_dph"] = o.bias_prior_dph;
+  for (const auto& run : runs)
+    info["heading_error_max_abs_deg"][run.name] = run.track.heading_error_rad.cwiseAbs().maxCoeff() * kDegPerRad;
   const auto& floor_track = runs.back().track;
   info["noise_only"] = {
       {"what", "true rate + the gyro's noise only (measured - simulated systematic rate): the intrinsic floor"},

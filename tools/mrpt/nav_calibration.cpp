@@ -1,5 +1,7 @@
 #include "tools/mrpt/nav_calibration.hpp"
 
+#include <sstream>
+
 #include "devices/simulator.hpp"
 #include "models/calibration/fit.hpp"
 
@@ -13,8 +15,10 @@ calibration::CalibrationModel calibrate_on_oven_run(const devices::DeviceDefinit
   const auto profile = devices::default_oven_profile();
   const auto run = devices::simulate(device, profile, oven);
   calibration::Record record;
-  record.name = "simulated oven run of " + device.name + " (" + profile.source + "; " +
-                std::to_string(options.sample_rate_hz) + " Hz, seed " + std::to_string(options.seed) + ")";
+  std::ostringstream name;
+  name << "simulated oven run of " << device.name << " (" << profile.source << "; " << options.sample_rate_hz
+       << " Hz, seed " << options.seed << ")";
+  record.name = name.str();
   record.time_s = run.time_s;
   record.rate_rad_s = run.rate_rad_s;
   record.temp_c = run.temp_c;
