@@ -18,7 +18,7 @@ constexpr const char* kStyle =
     "th,td{border:1px solid #ccc;padding:3px 9px}th{background:#f2f2f2;text-align:left}"
     "td.n{text-align:right;font-variant-numeric:tabular-nums}caption{caption-side:top;text-align:left;"
     "font-weight:600;padding:.2em 0}.note{font-size:.88em;color:#555;margin-top:-.2em}"
-    "figure{margin:1.2em 0}figure svg{display:block;width:100%;height:auto}"
+    "figure{margin:1.2em 0;break-inside:avoid}figure svg{display:block;width:100%;height:auto}"
     "figcaption{font-size:.92em;color:#333;margin-top:.3em}"
     "pre{background:#f6f6f6;padding:.5em;overflow-x:auto;font-size:.88em}";
 

@@ -59,7 +59,8 @@ struct PlotPanel {
 
 struct Figure {
   std::vector<PlotPanel> panels;  // row by row
-  int width = 900;                // px, whole figure
+  int width = 900;                // px, whole figure; a report page shows it about 1000 px wide, so
+                                  // much wider figures get small text there
   int panel_height = 260;         // px, each row
   int columns = 1;
   std::string title;              // above all panels; may be empty
