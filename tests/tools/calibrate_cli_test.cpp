@@ -1,8 +1,12 @@
 // End to end: `driftlab calibrate` and `driftlab compensate` (batch and streaming).
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include "tests/tools/cli_harness.hpp"
@@ -64,9 +68,73 @@ TEST_F(CalibrateCli, CalibrateRefusesToOverwriteItsInput) {
   EXPECT_EQ(r.exit_code, 2);
 }
 
+// Peak resident memory (KiB) of one `compensate --stream` run over `rows` generated rows.
+long stream_peak_kib(const std::string& dir, const std::string& model, int rows) {
+  const std::string csv = dir + "/rows" + std::to_string(rows) + ".csv";
+  {
+    std::ofstream out(csv);
+    out << "t_s,rate_dps,temp_c\n";
+    for (int i = 0; i < rows; ++i) out << 0.01 * i << "," << 0.001 * (i % 7) << "," << 20.0 + 1e-4 * i << "\n";
+  }
+  const std::string command =
+      "exec " + std::string(DRIFTLAB_EXE) + " compensate --model " + model + " --stream < " + csv + " > /dev/null";
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  int status = 0;
+  struct rusage usage {};
+  ::wait4(pid, &status, 0, &usage);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  return usage.ru_maxrss;
+}
+
+TEST_F(CalibrateCli, StreamingMemoryDoesNotGrowWithInputLength) {
+  // 8x more rows: a batch run would hold ~16 MB more (time, rate, temperature and output text).
+  constexpr long kSlackKib = 2048;  // allocator and page-cache noise
+  const long small = stream_peak_kib(dir_, dir_ + "/poly.json", 50'000);
+  const long large = stream_peak_kib(dir_, dir_ + "/poly.json", 400'000);
+  EXPECT_LT(large - small, kSlackKib) << small << " KiB vs " << large << " KiB";
+}
+
+TEST_F(CalibrateCli, TheKalmanStageSmoothsAndStreamsLikeTheBatch) {
+  const std::string k = " --kalman --kalman-q 1e-14 --kalman-r 1e-6";
+  const auto b = run_driftlab("compensate --model " + dir_ + "/poly.json --data " + dir_ + "/oven.csv --out " + dir_ +
+                              "/kf.csv" + k);
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  const std::string command = std::string(DRIFTLAB_EXE) + " compensate --model " + dir_ + "/poly.json --stream" + k +
+                              " < " + dir_ + "/oven.csv > " + dir_ + "/kf_stream.csv";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  const std::string batch = read_text(dir_ + "/kf.csv");
+  EXPECT_EQ(batch, read_text(dir_ + "/kf_stream.csv"));
+  EXPECT_EQ(batch.substr(0, batch.find('\n')), "t_s,rate_dps,bias_dps,temp_c,extrapolated,compensated_dps");
+  // The filtered column varies less than the compensated one.
+  std::istringstream in(batch);
+  std::string line;
+  std::getline(in, line);
+  double n = 0, s_out = 0, ss_out = 0, s_in = 0, ss_in = 0;
+  while (std::getline(in, line)) {
+    double v[6];
+    char comma;
+    std::istringstream f(line);
+    f >> v[0] >> comma >> v[1] >> comma >> v[2] >> comma >> v[3] >> comma >> v[4] >> comma >> v[5];
+    n += 1;
+    s_out += v[1];
+    ss_out += v[1] * v[1];
+    s_in += v[5];
+    ss_in += v[5] * v[5];
+  }
+  EXPECT_LT(ss_out / n - (s_out / n) * (s_out / n), 0.1 * (ss_in / n - (s_in / n) * (s_in / n)));
+  const auto missing = run_driftlab("compensate --model " + dir_ + "/poly.json --data " + dir_ + "/oven.csv --out " +
+                                    dir_ + "/kf2.csv --kalman --kalman-r 1e-6");
+  EXPECT_EQ(missing.exit_code, 2) << "no q and no rate-random-walk term in the model: refused";
+}
+
 TEST_F(CalibrateCli, EveryCommandHasHelp) {
   EXPECT_EQ(run_driftlab("calibrate --help").exit_code, 0);
   EXPECT_EQ(run_driftlab("compensate --help").exit_code, 0);
+  EXPECT_EQ(run_driftlab("export --help").exit_code, 0);
 }
 
 }  // namespace
