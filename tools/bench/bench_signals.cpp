@@ -1,5 +1,6 @@
 #include "tools/bench/bench_signals.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -9,6 +10,8 @@
 #include <stdexcept>
 
 #include "framework/csv.hpp"
+#include "framework/params_io.hpp"
+#include "framework/registry.hpp"
 
 namespace driftlab::bench {
 namespace {
@@ -65,6 +68,41 @@ const BenchSignal& bench_signal(std::size_t n) {
   auto& slot = cache[n];
   if (!slot) slot = std::make_unique<BenchSignal>(load(n));
   return *slot;
+}
+
+RegressionProblem regression_problem(std::size_t n) {
+  const auto& signal = bench_signal(n);
+  const Eigen::Index size = signal.temp_c.size();
+  const auto half_window = static_cast<Eigen::Index>(std::max(1.0, 0.5 * signal.sample_rate_hz));
+  RegressionProblem p{Eigen::MatrixXd(size, 2), signal.rate_rad_s};
+  p.features.col(0) = signal.temp_c;
+  for (Eigen::Index i = 0; i < size; ++i) {
+    const Eigen::Index lo = std::max<Eigen::Index>(0, i - half_window);
+    const Eigen::Index hi = std::min(size - 1, i + half_window);
+    p.features(i, 1) = (signal.temp_c[hi] - signal.temp_c[lo]) / (signal.time_s[hi] - signal.time_s[lo]);
+  }
+  return p;
+}
+
+void run_regressor(benchmark::State& state, const std::string& plugin, const std::vector<std::string>& assignments) {
+  RegressionProblem problem;
+  try {
+    problem = regression_problem(static_cast<std::size_t>(state.range(0)));
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  Registry registry;
+  register_builtin_plugins(registry);
+  const auto params = params_from_assignments(registry, plugin, assignments);
+  for (auto _ : state) {
+    auto regressor = registry.create_as<Regressor>({plugin, params});
+    RunContext ctx;
+    ctx.threads = 1;
+    regressor->fit(problem.features, problem.target, ctx);
+    benchmark::DoNotOptimize(regressor->predict(problem.features.topRows(1)));
+  }
+  state.SetItemsProcessed(state.iterations() * state.range(0));
 }
 
 }  // namespace driftlab::bench

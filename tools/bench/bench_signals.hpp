@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <string>
+#include <vector>
 
 namespace driftlab::bench {
 
@@ -29,5 +30,18 @@ const BenchSignal* signal_or_skip(benchmark::State& state);
 
 // The directory in $DRIFTLAB_BENCH_SIGNALS, or empty.
 std::string bench_signal_dir();
+
+// The regressors' benchmark problem on the record of length n. Features: temperature (degC) and
+// its time derivative (degC/s, central difference over +-0.5 s, one-sided at the ends); target:
+// rate (rad/s). Throws like bench_signal().
+struct RegressionProblem {
+  Eigen::MatrixXd features;
+  Eigen::VectorXd target;
+};
+RegressionProblem regression_problem(std::size_t n);
+
+// Times fit (+ one predict) of `plugin` configured by `assignments` (key=value, as on the command
+// line) on regression_problem(state.range(0)), one thread; skipped when the signals are missing.
+void run_regressor(benchmark::State& state, const std::string& plugin, const std::vector<std::string>& assignments);
 
 }  // namespace driftlab::bench
