@@ -202,6 +202,22 @@ TEST(Plot, StreamsAFigureLargerThanThePipeBuffersBothWays) {
   EXPECT_THAT(svg, HasSubstr("panel 11"));
 }
 
+TEST(Plot, LabelsASharedXAxisOnceUnderTheBottomPanel) {
+  Figure f;
+  f.shared_x = true;
+  for (int p = 0; p < 3; ++p)
+    f.panels.push_back({"imf" + std::to_string(p + 1), "t (s)", "rate (°/h)", false, false,
+                        {line("imf", {0, 5.0 * (p + 1)}, {0, 1})}});
+  const std::string svg = render_svg(f);
+  EXPECT_EQ(count(svg, ">t (s)<"), 1u);
+  EXPECT_THAT(svg, HasSubstr("viewBox=\"0 0 900 700\""));  // 3 x 260 px, two rows 40 px shorter
+  const auto first = path_x(svg, "gnuplot_plot_1a"), last = path_x(svg, "gnuplot_plot_1c");
+  ASSERT_EQ(first.size(), 2u);
+  ASSERT_EQ(last.size(), 2u);
+  EXPECT_EQ(first[0], last[0]);  // one x range: t = 0 at the same place in every panel
+  EXPECT_LT(first[1], last[1]);
+}
+
 TEST(Plot, DrawsAPanelWithoutDataAsEmpty) {
   Figure f;
   f.panels.push_back({"nothing yet", "x", "y", true, true, {line("none", {}, {})}});

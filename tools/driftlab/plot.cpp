@@ -28,6 +28,7 @@ constexpr std::size_t kReduceMarkersAbove = 2000;
 constexpr long kMarkerCellPx = 3;               // about a marker's diameter
 constexpr double kCharWidthPx = 6.6;            // gnuplot's character width at 11 pt, for margins
 constexpr double kVerticalMarginsPx = 86;       // title, x tick labels and x label of a panel
+constexpr long kHiddenXAxisPx = 40;             // what a panel without x labels saves (bmargin 3.5 -> 0.8)
 
 std::string number(double v) {
   char buf[32];
@@ -241,9 +242,16 @@ std::string legend_command(const PlotPanel& panel, const std::vector<std::vector
   return std::string("set key inside top right") + style;
 }
 
-// `placement`: the commands that put the panel in its cell of the figure (after `reset`).
+// Where a panel goes: the commands that put it in its cell of the figure (after `reset`), whether it
+// labels its x axis, and the x range it shares with the others (empty: its own).
+struct Placement {
+  std::string commands;
+  bool x_labels = true;
+  Range shared_x;
+};
+
 void panel_script(std::string& script, const PlotPanel& panel, std::size_t index, const Geometry& g,
-                  bool any_right_axis, const std::string& placement) {
+                  bool any_right_axis, const Placement& place) {
   const auto columns = static_cast<long>(g.plot_width), rows = static_cast<long>(g.plot_height);
   Range xr, yr, y2r;
   xr.log = panel.log_x, yr.log = panel.log_y, y2r.log = panel.log_y2;
@@ -256,6 +264,7 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
     }
     data.push_back(std::move(pts));
   }
+  if (!place.shared_x.empty()) xr = place.shared_x;
   for (std::size_t k = 0; k < data.size(); ++k) {
     const auto& s = panel.series[k];
     if (!s.y_low.empty() || !s.y_high.empty()) continue;
@@ -288,7 +297,7 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
   Axis y2 = make_axis(y2r, panel.log_y2, g.plot_height / 38.0, true, 0.0);
   const std::string key = legend_command(panel, data, x, y, y2, g);
 
-  script += "reset\n" + placement + "set encoding utf8\nset lmargin 12\nset bmargin 3.5\nset tmargin 2.2\n";
+  script += "reset\n" + place.commands + "set encoding utf8\nset lmargin 12\nset bmargin 3.5\nset tmargin 2.2\n";
   script += any_right_axis ? "set rmargin 12\n" : "set rmargin 4\n";
   script += "set grid xtics ytics lc rgb '#dddddd' lw 1 dt solid\nset border lc rgb '#444444'\n";
   script += "set title " + quoted(panel.title) + " noenhanced font ',12'\n";
@@ -312,6 +321,7 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
               "set cblabel " + quoted(panel.z_label) + " noenhanced\nset format cb '%g'\n";
   else
     script += "unset colorbox\n";
+  if (!place.x_labels) script += "set format x ''\nunset xlabel\nset bmargin 0.8\n";
   script += key;
 
   std::vector<std::string> bands, items;
@@ -475,27 +485,45 @@ std::string render_svg(const Figure& figure) {
   const long columns = std::max(1, figure.columns);
   const long rows = std::max<long>(1, (static_cast<long>(figure.panels.size()) + columns - 1) / columns);
   const long title_px = figure.title.empty() ? 0 : 30;
-  const long height = rows * figure.panel_height + title_px;
+  const auto n = static_cast<long>(figure.panels.size());
+  // With shared_x, a row whose panels all have another panel below them leaves out its x labels.
+  const auto row_labels = [&](long row) { return !figure.shared_x || (row + 2) * columns > n; };
+  std::vector<long> row_top(static_cast<std::size_t>(rows) + 1, title_px);
+  for (long r = 0; r < rows; ++r)
+    row_top[static_cast<std::size_t>(r) + 1] =
+        row_top[static_cast<std::size_t>(r)] + figure.panel_height - (row_labels(r) ? 0 : kHiddenXAxisPx);
+  const long height = row_top.back();
   const bool any_right = std::any_of(figure.panels.begin(), figure.panels.end(), [](const PlotPanel& p) {
     return std::any_of(p.series.begin(), p.series.end(), [](const PlotSeries& s) { return s.right_axis; });
   });
+  Range shared;
+  if (figure.shared_x && !figure.panels.empty()) {
+    shared.log = figure.panels.front().log_x;
+    for (const auto& panel : figure.panels)
+      for (const auto& s : panel.series)
+        for (double v : s.x) shared.add(v);
+  }
 
   std::string script = "set terminal svg size " + std::to_string(figure.width) + "," + std::to_string(height) +
                        " dynamic enhanced font 'sans,11'\nset output\nset encoding utf8\n";
   script += "set multiplot\n";
   const Geometry g{std::max(50.0, figure.width / static_cast<double>(columns) - (any_right ? 24 : 16) * kCharWidthPx),
                    std::max(40.0, figure.panel_height - kVerticalMarginsPx)};
-  const double cell_height = static_cast<double>(figure.panel_height) / static_cast<double>(height);
+  const auto screen = [&](long px) { return number(static_cast<double>(px) / static_cast<double>(height)); };
   for (std::size_t p = 0; p < figure.panels.size(); ++p) {
     const auto row = static_cast<long>(p) / columns, column = static_cast<long>(p) % columns;
-    std::string placement = "set origin " + number(static_cast<double>(column) / static_cast<double>(columns)) + "," +
-                            number(static_cast<double>(rows - 1 - row) * cell_height) + "\nset size " +
-                            number(1.0 / static_cast<double>(columns)) + "," + number(cell_height) + "\n";
+    const auto r = static_cast<std::size_t>(row);
+    Placement place;
+    place.x_labels = row_labels(row);
+    place.shared_x = shared;
+    place.commands = "set origin " + number(static_cast<double>(column) / static_cast<double>(columns)) + "," +
+                     screen(height - row_top[r + 1]) + "\nset size " + number(1.0 / static_cast<double>(columns)) +
+                     "," + screen(row_top[r + 1] - row_top[r]) + "\n";
     if (p == 0 && !figure.title.empty())
-      placement += "set label 99 " + quoted(figure.title) + " noenhanced at screen 0.5," +
-                   number(1.0 - 0.55 * static_cast<double>(title_px) / static_cast<double>(height)) +
-                   " center font ',13'\n";
-    panel_script(script, figure.panels[p], p, g, any_right, placement);
+      place.commands += "set label 99 " + quoted(figure.title) + " noenhanced at screen 0.5," +
+                        number(1.0 - 0.55 * static_cast<double>(title_px) / static_cast<double>(height)) +
+                        " center font ',13'\n";
+    panel_script(script, figure.panels[p], p, g, any_right, place);
   }
   script += "unset multiplot\n";
   return run_gnuplot(script);

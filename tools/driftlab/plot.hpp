@@ -64,9 +64,12 @@ struct Figure {
   int panel_height = 260;         // px, each row
   int columns = 1;
   std::string title;              // above all panels; may be empty
+  bool shared_x = false;          // one x range for all panels, labelled only under the bottom row
+                                  // (rows with a panel below every one of theirs are 40 px shorter)
 };
 
-// The figure as a standalone SVG document (viewBox width x rows * panel_height).
+// The figure as a standalone SVG document (viewBox width x rows * panel_height, less the rows
+// shortened by shared_x, plus 30 px for a title).
 std::string render_svg(const Figure& figure);
 
 }  // namespace driftlab::cli
