@@ -55,6 +55,7 @@ Figure component_figure(const DecomposeOptions& o, const Eigen::VectorXd& t, con
                         const std::string& unit, const std::vector<std::string>& groups) {
   Figure figure;
   figure.panel_height = 150;
+  figure.shared_x = true;
   auto add = [&](const std::string& title, const Eigen::VectorXd& y) {
     PlotPanel panel;
     panel.title = title;
