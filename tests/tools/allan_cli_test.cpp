@@ -92,6 +92,18 @@ TEST(AllanCommand, WritesIntervalsTermsAndAPlotForAWhiteNoiseRecord) {
   EXPECT_THAT(plot, HasSubstr("N term"));
 }
 
+TEST(AllanCommand, SaysWhichGnuplotItCouldNotRunWhenAPlotIsAsked) {
+  const auto dir = scratch_dir("allan_no_gnuplot");
+  const auto csv = white_noise_csv(dir);
+  const auto r = run_driftlab("allan --data " + csv.string() + " --fs 100 --out " + (dir / "allan.csv").string() +
+                                  " --plot " + (dir / "allan.svg").string(),
+                              "DRIFTLAB_GNUPLOT=/nonexistent/gnuplot");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("/nonexistent/gnuplot"));
+  EXPECT_THAT(r.err, HasSubstr("gnuplot-nox"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "allan.svg"));
+}
+
 TEST(AllanCommand, ReproducesThePublishedAdis16405AllanVariance) {
   const auto data = std::filesystem::path(DRIFTLAB_SHARED_DATA) / "real" / "smac-imudata-static" /
                     "adis16405_imu1_gyro_dps.csv";
