@@ -90,6 +90,12 @@ void expect_tables_equal(const ImuTable& a, const ImuTable& b) {
   }
 }
 
+// dir/in.csv (write_test_csv) exported to dir/in.rawlog.
+void export_test_rawlog(const fs::path& dir, int n, bool odometry) {
+  write_test_csv(dir / "in.csv", n, odometry);
+  export_rawlog(read_imu_csv(dir / "in.csv"), dir / "in.rawlog");
+}
+
 // Decompresses a gzip'ed rawlog into a plain one (MRPT reads both).
 void gunzip(const fs::path& in, const fs::path& out) {
   gzFile f = gzopen(in.c_str(), "rb");
@@ -188,8 +194,7 @@ TEST(MrptBridge, RawlogEditReadsTheExportAndCountsTheImuObservations) {
     GTEST_SKIP() << "rawlog-edit (Debian package mrpt-apps) is not installed";
   const auto dir = scratch_dir("mrpt_rawlog_edit");
   for (const bool odometry : {false, true}) {
-    write_test_csv(dir / "in.csv", 321, odometry);
-    export_rawlog(read_imu_csv(dir / "in.csv"), dir / "in.rawlog");
+    export_test_rawlog(dir, 321, odometry);
     const std::string command = "rawlog-edit --info -i " + (dir / "in.rawlog").string() + " >" +
                                 (dir / "info.txt").string() + " 2>&1";
     ASSERT_EQ(std::system(command.c_str()), 0);
@@ -219,8 +224,7 @@ TEST(MrptBridge, CompensationChangesOnlyTheImuRateByExactlyTheCorrection) {
   SKIP_WITHOUT_MRPT();
 #if DRIFTLAB_HAVE_MRPT
   const auto dir = scratch_dir("mrpt_compensate");
-  write_test_csv(dir / "in.csv", 300, true);
-  export_rawlog(read_imu_csv(dir / "in.csv"), dir / "in.rawlog");
+  export_test_rawlog(dir, 300, true);
   // A stateful corrector (like a causal model): the k-th call subtracts a known amount.
   std::vector<double> corrections;
   const auto stats = compensate_rawlog(dir / "in.rawlog", dir / "out.rawlog", [&](double t, double rate, double temp) {
@@ -259,8 +263,7 @@ TEST(MrptBridge, CompensateCommandAppliesTheCalibrationModelsCorrectionExactly) 
   SKIP_WITHOUT_MRPT();
 #if DRIFTLAB_HAVE_MRPT
   const auto dir = scratch_dir("mrpt_compensate_cli");
-  write_test_csv(dir / "in.csv", 400, true);  // temperatures -10 .. -6 degC, inside the range below
-  export_rawlog(read_imu_csv(dir / "in.csv"), dir / "in.rawlog");
+  export_test_rawlog(dir, 400, true);  // temperatures -10 .. -6 degC, inside the range below
   driftlab::calibration::CalibrationModel model;
   model.device = "test";
   model.reference_temp_c = 25.0;
@@ -304,8 +307,7 @@ TEST(MrptBridge, TruncatedAndMalformedRawlogsNameTheFileAndTheObjectIndex) {
   SKIP_WITHOUT_MRPT();
 #if DRIFTLAB_HAVE_MRPT
   const auto dir = scratch_dir("mrpt_bad");
-  write_test_csv(dir / "in.csv", 50, false);
-  export_rawlog(read_imu_csv(dir / "in.csv"), dir / "in.rawlog");
+  export_test_rawlog(dir, 50, false);
   gunzip(dir / "in.rawlog", dir / "plain.rawlog");
   const std::string plain = read_bytes(dir / "plain.rawlog");
   const std::size_t object_size = plain.size() / 50;  // all 50 objects serialize to the same size

@@ -6,35 +6,10 @@
 
 #include "devices/yaml_fields.hpp"
 #include "framework/error.hpp"
-#include "framework/seeded_random.hpp"
+#include "models/error_model/error_model.hpp"
 #include "framework/units.hpp"
 
 namespace driftlab::mrpt_bridge {
-namespace {
-
-// Standard normal deviates from SeededRandom (Box-Muller; portable for one seed).
-class Normal {
- public:
-  explicit Normal(std::uint64_t seed) : random_(seed) {}
-  double operator()() {
-    if (have_spare_) {
-      have_spare_ = false;
-      return spare_;
-    }
-    const double u1 = 1.0 - random_.uniform(), u2 = random_.uniform();
-    const double r = std::sqrt(-2.0 * std::log(u1));
-    spare_ = r * std::sin(2.0 * kPi * u2);
-    have_spare_ = true;
-    return r * std::cos(2.0 * kPi * u2);
-  }
-
- private:
-  SeededRandom random_;
-  double spare_ = 0.0;
-  bool have_spare_ = false;
-};
-
-}  // namespace
 
 double NavScenario::duration_s() const {
   return std::max({cabin_c.duration_s(), yaw_rate_rad_s.duration_s(), speed_mps.duration_s()});
@@ -104,9 +79,11 @@ DriveRecord simulate_drive(const devices::DeviceDefinition& device, const NavSce
   const Eigen::Index n = t.size();
   d.speed_mps = scenario.speed_mps.sample(t);
   d.odometry_speed_mps.resize(n);
-  Normal odometry_noise(splitmix64(scenario.seed) ^ 0x6f646f6dULL);  // "odom" stream
+  // Streams of the drive seed beyond the gyro's (error_model::rate_noise uses 0, 1, 2, ...).
+  constexpr std::uint64_t kOdometryStream = 0x6f646f6d, kFixStream = 0x66697865;  // "odom", "fixe"
+  error_model::NormalStream odometry_noise(scenario.seed, kOdometryStream);
   for (Eigen::Index k = 0; k < n; ++k)
-    d.odometry_speed_mps[k] = d.speed_mps[k] + scenario.odometry_speed_sigma_mps * odometry_noise();
+    d.odometry_speed_mps[k] = d.speed_mps[k] + scenario.odometry_speed_sigma_mps * odometry_noise.next();
 
   d.x_m = Eigen::VectorXd::Zero(n);
   d.y_m = Eigen::VectorXd::Zero(n);
@@ -125,13 +102,13 @@ DriveRecord simulate_drive(const devices::DeviceDefinition& device, const NavSce
   }
 
   if (scenario.fix_period_s > 0.0) {
-    Normal fix_noise(splitmix64(scenario.seed) ^ 0x66697865ULL);  // "fixe" stream
+    error_model::NormalStream fix_noise(scenario.seed, kFixStream);
     double next = scenario.fix_period_s;
     for (Eigen::Index k = 1; k < n; ++k) {
       if (t[k] + 1e-9 < next) continue;
       next += scenario.fix_period_s;
       d.fix_index.push_back(k);
-      const double ex = scenario.fix_sigma_m * fix_noise(), ey = scenario.fix_sigma_m * fix_noise();
+      const double ex = scenario.fix_sigma_m * fix_noise.next(), ey = scenario.fix_sigma_m * fix_noise.next();
       d.fix_m.emplace_back(d.x_m[k] + ex, d.y_m[k] + ey);
     }
   }

@@ -34,17 +34,14 @@ DataError data_error(const fs::path& file, const std::string& message) {
   return DataError(Location{file.string(), 0, ""}, message);
 }
 
-// MRPT's exception texts carry a call trace; keep the first line that says what went wrong.
-std::string first_line(const std::string& text) {
+// MRPT's exception texts nest ("==== MRPT exception ====", "Message: ...", a call trace): keep the
+// innermost message, which says what went wrong.
+std::string innermost_message(const std::string& text) {
   std::istringstream in(text);
   std::string line, best;
-  while (std::getline(in, line)) {
-    if (line.find_first_not_of(" \t=") == std::string::npos) continue;
-    best = line;
-    if (line.find("Assert") != std::string::npos || line.find("rror") != std::string::npos ||
-        line.find("nknown") != std::string::npos || line.find("EOF") != std::string::npos)
-      break;
-  }
+  while (std::getline(in, line))
+    if (line.rfind("Message:", 0) == 0) best = line.substr(line.find_first_not_of(" ", 8));
+  if (best.empty()) best = text.substr(0, text.find('\n'));
   return best.size() > 200 ? best.substr(0, 200) + "..." : best;
 }
 
@@ -108,7 +105,7 @@ class ObjectReader {
       const std::string what = e.what();
       if (what.find("EOF") != std::string::npos || what.find("nexpected end") != std::string::npos)
         throw data_error(path_, where() + "the file ends inside this object (truncated rawlog)");
-      throw data_error(path_, where() + "not a valid MRPT object (malformed rawlog): " + first_line(what));
+      throw data_error(path_, where() + "not a valid MRPT object (malformed rawlog): " + innermost_message(what));
     }
   }
   std::size_t index() const { return index_; }
