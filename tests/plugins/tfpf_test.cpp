@@ -37,6 +37,10 @@ TEST(Tfpf, IsExactForASignalLinearOverTheWindow) {
   // Interior only: at the ends the reflected extension bends the ramp inside the window.
   constexpr double kNewtonTolerance = 1e-9;  // peak located to ~1e-13 cycles/lag, times range / 0.2
   EXPECT_LT((r.filtered - ramp).segment(15, 370).cwiseAbs().maxCoeff(), kNewtonTolerance);
+  // Any symmetric lag weighting keeps the peak where the phase is linear: Hann too.
+  const tfpf::Result hann =
+      tfpf::filter(ramp, {.rule = tfpf::WindowRule::Fixed, .window = 31, .lag_window = tfpf::LagWindow::Hann});
+  EXPECT_LT((hann.filtered - ramp).segment(15, 370).cwiseAbs().maxCoeff(), kNewtonTolerance);
 }
 
 TEST(Tfpf, ConstantSignalsPassUnchanged) {
