@@ -288,6 +288,7 @@ TEST(HtmlReport, IsWellNestedAndNumbersItsTablesAndFigures) {
   EXPECT_THAT(html, HasSubstr("<b>Figure 1.</b> raw rate and temperature"));
   EXPECT_THAT(html, HasSubstr("<b>Figure 2.</b> again"));
   EXPECT_EQ(count(html, "<svg"), 2u);
+  EXPECT_EQ(count(html, "style=\"max-width:900px\" viewBox"), 2u);  // never scaled above its own size
   EXPECT_EQ(count(html, "<?xml"), 0u);
 }
 

@@ -18,7 +18,7 @@ constexpr const char* kStyle =
     "th,td{border:1px solid #ccc;padding:3px 9px}th{background:#f2f2f2;text-align:left}"
     "td.n{text-align:right;font-variant-numeric:tabular-nums}caption{caption-side:top;text-align:left;"
     "font-weight:600;padding:.2em 0}.note{font-size:.88em;color:#555;margin-top:-.2em}"
-    "figure{margin:1.2em 0;break-inside:avoid}figure svg{display:block;width:100%;height:auto}"
+    "figure{margin:1.2em 0;break-inside:avoid}figure svg{display:block;width:100%;height:auto;margin:0 auto}"
     "figcaption{font-size:.92em;color:#333;margin-top:.3em}"
     "pre{background:#f6f6f6;padding:.5em;overflow-x:auto;font-size:.88em}";
 
@@ -58,6 +58,12 @@ std::string inline_svg(std::string svg, const std::string& id_prefix) {
   for (const char* attribute : {" xmlns=\"http://www.w3.org/2000/svg\"", " xmlns:xlink=\"http://www.w3.org/1999/xlink\""})
     replace_all(svg, attribute, "");
   replace_all(svg, "<title>Gnuplot</title>", "");
+  const std::size_t box = svg.find("viewBox=\"0 0 ");
+  if (box != std::string::npos && box < svg.find('>')) {
+    const std::size_t width_at = box + 13;
+    const std::string width = svg.substr(width_at, svg.find(' ', width_at) - width_at);
+    svg.insert(box, "style=\"max-width:" + width + "px\" ");
+  }
   for (std::size_t at = svg.find(" id=\"gnuplot_"); at != std::string::npos; at = svg.find(" id=\"gnuplot_", at))
     svg.erase(at, svg.find('"', at + 5) + 1 - at);
   for (const char* token : {" id='", " id=\"", "href='#", "href=\"#", "url(#"})

@@ -59,7 +59,8 @@ std::string html_escape(const std::string& text);
 
 // An SVG document (from render_svg) made fit to sit inside HTML beside others: no XML prolog, no
 // namespace URIs (the HTML parser supplies them), no ids of gnuplot's own, the remaining ids and
-// references prefixed with `id_prefix` (unique per figure in a page).
+// references prefixed with `id_prefix` (unique per figure in a page), and never drawn wider than
+// its own width (so text keeps its size in points: a narrow figure is not blown up).
 std::string inline_svg(std::string svg, const std::string& id_prefix);
 
 }  // namespace driftlab::cli
