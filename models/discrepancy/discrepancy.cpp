@@ -3,10 +3,13 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <functional>
 #include <stdexcept>
 
 #include "framework/error.hpp"
 #include "framework/signal.hpp"
+#include "framework/units.hpp"
 #include "models/allan/confidence.hpp"
 #include "models/allan/noise_fit.hpp"
 #include "models/allan/tau_grid.hpp"
@@ -152,7 +155,11 @@ class Workflow {
 
     while (static_cast<int>(result.steps.size()) < options_.max_effects) {
       auto scores = score_all(state);
-      if (scores.empty() || !scores.front().applicable || !(scores.front().delta_bic > options_.significance)) {
+      result.unexplained = structure_tests(state);
+      const double best_view = result.unexplained.views.front().delta_bic;
+      const bool candidate_passes =
+          !scores.empty() && scores.front().applicable && scores.front().delta_bic > options_.significance;
+      if (!candidate_passes || scores.front().delta_bic < best_view - options_.significance) {
         result.final_scores = std::move(scores);
         break;
       }
@@ -171,6 +178,7 @@ class Workflow {
       result.steps.push_back(std::move(step));
     }
 
+    result.unexplained = structure_tests(state);
     const Eigen::MatrixXd covariance = parameter_covariance(state);
     for (std::size_t i = 0; i < result.steps.size(); ++i) result.steps[i].parameters = describe(state, i, covariance);
     result.chi2_final = state.fit.chi2;
@@ -474,8 +482,19 @@ class Workflow {
       terms.push_back({c, theta});
       return chi2_of(terms);
     }
-    const Eigen::MatrixXd basis = whiten(e.evaluate(state.design.moved, context_, theta).basis);
-    if (basis.cols() == 0) return state.fit.chi2;
+    return added_columns_chi2(state, e.evaluate(state.design.moved, context_, theta).basis).chi2;
+  }
+
+  // chi2 of the state with extra columns (block level): their whitened columns are projected off
+  // the current span (no refit of the rest); `kept` counts the columns outside it.
+  struct Added {
+    double chi2;
+    Eigen::Index kept = 0;
+    Eigen::VectorXd component;  // the fitted extra component at the blocks (unwhitened), rad/s
+  };
+  Added added_columns_chi2(const State& state, const Eigen::MatrixXd& columns) const {
+    const Eigen::MatrixXd basis = whiten(columns);
+    if (basis.cols() == 0) return {state.fit.chi2};
     const Eigen::MatrixXd& q = state.fit.orthonormal;
     const Eigen::MatrixXd perpendicular = basis - q * (q.transpose() * basis);
     Eigen::MatrixXd kept(basis.rows(), 0);
@@ -484,9 +503,111 @@ class Workflow {
       kept.conservativeResize(Eigen::NoChange, kept.cols() + 1);
       kept.col(kept.cols() - 1) = perpendicular.col(j);
     }
-    if (kept.cols() == 0) return state.fit.chi2;
+    if (kept.cols() == 0) return {state.fit.chi2};
     const auto ls = least_squares(kept, state.fit.whitened_residual);
-    return state.fit.chi2 - (ls.orthonormal.transpose() * state.fit.whitened_residual).squaredNorm();
+    const Eigen::VectorXd explained = ls.orthonormal * (ls.orthonormal.transpose() * state.fit.whitened_residual);
+    return {state.fit.chi2 - explained.squaredNorm(), ls.orthonormal.cols(),
+            whitener_.triangularView<Eigen::Lower>() * explained};
+  }
+
+  // ---- structure no candidate explains -----------------------------------------------------------
+  static constexpr int kViewBins = 8;
+
+  // Indicator columns of kViewBins bins of `key`: equal counts (quantiles) or equal spans.
+  static Eigen::MatrixXd bin_columns(const Eigen::VectorXd& key, bool equal_counts, std::vector<double>& edges) {
+    const Eigen::Index n = key.size();
+    std::vector<double> sorted(key.data(), key.data() + n);
+    std::sort(sorted.begin(), sorted.end());
+    edges.clear();
+    for (int b = 0; b <= kViewBins; ++b) {
+      const double f = static_cast<double>(b) / kViewBins;
+      edges.push_back(equal_counts ? sorted[std::min<std::size_t>(static_cast<std::size_t>(f * static_cast<double>(n)),
+                                                                  static_cast<std::size_t>(n - 1))]
+                                   : sorted.front() + f * (sorted.back() - sorted.front()));
+    }
+    Eigen::MatrixXd m = Eigen::MatrixXd::Zero(n, kViewBins);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const auto b = std::upper_bound(edges.begin() + 1, edges.end() - 1, key[k]) - (edges.begin() + 1);
+      m(k, b) = 1.0;
+    }
+    return m;
+  }
+
+  Unexplained structure_tests(const State& state) const {
+    const TimeSeries& rec = state.design.moved;
+    const Eigen::VectorXd& temp = rec.channel(role::kTemperature).values;
+    const Eigen::ArrayXd x = temp.array() - options_.reference_temp_c;
+    const Eigen::VectorXd rate = signal::time_derivative(rec.time(), temp);
+    const double soak = 1e-3 * rate.cwiseAbs().maxCoeff();  // below this the chamber holds
+    const Eigen::ArrayXd branch = rate.array().unaryExpr([&](double r) { return r > soak ? 1.0 : r < -soak ? -1.0 : 0.0; });
+    constexpr double kDph = kDphPerRadPerSec;  // the texts are in deg/h
+    const double scale = chi2_scale(state);
+    const double log_blocks = std::log(static_cast<double>(blocks_.size()));
+    Unexplained u;
+    auto add = [&](const std::string& view, const Eigen::MatrixXd& columns,
+                   const std::function<std::string(const Eigen::VectorXd&)>& where) {
+      const auto a = added_columns_chi2(state, columns);
+      StructureTest t{view, state.fit.chi2 - a.chi2, -std::numeric_limits<double>::infinity(),
+                      static_cast<int>(a.kept), 0.0, ""};
+      if (a.kept > 0) {
+        t.delta_bic = t.delta_chi2 / scale - static_cast<double>(a.kept) * log_blocks;
+        t.size_rad_s = rms(a.component);
+        t.where = where(a.component);
+      }
+      u.views.push_back(std::move(t));
+    };
+    auto largest_bin = [&](const Eigen::VectorXd& key, const std::vector<double>& edges, const Eigen::VectorXd& c,
+                           const std::string& unit) {
+      int best = 0;
+      double best_value = 0.0;
+      for (int b = 0; b < kViewBins; ++b) {
+        double sum = 0.0;
+        int count = 0;
+        for (Eigen::Index k = 0; k < key.size(); ++k)
+          if (key[k] >= edges[b] && (key[k] < edges[b + 1] || b == kViewBins - 1)) sum += c[k], ++count;
+        const double mean = count ? sum / count : 0.0;
+        if (std::abs(mean) > std::abs(best_value)) best_value = mean, best = b;
+      }
+      char text[160];
+      std::snprintf(text, sizeof text, "largest at %.4g .. %.4g %s (%+.3g deg/h)", edges[best], edges[best + 1],
+                    unit.c_str(), best_value * kDph);
+      return std::string(text);
+    };
+    std::vector<double> temp_edges, time_edges;
+    const Eigen::MatrixXd temp_bins = bin_columns(temp, true, temp_edges);
+    add("temperature", temp_bins, [&](const Eigen::VectorXd& c) { return largest_bin(temp, temp_edges, c, "degC"); });
+    Eigen::MatrixXd branches(rec.size(), 2);
+    branches.col(0) = branch.matrix();
+    branches.col(1) = (branch * x).matrix();
+    add("heating_vs_cooling", branches, [&](const Eigen::VectorXd& c) {
+      double heating = 0.0, cooling = 0.0;
+      int nh = 0, nc = 0;
+      for (Eigen::Index k = 0; k < c.size(); ++k) {
+        if (branch[k] > 0) heating += c[k], ++nh;
+        if (branch[k] < 0) cooling += c[k], ++nc;
+      }
+      char text[160];
+      std::snprintf(text, sizeof text, "heating %+.3g deg/h, cooling %+.3g deg/h on average",
+                    nh ? heating / nh * kDph : 0.0, nc ? cooling / nc * kDph : 0.0);
+      return std::string(text);
+    });
+    Eigen::MatrixXd rates(rec.size(), 3);
+    rates.col(0) = rate;
+    rates.col(1) = (rate.array() * x).matrix();
+    rates.col(2) = (rate.array() * x.square()).matrix();
+    add("temperature_rate", rates, [&](const Eigen::VectorXd& c) {
+      const Eigen::Index k = [&] { Eigen::Index i; c.cwiseAbs().maxCoeff(&i); return i; }();
+      char text[160];
+      std::snprintf(text, sizeof text, "follows dT/dt with a temperature-dependent factor; largest %+.3g deg/h at %.3g degC, "
+                    "%.3g degC/min", c[k] * kDph, temp[k], rate[k] * 60.0);
+      return std::string(text);
+    });
+    add("time", bin_columns(rec.time(), false, time_edges),
+        [&](const Eigen::VectorXd& c) { return largest_bin(rec.time(), time_edges, c, "s"); });
+    std::stable_sort(u.views.begin(), u.views.end(),
+                     [](const StructureTest& a, const StructureTest& b) { return a.delta_bic > b.delta_bic; });
+    u.found = u.views.front().delta_bic > options_.significance;
+    return u;
   }
 
   State refined(std::vector<Term> terms) const {

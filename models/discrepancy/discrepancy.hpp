@@ -132,7 +132,31 @@ struct Step {
   std::vector<Score> scores;  // every candidate at this step, best first
 };
 
+// Structure left in the residual that no candidate explains, tested in generic views of it (the
+// same GLS criterion as the candidates, q = the view's columns outside the model's span):
+//   temperature         bias by temperature: indicators of 8 equal-count temperature bins
+//   heating_vs_cooling  branch offset: sgn(dT/dt) and sgn(dT/dt) (T - T0)
+//   temperature_rate    dT/dt times a quadratic in T - T0 (dT/dt, x dT/dt, x^2 dT/dt)
+//   time                indicators of 8 equal time spans
+// A candidate is named only when its delta_BIC is within `significance` of the best view's: when a
+// view beats every candidate by more, the workflow stops and reports the residual as unexplained
+// (in that view) instead of naming a candidate that does not fit. After the last named effect the
+// views are tested once more.
+struct StructureTest {
+  std::string view;          // one of the names above
+  double delta_chi2 = 0.0, delta_bic = -std::numeric_limits<double>::infinity();
+  int parameters = 0;        // q
+  double size_rad_s = 0.0;   // rms over the blocks of the view's fitted component
+  std::string where;         // e.g. "largest at 14.2 .. 25.8 degC (+160 deg/h)"
+};
+
+struct Unexplained {
+  bool found = false;               // a view's delta_BIC exceeds the significance
+  std::vector<StructureTest> views;  // every view, best first
+};
+
 struct Result {
+  Unexplained unexplained;          // after the last named effect (or instead of a wrong one)
   std::vector<Step> steps;          // the named effects, in order
   std::vector<Score> final_scores;  // the round that found nothing significant (empty if max_effects stopped it)
   double gap_initial_rad_s = 0.0, gap_final_rad_s = 0.0, noise_floor_rad_s = 0.0;

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <limits>
 #include <map>
 #include <set>
@@ -203,6 +204,7 @@ TEST(NoHiddenEffect, NothingIsNamedInRecordsWithOnlyColouredNoise) {
   for (int i = 0; i < kNoiseOnlyRecords; ++i) {
     const auto run = run_record(100000 + static_cast<std::uint64_t>(i), {});
     EXPECT_THAT(named(run.result), ::testing::IsEmpty()) << "record " << i;
+    EXPECT_FALSE(run.result.unexplained.found) << "record " << i << ": " << run.result.unexplained.views.front().view;
     ASSERT_FALSE(run.result.final_scores.empty());
     largest = std::max(largest, run.result.final_scores.front().delta_bic);
   }
@@ -268,6 +270,50 @@ TEST(WithoutTheDeviceFile, NothingIsNamedInRecordsWithOnlyColouredNoise) {
   }
   std::printf("[ summary  ] %d noise-only records without the device file: largest delta BIC %.1f\n",
               kNoiseOnlyRecords / 2, largest);
+}
+
+// Effects outside the library, added to the simulated rate as functions of the resonator
+// temperature: the workflow must not name a candidate, and must say which view holds the rest.
+void expect_unexplained_in(const std::string& view, const std::function<double(double t, double temp, double rate)>& bias) {
+  constexpr int kRecords = 4;
+  for (int i = 0; i < kRecords; ++i) {
+    const auto device = fmvmg(false);
+    auto record = testing_oven::make_record(device, kSeed, 500000 + static_cast<std::uint64_t>(i), {});
+    const Eigen::VectorXd& t = record.series.time();
+    const Eigen::VectorXd die = record.series.channel(role::kDieTemperature).values;
+    const Eigen::VectorXd die_rate = signal::time_derivative(t, die);
+    Eigen::VectorXd rate = record.series.channel(role::kRate).values;
+    for (Eigen::Index k = 0; k < rate.size(); ++k) rate[k] += bias(t[k], die[k], die_rate[k]);
+    record.series.set_channel({role::kRate, "rad/s", "rate with an effect outside the library", rate});
+    for (const auto& [label, result] :
+         {std::pair{"with the device file", discrepancy::find_missing_effects(record.series, candidates().list,
+                                                                               devices::discrepancy_options(device))},
+          std::pair{"without it", run_without_device(record)}}) {
+      EXPECT_THAT(named(result), ::testing::IsEmpty()) << label << ", record " << i;
+      EXPECT_TRUE(result.unexplained.found) << label << ", record " << i;
+      EXPECT_EQ(result.unexplained.views.front().view, view)
+          << label << ", record " << i << ": " << result.unexplained.views.front().where;
+      std::printf("[ summary  ] %s, record %d: unexplained in %s (delta BIC %.0f, %.0f deg/h rms): %s\n", label, i,
+                  result.unexplained.views.front().view.c_str(), result.unexplained.views.front().delta_bic,
+                  result.unexplained.views.front().size_rad_s / kRadPerSecPerDph,
+                  result.unexplained.views.front().where.c_str());
+    }
+  }
+}
+
+// Disabled: fails today (run with --gtest_also_run_disabled_tests to reproduce). A 1000-deg/h step
+// at 20 degC is absorbed by the bias polynomial and, on slow legs, looks like the slow wander the
+// FMVMG's flicker and random-walk terms allow: the temperature view reaches delta BIC -2 .. -20
+// (7 parameters), and with the device file a candidate (thermal lag, warm-up) is named in 3 of 4
+// records; without it the estimated noise terms absorb the step and nothing is named or flagged.
+TEST(EffectOutsideTheLibrary, DISABLED_ABiasStepAtOneTemperatureIsUnexplainedInTheTemperatureView) {
+  const double step = 1000.0 * kRadPerSecPerDph;  // above 20 degC
+  expect_unexplained_in("temperature", [&](double, double temp, double) { return temp > 20.0 ? step : 0.0; });
+}
+
+TEST(EffectOutsideTheLibrary, ABiasProportionalToTSquaredTimesDtDtIsUnexplainedInTheTemperatureRateView) {
+  const double c = 3.0 * kRadPerSecPerDph;  // deg/h per degC^2 K/s: up to ~600 deg/h on the fast legs
+  expect_unexplained_in("temperature_rate", [&](double, double temp, double rate) { return c * temp * temp * rate; });
 }
 
 TEST(HiddenThermalLag, IsSeenThroughTheDriveFrequencyWhenTheRecordHasIt) {

@@ -142,13 +142,19 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
   std::cout << "gap " << result.gap_initial_rad_s * kDphPerRadPerSec << " -> " << result.gap_final_rad_s * kDphPerRadPerSec
             << " deg/h (noise floor " << result.noise_floor_rad_s * kDphPerRadPerSec << " deg/h, " << result.blocks
             << " blocks of " << result.block_s << " s)\n";
-  if (result.steps.empty()) std::cout << "nothing significant is missing\n";
+  const auto& unexplained = result.unexplained;
+  if (result.steps.empty() && !unexplained.found) std::cout << "nothing significant is missing\n";
   for (const auto& step : result.steps) {
     std::cout << "named " << step.effect << " (delta BIC " << step.delta_bic << "):";
     for (const auto& p : step.parameters)
       for (std::size_t i = 0; i < p.values.size(); ++i) std::cout << " " << p.key << "=" << p.values[i];
     std::cout << "; gap " << step.gap_before_rad_s * kDphPerRadPerSec << " -> " << step.gap_after_rad_s * kDphPerRadPerSec
               << " deg/h\n";
+  }
+  if (unexplained.found) {
+    const auto& v = unexplained.views.front();
+    std::cout << "unexplained: structure remains that no candidate explains, in the " << v.view << " view (delta BIC "
+              << v.delta_bic << ", " << v.size_rad_s * kDphPerRadPerSec << " deg/h rms): " << v.where << "\n";
   }
   if (!o.update_device.empty()) {
     std::cout << "wrote " << o.update_device << " (" << device_path << " with the named effects under effects:)\n";

@@ -171,6 +171,18 @@ std::string parameter_text(const discrepancy::ReportedValue& v) {
   return text + " " + escape(v.unit);
 }
 
+nlohmann::json unexplained_json(const discrepancy::Unexplained& u) {
+  nlohmann::json views = nlohmann::json::array();
+  for (const auto& v : u.views)
+    views.push_back({{"view", v.view},
+                     {"delta_bic", number_or_null(v.delta_bic)},
+                     {"delta_chi2", v.delta_chi2},
+                     {"parameters", v.parameters},
+                     {"size_dph", dph(v.size_rad_s)},
+                     {"where", v.where}});
+  return {{"found", u.found}, {"views", views}};
+}
+
 }  // namespace
 
 nlohmann::json discrepancy_json(const discrepancy::Result& r, const DiscrepancyReportInfo& info) {
@@ -219,6 +231,7 @@ nlohmann::json discrepancy_json(const discrepancy::Result& r, const DiscrepancyR
             {"chi2_initial", r.chi2_initial},
             {"chi2_final", r.chi2_final}}},
           {"final_scores", scores_json(r.final_scores)},
+          {"unexplained", unexplained_json(r.unexplained)},
           {"model",
            {{"data", info.data},
             {"device", info.device},
