@@ -1,7 +1,10 @@
 // Figures drawn by gnuplot (tools/driftlab/plot.hpp) and the HTML report writer
 // (tools/driftlab/html_report.hpp).
+#include "tools/driftlab/plot.hpp"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -11,10 +14,8 @@
 #include <regex>
 #include <set>
 #include <sstream>
-#include <unistd.h>
 
 #include "tools/driftlab/html_report.hpp"
-#include "tools/driftlab/plot.hpp"
 
 namespace driftlab::cli {
 namespace {
@@ -27,7 +28,8 @@ using ::testing::Not;
 std::size_t plot_elements(const std::string& svg) {
   std::set<std::string> ids;
   const std::regex id(R"re(id="(gnuplot_plot_[0-9a-z]+)")re");
-  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), id); it != std::sregex_iterator(); ++it) ids.insert((*it)[1]);
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), id); it != std::sregex_iterator(); ++it)
+    ids.insert((*it)[1]);
   return ids.size();
 }
 
@@ -68,8 +70,10 @@ class GnuplotOverride {
     ::setenv("DRIFTLAB_GNUPLOT", path, 1);
   }
   ~GnuplotOverride() {
-    if (had_) ::setenv("DRIFTLAB_GNUPLOT", old_.c_str(), 1);
-    else ::unsetenv("DRIFTLAB_GNUPLOT");
+    if (had_)
+      ::setenv("DRIFTLAB_GNUPLOT", old_.c_str(), 1);
+    else
+      ::unsetenv("DRIFTLAB_GNUPLOT");
   }
 
  private:
@@ -79,9 +83,15 @@ class GnuplotOverride {
 
 Figure two_panels() {
   Figure f;
-  PlotPanel a{"rate", "t (s)", "rate (°/h)", false, false, {line("raw", {0, 1, 2, 3}, {1, 3, 2, 4}),
-                                                           line("model", {0, 1, 2, 3}, {1, 2, 3, 4}, PlotSeries::Style::Dashed)}};
-  PlotPanel b{"temperature", "t (s)", "T (°C)", false, false, {line("case", {0, 1, 2, 3}, {20, 21, 23, 22}, PlotSeries::Style::Markers)}};
+  PlotPanel a{
+      "rate",
+      "t (s)",
+      "rate (°/h)",
+      false,
+      false,
+      {line("raw", {0, 1, 2, 3}, {1, 3, 2, 4}), line("model", {0, 1, 2, 3}, {1, 2, 3, 4}, PlotSeries::Style::Dashed)}};
+  PlotPanel b{"temperature", "t (s)", "T (°C)",
+              false,         false,   {line("case", {0, 1, 2, 3}, {20, 21, 23, 22}, PlotSeries::Style::Markers)}};
   f.panels = {a, b};
   return f;
 }
@@ -91,7 +101,8 @@ TEST(Plot, DrawsOnePlotElementPerSeriesInEveryPanel) {
   EXPECT_THAT(svg, HasSubstr("<svg"));
   EXPECT_THAT(svg, HasSubstr("</svg>"));
   EXPECT_EQ(plot_elements(svg), 3u);
-  for (const char* text : {">raw<", ">model<", ">case<", "rate (°/h)", "T (°C)", "t (s)"}) EXPECT_THAT(svg, HasSubstr(text));
+  for (const char* text : {">raw<", ">model<", ">case<", "rate (°/h)", "T (°C)", "t (s)"})
+    EXPECT_THAT(svg, HasSubstr(text));
 }
 
 TEST(Plot, ShowsLabelsLiterallyAndEscapedWithoutBreakingTheScript) {
@@ -107,7 +118,11 @@ TEST(Plot, ShowsLabelsLiterallyAndEscapedWithoutBreakingTheScript) {
 
 TEST(Plot, PlacesDecadesEvenlyOnALogAxis) {
   Figure f;
-  f.panels.push_back({"Allan deviation", "tau (s)", "sigma (°/h)", true, true,
+  f.panels.push_back({"Allan deviation",
+                      "tau (s)",
+                      "sigma (°/h)",
+                      true,
+                      true,
                       {line("adev", {0.01, 0.1, 1, 10, 100}, {30, 10, 3, 1, 0.3})}});
   const auto xs = path_x(render_svg(f), "gnuplot_plot_1a");
   ASSERT_EQ(xs.size(), 5u);
@@ -172,7 +187,8 @@ TEST(Plot, DrawsBandsErrorBarsASecondAxisAndAColourScale) {
   Figure f;
   f.columns = 2;
   f.panels.push_back({"allan", "tau (s)", "sigma (°/h)", true, true, {band, bars}});
-  PlotPanel two{"rate and temperature", "t (s)", "rate (°/h)", false, false, {line("rate", {0, 1, 2}, {5, 4, 6}), temp}};
+  PlotPanel two{
+      "rate and temperature", "t (s)", "rate (°/h)", false, false, {line("rate", {0, 1, 2}, {5, 4, 6}), temp}};
   two.y2_label = "temperature (°C)";
   f.panels.push_back(two);
   PlotPanel three{"residual", "T (°C)", "residual (°/h)", false, false, {coloured}};
@@ -182,7 +198,7 @@ TEST(Plot, DrawsBandsErrorBarsASecondAxisAndAColourScale) {
   EXPECT_THAT(svg, HasSubstr("temperature (°C)"));
   EXPECT_THAT(svg, HasSubstr("time (h)"));
   EXPECT_THAT(svg, HasSubstr("fill-opacity"));  // the shaded band
-  EXPECT_EQ(plot_elements(svg), 6u);  // band + line, bars, rate, temperature, coloured
+  EXPECT_EQ(plot_elements(svg), 6u);            // band + line, bars, rate, temperature, coloured
 }
 
 TEST(Plot, StreamsAFigureLargerThanThePipeBuffersBothWays) {
@@ -206,7 +222,11 @@ TEST(Plot, LabelsASharedXAxisOnceUnderTheBottomPanel) {
   Figure f;
   f.shared_x = true;
   for (int p = 0; p < 3; ++p)
-    f.panels.push_back({"imf" + std::to_string(p + 1), "t (s)", "rate (°/h)", false, false,
+    f.panels.push_back({"imf" + std::to_string(p + 1),
+                        "t (s)",
+                        "rate (°/h)",
+                        false,
+                        false,
                         {line("imf", {0, 5.0 * (p + 1)}, {0, 1})}});
   const std::string svg = render_svg(f);
   EXPECT_EQ(count(svg, ">t (s)<"), 1u);
@@ -257,7 +277,8 @@ bool well_nested(const std::string& html, std::string& problem) {
     const bool self_closing = tag.back() == '/';
     const std::string name = tag.substr(closing, tag.find_first_of(" \t\n/>", closing) - closing);
     if (closing) {
-      if (open.empty() || open.back() != name) return problem = "</" + name + "> closes " + (open.empty() ? "nothing" : open.back()), false;
+      if (open.empty() || open.back() != name)
+        return problem = "</" + name + "> closes " + (open.empty() ? "nothing" : open.back()), false;
       open.pop_back();
     } else if (!self_closing && !kVoid.count(name)) {
       open.push_back(name);
@@ -270,7 +291,8 @@ bool well_nested(const std::string& html, std::string& problem) {
 HtmlReport sample_report() {
   HtmlReport r("driftlab run <li2023> & friends");
   r.section("Table 2").paragraph("B falls at every stage: 34.66 -> 3.589 °/h <really>.");
-  r.table({"Allan figures per stage", {"stage", "B (°/h)", "N (°/h/√Hz)", "blocks"},
+  r.table({"Allan figures per stage",
+           {"stage", "B (°/h)", "N (°/h/√Hz)", "blocks"},
            {{std::string("original"), 34.66, 99.608, 16200.0}, {std::string("rbf_ga_kf"), 3.589, NAN, 3.0}},
            "68.3 % intervals <chi2>"});
   r.figure(two_panels(), "raw rate and temperature");

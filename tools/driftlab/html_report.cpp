@@ -25,13 +25,16 @@ constexpr const char* kStyle =
 std::string number(double v, int digits) {
   if (!std::isfinite(v)) return "–";
   char buf[48];
-  if (v == std::floor(v) && std::abs(v) < 1e15) std::snprintf(buf, sizeof buf, "%.0f", v == 0.0 ? 0.0 : v);
-  else std::snprintf(buf, sizeof buf, "%.*g", std::max(1, digits), v);
+  if (v == std::floor(v) && std::abs(v) < 1e15)
+    std::snprintf(buf, sizeof buf, "%.0f", v == 0.0 ? 0.0 : v);
+  else
+    std::snprintf(buf, sizeof buf, "%.*g", std::max(1, digits), v);
   return buf;
 }
 
 void replace_all(std::string& s, const std::string& from, const std::string& to) {
-  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
+  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
+    s.replace(at, from.size(), to);
 }
 
 }  // namespace
@@ -41,12 +44,23 @@ std::string html_escape(const std::string& text) {
   out.reserve(text.size());
   for (char c : text) {
     switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -55,7 +69,8 @@ std::string html_escape(const std::string& text) {
 std::string inline_svg(std::string svg, const std::string& id_prefix) {
   const std::size_t start = svg.find("<svg");
   if (start != std::string::npos) svg.erase(0, start);
-  for (const char* attribute : {" xmlns=\"http://www.w3.org/2000/svg\"", " xmlns:xlink=\"http://www.w3.org/1999/xlink\""})
+  for (const char* attribute :
+       {" xmlns=\"http://www.w3.org/2000/svg\"", " xmlns:xlink=\"http://www.w3.org/1999/xlink\""})
     replace_all(svg, attribute, "");
   replace_all(svg, "<title>Gnuplot</title>", "");
   const std::size_t box = svg.find("viewBox=\"0 0 ");
@@ -91,7 +106,8 @@ HtmlReport& HtmlReport::preformatted(const std::string& text) {
 
 HtmlReport& HtmlReport::table(const HtmlTable& t) {
   body_ += "<table>\n";
-  if (!t.caption.empty()) body_ += "<caption>Table " + std::to_string(++tables_) + ". " + html_escape(t.caption) + "</caption>\n";
+  if (!t.caption.empty())
+    body_ += "<caption>Table " + std::to_string(++tables_) + ". " + html_escape(t.caption) + "</caption>\n";
   if (!t.header.empty()) {
     body_ += "<thead><tr>";
     for (const auto& h : t.header) body_ += "<th>" + html_escape(h) + "</th>";
@@ -101,8 +117,10 @@ HtmlReport& HtmlReport::table(const HtmlTable& t) {
   for (const auto& row : t.rows) {
     body_ += "<tr>";
     for (const auto& cell : row) {
-      if (const auto* v = std::get_if<double>(&cell)) body_ += "<td class=\"n\">" + number(*v, t.digits) + "</td>";
-      else body_ += "<td>" + html_escape(std::get<std::string>(cell)) + "</td>";
+      if (const auto* v = std::get_if<double>(&cell))
+        body_ += "<td class=\"n\">" + number(*v, t.digits) + "</td>";
+      else
+        body_ += "<td>" + html_escape(std::get<std::string>(cell)) + "</td>";
     }
     body_ += "</tr>\n";
   }
@@ -117,9 +135,9 @@ HtmlReport& HtmlReport::figure(const Figure& f, const std::string& caption) {
 
 HtmlReport& HtmlReport::figure_svg(const std::string& svg, const std::string& caption) {
   ++figures_;
-  body_ += "<figure id=\"figure-" + std::to_string(figures_) + "\">\n" + inline_svg(svg, "f" + std::to_string(figures_) + "-") +
-           "<figcaption><b>Figure " + std::to_string(figures_) + ".</b> " + html_escape(caption) +
-           "</figcaption>\n</figure>\n";
+  body_ += "<figure id=\"figure-" + std::to_string(figures_) + "\">\n" +
+           inline_svg(svg, "f" + std::to_string(figures_) + "-") + "<figcaption><b>Figure " + std::to_string(figures_) +
+           ".</b> " + html_escape(caption) + "</figcaption>\n</figure>\n";
   return *this;
 }
 

@@ -23,12 +23,12 @@ namespace {
 
 constexpr std::array<const char*, 8> kColors = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e",
                                                 "#9467bd", "#8c564b", "#e377c2", "#17becf"};
-constexpr std::size_t kReduceLinesAbove = 4;    // points per pixel column before lines are reduced
+constexpr std::size_t kReduceLinesAbove = 4;  // points per pixel column before lines are reduced
 constexpr std::size_t kReduceMarkersAbove = 2000;
-constexpr long kMarkerCellPx = 3;               // about a marker's diameter
-constexpr double kCharWidthPx = 6.6;            // gnuplot's character width at 11 pt, for margins
-constexpr double kVerticalMarginsPx = 86;       // title, x tick labels and x label of a panel
-constexpr long kHiddenXAxisPx = 40;             // what a panel without x labels saves (bmargin 3.5 -> 0.8)
+constexpr long kMarkerCellPx = 3;          // about a marker's diameter
+constexpr double kCharWidthPx = 6.6;       // gnuplot's character width at 11 pt, for margins
+constexpr double kVerticalMarginsPx = 86;  // title, x tick labels and x label of a panel
+constexpr long kHiddenXAxisPx = 40;        // what a panel without x labels saves (bmargin 3.5 -> 0.8)
 
 std::string number(double v) {
   char buf[32];
@@ -40,9 +40,12 @@ std::string number(double v) {
 std::string quoted(const std::string& s) {
   std::string out = "'";
   for (char c : s) {
-    if (c == '\'') out += "''";
-    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) out += ' ';
-    else out += c;
+    if (c == '\'')
+      out += "''";
+    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      out += ' ';
+    else
+      out += c;
   }
   return out + "'";
 }
@@ -197,14 +200,14 @@ std::size_t display_length(const std::string& s) {
 
 // The legend's place: the requested corner, or (Auto) the corner where the least data lies; when
 // every corner holds data, top right above the data, whose y axes get that much headroom.
-std::string legend_command(const PlotPanel& panel, const std::vector<std::vector<Point>>& data, const Axis& x,
-                           Axis& y, Axis& y2, const Geometry& g) {
+std::string legend_command(const PlotPanel& panel, const std::vector<std::vector<Point>>& data, const Axis& x, Axis& y,
+                           Axis& y2, const Geometry& g) {
   std::size_t labelled = 0, longest = 0;
   for (const auto& s : panel.series)
     if (!s.label.empty()) ++labelled, longest = std::max(longest, display_length(s.label));
-  const bool only_the_title = labelled == 1 && std::any_of(panel.series.begin(), panel.series.end(), [&](const auto& s) {
-                                return !s.label.empty() && s.label == panel.title;
-                              });
+  const bool only_the_title =
+      labelled == 1 && std::any_of(panel.series.begin(), panel.series.end(),
+                                   [&](const auto& s) { return !s.label.empty() && s.label == panel.title; });
   if (panel.legend == PlotPanel::Legend::None || labelled == 0 || only_the_title) return "unset key\n";
   const std::string style = " opaque box lc rgb '#bbbbbb' samplen 2.5 spacing 1.1 font ',10'\n";
   const char* names[] = {"top right", "top left", "bottom right", "bottom left"};
@@ -215,7 +218,7 @@ std::string legend_command(const PlotPanel& panel, const std::vector<std::vector
   const double kh = std::min(0.9, (static_cast<double>(labelled) * 14.0 + 12.0) / g.plot_height);
   std::array<std::size_t, 4> crowd{};
   const auto count = [&](double fx, double fy) {
-    const bool right = fx > 1 - kw, left = fx < kw, top = fy > 1 - kh, bottom = fy < kh;
+    const bool right = fx > 1 - kw, left = fx<kw, top = fy> 1 - kh, bottom = fy < kh;
     crowd[0] += right && top, crowd[1] += left && top, crowd[2] += right && bottom, crowd[3] += left && bottom;
   };
   for (std::size_t k = 0; k < data.size(); ++k) {
@@ -317,8 +320,10 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
   const bool coloured = std::any_of(panel.series.begin(), panel.series.end(),
                                     [](const auto& s) { return !s.z.empty() && s.z.size() == s.y.size(); });
   if (coloured)
-    script += "set palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', 0.75 '#5ec962', 1 '#fde725')\n"
-              "set cblabel " + quoted(panel.z_label) + " noenhanced\nset format cb '%g'\n";
+    script +=
+        "set palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', 0.75 '#5ec962', 1 '#fde725')\n"
+        "set cblabel " +
+        quoted(panel.z_label) + " noenhanced\nset format cb '%g'\n";
   else
     script += "unset colorbox\n";
   if (!place.x_labels) script += "set format x ''\nunset xlabel\nset bmargin 0.8\n";
@@ -340,9 +345,12 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
     const bool z = s.z.size() == s.y.size() && !s.z.empty();
     std::string item;
     if (s.style == PlotSeries::Style::Markers) {
-      if (interval && !band) item = src + " using 1:2:3:4" + axes + " with yerrorbars pt 7 ps 0.45 lw 1" + lc;
-      else if (z) item = src + " using 1:2:5" + axes + " with points pt 7 ps 0.35 lc palette";
-      else item = src + " using 1:2" + axes + " with points pt 7 ps 0.45" + lc;
+      if (interval && !band)
+        item = src + " using 1:2:3:4" + axes + " with yerrorbars pt 7 ps 0.45 lw 1" + lc;
+      else if (z)
+        item = src + " using 1:2:5" + axes + " with points pt 7 ps 0.35 lc palette";
+      else
+        item = src + " using 1:2" + axes + " with points pt 7 ps 0.45" + lc;
     } else {
       const std::string dash = s.style == PlotSeries::Style::Dashed ? " dt (6,4)" : "";
       if (interval && !band)
@@ -373,7 +381,8 @@ std::string gnuplot_executable() {
 struct Pipe {
   int fd[2] = {-1, -1};
   Pipe() {
-    if (::pipe2(fd, O_CLOEXEC) != 0) throw PlotError(std::string("cannot create a pipe for gnuplot: ") + std::strerror(errno));
+    if (::pipe2(fd, O_CLOEXEC) != 0)
+      throw PlotError(std::string("cannot create a pipe for gnuplot: ") + std::strerror(errno));
   }
   ~Pipe() {
     close_end(0);
@@ -454,15 +463,18 @@ std::string run_gnuplot(const std::string& script) {
         if (fds[i].revents == 0) continue;
         const int fd = fds[i].fd;
         if (fd == in.fd[1]) {
-          const ssize_t w = ::write(fd, script.data() + written, std::min<std::size_t>(script.size() - written, buf.size()));
+          const ssize_t w =
+              ::write(fd, script.data() + written, std::min<std::size_t>(script.size() - written, buf.size()));
           if (w > 0) written += static_cast<std::size_t>(w);
           if (w < 0 && errno != EINTR && errno != EAGAIN) in.close_end(1);
           if (written == script.size()) in.close_end(1);
           continue;
         }
         const ssize_t r = ::read(fd, buf.data(), buf.size());
-        if (r > 0) (fd == out.fd[0] ? svg : messages).append(buf.data(), static_cast<std::size_t>(r));
-        else if (r == 0 || errno != EINTR) (fd == out.fd[0] ? out : err).close_end(0);
+        if (r > 0)
+          (fd == out.fd[0] ? svg : messages).append(buf.data(), static_cast<std::size_t>(r));
+        else if (r == 0 || errno != EINTR)
+          (fd == out.fd[0] ? out : err).close_end(0);
       }
     }
   }

@@ -1,6 +1,6 @@
 // Figures for command outputs (--plot) and HTML reports, drawn by gnuplot (Debian `gnuplot-nox`)
 // run as a child process: the script and the data go to its stdin, the SVG comes from its stdout;
-// no shell, no temporary files. Same figure in, same SVG out.
+// no shell, no temporary files. Same figure (and gnuplot version) in, same SVG out.
 //
 // A Figure is a grid of panels (`columns` wide, filled row by row; one column = stacked panels
 // sharing their left edge). A panel holds series drawn as lines, dashed lines or markers, with
@@ -15,8 +15,8 @@
 // - The x axis spans the data (2 % more at each end when a series has markers); y axes extend to
 //   whole ticks (whole decades when log). Tick steps follow the panel's size.
 // - Long series are reduced before they reach gnuplot: lines to the min and max of each pixel
-//   column (in their original order), markers to one point per 3 x 3 px cell. Series with intervals are
-//   drawn as given.
+//   column (in their original order), markers to one point per 3 x 3 px cell. Series with
+//   intervals are drawn as given.
 // - The gnuplot executable is $DRIFTLAB_GNUPLOT when set and non-empty, else `gnuplot` on PATH.
 //   A missing executable, a failing run or an empty result throws PlotError.
 #pragma once
