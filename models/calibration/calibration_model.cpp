@@ -31,6 +31,20 @@ std::string to_string(Extrapolation policy) {
   return "clamp";
 }
 
+std::optional<ModelKind> parse_model_kind(const std::string& text) {
+  for (const auto k : {ModelKind::Polynomial, ModelKind::Physical, ModelKind::Rbf}) {
+    if (to_string(k) == text) return k;
+  }
+  return std::nullopt;
+}
+
+std::optional<Extrapolation> parse_extrapolation(const std::string& text) {
+  for (const auto e : {Extrapolation::Clamp, Extrapolation::Linear, Extrapolation::Evaluate}) {
+    if (to_string(e) == text) return e;
+  }
+  return std::nullopt;
+}
+
 namespace {
 
 double horner(const std::vector<double>& a, double u) { return polynomial::evaluate(a, 0.0, u); }
@@ -222,15 +236,9 @@ CalibrationModel read_calibration_model(const std::filesystem::path& path) {
 
   CalibrationModel m;
   const std::string kind = r.text(j, "", "kind");
-  if (kind == "poly") {
-    m.kind = ModelKind::Polynomial;
-  } else if (kind == "physical") {
-    m.kind = ModelKind::Physical;
-  } else if (kind == "rbf") {
-    m.kind = ModelKind::Rbf;
-  } else {
-    r.fail("kind", "expected poly, physical or rbf, got \"" + kind + "\"");
-  }
+  const auto parsed_kind = parse_model_kind(kind);
+  if (!parsed_kind) r.fail("kind", "expected poly, physical or rbf, got \"" + kind + "\"");
+  m.kind = *parsed_kind;
   if (r.optional(j, "device")) m.device = r.text(j, "", "device");
   if (r.optional(j, "axis")) m.axis = r.text(j, "", "axis");
   if (m.axis != "x" && m.axis != "y" && m.axis != "z") r.fail("axis", "expected x, y or z, got \"" + m.axis + "\"");
@@ -240,15 +248,9 @@ CalibrationModel read_calibration_model(const std::filesystem::path& path) {
   m.valid_min_c = range[0];
   m.valid_max_c = range[1];
   const std::string policy = r.text(j, "", "extrapolation");
-  if (policy == "clamp") {
-    m.extrapolation = Extrapolation::Clamp;
-  } else if (policy == "linear") {
-    m.extrapolation = Extrapolation::Linear;
-  } else if (policy == "evaluate") {
-    m.extrapolation = Extrapolation::Evaluate;
-  } else {
-    r.fail("extrapolation", "expected clamp, linear or evaluate, got \"" + policy + "\"");
-  }
+  const auto parsed_policy = parse_extrapolation(policy);
+  if (!parsed_policy) r.fail("extrapolation", "expected clamp, linear or evaluate, got \"" + policy + "\"");
+  m.extrapolation = *parsed_policy;
   const auto& bias = r.at(j, "", "bias");
   m.bias_rad_s = r.numbers(r.at(bias, "bias", "polynomial_rad_s_per_k_i"), "bias.polynomial_rad_s_per_k_i");
   if (m.bias_rad_s.empty()) r.fail("bias.polynomial_rad_s_per_k_i", "needs at least one coefficient");

@@ -44,9 +44,11 @@ inline constexpr const char* kFormat = "driftlab-calibration/1";
 
 enum class ModelKind { Polynomial, Physical, Rbf };
 std::string to_string(ModelKind kind);  // "poly", "physical", "rbf"
+std::optional<ModelKind> parse_model_kind(const std::string& text);  // inverse of to_string
 
 enum class Extrapolation { Clamp, Linear, Evaluate };
 std::string to_string(Extrapolation policy);  // "clamp", "linear", "evaluate"
+std::optional<Extrapolation> parse_extrapolation(const std::string& text);  // inverse of to_string
 
 // Gaussian RBF network on standardized inputs u = (x - mean) / scale, x = (T_c degC, D K/s, s 1):
 // rbf(x) = bias_rad_s + sum_k weights_rad_s[k] exp(-|u - centres.row(k)|^2 / (2 sigma^2)).

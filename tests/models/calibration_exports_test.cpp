@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "framework/error.hpp"
+#include "tests/models/calibration_fixtures.hpp"
 
 namespace driftlab::calibration {
 namespace {
@@ -19,35 +20,8 @@ namespace {
 constexpr double kFloatText = 1e-8;  // relative: the .params files carry 9 significant digits
 const std::vector<double> kTemperatures{-40.0, -20.0, 0.0, 12.5, 25.0, 35.0, 48.0, 70.0};
 
-CalibrationModel cubic_model() {
-  CalibrationModel m;
-  m.reference_temp_c = 25.0;
-  m.valid_min_c = -25.0;
-  m.valid_max_c = 60.0;
-  m.bias_rad_s = {4e-4, -1.1e-5, -1.4e-8, 3e-10};
-  return m;
-}
-
-CalibrationModel stateful_model() {
-  CalibrationModel m = cubic_model();
-  m.kind = ModelKind::Rbf;
-  m.lag_tau_s = 100.0;
-  m.derivative_tau_s = 20.0;
-  m.temperature_rate_rad_s_per_k_s = 3e-3;
-  m.hysteresis_rad_s = -2e-5;
-  m.hysteresis_width_k = 1.5;
-  RbfTerm r;
-  r.mean = {20, 0, 0};
-  r.scale = {15, 0.01, 0.5};
-  r.centres = Eigen::MatrixXd(3, 3);
-  r.centres << 0.1, -0.2, 0.3, -1.0, 0.5, 0.0, 0.7, 0.0, -0.9;
-  r.sigma = 0.8;
-  r.weights_rad_s = {1e-5, -2e-5, 3e-6};
-  r.bias_rad_s = 1e-6;
-  m.rbf = r;
-  m.scale_factor_per_k = {1e-4, 2e-6};
-  return m;
-}
+CalibrationModel cubic_model() { return testing::example_polynomial_model({4e-4, -1.1e-5, -1.4e-8, 3e-10}, -25.0, 60.0); }
+CalibrationModel stateful_model() { return testing::example_full_model(); }
 
 std::filesystem::path scratch() {
   const auto dir = std::filesystem::temp_directory_path() / ("driftlab_exports_" + std::to_string(::getpid()));

@@ -9,6 +9,7 @@
 
 #include "framework/error.hpp"
 #include "models/calibration/fit.hpp"
+#include "tests/models/calibration_fixtures.hpp"
 
 namespace driftlab::calibration {
 namespace {
@@ -21,43 +22,8 @@ std::filesystem::path scratch(const std::string& name) {
   return dir / name;
 }
 
-CalibrationModel poly_model() {
-  CalibrationModel m;
-  m.reference_temp_c = 25.0;
-  m.valid_min_c = -10.0;
-  m.valid_max_c = 50.0;
-  m.bias_rad_s = {1e-3, 2e-5, -3e-7};
-  m.bias_sigma_rad_s = {1e-6, 1e-7, 1e-9};
-  return m;
-}
-
-CalibrationModel full_model() {
-  CalibrationModel m = poly_model();
-  m.kind = ModelKind::Rbf;
-  m.device = "fmvmg";
-  m.axis = "x";
-  m.extrapolation = Extrapolation::Linear;
-  m.lag_tau_s = 120.0;
-  m.derivative_tau_s = 20.0;
-  m.temperature_rate_rad_s_per_k_s = 3e-3;
-  m.hysteresis_rad_s = -2e-5;
-  m.hysteresis_width_k = 1.5;
-  RbfTerm r;
-  r.mean = {20, 0, 0};
-  r.scale = {15, 0.01, 0.5};
-  r.centres = Eigen::MatrixXd::Random(4, 3);
-  r.sigma = 0.7;
-  r.weights_rad_s = {1e-5, -2e-5, 3e-6, 4e-6};
-  r.bias_rad_s = 1e-6;
-  m.rbf = r;
-  m.scale_factor_per_k = {1e-4, 2e-5, 1e-8};
-  m.noise = {1e-4, 2e-5, 3e-7, 100.0};
-  m.fit.records = {"a.csv", "b.csv"};
-  m.fit.samples = 1234;
-  m.fit.selection = "test";
-  m.fit.holdout_rms_rad_s = 1e-5;
-  return m;
-}
+CalibrationModel poly_model() { return testing::example_polynomial_model(); }
+CalibrationModel full_model() { return testing::example_full_model(); }
 
 TEST(CalibrationModelJson, RoundTripsEveryField) {
   const auto path = scratch("full.json");
@@ -150,27 +116,42 @@ TEST(CausalCompensator, BatchEqualsStepByStep) {
   for (int i = 0; i < 500; ++i) ASSERT_EQ(c.step(t[i], rate[i], temp[i]), batch.rate_rad_s[i]);
 }
 
-TEST(FitCalibration, RecoversAPolynomialBiasFromANoisyRecordOfBothDirections) {
-  std::mt19937_64 rng(11);
+// A synthetic oven record: bias truth[0] + truth[1] dT + truth[2] dT^2 (dT = T - 25 degC) plus
+// white noise, temperature swinging 15 +- 35 degC (heating and cooling).
+Record synthetic_record(std::uint64_t seed, const std::vector<double>& truth, double phase) {
+  std::mt19937_64 rng(seed);
   std::normal_distribution<double> noise(0.0, 1e-3);
   Record r;
-  r.name = "synthetic";
+  r.name = "synthetic " + std::to_string(seed);
   const Eigen::Index n = 20000;
   r.time_s = Eigen::VectorXd::LinSpaced(n, 0, (n - 1) * 0.5);
-  r.temp_c = (15.0 + 35.0 * (r.time_s.array() * (2 * M_PI / 10000.0)).sin()).matrix();
+  r.temp_c = (15.0 + 35.0 * (r.time_s.array() * (2 * M_PI / 10000.0) + phase).sin()).matrix();
   r.rate_rad_s.resize(n);
-  const std::vector<double> truth{2e-3, -4e-5, 6e-7};
   for (Eigen::Index i = 0; i < n; ++i) {
     const double d = r.temp_c[i] - 25.0;
     r.rate_rad_s[i] = truth[0] + truth[1] * d + truth[2] * d * d + noise(rng);
   }
-  FitOptions o;
-  o.kind = ModelKind::Polynomial;
-  const CalibrationModel m = fit_calibration({r}, o);
+  return r;
+}
+
+const std::vector<double> kTruth{2e-3, -4e-5, 6e-7};
+
+TEST(FitCalibration, RecoversAPolynomialBiasFromANoisyRecordOfBothDirections) {
+  const CalibrationModel m = fit_calibration({synthetic_record(11, kTruth, 0.0)}, FitOptions{});
   EXPECT_GE(m.order(), 2);
-  for (int i = 0; i <= 2; ++i) EXPECT_NEAR(m.bias_rad_s[i], truth[i], 5 * m.bias_sigma_rad_s[i] + 1e-12) << i;
+  for (int i = 0; i <= 2; ++i) EXPECT_NEAR(m.bias_rad_s[i], kTruth[i], 5 * m.bias_sigma_rad_s[i] + 1e-12) << i;
   EXPECT_NEAR(m.valid_min_c, -20.0, 0.01);
   EXPECT_NEAR(m.valid_max_c, 50.0, 0.01);
+}
+
+TEST(FitCalibration, CombinesSeveralRecordsOfOneGyro) {
+  const CalibrationModel one = fit_calibration({synthetic_record(11, kTruth, 0.0)}, FitOptions{});
+  const CalibrationModel two =
+      fit_calibration({synthetic_record(11, kTruth, 0.0), synthetic_record(12, kTruth, 1.0)}, FitOptions{});
+  EXPECT_EQ(two.fit.records.size(), 2u);
+  EXPECT_EQ(two.fit.samples, 2 * one.fit.samples);
+  for (int i = 0; i <= 2; ++i) EXPECT_NEAR(two.bias_rad_s[i], kTruth[i], 5 * two.bias_sigma_rad_s[i] + 1e-12) << i;
+  EXPECT_EQ(two.fit.holdout_blocks, one.fit.holdout_blocks) << "each record is cut into its own held-out blocks";
 }
 
 }  // namespace

@@ -49,17 +49,13 @@ std::vector<calibration::Record> load_calibration_records(const CalibrationDataO
   return out;
 }
 
-calibration::ModelKind parse_model_kind(const std::string& text) {
-  if (text == "poly") return calibration::ModelKind::Polynomial;
-  if (text == "physical") return calibration::ModelKind::Physical;
-  if (text == "rbf") return calibration::ModelKind::Rbf;
+calibration::ModelKind model_kind_option(const std::string& text) {
+  if (const auto k = calibration::parse_model_kind(text)) return *k;
   throw ConfigError({"", 0, "--model"}, "expected poly, physical or rbf, got '" + text + "'");
 }
 
-calibration::Extrapolation parse_extrapolation(const std::string& text) {
-  if (text == "clamp") return calibration::Extrapolation::Clamp;
-  if (text == "linear") return calibration::Extrapolation::Linear;
-  if (text == "evaluate") return calibration::Extrapolation::Evaluate;
+calibration::Extrapolation extrapolation_option(const std::string& text) {
+  if (const auto e = calibration::parse_extrapolation(text)) return *e;
   throw ConfigError({"", 0, "--extrapolation"}, "expected clamp, linear or evaluate, got '" + text + "'");
 }
 

@@ -24,8 +24,8 @@ void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, b
 std::vector<calibration::Record> load_calibration_records(const CalibrationDataOptions& data);
 calibration::Record load_calibration_record(const std::string& path, const CalibrationDataOptions& data);
 
-calibration::ModelKind parse_model_kind(const std::string& text);
-calibration::Extrapolation parse_extrapolation(const std::string& text);
+calibration::ModelKind model_kind_option(const std::string& text);  // ConfigError naming --model
+calibration::Extrapolation extrapolation_option(const std::string& text);  // ConfigError naming --extrapolation
 
 void print_model_summary(std::ostream& out, const calibration::CalibrationModel& model);
 

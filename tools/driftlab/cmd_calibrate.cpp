@@ -40,8 +40,8 @@ struct CalibrateOptions {
 
 calibration::FitOptions fit_options(const CalibrateOptions& o, const CommandEnv& env) {
   calibration::FitOptions f;
-  f.kind = parse_model_kind(o.model);
-  f.extrapolation = parse_extrapolation(o.extrapolation);
+  f.kind = model_kind_option(o.model);
+  f.extrapolation = extrapolation_option(o.extrapolation);
   f.device = o.device;
   f.axis = o.axis;
   f.reference_temp_c = o.reference_temp_c;
