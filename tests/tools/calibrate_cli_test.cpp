@@ -9,6 +9,9 @@
 #include <sstream>
 #include <string>
 
+#include <nlohmann/json.hpp>
+#include <vector>
+
 #include "tests/tools/cli_harness.hpp"
 
 namespace driftlab {
@@ -129,6 +132,24 @@ TEST_F(CalibrateCli, TheKalmanStageSmoothsAndStreamsLikeTheBatch) {
   const auto missing = run_driftlab("compensate --model " + dir_ + "/poly.json --data " + dir_ + "/oven.csv --out " +
                                     dir_ + "/kf2.csv --kalman --kalman-r 1e-6");
   EXPECT_EQ(missing.exit_code, 2) << "no q and no rate-random-walk term in the model: refused";
+}
+
+TEST_F(CalibrateCli, TheReportScoresEveryModelOnAHeldOutRunOfAnotherProfile) {
+  const auto sim = run_driftlab("simulate --device fmvmg --fs 2 --seed 4 --profile " + std::string(DRIFTLAB_SOURCE_DIR) +
+                                "/models/calibration/heldout_profile.yaml --out " + dir_ + "/heldout.csv");
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const auto r = run_driftlab("-q calibrate --data " + dir_ + "/oven.csv --model physical --out " + dir_ +
+                              "/phys.json --evaluate " + dir_ + "/heldout.csv --report " + dir_ + "/report");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(read_text(dir_ + "/report/report.json"));
+  EXPECT_EQ(j["format"], "driftlab-calibrate-report/1");
+  ASSERT_EQ(j["evaluations"].size(), 1u);
+  std::vector<std::string> names;
+  for (const auto& m : j["evaluations"][0]["methods"]) names.push_back(m["name"]);
+  EXPECT_EQ(names, (std::vector<std::string>{"none", "PX4-style poly", "poly", "physical", "rbf"}));
+  const auto& methods = j["evaluations"][0]["methods"];
+  EXPECT_LT(methods[3]["residual_drift_dph"].get<double>(), methods[0]["residual_drift_dph"].get<double>());
+  EXPECT_NE(read_text(dir_ + "/report/report.html").find("Held-out record"), std::string::npos);
 }
 
 TEST_F(CalibrateCli, EveryCommandHasHelp) {

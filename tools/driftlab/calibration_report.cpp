@@ -14,14 +14,14 @@ namespace {
 constexpr double kDph = 180.0 / std::numbers::pi * 3600.0;  // rad/s -> deg/h
 
 struct Scored {
-  std::string name, description;
+  std::string name, description, bandwidth;
   double drift_dph = 0, b_dph = NAN, n_dph_rthz = NAN, extrapolated = 0;
   std::vector<double> block_t, block_mean_dph;
 };
 
 Scored score(const std::string& name, const std::string& description, const calibration::Record& r,
              const Eigen::VectorXd& out, const std::vector<char>* extrapolated) {
-  Scored s{name, description};
+  Scored s{name, description, ""};
   const Eigen::VectorXd truth = r.true_rate_rad_s.size() ? r.true_rate_rad_s : Eigen::VectorXd::Zero(r.time_s.size());
   s.drift_dph = calibration::residual_drift_rad_s(r.time_s, out, truth) * kDph;
   const double fs = static_cast<double>(r.time_s.size() - 1) / (r.time_s[r.time_s.size() - 1] - r.time_s[0]);
@@ -61,6 +61,23 @@ Scored score(const std::string& name, const std::string& description, const cali
     }
   }
   return s;
+}
+
+std::string terms_text(const calibration::CalibrationModel& m) {
+  char buf[64];
+  std::string t = "polynomial";
+  if (m.lag_tau_s > 0) {
+    std::snprintf(buf, sizeof buf, ", lag %g s", m.lag_tau_s);
+    t += buf;
+  }
+  if (m.temperature_rate_rad_s_per_k_s != 0.0) t += ", dT/dt";
+  if (m.hysteresis_width_k > 0) {
+    std::snprintf(buf, sizeof buf, ", hysteresis (width %g K)", m.hysteresis_width_k);
+    t += buf;
+  }
+  if (m.rbf && m.rbf->centres.rows() > 0) t += ", RBF " + std::to_string(m.rbf->centres.rows()) + " centres";
+  if (!m.scale_factor_per_k.empty()) t += ", scale factor";
+  return t;
 }
 
 nlohmann::json model_json(const CompetingModel& m) {
@@ -110,16 +127,17 @@ nlohmann::json write_calibration_report(const ReportInput& in, const std::filesy
   html.paragraph("Truth: " + in.truth_note);
   for (const auto& n : in.notes) html.paragraph("Note: " + n);
   {
-    HtmlTable t{"Competing models, all fitted on the calibration records", {"name", "kind", "order", "valid range (degC)", "extrapolation", "fitted on", "held-out CV residual (deg/h)"}};
+    HtmlTable t{"Competing models, all fitted on the calibration records", {"name", "kind", "order", "terms", "valid range (degC)", "extrapolation", "fitted on", "held-out CV residual (deg/h)"}};
     for (const auto& m : in.models) {
       if (!m.model) {
-        t.rows.push_back({m.name, std::string("none"), std::string("-"), std::string("-"), std::string("-"), std::string("-"), std::string("-")});
+        t.rows.push_back({m.name, std::string("none"), std::string("-"), std::string("-"), std::string("-"),
+                          std::string("-"), std::string("-"), std::string("-")});
         continue;
       }
       char range[64];
       std::snprintf(range, sizeof range, "%.2f .. %.2f", m.model->valid_min_c, m.model->valid_max_c);
       t.rows.push_back({m.name, calibration::to_string(m.model->kind), static_cast<double>(m.model->order()),
-                        std::string(range), calibration::to_string(m.model->extrapolation),
+                        terms_text(*m.model), std::string(range), calibration::to_string(m.model->extrapolation),
                         std::string(m.model->fit.heating_only ? "heating only" : "heating and cooling"),
                         m.model->fit.holdout_rms_rad_s * kDph});
     }
@@ -138,9 +156,13 @@ nlohmann::json write_calibration_report(const ReportInput& in, const std::filesy
         const auto c = calibration::compensate(*m.model, r.time_s, r.rate_rad_s, r.temp_c);
         scores.push_back(score(m.name, m.description, r, c.rate_rad_s, &c.extrapolated));
       }
+      scores.back().bandwidth = "fs/2 (unchanged: the correction is a slow bias)";
     }
     for (const auto& x : in.external) {
-      if (x.record == e) scores.push_back(score(x.name, x.description, r, x.rate_rad_s, nullptr));
+      if (x.record == e) {
+        scores.push_back(score(x.name, x.description, r, x.rate_rad_s, nullptr));
+        scores.back().bandwidth = x.bandwidth;
+      }
     }
     nlohmann::json ej{{"record", r.name},
                       {"samples", r.time_s.size()},
@@ -152,15 +174,16 @@ nlohmann::json write_calibration_report(const ReportInput& in, const std::filesy
           calibration::residual_drift_rad_s(r.time_s, floor_err, Eigen::VectorXd::Zero(floor_err.size())) * kDph;
     }
     ej["methods"] = nlohmann::json::array();
-    HtmlTable t{"Held-out record " + r.name, {"method", "residual drift (deg/h)", "B (deg/h)", "N (deg/h/sqrt(Hz))", "extrapolated (%)"}};
+    HtmlTable t{"Held-out record " + r.name, {"method", "residual drift (deg/h)", "B (deg/h)", "N (deg/h/sqrt(Hz))", "output bandwidth", "extrapolated (%)"}};
     for (const auto& s : scores) {
       ej["methods"].push_back({{"name", s.name},
                                {"description", s.description},
                                {"residual_drift_dph", s.drift_dph},
                                {"B_dph", std::isfinite(s.b_dph) ? nlohmann::json(s.b_dph) : nlohmann::json()},
                                {"N_dph_rthz", std::isfinite(s.n_dph_rthz) ? nlohmann::json(s.n_dph_rthz) : nlohmann::json()},
+                               {"output_bandwidth", s.bandwidth},
                                {"extrapolated_fraction", s.extrapolated}});
-      t.rows.push_back({s.name, s.drift_dph, s.b_dph, s.n_dph_rthz, 100.0 * s.extrapolated});
+      t.rows.push_back({s.name, s.drift_dph, s.b_dph, s.n_dph_rthz, s.bandwidth, 100.0 * s.extrapolated});
     }
     t.note = "Residual drift: rms of 60-s block means of (output - true rate). B and N need an evenly sampled "
              "record (none for burst records). " +

@@ -22,6 +22,7 @@ struct CompetingModel {
 // An externally computed output for a record (e.g. the offline paper pipeline), same length.
 struct ExternalOutput {
   std::string name, description;
+  std::string bandwidth;  // what the method does to the output bandwidth
   std::size_t record = 0;
   Eigen::VectorXd rate_rad_s;
 };

@@ -146,7 +146,7 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
       const auto it = outputs.find("compensated");
       if (it == outputs.end()) throw ConfigError({o.paper_pipeline, 0, "outputs"}, "needs an output named 'compensated'");
       in.external.push_back({"paper pipeline (offline)", "fitted in-sample on this very record, non-causal",
-                             e, it->second.sum()});
+                             "below fs/2: noise IMFs dropped, RBF + Kalman smoothing", e, it->second.sum()});
     }
   }
   const auto j = write_calibration_report(in, o.report);
