@@ -56,7 +56,7 @@ TEST(SiblingPipeline, RunsEndToEndFromItsYaml) {
   }
   EXPECT_THAT(report, HasSubstr("output_weight_norm"));  // tuned on the paper's two objectives
   EXPECT_THAT(report, HasSubstr("pareto_front"));
-  EXPECT_THAT(read_text(dir / "out" / "outputs.csv"), HasSubstr("t_s,compensated_dps"));
+  EXPECT_THAT(read_text(dir / "out" / "outputs.csv"), HasSubstr("tfpf_elm_dps"));
 }
 
 TEST(SiblingPipeline, SwappingOneBlockIsAOneLineChangeThatStillRuns) {
