@@ -217,7 +217,7 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
     std::vector<double> y(static_cast<std::size_t>(b.bins), 0.0);
     for (Eigen::Index i = 0; i < r.time_s.size(); ++i) {
       const double w = r.true_rate_rad_s.size() ? r.true_rate_rad_s[i] : 0.0;
-      y[static_cast<std::size_t>(b.bin_of[static_cast<std::size_t>(i)])] += r.rate_rad_s[i] - (with_sf ? 0.0 : w);
+      y[static_cast<std::size_t>(b.bin_of[static_cast<std::size_t>(i)])] += r.rate_rad_s[i] - w;  // rate - true = sf_dev w + bias
     }
     const Features f0 = features(r, b, 0.0, o.derivative_tau_s, 0.0, t0, false);
     for (int k = 0; k < b.bins; ++k) {

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "framework/error.hpp"
+#include "models/calibration/evidence.hpp"
 #include "models/calibration/fit.hpp"
 #include "tests/models/calibration_fixtures.hpp"
 
@@ -152,6 +153,25 @@ TEST(FitCalibration, CombinesSeveralRecordsOfOneGyro) {
   EXPECT_EQ(two.fit.samples, 2 * one.fit.samples);
   for (int i = 0; i <= 2; ++i) EXPECT_NEAR(two.bias_rad_s[i], kTruth[i], 5 * two.bias_sigma_rad_s[i] + 1e-12) << i;
   EXPECT_EQ(two.fit.holdout_blocks, one.fit.holdout_blocks) << "each record is cut into its own held-out blocks";
+}
+
+TEST(FitCalibration, FitsTheScaleFactorWhenTheTrueRateVaries) {
+  // Rate table: +-0.5 rad/s square steps; scale factor 1 + 2e-3 + 5e-5 (T - 25).
+  Record r = synthetic_record(13, kTruth, 0.0);
+  r.true_rate_rad_s.resize(r.time_s.size());
+  for (Eigen::Index i = 0; i < r.time_s.size(); ++i) {
+    const double w = (static_cast<long>(r.time_s[i] / 37.0) % 2 ? 0.5 : -0.5);
+    r.true_rate_rad_s[i] = w;
+    r.rate_rad_s[i] += w * (1.0 + 2e-3 + 5e-5 * (r.temp_c[i] - 25.0));
+  }
+  const CalibrationModel m = fit_calibration({r}, FitOptions{});
+  ASSERT_TRUE(m.fit.scale_factor_fitted);
+  ASSERT_GE(m.scale_factor_per_k.size(), 2u);
+  constexpr double kNoise = 2e-5;  // 1/K: 1e-3 rad/s noise on +-0.5 rad/s over 20 000 samples
+  EXPECT_NEAR(m.scale_factor_per_k[0], 2e-3, 10 * kNoise);
+  EXPECT_NEAR(m.scale_factor_per_k[1], 5e-5, kNoise);
+  const auto out = compensate(m, r.time_s, r.rate_rad_s, r.temp_c);
+  EXPECT_LT(residual_drift_rad_s(r.time_s, out.rate_rad_s, r.true_rate_rad_s), 1e-4);
 }
 
 }  // namespace
