@@ -4,14 +4,12 @@
 // optimizer (the 2024 paper's NSGA-II: optimizer/pagmo, algorithm nsga2), by the held-out RMSE
 // and the output-weight norm ||beta||_2 together; then it fits all samples with the chosen values.
 #include <cmath>
-#include <limits>
 #include <optional>
 #include <stdexcept>
 
 #include "framework/error.hpp"
 #include "framework/registry.hpp"
 #include "plugins/elm/elm.hpp"
-#include "plugins/rbf/rbf.hpp"
 #include "plugins/tuning/tuning.hpp"
 
 namespace driftlab {
@@ -74,19 +72,14 @@ class ElmPlugin final : public Regressor {
   }
 
   elm::Config tuned(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, RunContext& ctx) const {
-    const auto data = tuning::split(X, y, *settings_);
-    const auto criteria = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
-      try {
-        const auto model = elm::fit(data.X_train, data.y_train, decode(v));
-        return Eigen::Vector2d(rbf::rmse(model.predict(data.X_holdout), data.y_holdout), model.output_weight_norm());
-      } catch (const std::invalid_argument&) {
-        return Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
-      }
-    };
     const std::vector<Bound> bounds{{"hidden", hidden_range_[0], hidden_range_[1], true},
                                     {"log10_regularization", regularization_range_[0], regularization_range_[1], false},
                                     {"input_scale", scale_range_[0], scale_range_[1], false}};
-    return decode(tuning::run(*optimizer_, bounds, criteria, *settings_, data, ctx));
+    const auto fit_and_score = [&](const tuning::Split& d, const Eigen::VectorXd& v) {
+      const auto model = elm::fit(d.X_train, d.y_train, decode(v));
+      return tuning::Score{model.predict(d.X_holdout), model.output_weight_norm()};
+    };
+    return decode(tuning::run(*optimizer_, bounds, *settings_, X, y, fit_and_score, ctx));
   }
 
   elm::Config config_;

@@ -4,13 +4,11 @@
 // a multi-objective optimizer, by the held-out RMSE and the share of training rows that become
 // support vectors (model complexity); then it fits all samples (up to max_samples) with them.
 #include <cmath>
-#include <limits>
 #include <optional>
 #include <stdexcept>
 
 #include "framework/error.hpp"
 #include "framework/registry.hpp"
-#include "plugins/rbf/rbf.hpp"
 #include "plugins/svr/svr.hpp"
 #include "plugins/tuning/tuning.hpp"
 
@@ -70,20 +68,15 @@ class SvrPlugin final : public Regressor {
   }
 
   svr::Config tuned(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, RunContext& ctx) const {
-    const auto data = tuning::split(X, y, *settings_);
-    const auto criteria = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
-      try {
-        const auto r = svr::fit(data.X_train, data.y_train, decode(v));
-        return Eigen::Vector2d(rbf::rmse(r.model.predict(data.X_holdout), data.y_holdout),
-                               static_cast<double>(r.model.support_vectors()) / static_cast<double>(r.training_rows));
-      } catch (const std::invalid_argument&) {
-        return Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
-      }
-    };
     const std::vector<Bound> bounds{{"log10_c", c_range_[0], c_range_[1], false},
                                     {"log10_gamma", gamma_range_[0], gamma_range_[1], false},
                                     {"epsilon", epsilon_range_[0], epsilon_range_[1], false}};
-    return decode(tuning::run(*optimizer_, bounds, criteria, *settings_, data, ctx));
+    const auto fit_and_score = [&](const tuning::Split& d, const Eigen::VectorXd& v) {
+      const auto r = svr::fit(d.X_train, d.y_train, decode(v));
+      return tuning::Score{r.model.predict(d.X_holdout),
+                           static_cast<double>(r.model.support_vectors()) / static_cast<double>(r.training_rows)};
+    };
+    return decode(tuning::run(*optimizer_, bounds, *settings_, X, y, fit_and_score, ctx));
   }
 
   svr::Config config_;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "framework/error.hpp"
 #include "plugins/rbf/rbf.hpp"
@@ -66,8 +67,18 @@ Split split(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Settings& 
   return {Xs(h.train, Eigen::all), Xs(h.holdout, Eigen::all), ys(h.train), ys(h.holdout)};
 }
 
-Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const VectorObjective& criteria,
-                    const Settings& s, const Split& data, RunContext& ctx) {
+Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s,
+                    const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const FitAndScore& fit_and_score,
+                    RunContext& ctx) {
+  const Split data = split(X, y, s);
+  const auto criteria = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
+    try {
+      const Score score = fit_and_score(data, v);
+      return Eigen::Vector2d(rbf::rmse(score.holdout_prediction, data.y_holdout), score.complexity);
+    } catch (const std::invalid_argument&) {
+      return Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+    }
+  };
   RunContext inner;
   inner.seed = ctx.seed;
   inner.threads = ctx.threads;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -42,10 +43,21 @@ struct Split {
 // enough), then the blocked holdout of rbf::blocked_holdout.
 Split split(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Settings& s);
 
-// criteria(v) returns {held-out RMSE, complexity}; only the first is used with one objective.
-// Returns the chosen decision vector; writes ctx.diagnostics["tuning"] (start, best, front,
-// history, optimizer diagnostics). Throws DataError when no point gave a finite RMSE.
-Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const VectorObjective& criteria,
-                    const Settings& s, const Split& data, RunContext& ctx);
+// One candidate's fit: its predictions on the held-out rows and its complexity measure.
+struct Score {
+  Eigen::VectorXd holdout_prediction;
+  double complexity = 0.0;
+};
+// fit_and_score(split, v) fits the candidate v on split's training rows; it may throw
+// std::invalid_argument (a hyperparameter the kernel refuses), which scores +infinity.
+using FitAndScore = std::function<Score(const Split&, const Eigen::VectorXd&)>;
+
+// Splits (split()), minimizes the held-out RMSE (and, with two objectives, the complexity) over
+// `bounds` with the optimizer and returns the chosen decision vector. Writes
+// ctx.diagnostics["tuning"] (objectives, holdout sizes, best, history, optimizer diagnostics).
+// Throws DataError when no point gave a finite RMSE.
+Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s,
+                    const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const FitAndScore& fit_and_score,
+                    RunContext& ctx);
 
 }  // namespace driftlab::tuning
