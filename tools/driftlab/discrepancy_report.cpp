@@ -260,14 +260,20 @@ std::string discrepancy_html(const discrepancy::Result& r, const DiscrepancyRepo
     << format(dph(r.gap_final_rad_s)) << " deg/h</b> after the named effects. Noise alone would leave about "
     << format(dph(r.noise_floor_rad_s)) << " deg/h.</p>\n";
   h << "<h2>Named effects</h2>\n";
-  if (r.steps.empty()) {
+  if (r.unexplained.found) {
+    const auto& v = r.unexplained.views.front();
+    h << "<p><b>Unexplained:</b> structure remains that no candidate explains, in the <b>" << escape(v.view)
+      << "</b> view (&Delta;BIC = " << format(v.delta_bic, "%.1f") << ", " << format(dph(v.size_rad_s))
+      << " deg/h rms): " << escape(v.where) << ". See the residual plots below.</p>\n";
+  }
+  if (r.steps.empty() && !r.unexplained.found) {
     h << "<p>Nothing significant is missing";
     if (!r.final_scores.empty() && r.final_scores.front().applicable)
       h << " (best candidate " << escape(r.final_scores.front().effect)
         << ", &Delta;BIC = " << format(r.final_scores.front().delta_bic, "%.1f") << ", needs &gt; "
         << format(info.options->significance) << ")";
     h << ".</p>\n";
-  } else {
+  } else if (!r.steps.empty()) {
     h << "<table><tr><th>step</th><th>effect</th><th>parameters (final model)</th><th>&Delta;BIC</th>"
          "<th>gap before &rarr; after (deg/h)</th></tr>\n";
     for (std::size_t i = 0; i < r.steps.size(); ++i) {
