@@ -66,6 +66,16 @@ TEST_F(CalibrateCli, AMissingTemperatureColumnIsADataError) {
   EXPECT_NE(read_text(dir_ + "/err.txt").find("temp_c"), std::string::npos);
 }
 
+TEST_F(CalibrateCli, ABadStreamedRowStopsTheStreamWithItsLineNumber) {
+  std::ofstream(dir_ + "/badrow.csv") << "t_s,rate_dps,temp_c\n0,0.1,20\n1,abc,20\n2,0.1,20\n";
+  const std::string command = std::string(DRIFTLAB_EXE) + " compensate --model " + dir_ + "/poly.json --stream < " +
+                              dir_ + "/badrow.csv > " + dir_ + "/badrow_out.csv 2>" + dir_ + "/badrow_err.txt";
+  EXPECT_EQ(WEXITSTATUS(std::system(command.c_str())), 3);
+  const std::string err = read_text(dir_ + "/badrow_err.txt");
+  EXPECT_NE(err.find("<stdin>:3"), std::string::npos) << err;
+  EXPECT_NE(err.find("abc"), std::string::npos) << err;
+}
+
 TEST_F(CalibrateCli, CalibrateRefusesToOverwriteItsInput) {
   const auto r = run_driftlab("calibrate --data " + dir_ + "/oven.csv --out " + dir_ + "/oven.csv");
   EXPECT_EQ(r.exit_code, 2);
