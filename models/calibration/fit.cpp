@@ -373,7 +373,7 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
     gc.population = o.ga_population;
     gc.generations = o.ga_generations;
     gc.seed = o.seed;
-    gc.threads = 1;  // the progress counter is not thread safe
+    gc.threads = 1;  // one thread: the progress counter is not thread safe, and fits are seconds
     const double max_centres = std::min<double>(40.0, static_cast<double>(split.train.size()) / 4.0);
     const auto result = ga::minimize(objective, {{0.1, 3.0, false}, {-8.0, -1.0, false}, {3.0, std::max(3.0, max_centres), true}}, gc);
     const double no_rbf = rbf::rmse(Eigen::VectorXd::Zero(rh.size()), rh);

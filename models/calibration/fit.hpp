@@ -56,7 +56,6 @@ struct FitOptions {
   std::vector<double> hysteresis_width_grid_k{0, 0.5, 1, 2, 4, 8};
   std::size_t ga_population = 16, ga_generations = 10;  // RBF tuning
   std::uint64_t seed = 1;
-  unsigned threads = 1;
   // Progress: (stage label, fraction in [0, 1]).
   std::function<void(const std::string&, double)> progress = [](const std::string&, double) {};
 };

@@ -54,7 +54,6 @@ calibration::FitOptions fit_options(const CalibrateOptions& o, const CommandEnv&
   f.ga_population = o.ga_population;
   f.ga_generations = o.ga_generations;
   f.seed = o.seed;
-  f.threads = env.threads;
   f.progress = [&env](const std::string& label, double fraction) { env.progress(label, fraction); };
   return f;
 }
