@@ -39,6 +39,8 @@ void replace_all(std::string& s, const std::string& from, const std::string& to)
 
 }  // namespace
 
+std::string format_number(double v, int digits) { return number(v, digits); }
+
 std::string html_escape(const std::string& text) {
   std::string out;
   out.reserve(text.size());
