@@ -21,16 +21,7 @@ struct CalibrateOptions {
   std::string model = "poly";
   std::string out;
   std::string extrapolation = "clamp";
-  std::string device;
-  std::string axis = "z";
-  double reference_temp_c = 25.0;
-  int min_order = 1, max_order = 5;
-  std::size_t blocks = 8;
-  double bin_s = 10.0;
-  double derivative_tau_s = 30.0;
-  bool heating_only = false;
-  std::size_t ga_population = 16, ga_generations = 10;
-  std::uint64_t seed = 1;
+  calibration::FitOptions fit;        // the numeric options are bound to its fields directly
   std::vector<std::string> evaluate;  // held-out records
   double train_until_s = 0.0;         // > 0: calibrate on t < this of the --data record, test on the rest
   std::string report;                 // report directory
@@ -39,21 +30,9 @@ struct CalibrateOptions {
 };
 
 calibration::FitOptions fit_options(const CalibrateOptions& o, const CommandEnv& env) {
-  calibration::FitOptions f;
+  calibration::FitOptions f = o.fit;
   f.kind = model_kind_option(o.model);
   f.extrapolation = extrapolation_option(o.extrapolation);
-  f.device = o.device;
-  f.axis = o.axis;
-  f.reference_temp_c = o.reference_temp_c;
-  f.min_order = o.min_order;
-  f.max_order = o.max_order;
-  f.holdout_blocks = o.blocks;
-  f.bin_s = o.bin_s;
-  f.derivative_tau_s = o.derivative_tau_s;
-  f.heating_only = o.heating_only;
-  f.ga_population = o.ga_population;
-  f.ga_generations = o.ga_generations;
-  f.seed = o.seed;
   f.progress = [&env](const std::string& label, double fraction) { env.progress(label, fraction); };
   return f;
 }
@@ -129,7 +108,7 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
     f.kind = kind;
     const std::string name = calibration::to_string(kind);
     in.models.push_back({name, "ours: heating and cooling, causal, " + o.extrapolation + " outside the range",
-                         kind == model.kind && !o.heating_only ? model : calibration::fit_calibration(records, f)});
+                         kind == model.kind && !o.fit.heating_only ? model : calibration::fit_calibration(records, f)});
   }
   if (!o.paper_pipeline.empty()) {
     const auto& registry = env.registry();
@@ -185,29 +164,29 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
                   "outside the calibrated range: clamp (hold the edge value), linear (edge tangent), evaluate")
       ->check(CLI::IsMember({"clamp", "linear", "evaluate"}))
       ->capture_default_str();
-  cmd->add_option("--reference-temp", o->reference_temp_c, "reference temperature T0 of the polynomial, degC")
+  cmd->add_option("--reference-temp", o->fit.reference_temp_c, "reference temperature T0 of the polynomial, degC")
       ->capture_default_str();
-  cmd->add_option("--min-order", o->min_order, "lowest polynomial order scored")->check(CLI::Range(0, 12))->capture_default_str();
-  cmd->add_option("--max-order", o->max_order, "highest polynomial order scored (= --min-order: fixed)")
+  cmd->add_option("--min-order", o->fit.min_order, "lowest polynomial order scored")->check(CLI::Range(0, 12))->capture_default_str();
+  cmd->add_option("--max-order", o->fit.max_order, "highest polynomial order scored (= --min-order: fixed)")
       ->check(CLI::Range(0, 12))
       ->capture_default_str();
-  cmd->add_option("--blocks", o->blocks, "held-out contiguous time blocks per record (model selection)")
+  cmd->add_option("--blocks", o->fit.holdout_blocks, "held-out contiguous time blocks per record (model selection)")
       ->check(CLI::Range(2, 1000))
       ->capture_default_str();
-  cmd->add_option("--bin", o->bin_s, "fitting bin length, s (features and target are averaged per bin)")
+  cmd->add_option("--bin", o->fit.bin_s, "fitting bin length, s (features and target are averaged per bin)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->add_option("--derivative-tau", o->derivative_tau_s, "smoothing time constant of the causal dT/dt estimate, s")
+  cmd->add_option("--derivative-tau", o->fit.derivative_tau_s, "smoothing time constant of the causal dT/dt estimate, s")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->add_flag("--heating-only", o->heating_only, "fit on heating samples only (PX4 practice; for comparison)");
-  cmd->add_option("--device", o->device, "device name stored in the model");
-  cmd->add_option("--axis", o->axis, "gyro axis the model applies to (for PX4 / ArduPilot exports)")
+  cmd->add_flag("--heating-only", o->fit.heating_only, "fit on heating samples only (PX4 practice; for comparison)");
+  cmd->add_option("--device", o->fit.device, "device name stored in the model");
+  cmd->add_option("--axis", o->fit.axis, "gyro axis the model applies to (for PX4 / ArduPilot exports)")
       ->check(CLI::IsMember({"x", "y", "z"}))
       ->capture_default_str();
-  cmd->add_option("--ga-population", o->ga_population, "RBF tuning: GA population")->check(CLI::Range(2, 1000))->capture_default_str();
-  cmd->add_option("--ga-generations", o->ga_generations, "RBF tuning: GA generations")->check(CLI::Range(1, 1000))->capture_default_str();
-  cmd->add_option("--seed", o->seed, "seed of the RBF tuning (k-means, holdout, GA)")->capture_default_str();
+  cmd->add_option("--ga-population", o->fit.ga_population, "RBF tuning: GA population")->check(CLI::Range(2, 1000))->capture_default_str();
+  cmd->add_option("--ga-generations", o->fit.ga_generations, "RBF tuning: GA generations")->check(CLI::Range(1, 1000))->capture_default_str();
+  cmd->add_option("--seed", o->fit.seed, "seed of the RBF tuning (k-means, holdout, GA)")->capture_default_str();
   cmd->add_option("--evaluate", o->evaluate, "held-out record(s) to score in the report (other seed / profile)");
   cmd->add_option("--train-until", o->train_until_s,
                   "calibrate on t < this (s) of the single --data record and score the rest in the report")
@@ -223,7 +202,7 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
     for (const auto* opt : cmd->get_options()) {
       for (const auto& v : opt->results()) o->command_line += " " + opt->get_name() + " " + v;
     }
-    if (o->min_order > o->max_order) throw ConfigError({"", 0, "--min-order"}, "--min-order exceeds --max-order");
+    if (o->fit.min_order > o->fit.max_order) throw ConfigError({"", 0, "--min-order"}, "--min-order exceeds --max-order");
     calibrate_command(*o, env);
   });
 }
