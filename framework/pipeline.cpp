@@ -200,7 +200,8 @@ class Parser {
     if (!node || !node.IsMap() || node.size() == 0)
       return problem(node ? node : YAML::Node(), "outputs", "expected a map of output name to step.output");
     for (const auto& kv : node) {
-      p.outputs[kv.first.as<std::string>()] = kv.second.as<std::string>();
+      if (p.outputs.emplace(kv.first.as<std::string>(), kv.second.as<std::string>()).second)
+        p.output_order.push_back(kv.first.as<std::string>());
       output_refs_.emplace_back(kv.second.as<std::string>(), line_of(kv.second));
     }
   }
@@ -356,7 +357,7 @@ std::string effective_pipeline_yaml(const Pipeline& pipeline, const Registry& re
   }
   out << YAML::EndSeq;
   out << YAML::Key << "outputs" << YAML::Value << YAML::BeginMap;
-  for (const auto& [name, ref] : pipeline.outputs) out << YAML::Key << name << YAML::Value << ref;
+  for (const auto& name : pipeline.output_order) out << YAML::Key << name << YAML::Value << pipeline.outputs.at(name);
   out << YAML::EndMap << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }
@@ -410,6 +411,8 @@ std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Regis
       throw;
     }
     ctx.progress(1.0);
+    if (options.step_signals != nullptr)
+      for (const auto& [port, signal] : produced[step.name]) (*options.step_signals)[step.name + "." + port] = signal;
     slot["status"] = "ok";
     slot["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     slot["diagnostics"] = ctx.diagnostics;

@@ -54,6 +54,7 @@ struct Pipeline {
   std::map<std::string, std::string> inputs;   // input name -> channel role
   std::vector<PipelineStep> steps;             // in execution order
   std::map<std::string, std::string> outputs;  // output name -> reference
+  std::vector<std::string> output_order;       // output names in file order
 };
 
 // Parses and validates. Throws ConfigError with every problem found.
@@ -67,6 +68,8 @@ struct PipelineRunOptions {
   unsigned threads = 1;
   // Called with (step index, step count, step name, fraction of that step done).
   std::function<void(std::size_t, std::size_t, const std::string&, double)> progress;
+  // When set, receives every step's output signals as "step.port" (for reports and figures).
+  std::map<std::string, Signal>* step_signals = nullptr;
 };
 
 // Runs the steps on a record. `report` is filled as steps complete (status, seconds,

@@ -120,7 +120,7 @@ SignalMap Effect::run(const SignalMap&, RunContext&) {
 
 SignalMap Filter::run(const SignalMap& inputs, RunContext& ctx) {
   const auto& x = input(inputs, "signal");
-  return {{"signal", Signal::single(filter(x.sum(), ctx), "signal", x.unit)}};
+  return {{"signal", Signal::single(filter(x.sum(), ctx), "signal", output_unit(x.unit))}};
 }
 
 }  // namespace driftlab

@@ -153,6 +153,8 @@ class Optimizer : public Plugin {
 class Filter : public Plugin {
  public:
   virtual Eigen::VectorXd filter(const Eigen::VectorXd& z, RunContext& ctx) = 0;
+  // Unit of the output for an input in input_unit (a denoiser keeps it; a slope adds "/s").
+  virtual std::string output_unit(const std::string& input_unit) const { return input_unit; }
   SignalMap run(const SignalMap& inputs, RunContext& ctx) final;
 };
 

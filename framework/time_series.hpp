@@ -12,6 +12,9 @@ namespace role {
 inline constexpr const char* kRate = "rate";                // angular rate, rad/s
 inline constexpr const char* kTemperature = "temperature";  // case / sensor temperature, degC
 inline constexpr const char* kTrueRate = "true_rate";       // reference input rate, rad/s
+// The true systematic rate of a simulated record (everything but noise), rad/s: measured minus
+// this is the intrinsic noise, whose Allan deviation is the floor no compensation can go below.
+inline constexpr const char* kSystematic = "systematic";
 inline constexpr const char* kDieTemperature = "die_temperature";  // degC
 inline constexpr const char* kDriveFrequency = "drive_frequency";  // Hz
 }  // namespace role

@@ -15,6 +15,7 @@ void register_tfpf_plugins(Registry&);
 void register_pagmo_plugins(Registry&);
 void register_elm_plugins(Registry&);
 void register_svr_plugins(Registry&);
+void register_rate_of_change_plugins(Registry&);
 
 void register_builtin_plugins(Registry& registry) {
   register_ga_plugins(registry);
@@ -30,6 +31,7 @@ void register_builtin_plugins(Registry& registry) {
   register_pagmo_plugins(registry);
   register_elm_plugins(registry);
   register_svr_plugins(registry);
+  register_rate_of_change_plugins(registry);
 }
 
 }  // namespace driftlab

@@ -18,24 +18,31 @@ Standardizer Standardizer::fit(const Eigen::MatrixXd& X) {
 
 Eigen::VectorXd solve(Eigen::Index rows, Eigen::Index columns,
                       const std::function<Eigen::MatrixXd(Eigen::Index, Eigen::Index)>& design,
-                      const Eigen::VectorXd& y, double lambda) {
+                      const Eigen::VectorXd& y, double lambda, Eigen::Index penalized, unsigned threads) {
   const Eigen::Index k = columns + 1;
-  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(k, k);
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(k);
-  Eigen::MatrixXd B;
-  for (Eigen::Index start = 0; start < rows; start += kBlockRows) {
-    const Eigen::Index len = std::min(kBlockRows, rows - start);
-    B.resize(len, k);
+  const Eigen::Index blocks = (rows + kBlockRows - 1) / kBlockRows;
+  std::vector<Eigen::MatrixXd> grams(static_cast<std::size_t>(blocks));
+  std::vector<Eigen::VectorXd> rhss(static_cast<std::size_t>(blocks));
+  for_blocks(blocks, threads, [&](Eigen::Index b) {
+    const Eigen::Index start = b * kBlockRows, len = std::min(kBlockRows, rows - start);
+    Eigen::MatrixXd B(len, k);
     B.leftCols(columns) = design(start, len);
     B.col(columns).setOnes();
-    gram.selfadjointView<Eigen::Lower>().rankUpdate(B.transpose());
-    rhs.noalias() += B.transpose() * y.segment(start, len);
+    auto& g = grams[static_cast<std::size_t>(b)] = Eigen::MatrixXd::Zero(k, k);
+    g.selfadjointView<Eigen::Lower>().rankUpdate(B.transpose());
+    rhss[static_cast<std::size_t>(b)] = B.transpose() * y.segment(start, len);
+  });
+  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(k, k);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(k);
+  for (Eigen::Index b = 0; b < blocks; ++b) {
+    gram += grams[static_cast<std::size_t>(b)];
+    rhs += rhss[static_cast<std::size_t>(b)];
   }
   const double n = static_cast<double>(rows);
   gram = gram.selfadjointView<Eigen::Lower>();
   gram /= n;
   rhs /= n;
-  gram.diagonal().head(columns).array() += lambda;
+  gram.diagonal().head(penalized < 0 ? columns : std::min(penalized, columns)).array() += lambda;
   Eigen::LDLT<Eigen::MatrixXd> ldlt(gram);
   if (ldlt.info() != Eigen::Success) throw std::invalid_argument("normal equations could not be factorized");
   Eigen::VectorXd w = ldlt.solve(rhs);

@@ -12,11 +12,11 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 namespace driftlab::rbf {
 namespace {
 
-constexpr Eigen::Index kBlockRows = 4096;
 
 Eigen::MatrixXd squared_distances(const Eigen::MatrixXd& U, const Eigen::MatrixXd& C) {
   Eigen::MatrixXd D(U.rows(), C.rows());
@@ -148,10 +148,12 @@ Eigen::MatrixXd grid(const Eigen::MatrixXd& U, std::size_t points) {
   return C;
 }
 
-Eigen::MatrixXd with_bias(const Eigen::MatrixXd& A) {
-  Eigen::MatrixXd B(A.rows(), A.cols() + 1);
-  B.leftCols(A.cols()) = A;
-  B.col(A.cols()).setOnes();
+// The regressors of the rows of U without the constant: (a_1..a_K[, u_1..u_d]).
+Eigen::MatrixXd design(const Eigen::MatrixXd& U, const Eigen::MatrixXd& C, const Config& c) {
+  if (!c.linear_tail) return activations(U, C, c.sigma);
+  Eigen::MatrixXd B(U.rows(), C.rows() + U.cols());
+  B.leftCols(C.rows()) = activations(U, C, c.sigma);
+  B.rightCols(U.cols()) = U;
   return B;
 }
 
@@ -159,9 +161,9 @@ Eigen::VectorXd least_squares(const Eigen::MatrixXd& U, const Eigen::VectorXd& y
                               const Eigen::MatrixXd& C, const Config& c) {
   try {
     return ridge::solve(
-        U.rows(), C.rows(),
-        [&](Eigen::Index start, Eigen::Index len) { return activations(U.middleRows(start, len), C, c.sigma); }, y,
-        c.regularization);
+        U.rows(), C.rows() + (c.linear_tail ? U.cols() : 0),
+        [&](Eigen::Index start, Eigen::Index len) { return design(U.middleRows(start, len), C, c); }, y,
+        c.regularization, C.rows(), c.threads);
   } catch (const std::invalid_argument& e) {
     fail(e.what());
   }
@@ -169,7 +171,10 @@ Eigen::VectorXd least_squares(const Eigen::MatrixXd& U, const Eigen::VectorXd& y
 
 Eigen::VectorXd lms(const Eigen::MatrixXd& U, const Eigen::VectorXd& y, const Eigen::MatrixXd& C,
                     const Config& c, std::vector<double>& epoch_rmse) {
-  const Eigen::MatrixXd rows_as_columns = with_bias(activations(U, C, c.sigma)).transpose();
+  const Eigen::MatrixXd d = design(U, C, c);
+  Eigen::MatrixXd rows_as_columns(d.cols() + 1, d.rows());
+  rows_as_columns.topRows(d.cols()) = d.transpose();
+  rows_as_columns.bottomRows(1).setOnes();
   Eigen::VectorXd w = Eigen::VectorXd::Zero(rows_as_columns.rows());
   for (std::size_t epoch = 0; epoch < c.lms_epochs; ++epoch) {
     for (Eigen::Index i = 0; i < rows_as_columns.cols(); ++i) {
@@ -183,26 +188,28 @@ Eigen::VectorXd lms(const Eigen::MatrixXd& U, const Eigen::VectorXd& y, const Ei
 }  // namespace
 
 Network::Network(Eigen::RowVectorXd mean, Eigen::RowVectorXd scale, Eigen::MatrixXd centres,
-                 double sigma, Eigen::VectorXd weights, double bias)
+                 double sigma, Eigen::VectorXd weights, double bias, Eigen::VectorXd linear)
     : mean_(std::move(mean)),
       scale_(std::move(scale)),
       centres_(std::move(centres)),
       sigma_(sigma),
       weights_(std::move(weights)),
-      bias_(bias) {}
+      bias_(bias),
+      linear_(std::move(linear)) {}
 
-Eigen::VectorXd Network::predict(const Eigen::MatrixXd& X) const {
+Eigen::VectorXd Network::predict(const Eigen::MatrixXd& X, unsigned threads) const {
   if (X.cols() != mean_.size()) {
     fail("predict got " + std::to_string(X.cols()) + " features, the network was fitted on " +
          std::to_string(mean_.size()));
   }
   Eigen::VectorXd out(X.rows());
-  for (Eigen::Index start = 0; start < X.rows(); start += kBlockRows) {
-    const Eigen::Index len = std::min(kBlockRows, X.rows() - start);
+  ridge::for_blocks((X.rows() + ridge::kBlockRows - 1) / ridge::kBlockRows, threads, [&](Eigen::Index b) {
+    const Eigen::Index start = b * ridge::kBlockRows, len = std::min(ridge::kBlockRows, X.rows() - start);
     const Eigen::MatrixXd U =
         (X.middleRows(start, len).rowwise() - mean_).array().rowwise() / scale_.array();
     out.segment(start, len) = (activations(U, centres_, sigma_) * weights_).array() + bias_;
-  }
+    if (linear_.size() > 0) out.segment(start, len) += U * linear_;
+  });
   return out;
 }
 
@@ -231,7 +238,9 @@ FitResult fit(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Config& 
                                 ? least_squares(U, y, C, config)
                                 : lms(U, y, C, config, epoch_rmse);
   const Eigen::Index k = C.rows();
-  return {Network(mean, scale, std::move(C), config.sigma, w.head(k), w[k]), std::move(epoch_rmse)};
+  // w = (Gaussian weights, linear tail if any, constant last)
+  return {Network(mean, scale, std::move(C), config.sigma, w.head(k), w[w.size() - 1], w.segment(k, w.size() - k - 1)),
+          std::move(epoch_rmse)};
 }
 
 Split blocked_holdout(Eigen::Index n, double fraction, std::size_t blocks, std::uint64_t seed) {

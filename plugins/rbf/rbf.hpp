@@ -5,7 +5,13 @@
 //   a_j(u) = exp(-||u - c_j||^2 / (2 sigma^2)),  j = 1..K                       (eqs. 6-7)
 //   y(u)   = sum_j w_j a_j(u) + b                                                (eq. 8)
 // All units share one width sigma (the width the paper's GA tunes). The bias b is the weight of a
-// constant unit a_0 = 1, so a = (a_1..a_K, 1) in what follows.
+// constant unit a_0 = 1, so a = (a_1..a_K, 1) in what follows. With `linear_tail`, the network also
+// has a linear term in the standardized inputs (the usual polynomial augmentation of RBF
+// interpolation, Buhmann 2003, ch. 5):
+//   y(u)   = sum_j w_j a_j(u) + b + v^T u,    a = (a_1..a_K, 1, u_1..u_d)
+// so a target whose large part is (nearly) linear in the inputs, like a gyro bias over a 90 degC
+// range, is carried by v, and the Gaussians only model the curvature. Without it, the Gaussians must
+// build the whole range from bumps, which needs a tiny ridge and is ill-conditioned.
 //
 // Centres:
 //   KMeans  Lloyd's k-means with k-means++ seeding (Arthur & Vassilvitskii 2007) on at most
@@ -16,8 +22,8 @@
 //           (K = grid_points^d).
 // Output weights:
 //   LeastSquares  ridge regression on the normal equations, (A^T A / N + lambda I') w = A^T y / N,
-//                 solved by Eigen's LDLT; I' is the identity without the bias entry (the bias is
-//                 not penalized). lambda = `regularization` (units of a^2, scale-free in N).
+//                 solved by Eigen's LDLT; I' is the identity on the Gaussian weights only (the bias
+//                 and the linear tail are not penalized). lambda = `regularization` (units of a^2, scale-free in N).
 //   Lms           the paper's normalized LMS rule (eq. 9), from w = 0, rows in order, `lms_epochs`
 //                 passes:  w(l+1) = w(l) + beta (y_d - y) a / (a^T a),  0 < beta < 2.
 //                 For targets the network can represent exactly, ||w - w*|| never increases:
@@ -50,16 +56,18 @@ struct Config {
   std::size_t kmeans_iterations = 50;   // Lloyd iterations cap
   std::size_t kmeans_sample = 2000;     // rows used by k-means at most
   std::uint64_t seed = 1;               // k-means subsample and seeding
+  bool linear_tail = false;             // add v^T u (see above)
+  unsigned threads = 1;                 // least-squares blocks in parallel; results do not depend on it
 };
 
 class Network {
  public:
   Network(Eigen::RowVectorXd mean, Eigen::RowVectorXd scale, Eigen::MatrixXd centres, double sigma,
-          Eigen::VectorXd weights, double bias);
+          Eigen::VectorXd weights, double bias, Eigen::VectorXd linear = {});
 
-  // X: samples x features (same features as in fit). Throws std::invalid_argument on a column
-  // count mismatch.
-  Eigen::VectorXd predict(const Eigen::MatrixXd& X) const;
+  // X: samples x features (same features as in fit), rows in blocks on `threads` threads. Throws
+  // std::invalid_argument on a column count mismatch.
+  Eigen::VectorXd predict(const Eigen::MatrixXd& X, unsigned threads = 1) const;
 
   const Eigen::RowVectorXd& mean() const { return mean_; }
   const Eigen::RowVectorXd& scale() const { return scale_; }
@@ -67,6 +75,7 @@ class Network {
   double sigma() const { return sigma_; }
   const Eigen::VectorXd& weights() const { return weights_; }   // w_1..w_K
   double bias() const { return bias_; }
+  const Eigen::VectorXd& linear() const { return linear_; }  // v (empty without a linear tail)
 
  private:
   Eigen::RowVectorXd mean_, scale_;
@@ -74,6 +83,7 @@ class Network {
   double sigma_;
   Eigen::VectorXd weights_;
   double bias_;
+  Eigen::VectorXd linear_;
 };
 
 struct FitResult {

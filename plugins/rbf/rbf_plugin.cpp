@@ -1,8 +1,10 @@
 // regressor/rbf: adapter of plugins/rbf/rbf.hpp. With tune = true, fit() splits the samples by
 // rbf::blocked_holdout, lets the nested optimizer minimize the held-out RMSE over sigma,
-// log10(regularization) and (k-means only) the integer number of centres, then refits on all
+// log10(regularization), (k-means only) the integer number of centres and (tune_linear_tail) the
+// linear tail on or off, then refits on all
 // samples with the best values; ctx.diagnostics["tuning"] logs the start, the best and the
-// per-generation history. Hyperparameters that make the kernel reject the fit score +infinity.
+// per-generation history. Tuning sees at most tune_rows means of consecutive rows (see tuned()).
+// Hyperparameters that make the kernel reject the fit score +infinity.
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -39,19 +41,24 @@ class RbfPlugin final : public Regressor {
                 .lms_epochs = static_cast<std::size_t>(p.integer("lms_epochs")),
                 .kmeans_iterations = static_cast<std::size_t>(p.integer("kmeans_iterations")),
                 .kmeans_sample = static_cast<std::size_t>(p.integer("kmeans_sample")),
-                .seed = static_cast<std::uint64_t>(p.integer("seed"))},
+                .seed = static_cast<std::uint64_t>(p.integer("seed")),
+                .linear_tail = p.boolean("linear_tail")},
         sigma_range_(range_of(p, "tune_sigma")),
         centres_range_(range_of(p, "tune_centres")),
         log10_regularization_range_(range_of(p, "tune_log10_regularization")),
         holdout_fraction_(p.real("holdout_fraction")),
-        holdout_blocks_(static_cast<std::size_t>(p.integer("holdout_blocks"))) {
+        holdout_blocks_(static_cast<std::size_t>(p.integer("holdout_blocks"))),
+        tune_rows_(static_cast<std::size_t>(p.integer("tune_rows"))),
+        tune_linear_tail_(p.boolean("tune_linear_tail")) {
     if (p.boolean("tune")) optimizer_ = registry.create_as<Optimizer>(p.plugin("optimizer"));
   }
 
   void fit(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, RunContext& ctx) override {
     network_.reset();
     try {
-      const rbf::Config config = optimizer_ ? tuned(X, y, ctx) : config_;
+      rbf::Config config = optimizer_ ? tuned(X, y, ctx) : config_;
+      config.threads = ctx.threads;
+      threads_ = ctx.threads;
       auto result = rbf::fit(X, y, config);
       if (!result.lms_rmse.empty()) ctx.diagnostics["lms_rmse"] = result.lms_rmse;
       network_ = std::move(result.network);
@@ -63,7 +70,7 @@ class RbfPlugin final : public Regressor {
   Eigen::VectorXd predict(const Eigen::MatrixXd& X) const override {
     if (!network_) throw NotFittedError("regressor/rbf: predict called before fit");
     try {
-      return network_->predict(X);
+      return network_->predict(X, threads_);
     } catch (const std::invalid_argument& e) {
       throw DataError({"", 0, "features"}, std::string("regressor/rbf: ") + e.what());
     }
@@ -77,11 +84,13 @@ class RbfPlugin final : public Regressor {
     c.sigma = v[0];
     c.regularization = std::pow(10.0, v[1]);
     if (tunes_centres()) c.centres = static_cast<std::size_t>(std::llround(v[2]));
+    if (tune_linear_tail_) c.linear_tail = v[v.size() - 1] >= 0.5;
     return c;
   }
 
   nlohmann::json describe(const rbf::Config& c, double holdout_rmse) const {
-    nlohmann::json out{{"sigma", c.sigma}, {"regularization", c.regularization}, {"holdout_rmse", holdout_rmse}};
+    nlohmann::json out{{"sigma", c.sigma}, {"regularization", c.regularization}, {"linear_tail", c.linear_tail},
+                       {"holdout_rmse", holdout_rmse}};
     if (tunes_centres()) {
       out["centres"] = c.centres;
     } else {
@@ -90,7 +99,20 @@ class RbfPlugin final : public Regressor {
     return out;
   }
 
-  rbf::Config tuned(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, RunContext& ctx) const {
+  // Tuning sees the means of consecutive runs of `stride` rows (stride = ceil(rows / tune_rows)):
+  // its cost does not grow with the record, and a smooth target's held-out error is not drowned in
+  // sample noise. The final fit uses every row.
+  rbf::Config tuned(const Eigen::MatrixXd& X_all, const Eigen::VectorXd& y_all, RunContext& ctx) const {
+    const Eigen::Index stride =
+        std::max<Eigen::Index>(1, (X_all.rows() + static_cast<Eigen::Index>(tune_rows_) - 1) /
+                                      static_cast<Eigen::Index>(tune_rows_));
+    const Eigen::Index runs = X_all.rows() / stride;
+    Eigen::MatrixXd X(runs, X_all.cols());
+    Eigen::VectorXd y(runs);
+    for (Eigen::Index r = 0; r < runs; ++r) {
+      X.row(r) = X_all.middleRows(r * stride, stride).colwise().mean();
+      y[r] = y_all.segment(r * stride, stride).mean();
+    }
     const auto split = rbf::blocked_holdout(X.rows(), holdout_fraction_, holdout_blocks_, config_.seed);
     const Eigen::MatrixXd X_train = X(split.train, Eigen::all);
     const Eigen::VectorXd y_train = y(split.train);
@@ -111,6 +133,7 @@ class RbfPlugin final : public Regressor {
       const double usable = static_cast<double>(std::min<std::size_t>(split.train.size(), config_.kmeans_sample));
       bounds.push_back({"centres", centres_range_.low, std::min(centres_range_.high, usable), true});
     }
+    if (tune_linear_tail_) bounds.push_back({"linear_tail", 0.0, 1.0, true});
     RunContext inner;
     inner.seed = ctx.seed;
     inner.threads = ctx.threads;
@@ -123,7 +146,7 @@ class RbfPlugin final : public Regressor {
     const rbf::Config best = decode(result.best);
     ctx.diagnostics["tuning"] = {
         {"objective", "RMSE on a blocked holdout (unit of the target)"},
-        {"holdout", {{"fraction", holdout_fraction_}, {"blocks", holdout_blocks_},
+        {"holdout", {{"fraction", holdout_fraction_}, {"blocks", holdout_blocks_}, {"row_stride", stride},
                      {"train_samples", split.train.size()}, {"holdout_samples", split.holdout.size()}}},
         {"start", describe(config_, holdout_rmse(config_))},
         {"best", describe(best, result.best_value)},
@@ -137,8 +160,11 @@ class RbfPlugin final : public Regressor {
   SearchRange sigma_range_, centres_range_, log10_regularization_range_;
   double holdout_fraction_;
   std::size_t holdout_blocks_;
+  std::size_t tune_rows_;
+  bool tune_linear_tail_;
   std::unique_ptr<Optimizer> optimizer_;
   std::optional<rbf::Network> network_;
+  unsigned threads_ = 1;
 };
 
 ParamSpec search_range(std::string key, std::vector<double> def, std::string doc) {
@@ -170,11 +196,17 @@ void register_rbf_plugins(Registry& registry) {
                 param::integer("kmeans_iterations", 50, "1", "cap on Lloyd iterations").at_least(1),
                 param::integer("kmeans_sample", 2000, "1", "rows used by k-means at most (seeded subsample)")
                     .at_least(1),
+                param::boolean("linear_tail", false,
+                               "add a linear term in the standardized inputs (y = sum w a + b + v.u): the "
+                               "Gaussians then model only the curvature of a nearly linear target"),
                 param::boolean("tune", false,
                                "tune sigma, regularization and (kmeans) centres with the nested optimizer on "
                                "the blocked-holdout RMSE, then fit all samples"),
                 param::nested("optimizer", "optimizer", "optimizer/ga",
                               "optimizer used when tune is true; objective: held-out RMSE"),
+                param::boolean("tune_linear_tail", false,
+                               "when tuning, the optimizer also chooses whether the network has the linear "
+                               "tail (a 0/1 gene)"),
                 search_range("tune_sigma", {0.05, 3.0}, "search range for sigma").greater_than(0),
                 search_range("tune_centres", {4, 60}, "search range for centres (kmeans)").at_least(1),
                 search_range("tune_log10_regularization", {-10, -2}, "search range for log10(regularization)"),
@@ -183,6 +215,10 @@ void register_rbf_plugins(Registry& registry) {
                     .less_than(1),
                 param::integer("holdout_blocks", 10, "1", "evenly spread contiguous held-out runs when tuning")
                     .at_least(1),
+                param::integer("tune_rows", 20000, "1",
+                               "rows the tuning sees at most: means of ceil(rows / tune_rows) consecutive rows; "
+                               "the final fit uses all rows")
+                    .at_least(10),
                 param::seed()},
                {{"centres <= kmeans_sample",
                  {"centres", "kmeans_sample"},

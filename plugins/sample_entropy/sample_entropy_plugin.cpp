@@ -1,8 +1,13 @@
 // classifier/sample_entropy: groups IMFs into noise / mixed / drift by their sample entropy.
 // Each IMF's SampEn(m, r) uses r relative to that IMF's population standard deviation; the
 // grouping rules are documented in sample_entropy.hpp. IMFs are processed on ctx.threads threads,
-// each IMF by one thread, so results do not depend on the thread count.
+// each IMF by one thread, so results do not depend on the thread count. An IMF longer than
+// max_samples is scored on kWindows evenly spaced windows of max_samples / kWindows samples: A and B
+// are summed over the windows (pairs within a window), r is relative to the whole IMF's population
+// SD, so the cost no longer grows with the record while every part of it is seen.
+#include <cmath>
 #include <exception>
+#include <limits>
 #include <memory>
 #include <span>
 #include <stdexcept>
@@ -31,7 +36,8 @@ class SampleEntropyClassifier final : public Classifier {
         r_(p.real("r")),
         rule_(p.text("rule")),
         noise_above_(p.real("noise_above")),
-        drift_below_(p.real("drift_below")) {}
+        drift_below_(p.real("drift_below")),
+        max_samples_(static_cast<std::size_t>(p.integer("max_samples"))) {}
 
   Classification classify(const Eigen::MatrixXd& imfs, RunContext& ctx) override {
     const auto results = entropies(imfs, ctx.threads);
@@ -65,6 +71,30 @@ class SampleEntropyClassifier final : public Classifier {
   }
 
  private:
+  static constexpr std::size_t kWindows = 8;
+
+  sampen::Result windowed_entropy(std::span<const double> x) const {
+    if (max_samples_ / kWindows < 16 || x.size() <= max_samples_) return sampen::sample_entropy_relative(x, m_, r_);
+    const double tolerance = r_ * sampen::population_sd(x);
+    const std::size_t length = max_samples_ / kWindows;
+    sampen::Result total;
+    total.m = m_;
+    total.tolerance = tolerance;
+    for (std::size_t w = 0; w < kWindows; ++w) {
+      const std::size_t start = w * (x.size() - length) / (kWindows - 1);
+      const auto part = sampen::sample_entropy(x.subspan(start, length), m_, tolerance);
+      total.n += part.n;
+      total.a += part.a;
+      total.b += part.b;
+    }
+    total.status = total.b == 0   ? sampen::Status::Undefined
+                   : total.a == 0 ? sampen::Status::NoMatches
+                                  : sampen::Status::Finite;
+    total.value = total.finite() ? -std::log(static_cast<double>(total.a) / static_cast<double>(total.b))
+                                 : std::numeric_limits<double>::infinity();
+    return total;
+  }
+
   std::vector<sampen::Result> entropies(const Eigen::MatrixXd& imfs, unsigned threads) const {
     const auto count = static_cast<std::size_t>(imfs.cols());
     std::vector<sampen::Result> results(count);
@@ -73,8 +103,7 @@ class SampleEntropyClassifier final : public Classifier {
       for (std::size_t k = first; k < count; k += stride) {
         try {
           const auto column = imfs.col(static_cast<Eigen::Index>(k));
-          results[k] = sampen::sample_entropy_relative(
-              std::span<const double>(column.data(), static_cast<std::size_t>(column.size())), m_, r_);
+          results[k] = windowed_entropy(std::span<const double>(column.data(), static_cast<std::size_t>(column.size())));
         } catch (...) {
           errors[k] = std::current_exception();
         }
@@ -101,6 +130,7 @@ class SampleEntropyClassifier final : public Classifier {
   std::string rule_;
   double noise_above_;
   double drift_below_;
+  std::size_t max_samples_;
 };
 
 }  // namespace
@@ -126,6 +156,10 @@ void register_sample_entropy_plugins(Registry& registry) {
                            "rule thresholds: SampEn above this (or Inf) -> noise")
                    .at_least(0),
                param::real("drift_below", 0.2, "1", "rule thresholds: SampEn below this -> drift")
+                   .at_least(0),
+               param::integer("max_samples", 40000, "1",
+                              "IMFs longer than this are scored on 8 evenly spaced windows of max_samples / 8 "
+                              "samples (pair counts summed); below 128: always the whole IMF")
                    .at_least(0),
            },
            {

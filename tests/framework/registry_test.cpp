@@ -33,9 +33,9 @@ TEST(BuiltinPlugins, AreExactlyTheDocumentedSet) {
                                      "decomposition/emd", "decomposition/vmd", "effect/hysteresis", "effect/mode_split_drift",
                                      "effect/periodic_disturbance", "effect/scale_factor_temperature",
                                      "effect/temperature_rate", "effect/thermal_lag", "effect/warmup_transient",
-                                     "filter/kalman", "filter/tfpf", "filter/wavelet", "optimizer/ga",
-                                     "optimizer/pagmo", "regressor/elm", "regressor/polynomial", "regressor/rbf",
-                                     "regressor/svr"));
+                                     "filter/kalman", "filter/rate_of_change", "filter/tfpf", "filter/wavelet",
+                                     "optimizer/ga", "optimizer/pagmo", "regressor/elm", "regressor/polynomial",
+                                     "regressor/rbf", "regressor/svr"));
 }
 
 TEST(Registry, RejectsMalformedNamesUnknownKindsAndDuplicates) {

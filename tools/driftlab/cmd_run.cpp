@@ -1,12 +1,14 @@
 #include <chrono>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "framework/atomic_file.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/pipeline.hpp"
 #include "tools/driftlab/cli.hpp"
+#include "tools/driftlab/run_report.hpp"
 #include "tools/driftlab/version.hpp"
 
 namespace driftlab::cli {
@@ -46,8 +48,9 @@ void run(const RunOptions& o, CommandEnv& env) {
     throw ConfigError({o.out, 0, "--out"}, "cannot create the output directory");
   const auto out_dir = std::filesystem::path(o.out);
   const auto outputs_csv = out_dir / "outputs.csv", effective = out_dir / "pipeline.effective.yaml",
-             report_json = out_dir / "report.json";
-  for (const auto& f : {outputs_csv, effective, report_json}) check_output(f.string(), {o.data.path, o.pipeline});
+             report_json = out_dir / "report.json", report_html = out_dir / "report.html";
+  for (const auto& f : {outputs_csv, effective, report_json, report_html})
+    check_output(f.string(), {o.data.path, o.pipeline});
 
   nlohmann::json report{{"format", "driftlab-run-report/1"},
                         {"driftlab_version", kVersion},
@@ -62,7 +65,8 @@ void run(const RunOptions& o, CommandEnv& env) {
     env.progress("[" + std::to_string(i + 1) + "/" + std::to_string(n) + "] " + name, f);
   };
   const auto start = std::chrono::steady_clock::now();
-  std::map<std::string, Signal> outputs;
+  std::map<std::string, Signal> outputs, step_signals;
+  options.step_signals = &step_signals;
   try {
     outputs = run_pipeline(pipeline, registry, record, options, report);
   } catch (...) {
@@ -83,19 +87,33 @@ void run(const RunOptions& o, CommandEnv& env) {
       report["outputs"].push_back({{"column", column}, {"unit", unit}});
     }
   }
+  std::optional<RunScores> scores;
+  if (record.has(role::kRate)) {
+    env.progress("scoring (Allan analysis of every stage)", 0.0);
+    scores = score_run(record, pipeline, outputs);
+    report.update(scores_json(*scores));
+    env.progress("scoring (Allan analysis of every stage)", 1.0);
+  }
   write_csv(outputs_csv, columns);
   write_file_atomically(effective, effective_pipeline_yaml(pipeline, registry));
   write_file_atomically(report_json, report.dump(2) + "\n");
+  if (scores) {
+    env.progress("figures (gnuplot)", 0.0);
+    write_run_html(report_html, "driftlab run: " + pipeline.file, record, pipeline, outputs, step_signals, report, *scores);
+    env.progress("figures (gnuplot)", 1.0);
+    std::cout << table2_text(*scores);
+  }
   if (!env.quiet)
-    std::cerr << "wrote " << outputs_csv.string() << ", " << effective.string() << ", " << report_json.string() << "\n";
+    std::cerr << "wrote " << outputs_csv.string() << ", " << effective.string() << ", " << report_json.string()
+              << (scores ? ", " + report_html.string() : std::string()) << "\n";
 }
 
 }  // namespace
 
 void add_run_command(CLI::App& app, CommandEnv& env) {
   auto opts = std::make_shared<RunOptions>();
-  auto* cmd = app.add_subcommand("run", "run a pipeline on a record; writes outputs.csv, pipeline.effective.yaml "
-                                        "and report.json into --out");
+  auto* cmd = app.add_subcommand("run", "run a pipeline on a record; writes outputs.csv, pipeline.effective.yaml, "
+                                        "report.json and report.html (Table 2, figures) into --out");
   cmd->add_option("--pipeline", opts->pipeline, "pipeline description (YAML, driftlab-pipeline/1)")->required();
   add_data_options(cmd, opts->data, "column mapping role=column:unit (e.g. rate=gyro_z:rad/s); repeatable");
   cmd->add_option("--out", opts->out, "output directory (created if missing)");

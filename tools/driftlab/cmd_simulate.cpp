@@ -1,5 +1,5 @@
 // `driftlab simulate`: run a device file through the oven simulator and write a CSV record
-// (t_s, rate_dps, temp_c, true_rate_dps, die_temp_c, drive_freq_hz).
+// (t_s, rate_dps, temp_c, true_rate_dps, systematic_dps, die_temp_c, drive_freq_hz).
 #include <cmath>
 #include <iostream>
 #include <memory>
@@ -60,6 +60,7 @@ void simulate_command(const SimulateOptions& o, CommandEnv& env) {
       output_column("rate_dps", record.rate_rad_s, "deg/s", device.find_channel(role::kRate)),
       output_column("temp_c", record.temp_c, "degC", device.find_channel(role::kTemperature)),
       output_column("true_rate_dps", record.true_rate_rad_s, "deg/s", nullptr),
+      output_column("systematic_dps", record.systematic_rate_rad_s, "deg/s", nullptr),
       output_column("die_temp_c", record.die_temp_c, "degC", nullptr)};
   if (record.drive_frequency_hz.size() == record.time_s.size())
     columns.push_back(output_column("drive_freq_hz", record.drive_frequency_hz, "Hz",

@@ -441,6 +441,8 @@ std::string run_gnuplot(const std::string& script) {
     throw PlotError("cannot run gnuplot '" + exe + "': " + std::strerror(spawned) +
                     " (install Debian's gnuplot-nox, see tools/install-deps.sh, or set DRIFTLAB_GNUPLOT)");
   in.close_end(0), out.close_end(1), err.close_end(1);
+  // Non-blocking writes: poll's POLLOUT promises room for one page, not for a whole buffer, and a
+  // blocked write while gnuplot waits for us to read its output would deadlock both.
   ::fcntl(in.fd[1], F_SETFL, ::fcntl(in.fd[1], F_GETFL) | O_NONBLOCK);
 
   std::string svg, messages;

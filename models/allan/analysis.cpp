@@ -1,0 +1,104 @@
+#include "models/allan/analysis.hpp"
+
+#include <unsupported/Eigen/FFT>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <limits>
+#include <numbers>
+
+#include "framework/error.hpp"
+#include "models/allan/deviation.hpp"
+#include "models/allan/tau_grid.hpp"
+
+namespace driftlab::allan {
+namespace {
+
+constexpr double kBandwidthFloorHz = 0.01;
+constexpr std::size_t kWelchSegment = std::size_t{1} << 14;
+
+double arw_at_one_second(const std::vector<Estimate>& curve) {
+  const auto above = std::find_if(curve.begin(), curve.end(), [](const Estimate& e) { return e.tau >= 1.0; });
+  if (above == curve.begin()) return above->dev * std::sqrt(above->tau);
+  if (above == curve.end()) return curve.back().dev * std::sqrt(curve.back().tau);
+  const auto below = std::prev(above);
+  const double f = std::log(1.0 / below->tau) / std::log(above->tau / below->tau);
+  return std::exp(std::log(below->dev) + f * (std::log(above->dev) - std::log(below->dev)));
+}
+
+FloorReading flat_floor(const std::vector<Estimate>& curve, double min_tau_s) {
+  const Estimate* best = nullptr;
+  for (const auto& e : curve) {
+    if (e.tau + 1e-12 < min_tau_s) continue;
+    if (best == nullptr || e.dev < best->dev) best = &e;
+  }
+  if (best == nullptr) {
+    throw DataError({"", 0, "tau"}, "no averaging time at or beyond the output's correlation time (" +
+                                        std::to_string(min_tau_s) + " s): the record is too short");
+  }
+  return {best->dev / kFlickerFloorFactor, best->dev_lo / kFlickerFloorFactor, best->dev_hi / kFlickerFloorFactor,
+          best->tau};
+}
+
+}  // namespace
+
+Analysis analyze_rate(const Eigen::Ref<const Eigen::VectorXd>& rate_rad_s, double sample_rate_hz,
+                      const AnalysisOptions& options) {
+  if (rate_rad_s.size() < 9) throw DataError({"", 0, "rate"}, "an Allan analysis needs at least 9 samples");
+  const double tau0 = 1.0 / sample_rate_hz;
+  const Eigen::VectorXd angle = angle_from_rate(rate_rad_s, tau0);
+  const auto n = static_cast<std::size_t>(angle.size());
+  const auto factors = averaging_factors(TauGrid{}, Kind::Oadev, n, tau0);
+
+  Analysis a;
+  a.sample_rate_hz = sample_rate_hz;
+  a.samples = static_cast<std::size_t>(rate_rad_s.size());
+  a.curve = estimate(Kind::Oadev, angle, tau0, InputType::Rate, factors, options.confidence);
+  a.bias_instability = flat_floor(a.curve, options.min_tau_s);
+  a.arw_rad_sqrt_s = arw_at_one_second(a.curve);
+  if (options.fit_terms) {
+    try {
+      a.fit = fit_noise_terms(a.curve);
+    } catch (const DataError&) {
+      a.fit.reset();
+    }
+  }
+  return a;
+}
+
+double noise_bandwidth_hz(const Eigen::Ref<const Eigen::VectorXd>& output_rad_s, double sample_rate_hz,
+                          double reference_arw_rad_sqrt_s) {
+  const auto n = static_cast<std::size_t>(output_rad_s.size());
+  if (n < 64) throw DataError({"", 0, "rate"}, "a noise bandwidth needs at least 64 samples");
+  const std::size_t length = std::min(kWelchSegment, n);
+  const std::size_t step = length / 2;
+  std::vector<double> window(length), segment(length);
+  double window_power = 0.0;
+  for (std::size_t i = 0; i < length; ++i) {
+    window[i] = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(length));
+    window_power += window[i] * window[i];
+  }
+  const double df = sample_rate_hz / static_cast<double>(length);
+  const auto first_bin = static_cast<std::size_t>(std::ceil(kBandwidthFloorHz / df));
+
+  Eigen::FFT<double> fft;
+  std::vector<std::complex<double>> spectrum;
+  double band_power = 0.0;  // integral of the one-sided PSD over [f_lo, fs/2], averaged over segments
+  std::size_t segments = 0;
+  for (std::size_t start = 0; start + length <= n; start += step, ++segments) {
+    const auto block = output_rad_s.segment(static_cast<Eigen::Index>(start), static_cast<Eigen::Index>(length));
+    const double mean = block.mean();
+    for (std::size_t i = 0; i < length; ++i) segment[i] = (block[static_cast<Eigen::Index>(i)] - mean) * window[i];
+    fft.fwd(spectrum, segment);
+    for (std::size_t k = std::max<std::size_t>(first_bin, 1); k <= length / 2; ++k) {
+      const double weight = k == length / 2 ? 1.0 : 2.0;
+      band_power += weight * std::norm(spectrum[k]) / (static_cast<double>(length) * window_power);
+    }
+  }
+  band_power /= static_cast<double>(segments);
+  const double reference_one_sided = 2.0 * reference_arw_rad_sqrt_s * reference_arw_rad_sqrt_s;
+  return band_power / reference_one_sided + std::max<std::size_t>(first_bin, 1) * df;
+}
+
+}  // namespace driftlab::allan

@@ -1,0 +1,484 @@
+#include "tools/driftlab/run_report.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "framework/units.hpp"
+#include "tools/driftlab/html_report.hpp"
+#include "tools/driftlab/plot.hpp"
+
+namespace driftlab::cli {
+namespace {
+
+constexpr double kDegPerHourPerRadS = kDegPerRad * 3600.0;
+constexpr double kArwDegPerHourRtHz = kDegPerRad * 3600.0;  // rad/s/sqrt(Hz) -> deg/h/sqrt(Hz)
+
+struct PaperRow {
+  const char* stage;
+  double b_deg_h, n_deg_h_rthz;
+};
+// Li et al. 2023, Table 2.
+constexpr PaperRow kPaperTable2[] = {
+    {"original", 34.66, 99.608}, {"rbf", 28.42, 99.6037}, {"rbf_ga", 23.65, 99.6011}, {"rbf_ga_kf", 3.589, 0.967814}};
+
+const PaperRow* paper_row(const std::string& stage) {
+  for (const auto& r : kPaperTable2)
+    if (stage == r.stage) return &r;
+  return nullptr;
+}
+
+nlohmann::json curve_json(const allan::Analysis& a) {
+  nlohmann::json c = nlohmann::json::array();
+  for (const auto& e : a.curve)
+    c.push_back({{"tau_s", e.tau}, {"dev_deg_h", e.dev * kDegPerHourPerRadS}, {"lo_deg_h", e.dev_lo * kDegPerHourPerRadS},
+                 {"hi_deg_h", e.dev_hi * kDegPerHourPerRadS}});
+  return c;
+}
+
+nlohmann::json fit_json(const allan::Analysis& a) {
+  if (!a.fit) return nullptr;
+  nlohmann::json j{{"label", "least-squares fit of the five IEEE 952 terms (not the paper's reading)"}};
+  for (const auto& c : allan::kIeee952Units) {
+    const auto& t = (*a.fit)[c.term];
+    j[std::string(c.key)] = {{"value", t.value * c.factor}, {"sigma", t.sigma * c.factor}, {"unit", std::string(c.unit)}};
+  }
+  return j;
+}
+
+}  // namespace
+
+RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const std::map<std::string, Signal>& outputs) {
+  RunScores s;
+  const double fs = record.sample_rate_hz();
+  const Eigen::VectorXd& rate = record.channel(role::kRate).values;
+  std::optional<evaluation::Truth> truth;
+  if (record.has(role::kTrueRate)) {
+    truth = evaluation::Truth{record.channel(role::kTrueRate).values, std::nullopt};
+    if (record.has(role::kSystematic)) truth->systematic_rad_s = record.channel(role::kSystematic).values;
+  }
+  const evaluation::Truth* t = truth ? &*truth : nullptr;
+  const double reference_n = allan::analyze_rate(rate, fs, {.fit_terms = false}).arw_rad_sqrt_s;
+
+  s.stages.push_back(evaluation::score_stage("original", rate, fs, reference_n, t));
+  for (const auto& name : pipeline.output_order) {
+    const auto it = outputs.find(name);
+    if (it == outputs.end() || it->second.unit != "rad/s" || it->second.columns.cols() != 1) continue;
+    if (name == "drift_model") continue;  // a model of the drift, not a compensated rate
+    s.stages.push_back(evaluation::score_stage(name, it->second.columns.col(0), fs, reference_n, t));
+  }
+  if (record.has(role::kTemperature)) {
+    s.baseline = evaluation::px4_style_baseline(rate, record.channel(role::kTemperature).values);
+    s.stages.push_back(evaluation::score_stage("px4_polynomial", s.baseline->compensated_rad_s, fs, reference_n, t));
+  }
+  if (truth && truth->systematic_rad_s) {
+    s.intrinsic = evaluation::intrinsic_floor(rate, *truth->systematic_rad_s, fs);
+    for (const auto& stage : s.stages)
+      if (stage.error) s.against_floor[stage.stage] = evaluation::compare_to_floor(*stage.error, *s.intrinsic, kFloorFactor);
+  }
+  return s;
+}
+
+nlohmann::json scores_json(const RunScores& s) {
+  nlohmann::json j;
+  auto& rows = j["table2"] = nlohmann::json::array();
+  auto& curves = j["allan"] = nlohmann::json::object();
+  for (const auto& st : s.stages) {
+    const auto& a = st.analysis;
+    nlohmann::json row{{"stage", st.stage},
+                       {"B_deg_h", a.bias_instability.value * kDegPerHourPerRadS},
+                       {"B_ci", {a.bias_instability.low * kDegPerHourPerRadS, a.bias_instability.high * kDegPerHourPerRadS}},
+                       {"B_tau_s", a.bias_instability.tau_s},
+                       {"N_deg_h_rtHz", a.arw_rad_sqrt_s * kArwDegPerHourRtHz},
+                       {"bandwidth_hz", st.bandwidth_hz},
+                       {"correlation_time_s", st.correlation_time_s},
+                       {"fit", fit_json(a)}};
+    if (st.residual_drift_rad_s) row["residual_drift_deg_h"] = *st.residual_drift_rad_s * kDegPerHourPerRadS;
+    if (const auto it = s.against_floor.find(st.stage); it != s.against_floor.end()) {
+      row["error_vs_floor"] = {{"max_ratio", it->second.max_ratio}, {"tau_of_max_s", it->second.tau_of_max_s},
+                               {"within_1_5x", it->second.within}};
+    }
+    if (const auto* p = paper_row(st.stage)) row["paper"] = {{"B_deg_h", p->b_deg_h}, {"N_deg_h_rtHz", p->n_deg_h_rthz}};
+    rows.push_back(row);
+    curves[st.stage] = curve_json(a);
+    if (st.error) curves[st.stage + "_minus_truth"] = curve_json(*st.error);
+  }
+  if (s.intrinsic) {
+    const auto& a = *s.intrinsic;
+    j["intrinsic_floor"] = {
+        {"what", "Allan analysis of measured - true systematic rate: the gyro's own noise"},
+        {"B_deg_h", a.bias_instability.value * kDegPerHourPerRadS},
+        {"B_ci", {a.bias_instability.low * kDegPerHourPerRadS, a.bias_instability.high * kDegPerHourPerRadS}},
+        {"B_tau_s", a.bias_instability.tau_s},
+        {"N_deg_h_rtHz", a.arw_rad_sqrt_s * kArwDegPerHourRtHz}};
+    curves["intrinsic_floor"] = curve_json(a);
+  }
+  if (s.baseline) {
+    const auto& b = *s.baseline;
+    nlohmann::json c = nlohmann::json::array();
+    for (double v : b.coefficients_rad_s) c.push_back(v * kDegPerHourPerRadS);
+    j["baseline"] = {{"what", "PX4-style: third-order polynomial in T - T0 fitted on the first heating leg, T clipped to it"},
+                     {"coefficients_deg_h_per_c_pow_i", c},
+                     {"reference_temp_c", b.reference_temp_c},
+                     {"fit_range_c", {b.fit_min_c, b.fit_max_c}}};
+  }
+  j["units"] = {{"B", "deg/h"}, {"N", "deg/h/sqrt(Hz)"}, {"bandwidth", "Hz (one-sided equivalent noise bandwidth)"},
+                {"residual_drift", "deg/h, rms of 60-s block means of output - true rate"}, {"allan", "deg/h"}};
+  j["readings"] = {{"B", "flat floor of the overlapping Allan deviation / 0.664 (IEEE 952 Annex C), at tau >= the "
+                         "output's correlation time (1 / bandwidth)"},
+                   {"N", "-1/2 slope line at tau = 1 s"}};
+  return j;
+}
+
+std::string table2_text(const RunScores& s) {
+  std::string out;
+  char line[256];
+  std::snprintf(line, sizeof line, "%-16s %10s %10s  %16s %12s %10s %14s\n", "stage", "paper B", "paper N", "B (deg/h)",
+                "N (dph/rtHz)", "bandw (Hz)", "resid. drift");
+  out += line;
+  const auto cell = [](std::optional<double> v, const char* fmt) {
+    char b[32];
+    if (!v) return std::string("-");
+    std::snprintf(b, sizeof b, fmt, *v);
+    return std::string(b);
+  };
+  for (const auto& st : s.stages) {
+    const auto* p = paper_row(st.stage);
+    const auto& a = st.analysis;
+    const std::string b = cell(a.bias_instability.value * kDegPerHourPerRadS, "%.3g") + " [" +
+                          cell(a.bias_instability.low * kDegPerHourPerRadS, "%.2g") + "," +
+                          cell(a.bias_instability.high * kDegPerHourPerRadS, "%.2g") + "]";
+    std::snprintf(line, sizeof line, "%-16s %10s %10s  %16s %12s %10s %14s\n", st.stage.c_str(),
+                  p ? cell(p->b_deg_h, "%.4g").c_str() : "-", p ? cell(p->n_deg_h_rthz, "%.4g").c_str() : "-", b.c_str(),
+                  cell(a.arw_rad_sqrt_s * kArwDegPerHourRtHz, "%.4g").c_str(), cell(st.bandwidth_hz, "%.3g").c_str(),
+                  st.residual_drift_rad_s ? cell(*st.residual_drift_rad_s * kDegPerHourPerRadS, "%.3g").c_str() : "-");
+    out += line;
+  }
+  if (s.intrinsic) {
+    const auto& a = *s.intrinsic;
+    std::snprintf(line, sizeof line, "%-16s %10s %10s  %16s %12s %10s %14s\n", "intrinsic floor", "-", "-",
+                  (cell(a.bias_instability.value * kDegPerHourPerRadS, "%.3g") + " [" +
+                   cell(a.bias_instability.low * kDegPerHourPerRadS, "%.2g") + "," +
+                   cell(a.bias_instability.high * kDegPerHourPerRadS, "%.2g") + "]")
+                      .c_str(),
+                  cell(a.arw_rad_sqrt_s * kArwDegPerHourRtHz, "%.4g").c_str(), "-", "-");
+    out += line;
+  }
+  return out;
+}
+
+}  // namespace driftlab::cli
+
+namespace driftlab::cli {
+namespace {
+
+constexpr double kHoursPerSecond = 1.0 / 3600.0;
+
+std::vector<double> to_vector(const Eigen::VectorXd& v, double scale = 1.0) {
+  std::vector<double> out(static_cast<std::size_t>(v.size()));
+  for (Eigen::Index i = 0; i < v.size(); ++i) out[static_cast<std::size_t>(i)] = v[i] * scale;
+  return out;
+}
+
+PlotSeries line(std::string label, const Eigen::VectorXd& x, const Eigen::VectorXd& y, double xs, double ys) {
+  PlotSeries s;
+  s.label = std::move(label);
+  s.x = to_vector(x, xs);
+  s.y = to_vector(y, ys);
+  return s;
+}
+
+Figure raw_figure(const TimeSeries& record) {
+  PlotPanel p;
+  p.title = "Raw record (paper Fig. 10)";
+  p.x_label = "time (h)";
+  p.y_label = "rate (°/h)";
+  p.y2_label = "temperature (°C)";
+  p.series.push_back(line("rate", record.time(), record.channel(role::kRate).values, kHoursPerSecond, kDegPerHourPerRadS));
+  if (record.has(role::kSystematic))
+    p.series.push_back(line("true systematic rate", record.time(), record.channel(role::kSystematic).values,
+                            kHoursPerSecond, kDegPerHourPerRadS));
+  if (record.has(role::kTemperature)) {
+    auto t = line("case temperature", record.time(), record.channel(role::kTemperature).values, kHoursPerSecond, 1.0);
+    t.right_axis = true;
+    p.series.push_back(t);
+  }
+  return {{p}, 900, 320, 1, ""};
+}
+
+Figure imf_figure(const std::string& step, const Signal& imfs, const Signal* residue, const Eigen::VectorXd& time) {
+  const bool rate = imfs.unit == "rad/s";
+  const double ys = rate ? kDegPerHourPerRadS : 1.0;
+  const std::string unit = rate ? "°/h" : imfs.unit == "degC" ? "°C" : imfs.unit;
+  Figure f;
+  f.columns = 3;
+  f.width = 1100;
+  f.panel_height = 170;
+  f.title = step + ": IMFs (" + unit + ") over time (h)";
+  for (Eigen::Index k = 0; k <= imfs.columns.cols(); ++k) {
+    if (k == imfs.columns.cols() && residue == nullptr) break;
+    PlotPanel p;
+    p.title = k < imfs.columns.cols() ? imfs.labels[static_cast<std::size_t>(k)] : "residue";
+    p.legend = PlotPanel::Legend::None;
+    const Eigen::VectorXd values = k < imfs.columns.cols() ? Eigen::VectorXd(imfs.columns.col(k)) : residue->columns.col(0);
+    p.series.push_back(line("", time, values, kHoursPerSecond, ys));
+    f.panels.push_back(p);
+  }
+  return f;
+}
+
+Figure entropy_figure(const std::string& step, const nlohmann::json& imfs) {
+  PlotPanel p;
+  p.title = step + ": sample entropy per IMF and the groups (paper Fig. 12)";
+  p.x_label = "IMF";
+  p.y_label = "SampEn";
+  p.legend = PlotPanel::Legend::TopRight;
+  std::map<std::string, PlotSeries> groups;
+  for (const auto& e : imfs) {
+    if (!e["score"].is_number()) continue;
+    auto& s = groups[e["group"].get<std::string>()];
+    s.label = e["group"].get<std::string>();
+    s.style = PlotSeries::Style::Markers;
+    s.x.push_back(e["imf"].get<double>());
+    s.y.push_back(e["score"].get<double>());
+  }
+  for (const char* g : {"noise", "mixed", "drift"})
+    if (groups.count(g)) p.series.push_back(groups[g]);
+  return {{p}, 700, 300, 1, ""};
+}
+
+Figure allan_figure(const RunScores& scores) {
+  PlotPanel p;
+  p.title = "Allan deviation of every stage, 68.3 % intervals (paper Fig. 15)";
+  p.x_label = "tau (s)";
+  p.y_label = "Allan deviation (°/h)";
+  p.log_x = p.log_y = true;
+  p.legend = PlotPanel::Legend::BottomLeft;
+  const auto add = [&](const std::string& label, const allan::Analysis& a, PlotSeries::Style style) {
+    PlotSeries s;
+    s.label = label;
+    s.style = style;
+    s.interval = PlotSeries::Interval::Band;
+    for (const auto& e : a.curve) {
+      s.x.push_back(e.tau);
+      s.y.push_back(e.dev * kDegPerHourPerRadS);
+      s.y_low.push_back(e.dev_lo * kDegPerHourPerRadS);
+      s.y_high.push_back(e.dev_hi * kDegPerHourPerRadS);
+    }
+    p.series.push_back(s);
+  };
+  for (const auto& st : scores.stages) add(st.stage, st.analysis, PlotSeries::Style::Line);
+  if (scores.intrinsic) add("intrinsic floor (measured - systematic)", *scores.intrinsic, PlotSeries::Style::Dashed);
+  return {{p}, 900, 520, 1, ""};
+}
+
+// Block means (60 s) of the residual of a stage against temperature, heating and cooling apart.
+Figure residual_figure(const TimeSeries& record, const std::vector<std::string>& stages,
+                       const std::map<std::string, Eigen::VectorXd>& outputs) {
+  const double fs = record.sample_rate_hz();
+  const auto per_block = static_cast<Eigen::Index>(std::llround(evaluation::kResidualBlockS * fs));
+  const Eigen::VectorXd& temp = record.channel(role::kTemperature).values;
+  const Eigen::VectorXd& truth = record.channel(role::kTrueRate).values;
+  Figure f;
+  f.columns = static_cast<int>(std::min<std::size_t>(stages.size(), 2));
+  f.width = 1100;
+  f.panel_height = 320;
+  f.title = "Residual (output - true rate), 60-s block means, against the case temperature";
+  for (const auto& stage : stages) {
+    PlotPanel p;
+    p.title = stage;
+    p.x_label = "temperature (°C)";
+    p.y_label = "residual (°/h)";
+    PlotSeries heat, cool;
+    heat.label = "heating";
+    cool.label = "cooling";
+    heat.style = cool.style = PlotSeries::Style::Markers;
+    heat.color = "#d62728";
+    cool.color = "#1f77b4";
+    const Eigen::VectorXd& y = outputs.at(stage);
+    for (Eigen::Index b = 0; (b + 1) * per_block <= y.size(); ++b) {
+      const Eigen::Index s = b * per_block;
+      const double r = (y.segment(s, per_block) - truth.segment(s, per_block)).mean() * kDegPerHourPerRadS;
+      const double t = temp.segment(s, per_block).mean();
+      const double slope = temp[s + per_block - 1] - temp[s];
+      auto& series = slope >= 0 ? heat : cool;
+      series.x.push_back(t);
+      series.y.push_back(r);
+    }
+    p.series = {heat, cool};
+    f.panels.push_back(p);
+  }
+  return f;
+}
+
+std::string fmt(double v, const char* format = "%.3g") {
+  char b[64];
+  std::snprintf(b, sizeof b, format, v);
+  return b;
+}
+
+}  // namespace
+
+void write_run_html(const std::filesystem::path& path, const std::string& title, const TimeSeries& record,
+                    const Pipeline& pipeline, const std::map<std::string, Signal>& outputs,
+                    const std::map<std::string, Signal>& step_signals, const nlohmann::json& report,
+                    const RunScores& scores) {
+  HtmlReport html(title);
+  html.paragraph("Pipeline " + pipeline.file + " on " + report.value("data", std::string()) + ": " +
+                 std::to_string(record.size()) + " samples at " + fmt(record.sample_rate_hz()) + " Hz (" +
+                 fmt(record.size() / record.sample_rate_hz() * kHoursPerSecond) + " h), seed " +
+                 std::to_string(pipeline.seed) + ".");
+
+  html.section("Table 2: Allan figures per stage");
+  HtmlTable t;
+  t.caption = "The stages of the pipeline beside the paper's Table 2, the intrinsic floor and a PX4-style baseline";
+  t.header = {"stage", "paper B (°/h)", "paper N (°/h/√Hz)", "B (°/h)", "B interval (°/h)", "B read at tau (s)",
+              "N (°/h/√Hz)", "noise bandwidth (Hz)", "residual drift (°/h)", "max error / floor"};
+  for (const auto& st : scores.stages) {
+    const auto* p = paper_row(st.stage);
+    const auto& a = st.analysis;
+    std::vector<HtmlCell> row{st.stage,
+                              p ? HtmlCell(p->b_deg_h) : HtmlCell(std::string("–")),
+                              p ? HtmlCell(p->n_deg_h_rthz) : HtmlCell(std::string("–")),
+                              a.bias_instability.value * kDegPerHourPerRadS,
+                              fmt(a.bias_instability.low * kDegPerHourPerRadS) + " – " +
+                                  fmt(a.bias_instability.high * kDegPerHourPerRadS),
+                              a.bias_instability.tau_s,
+                              a.arw_rad_sqrt_s * kArwDegPerHourRtHz,
+                              st.bandwidth_hz};
+    row.push_back(st.residual_drift_rad_s ? HtmlCell(*st.residual_drift_rad_s * kDegPerHourPerRadS)
+                                          : HtmlCell(std::string("–")));
+    const auto it = scores.against_floor.find(st.stage);
+    row.push_back(it != scores.against_floor.end()
+                      ? HtmlCell(fmt(it->second.max_ratio, "%.2f") + (it->second.within ? " (within 1.5x)" : " (above)"))
+                      : HtmlCell(std::string("–")));
+    t.rows.push_back(row);
+  }
+  if (scores.intrinsic) {
+    const auto& a = *scores.intrinsic;
+    t.rows.push_back({std::string("intrinsic floor"), std::string("–"), std::string("–"),
+                      a.bias_instability.value * kDegPerHourPerRadS,
+                      fmt(a.bias_instability.low * kDegPerHourPerRadS) + " – " +
+                          fmt(a.bias_instability.high * kDegPerHourPerRadS),
+                      a.bias_instability.tau_s, a.arw_rad_sqrt_s * kArwDegPerHourRtHz, record.sample_rate_hz() / 2.0,
+                      std::string("–"), std::string("–")});
+  }
+  t.note =
+      "B: flat floor of the overlapping Allan deviation / 0.664 (IEEE 952 Annex C), read at tau >= the output's "
+      "correlation time (1 / noise bandwidth), with its 68.3 % chi-square interval. N: the -1/2 slope line at "
+      "tau = 1 s; N is only comparable at equal noise bandwidth (one-sided equivalent bandwidth relative to the "
+      "original record's white level). Residual drift: rms of 60-s block means of output - true rate. Max error / "
+      "floor: largest ratio over tau of the Allan deviation of (output - true rate) to that of the intrinsic "
+      "noise (measured - true systematic rate); 'within 1.5x' when every tau is, allowing for both intervals. "
+      "px4_polynomial: third-order polynomial in temperature fitted on the first heating leg, clipped to it.";
+  html.table(t);
+  html.figure(allan_figure(scores), "Allan deviation of the original record, every stage, the PX4-style baseline and "
+                                    "the intrinsic floor, with 68.3 % intervals (bands)");
+
+  html.section("The record");
+  html.figure(raw_figure(record), "Rate and case temperature over time (paper Fig. 10)");
+
+  for (const auto& step : pipeline.steps) {
+    if (step.plugin.empty()) continue;
+    const auto kind = step.plugin.substr(0, step.plugin.find('/'));
+    if (kind == "decomposition") {
+      const auto imfs = step_signals.find(step.name + ".imfs");
+      const auto residue = step_signals.find(step.name + ".residue");
+      if (imfs == step_signals.end()) continue;
+      html.section("Decomposition: " + step.name + " (" + step.plugin + ")");
+      html.figure(imf_figure(step.name, imfs->second, residue == step_signals.end() ? nullptr : &residue->second,
+                             record.time()),
+                  imfs->second.unit == "rad/s" ? "IMFs of the rate (paper Fig. 11)"
+                                               : "IMFs of the temperature (paper Fig. 13)");
+    } else if (kind == "classifier") {
+      nlohmann::json imfs;
+      for (const auto& s : report["steps"])
+        if (s["name"] == step.name) imfs = s["diagnostics"].value("imfs", nlohmann::json::array());
+      if (imfs.empty()) continue;
+      html.section("Grouping: " + step.name + " (" + step.plugin + ")");
+      html.figure(entropy_figure(step.name, imfs), "Sample entropy per IMF and the groups (paper Fig. 12)");
+      HtmlTable g;
+      g.caption = step.name + ": the group of each IMF and why";
+      g.header = {"IMF", "sample entropy", "group", "reason"};
+      for (const auto& e : imfs)
+        g.rows.push_back({e["imf"].get<double>(), e["score"].is_number() ? HtmlCell(e["score"].get<double>())
+                                                                          : HtmlCell(std::string("Inf")),
+                          e["group"].get<std::string>(), e["reason"].get<std::string>()});
+      html.table(g);
+    }
+  }
+
+  // Temperature trend (degC step outputs over the temperature) and the mixed group before/after.
+  if (record.has(role::kTemperature)) {
+    PlotPanel p;
+    p.title = "Temperature and its trend (paper Fig. 13)";
+    p.x_label = "time (h)";
+    p.y_label = "temperature (°C)";
+    p.series.push_back(line("case temperature", record.time(), record.channel(role::kTemperature).values, kHoursPerSecond, 1.0));
+    for (const auto& [name, s] : step_signals)
+      if (s.unit == "degC" && s.columns.cols() == 1 && name.size() > 7 && name.substr(name.size() - 7) == ".signal")
+        p.series.push_back(line(name, record.time(), s.columns.col(0), kHoursPerSecond, 1.0));
+    html.section("Temperature trend");
+    html.figure({{p}, 900, 320, 1, ""}, "The case temperature and the trend the drift is compensated with");
+  }
+
+  std::map<std::string, Eigen::VectorXd> stage_outputs;
+  std::vector<std::string> stage_names;
+  for (const auto& st : scores.stages) {
+    if (st.stage == "original") continue;
+    if (st.stage == "px4_polynomial") {
+      stage_outputs[st.stage] = scores.baseline->compensated_rad_s;
+    } else {
+      stage_outputs[st.stage] = outputs.at(st.stage).columns.col(0);
+    }
+    stage_names.push_back(st.stage);
+  }
+  {
+    // Minute means: the noise of a 10-Hz record hides the drift the stages remove.
+    const auto per_block = static_cast<Eigen::Index>(std::llround(evaluation::kResidualBlockS * record.sample_rate_hz()));
+    const auto minute_means = [&](const Eigen::VectorXd& x) {
+      const Eigen::Index blocks = x.size() / std::max<Eigen::Index>(per_block, 1);
+      Eigen::VectorXd t(blocks), m(blocks);
+      for (Eigen::Index b = 0; b < blocks; ++b) {
+        t[b] = record.time().segment(b * per_block, per_block).mean();
+        m[b] = x.segment(b * per_block, per_block).mean();
+      }
+      return std::pair{t, m};
+    };
+    PlotPanel p;
+    p.title = "Reconstructed rate per stage, 60-s means (paper Fig. 14)";
+    p.x_label = "time (h)";
+    p.y_label = "rate (°/h)";
+    for (const auto& name : stage_names) {
+      const auto [t, m] = minute_means(stage_outputs[name]);
+      p.series.push_back(line(name, t, m, kHoursPerSecond, kDegPerHourPerRadS));
+    }
+    PlotPanel mixed;
+    mixed.title = "Mixed group before and after the Kalman filter, first 10 minutes";
+    mixed.x_label = "time (s)";
+    mixed.y_label = "rate (°/h)";
+    const auto first = std::min<Eigen::Index>(record.size(), static_cast<Eigen::Index>(600.0 * record.sample_rate_hz()));
+    for (const auto& [name, sig] : step_signals) {
+      const bool is_mixed = name.size() > 6 && name.substr(name.size() - 6) == ".mixed";
+      const bool is_filtered = name.find("kf") != std::string::npos && name.substr(name.size() - 7) == ".signal";
+      if ((is_mixed || is_filtered) && sig.unit == "rad/s")
+        mixed.series.push_back(line(name, record.time().head(first), sig.columns.col(0).head(first), 1.0, kDegPerHourPerRadS));
+    }
+    Figure f{{p}, 900, 320, 1, ""};
+    if (!mixed.series.empty()) f.panels.push_back(mixed);
+    html.section("Reconstruction");
+    html.figure(f, "The reconstructed rate of every stage (60-s means) and the denoising of the mixed group");
+  }
+  if (record.has(role::kTrueRate) && record.has(role::kTemperature) && !stage_names.empty()) {
+    std::vector<std::string> shown;
+    for (const auto& name : stage_names)
+      if (name != "px4_polynomial") shown = {name};
+    if (stage_outputs.count("px4_polynomial")) shown.push_back("px4_polynomial");
+    html.section("Residual against temperature");
+    html.figure(residual_figure(record, shown, stage_outputs),
+                "Residual of the final stage and of the PX4-style baseline against temperature, heating (red) and "
+                "cooling (blue) apart: what a temperature model left");
+  }
+  html.write(path);
+}
+
+}  // namespace driftlab::cli
