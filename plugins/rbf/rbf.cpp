@@ -17,7 +17,6 @@
 namespace driftlab::rbf {
 namespace {
 
-
 Eigen::MatrixXd squared_distances(const Eigen::MatrixXd& U, const Eigen::MatrixXd& C) {
   Eigen::MatrixXd D(U.rows(), C.rows());
   for (Eigen::Index j = 0; j < C.rows(); ++j) {

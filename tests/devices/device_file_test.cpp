@@ -33,7 +33,9 @@ TEST(DeviceFile, LoadsTheFmvmgWithThePapersNumbers) {
   ASSERT_NE(d.find_channel("temperature"), nullptr);
   ASSERT_NE(d.find_channel("drive_frequency"), nullptr);
   EXPECT_NEAR(d.error_model.noise.arw_rad_sqrt_s / kDph, 99.6, 1e-9);
-  EXPECT_NEAR(d.error_model.noise.bias_instability_rad_s / kDph, 34.7, 1e-9);
+  // The paper's raw B (34.66) is the temperature-driven bias; the intrinsic B stays well below the
+  // compensated 3.589 (devices/fmvmg.yaml explains both).
+  EXPECT_NEAR(d.error_model.noise.bias_instability_rad_s / kDph, 1.0, 1e-9);
   EXPECT_FALSE(d.error_model.effects.any());
 }
 

@@ -51,8 +51,8 @@ TEST(DevicesCli, SimulatesTheContractColumnsReproduciblyWithEffects) {
   const auto b = run_driftlab(common + " --out " + (dir / "b.csv").string());
   ASSERT_EQ(b.exit_code, 0) << b.err;
   EXPECT_EQ(read_text(dir / "a.csv"), read_text(dir / "b.csv"));
-  const std::string header = read_text(dir / "a.csv").substr(0, 60);
-  EXPECT_THAT(header, HasSubstr("t_s,rate_dps,temp_c,true_rate_dps,die_temp_c,drive_freq_hz"));
+  const std::string header = read_text(dir / "a.csv").substr(0, 80);
+  EXPECT_THAT(header, HasSubstr("t_s,rate_dps,temp_c,true_rate_dps,systematic_dps,die_temp_c,drive_freq_hz"));
   const TimeSeries record = read_csv(dir / "a.csv");
   EXPECT_EQ(record.size(), 1200);
   EXPECT_TRUE(record.has("drive_frequency"));

@@ -90,8 +90,13 @@ void run(const RunOptions& o, CommandEnv& env) {
   std::optional<RunScores> scores;
   if (record.has(role::kRate)) {
     env.progress("scoring (Allan analysis of every stage)", 0.0);
-    scores = score_run(record, pipeline, outputs);
-    report.update(scores_json(*scores));
+    try {
+      scores = score_run(record, pipeline, outputs);
+      report.update(scores_json(*scores));
+    } catch (const DataError& e) {  // a record too short for Allan figures still gets its outputs
+      report["table2_skipped"] = e.what();
+      if (!env.quiet) std::cerr << "note: no Table 2: " << e.what() << "\n";
+    }
     env.progress("scoring (Allan analysis of every stage)", 1.0);
   }
   write_csv(outputs_csv, columns);

@@ -10,8 +10,6 @@
 namespace driftlab::cli {
 namespace {
 
-constexpr double kDegPerHourPerRadS = kDegPerRad * 3600.0;
-constexpr double kArwDegPerHourRtHz = kDegPerRad * 3600.0;  // rad/s/sqrt(Hz) -> deg/h/sqrt(Hz)
 
 struct PaperRow {
   const char* stage;
@@ -30,8 +28,8 @@ const PaperRow* paper_row(const std::string& stage) {
 nlohmann::json curve_json(const allan::Analysis& a) {
   nlohmann::json c = nlohmann::json::array();
   for (const auto& e : a.curve)
-    c.push_back({{"tau_s", e.tau}, {"dev_deg_h", e.dev * kDegPerHourPerRadS}, {"lo_deg_h", e.dev_lo * kDegPerHourPerRadS},
-                 {"hi_deg_h", e.dev_hi * kDegPerHourPerRadS}});
+    c.push_back({{"tau_s", e.tau}, {"dev_deg_h", e.dev * kDphPerRadPerSec}, {"lo_deg_h", e.dev_lo * kDphPerRadPerSec},
+                 {"hi_deg_h", e.dev_hi * kDphPerRadPerSec}});
   return c;
 }
 
@@ -85,14 +83,14 @@ nlohmann::json scores_json(const RunScores& s) {
   for (const auto& st : s.stages) {
     const auto& a = st.analysis;
     nlohmann::json row{{"stage", st.stage},
-                       {"B_deg_h", a.bias_instability.value * kDegPerHourPerRadS},
-                       {"B_ci", {a.bias_instability.low * kDegPerHourPerRadS, a.bias_instability.high * kDegPerHourPerRadS}},
+                       {"B_deg_h", a.bias_instability.value * kDphPerRadPerSec},
+                       {"B_ci", {a.bias_instability.low * kDphPerRadPerSec, a.bias_instability.high * kDphPerRadPerSec}},
                        {"B_tau_s", a.bias_instability.tau_s},
-                       {"N_deg_h_rtHz", a.arw_rad_sqrt_s * kArwDegPerHourRtHz},
+                       {"N_deg_h_rtHz", a.arw_rad_sqrt_s * kDphPerRadPerSec},
                        {"bandwidth_hz", st.bandwidth_hz},
                        {"correlation_time_s", st.correlation_time_s},
                        {"fit", fit_json(a)}};
-    if (st.residual_drift_rad_s) row["residual_drift_deg_h"] = *st.residual_drift_rad_s * kDegPerHourPerRadS;
+    if (st.residual_drift_rad_s) row["residual_drift_deg_h"] = *st.residual_drift_rad_s * kDphPerRadPerSec;
     if (const auto it = s.against_floor.find(st.stage); it != s.against_floor.end()) {
       row["error_vs_floor"] = {{"max_ratio", it->second.max_ratio}, {"tau_of_max_s", it->second.tau_of_max_s},
                                {"within_1_5x", it->second.within}};
@@ -106,16 +104,16 @@ nlohmann::json scores_json(const RunScores& s) {
     const auto& a = *s.intrinsic;
     j["intrinsic_floor"] = {
         {"what", "Allan analysis of measured - true systematic rate: the gyro's own noise"},
-        {"B_deg_h", a.bias_instability.value * kDegPerHourPerRadS},
-        {"B_ci", {a.bias_instability.low * kDegPerHourPerRadS, a.bias_instability.high * kDegPerHourPerRadS}},
+        {"B_deg_h", a.bias_instability.value * kDphPerRadPerSec},
+        {"B_ci", {a.bias_instability.low * kDphPerRadPerSec, a.bias_instability.high * kDphPerRadPerSec}},
         {"B_tau_s", a.bias_instability.tau_s},
-        {"N_deg_h_rtHz", a.arw_rad_sqrt_s * kArwDegPerHourRtHz}};
+        {"N_deg_h_rtHz", a.arw_rad_sqrt_s * kDphPerRadPerSec}};
     curves["intrinsic_floor"] = curve_json(a);
   }
   if (s.baseline) {
     const auto& b = *s.baseline;
     nlohmann::json c = nlohmann::json::array();
-    for (double v : b.coefficients_rad_s) c.push_back(v * kDegPerHourPerRadS);
+    for (double v : b.coefficients_rad_s) c.push_back(v * kDphPerRadPerSec);
     j["baseline"] = {{"what", "PX4-style: third-order polynomial in T - T0 fitted on the first heating leg, T clipped to it"},
                      {"coefficients_deg_h_per_c_pow_i", c},
                      {"reference_temp_c", b.reference_temp_c},
@@ -144,23 +142,23 @@ std::string table2_text(const RunScores& s) {
   for (const auto& st : s.stages) {
     const auto* p = paper_row(st.stage);
     const auto& a = st.analysis;
-    const std::string b = cell(a.bias_instability.value * kDegPerHourPerRadS, "%.3g") + " [" +
-                          cell(a.bias_instability.low * kDegPerHourPerRadS, "%.2g") + "," +
-                          cell(a.bias_instability.high * kDegPerHourPerRadS, "%.2g") + "]";
+    const std::string b = cell(a.bias_instability.value * kDphPerRadPerSec, "%.3g") + " [" +
+                          cell(a.bias_instability.low * kDphPerRadPerSec, "%.2g") + "," +
+                          cell(a.bias_instability.high * kDphPerRadPerSec, "%.2g") + "]";
     std::snprintf(line, sizeof line, "%-16s %10s %10s  %16s %12s %10s %14s\n", st.stage.c_str(),
                   p ? cell(p->b_deg_h, "%.4g").c_str() : "-", p ? cell(p->n_deg_h_rthz, "%.4g").c_str() : "-", b.c_str(),
-                  cell(a.arw_rad_sqrt_s * kArwDegPerHourRtHz, "%.4g").c_str(), cell(st.bandwidth_hz, "%.3g").c_str(),
-                  st.residual_drift_rad_s ? cell(*st.residual_drift_rad_s * kDegPerHourPerRadS, "%.3g").c_str() : "-");
+                  cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g").c_str(), cell(st.bandwidth_hz, "%.3g").c_str(),
+                  st.residual_drift_rad_s ? cell(*st.residual_drift_rad_s * kDphPerRadPerSec, "%.3g").c_str() : "-");
     out += line;
   }
   if (s.intrinsic) {
     const auto& a = *s.intrinsic;
     std::snprintf(line, sizeof line, "%-16s %10s %10s  %16s %12s %10s %14s\n", "intrinsic floor", "-", "-",
-                  (cell(a.bias_instability.value * kDegPerHourPerRadS, "%.3g") + " [" +
-                   cell(a.bias_instability.low * kDegPerHourPerRadS, "%.2g") + "," +
-                   cell(a.bias_instability.high * kDegPerHourPerRadS, "%.2g") + "]")
+                  (cell(a.bias_instability.value * kDphPerRadPerSec, "%.3g") + " [" +
+                   cell(a.bias_instability.low * kDphPerRadPerSec, "%.2g") + "," +
+                   cell(a.bias_instability.high * kDphPerRadPerSec, "%.2g") + "]")
                       .c_str(),
-                  cell(a.arw_rad_sqrt_s * kArwDegPerHourRtHz, "%.4g").c_str(), "-", "-");
+                  cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g").c_str(), "-", "-");
     out += line;
   }
   return out;
@@ -193,10 +191,10 @@ Figure raw_figure(const TimeSeries& record) {
   p.x_label = "time (h)";
   p.y_label = "rate (°/h)";
   p.y2_label = "temperature (°C)";
-  p.series.push_back(line("rate", record.time(), record.channel(role::kRate).values, kHoursPerSecond, kDegPerHourPerRadS));
+  p.series.push_back(line("rate", record.time(), record.channel(role::kRate).values, kHoursPerSecond, kDphPerRadPerSec));
   if (record.has(role::kSystematic))
     p.series.push_back(line("true systematic rate", record.time(), record.channel(role::kSystematic).values,
-                            kHoursPerSecond, kDegPerHourPerRadS));
+                            kHoursPerSecond, kDphPerRadPerSec));
   if (record.has(role::kTemperature)) {
     auto t = line("case temperature", record.time(), record.channel(role::kTemperature).values, kHoursPerSecond, 1.0);
     t.right_axis = true;
@@ -207,7 +205,7 @@ Figure raw_figure(const TimeSeries& record) {
 
 Figure imf_figure(const std::string& step, const Signal& imfs, const Signal* residue, const Eigen::VectorXd& time) {
   const bool rate = imfs.unit == "rad/s";
-  const double ys = rate ? kDegPerHourPerRadS : 1.0;
+  const double ys = rate ? kDphPerRadPerSec : 1.0;
   const std::string unit = rate ? "°/h" : imfs.unit == "degC" ? "°C" : imfs.unit;
   Figure f;
   f.columns = 3;
@@ -260,9 +258,9 @@ Figure allan_figure(const RunScores& scores) {
     s.interval = PlotSeries::Interval::Band;
     for (const auto& e : a.curve) {
       s.x.push_back(e.tau);
-      s.y.push_back(e.dev * kDegPerHourPerRadS);
-      s.y_low.push_back(e.dev_lo * kDegPerHourPerRadS);
-      s.y_high.push_back(e.dev_hi * kDegPerHourPerRadS);
+      s.y.push_back(e.dev * kDphPerRadPerSec);
+      s.y_low.push_back(e.dev_lo * kDphPerRadPerSec);
+      s.y_high.push_back(e.dev_hi * kDphPerRadPerSec);
     }
     p.series.push_back(s);
   };
@@ -297,7 +295,7 @@ Figure residual_figure(const TimeSeries& record, const std::vector<std::string>&
     const Eigen::VectorXd& y = outputs.at(stage);
     for (Eigen::Index b = 0; (b + 1) * per_block <= y.size(); ++b) {
       const Eigen::Index s = b * per_block;
-      const double r = (y.segment(s, per_block) - truth.segment(s, per_block)).mean() * kDegPerHourPerRadS;
+      const double r = (y.segment(s, per_block) - truth.segment(s, per_block)).mean() * kDphPerRadPerSec;
       const double t = temp.segment(s, per_block).mean();
       const double slope = temp[s + per_block - 1] - temp[s];
       auto& series = slope >= 0 ? heat : cool;
@@ -339,13 +337,13 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
     std::vector<HtmlCell> row{st.stage,
                               p ? HtmlCell(p->b_deg_h) : HtmlCell(std::string("–")),
                               p ? HtmlCell(p->n_deg_h_rthz) : HtmlCell(std::string("–")),
-                              a.bias_instability.value * kDegPerHourPerRadS,
-                              fmt(a.bias_instability.low * kDegPerHourPerRadS) + " – " +
-                                  fmt(a.bias_instability.high * kDegPerHourPerRadS),
+                              a.bias_instability.value * kDphPerRadPerSec,
+                              fmt(a.bias_instability.low * kDphPerRadPerSec) + " – " +
+                                  fmt(a.bias_instability.high * kDphPerRadPerSec),
                               a.bias_instability.tau_s,
-                              a.arw_rad_sqrt_s * kArwDegPerHourRtHz,
+                              a.arw_rad_sqrt_s * kDphPerRadPerSec,
                               st.bandwidth_hz};
-    row.push_back(st.residual_drift_rad_s ? HtmlCell(*st.residual_drift_rad_s * kDegPerHourPerRadS)
+    row.push_back(st.residual_drift_rad_s ? HtmlCell(*st.residual_drift_rad_s * kDphPerRadPerSec)
                                           : HtmlCell(std::string("–")));
     const auto it = scores.against_floor.find(st.stage);
     row.push_back(it != scores.against_floor.end()
@@ -356,10 +354,10 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
   if (scores.intrinsic) {
     const auto& a = *scores.intrinsic;
     t.rows.push_back({std::string("intrinsic floor"), std::string("–"), std::string("–"),
-                      a.bias_instability.value * kDegPerHourPerRadS,
-                      fmt(a.bias_instability.low * kDegPerHourPerRadS) + " – " +
-                          fmt(a.bias_instability.high * kDegPerHourPerRadS),
-                      a.bias_instability.tau_s, a.arw_rad_sqrt_s * kArwDegPerHourRtHz, record.sample_rate_hz() / 2.0,
+                      a.bias_instability.value * kDphPerRadPerSec,
+                      fmt(a.bias_instability.low * kDphPerRadPerSec) + " – " +
+                          fmt(a.bias_instability.high * kDphPerRadPerSec),
+                      a.bias_instability.tau_s, a.arw_rad_sqrt_s * kDphPerRadPerSec, record.sample_rate_hz() / 2.0,
                       std::string("–"), std::string("–")});
   }
   t.note =
@@ -450,7 +448,7 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
     p.y_label = "rate (°/h)";
     for (const auto& name : stage_names) {
       const auto [t, m] = minute_means(stage_outputs[name]);
-      p.series.push_back(line(name, t, m, kHoursPerSecond, kDegPerHourPerRadS));
+      p.series.push_back(line(name, t, m, kHoursPerSecond, kDphPerRadPerSec));
     }
     PlotPanel mixed;
     mixed.title = "Mixed group before and after the Kalman filter, first 10 minutes";
@@ -461,7 +459,7 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
       const bool is_mixed = name.size() > 6 && name.substr(name.size() - 6) == ".mixed";
       const bool is_filtered = name.find("kf") != std::string::npos && name.substr(name.size() - 7) == ".signal";
       if ((is_mixed || is_filtered) && sig.unit == "rad/s")
-        mixed.series.push_back(line(name, record.time().head(first), sig.columns.col(0).head(first), 1.0, kDegPerHourPerRadS));
+        mixed.series.push_back(line(name, record.time().head(first), sig.columns.col(0).head(first), 1.0, kDphPerRadPerSec));
     }
     Figure f{{p}, 900, 320, 1, ""};
     if (!mixed.series.empty()) f.panels.push_back(mixed);
