@@ -40,7 +40,7 @@ class VmdWaveletSvrPipeline : public ::testing::Test {
     const Pipeline pipeline = parse_pipeline(yaml, label, registry_);
     nlohmann::json report;
     auto outputs = run_pipeline(pipeline, registry_, record_.to_time_series(), {}, report);
-    return outputs.at("compensated").sum();
+    return outputs.at("wavelet_svr").sum();  // the last stage of the pipeline
   }
 
   Registry registry_;
@@ -72,7 +72,7 @@ TEST_F(VmdWaveletSvrPipeline, SwappingTheDenoiserIsOneLine) {
   yaml.replace(at, from.size(), "plugin: filter/tfpf");
   // The wavelet's params do not fit TFPF: drop that step's params line too (the one-line swap is the
   // plugin line; its parameters are the plugin's own).
-  const auto params = yaml.find("    params: {wavelet:");
+  const auto params = yaml.find("    params: {threshold:");
   ASSERT_NE(params, std::string::npos);
   yaml.erase(params, yaml.find('\n', params) - params + 1);
   const Eigen::VectorXd compensated = run(yaml, "swapped.yaml");

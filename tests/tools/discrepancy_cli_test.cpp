@@ -85,8 +85,14 @@ TEST(DiscrepancyCommand, WithoutADeviceFitsABiasPolynomialAndEstimatesTheNoiseTe
   // The FMVMG's white noise is N = 99.6 deg/h/sqrt(Hz); the Allan fit of the residual finds it.
   constexpr double kArwTolerance = 10.0;  // deg/h/sqrt(Hz): the fit's spread over one 4.5-h record
   EXPECT_NEAR(report["model"]["noise"]["arw_dph_rthz"].get<double>(), 99.6, kArwTolerance);
-  ASSERT_EQ(report["named_effects"].size(), 1u) << report.dump(2);
+  ASSERT_GE(report["named_effects"].size(), 1u) << report.dump(2);
   EXPECT_EQ(report["named_effects"][0]["effect"], "periodic_disturbance");
+  // Without the device file the workflow does not know that the case sensor lags the die by 5 s
+  // (devices/fmvmg.yaml, thermal.sensor_time_constant_s). With the FMVMG's bias slope of ~50 deg/h
+  // per degC that lag is visible, and the drive frequency shows it as the resonator running away from
+  // the sensor: a second name, if any, is that real effect and nothing else.
+  for (std::size_t i = 1; i < report["named_effects"].size(); ++i)
+    EXPECT_EQ(report["named_effects"][i]["effect"], "mode_split_drift") << report.dump(2);
 }
 
 // Keeps the header and the rows whose time stamp (first column, s) passes `keep`.
