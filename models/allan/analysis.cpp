@@ -46,14 +46,16 @@ FloorReading flat_floor(const std::vector<Estimate>& curve, double min_tau_s) {
 Analysis analyze_rate(const Eigen::Ref<const Eigen::VectorXd>& rate_rad_s, double sample_rate_hz,
                       const AnalysisOptions& options) {
   if (rate_rad_s.size() < 9) throw DataError({"", 0, "rate"}, "an Allan analysis needs at least 9 samples");
-  const double tau0 = 1.0 / sample_rate_hz;
-  const Eigen::VectorXd angle = angle_from_rate(rate_rad_s, tau0);
-  const auto n = static_cast<std::size_t>(angle.size());
-  const auto factors = averaging_factors(TauGrid{}, Kind::Oadev, n, tau0);
+  return analyze_angle(angle_from_rate(rate_rad_s, 1.0 / sample_rate_hz), 1.0 / sample_rate_hz, options);
+}
 
+Analysis analyze_angle(const Eigen::Ref<const Eigen::VectorXd>& angle, double tau0, const AnalysisOptions& options) {
+  const auto n = static_cast<std::size_t>(angle.size());
+  if (n < 10) throw DataError({"", 0, "rate"}, "an Allan analysis needs at least 9 samples");
+  const auto factors = averaging_factors(TauGrid{}, Kind::Oadev, n, tau0);
   Analysis a;
-  a.sample_rate_hz = sample_rate_hz;
-  a.samples = static_cast<std::size_t>(rate_rad_s.size());
+  a.sample_rate_hz = 1.0 / tau0;
+  a.samples = n - 1;
   a.curve = estimate(Kind::Oadev, angle, tau0, InputType::Rate, factors, options.confidence);
   a.bias_instability = flat_floor(a.curve, options.min_tau_s);
   a.arw_rad_sqrt_s = arw_at_one_second(a.curve);

@@ -64,6 +64,10 @@ struct Analysis {
 // no tau >= min_tau_s.
 Analysis analyze_rate(const Eigen::Ref<const Eigen::VectorXd>& rate_rad_s, double sample_rate_hz,
                       const AnalysisOptions& options = {});
+// The same from the integrated angle (rad) spaced tau0 s (an angle record, or a rate already
+// integrated by angle_from_rate).
+Analysis analyze_angle(const Eigen::Ref<const Eigen::VectorXd>& angle_rad, double tau0_s,
+                       const AnalysisOptions& options = {});
 
 // One-sided equivalent noise bandwidth (Hz) of `output` relative to white noise of level
 // reference_arw_rad_sqrt_s (see above). Throws DataError for fewer than 64 samples.

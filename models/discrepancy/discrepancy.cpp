@@ -10,9 +10,7 @@
 #include "framework/error.hpp"
 #include "framework/signal.hpp"
 #include "framework/units.hpp"
-#include "models/allan/confidence.hpp"
-#include "models/allan/noise_fit.hpp"
-#include "models/allan/tau_grid.hpp"
+#include "models/allan/analysis.hpp"
 
 namespace driftlab::discrepancy {
 namespace {
@@ -250,11 +248,9 @@ class Workflow {
 
   error_model::NoiseTerms estimated_noise(const Eigen::VectorXd& residual) const {
     const double tau0 = blocks_.sample_interval_s;
-    const Eigen::VectorXd angle = allan::angle_from_rate(residual, tau0);
-    const auto n_angle = static_cast<std::size_t>(angle.size());
-    const auto factors = allan::averaging_factors(allan::TauGrid{}, allan::Kind::Oadev, n_angle, tau0);
-    const auto curve = allan::estimate(allan::Kind::Oadev, angle, tau0, allan::InputType::Rate, factors);
-    const auto fit = allan::fit_noise_terms(curve);
+    const auto analysis = allan::analyze_rate(residual, 1.0 / tau0);
+    if (!analysis.fit) throw DataError({"", 0, "rate"}, "the residual's Allan curve has too few points for noise terms");
+    const auto& fit = *analysis.fit;
     error_model::NoiseTerms n;
     n.arw_rad_sqrt_s = fit[allan::Term::N].value;
     n.bias_instability_rad_s = fit[allan::Term::B].value;

@@ -7,8 +7,7 @@
 #include <numbers>
 
 #include "framework/signal.hpp"
-#include "models/allan/deviation.hpp"
-#include "models/allan/tau_grid.hpp"
+#include "models/allan/analysis.hpp"
 
 namespace driftlab::discrepancy {
 namespace {
@@ -112,12 +111,8 @@ Views residual_views(const Blocks& blocks, const Eigen::VectorXd& block_temperat
   }
 
   if (full_residual_rad_s.size() >= 8) {
-    const double tau0 = blocks.sample_interval_s;
-    const Eigen::VectorXd angle = allan::angle_from_rate(full_residual_rad_s, tau0);
-    const auto n_angle = static_cast<std::size_t>(angle.size());
-    const auto factors = allan::averaging_factors(allan::TauGrid{}, allan::Kind::Oadev, n_angle, tau0);
-    for (const auto& d : allan::deviations(allan::Kind::Oadev, angle, tau0, factors))
-      v.allan.push_back({d.tau, d.dev, model_allan_deviation(noise, d.tau)});
+    const auto analysis = allan::analyze_rate(full_residual_rad_s, 1.0 / blocks.sample_interval_s, {.fit_terms = false});
+    for (const auto& d : analysis.curve) v.allan.push_back({d.tau, d.dev, model_allan_deviation(noise, d.tau)});
   }
   return v;
 }

@@ -11,6 +11,7 @@
 
 #include "models/allan/confidence.hpp"
 #include "models/allan/deviation.hpp"
+#include "models/allan/analysis.hpp"
 #include "models/allan/noise_fit.hpp"
 #include "models/allan/tau_grid.hpp"
 #include "tools/bench/bench_signals.hpp"
@@ -53,14 +54,9 @@ void BM_Totdev(benchmark::State& state) { run_deviation(state, allan::Kind::Totd
 void BM_AllanAnalysis(benchmark::State& state) {
   const auto* signal = bench::signal_or_skip(state);
   if (signal == nullptr) return;
-  const auto kind = allan::Kind::Oadev;
-  Eigen::VectorXd angle;
   for (auto _ : state) {
-    const auto factors = integrate_copy(state, *signal, kind, angle);
-    const auto curve = allan::estimate(kind, angle, 1.0 / signal->sample_rate_hz,
-                                       allan::InputType::Rate, factors);
-    const allan::NoiseFit fit = allan::fit_noise_terms(curve);
-    benchmark::DoNotOptimize(fit.chi2);
+    const auto analysis = allan::analyze_rate(signal->rate_rad_s, signal->sample_rate_hz);
+    benchmark::DoNotOptimize(analysis.bias_instability.value);
   }
   state.SetItemsProcessed(state.iterations() * state.range(0));
 }

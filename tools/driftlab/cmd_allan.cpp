@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "framework/atomic_file.hpp"
@@ -17,6 +18,7 @@
 #include "framework/units.hpp"
 #include "models/allan/confidence.hpp"
 #include "models/allan/deviation.hpp"
+#include "models/allan/analysis.hpp"
 #include "models/allan/noise_fit.hpp"
 #include "models/allan/tau_grid.hpp"
 #include "tools/driftlab/cli.hpp"
@@ -79,6 +81,17 @@ nlohmann::json summary_json(const AllanOptions& o, const allan::NoiseFit& fit, b
               {"covariance_scale", fit.scale},
               {"model", "sigma^2 = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2"}};
   return j;
+}
+
+// The paper's and data sheets' readings (models/allan/analysis.hpp), in deg/h for a rate channel.
+nlohmann::json readings_json(const allan::Analysis& a, bool angular, const std::string& channel_unit) {
+  const double f = angular ? kDphPerRadPerSec : 1.0;
+  const std::string unit = angular ? "deg/h" : channel_unit;
+  const auto& b = a.bias_instability;
+  return {{"B_flat_floor", {{"value", b.value * f}, {"interval", {b.low * f, b.high * f}}, {"tau_s", b.tau_s},
+                            {"unit", unit}, {"how", "min OADEV / 0.664 (IEEE 952 Annex C)"}}},
+          {"N_at_1s", {{"value", a.arw_rad_sqrt_s * f}, {"unit", angular ? "deg/h/sqrt(Hz)" : channel_unit + "*sqrt(s)"},
+                       {"how", "-1/2 slope line at tau = 1 s"}}}};
 }
 
 Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& curve,
@@ -164,29 +177,38 @@ void allan_command(const AllanOptions& o) {
   }
   write_csv(o.out, columns);
 
-  std::unique_ptr<allan::NoiseFit> fit;
+  std::optional<allan::Analysis> analysis;
   try {
-    const auto oadev_curve =
-        *kind == allan::Kind::Oadev
-            ? curve
-            : allan::estimate(allan::Kind::Oadev, angle, tau0, input,
-                              allan::averaging_factors(allan::TauGrid{}, allan::Kind::Oadev, n, tau0),
-                              o.confidence);
-    fit = std::make_unique<allan::NoiseFit>(allan::fit_noise_terms(oadev_curve));
+    analysis = allan::analyze_angle(angle, tau0, {.confidence = o.confidence});
   } catch (const DataError& e) {
     if (!o.json.empty()) throw;
-    std::cerr << "note: no noise-term fit: " << e.what() << "\n";
+    std::cerr << "note: no Allan readings: " << e.what() << "\n";
+  }
+  const allan::NoiseFit* fit = analysis && analysis->fit ? &*analysis->fit : nullptr;
+  if (analysis && !fit) {
+    if (!o.json.empty()) throw DataError({o.data.path, 0, role}, "too few Allan points for the noise-term fit");
+    std::cerr << "note: no noise-term fit: too few Allan points\n";
   }
   const bool angular = channel.unit == "rad/s";
   const std::size_t samples = input == allan::InputType::Rate ? n - 1 : n;
   if (!o.json.empty()) {
-    write_file_atomically(o.json, summary_json(o, *fit, angular, channel.unit, samples, tau0).dump(2) + "\n");
+    auto summary = summary_json(o, *fit, angular, channel.unit, samples, tau0);
+    summary["readings"] = readings_json(*analysis, angular, channel.unit);
+    write_file_atomically(o.json, summary.dump(2) + "\n");
   }
-  if (!o.plot.empty()) write_file_atomically(o.plot, render_svg(allan_figure(o, curve, fit.get(), scale, unit)));
+  if (!o.plot.empty()) write_file_atomically(o.plot, render_svg(allan_figure(o, curve, fit, scale, unit)));
 
   std::cout << o.kind << " of " << role << ": " << curve.size() << " taus from " << curve.front().tau
             << " s to " << curve.back().tau << " s, " << samples << " samples at " << fs << " Hz\n";
+  if (analysis && angular) {
+    const auto& b = analysis->bias_instability;
+    std::printf("B = %.4g deg/h (flat floor of the OADEV / 0.664, IEEE 952) at tau = %g s, 68.3 %% interval [%.3g, %.3g]\n",
+                b.value * kDphPerRadPerSec, b.tau_s, b.low * kDphPerRadPerSec, b.high * kDphPerRadPerSec);
+    std::printf("N = %.4g deg/h/sqrt(Hz) (-1/2 slope line at tau = 1 s)\n", analysis->arw_rad_sqrt_s * kDphPerRadPerSec);
+    std::fflush(stdout);
+  }
   if (fit && angular) {
+    std::cout << "least-squares fit of the five IEEE 952 terms:\n";
     for (const auto& c : allan::kIeee952Units) {
       const auto& t = (*fit)[c.term];
       char line[160];
