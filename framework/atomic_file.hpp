@@ -8,8 +8,8 @@
 
 namespace driftlab {
 
-// Writes `content` to `path` atomically. Throws DataError (naming the path) on failure; the
-// temporary file is removed.
+// Writes `content` to `path` atomically: an OutputSet of one file (output_set.hpp). A missing or
+// unwritable directory is a ConfigError, a failed write an Error; the temporary file is removed.
 void write_file_atomically(const std::filesystem::path& path, std::string_view content);
 
 // Throws ConfigError when `output` is (or resolves to the same file as) one of `inputs`.

@@ -8,9 +8,11 @@
 #include <fstream>
 #include <optional>
 #include <string_view>
+#include <unordered_map>
 
 #include "framework/atomic_file.hpp"
 #include "framework/error.hpp"
+#include "framework/resources.hpp"
 #include "framework/units.hpp"
 
 namespace driftlab {
@@ -71,7 +73,11 @@ std::string read_file(const std::filesystem::path& path) {
     throw DataError({path.string(), 0, ""}, "file does not exist or is not a regular file");
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) throw DataError({path.string(), 0, ""}, std::string("cannot open: ") + std::strerror(errno));
-  std::string buffer(std::filesystem::file_size(path), '\0');
+  const auto size = std::filesystem::file_size(path);
+  // The text and the parsed values of every column: at most about three times the file size.
+  check_memory_estimate(3.0 * static_cast<double>(size), {path.string(), 0, ""},
+                        "reading a " + std::to_string(size >> 20) + " MB file");
+  std::string buffer(size, '\0');
   const auto n = std::fread(buffer.data(), 1, buffer.size(), f);
   std::fclose(f);
   buffer.resize(n);
@@ -86,29 +92,61 @@ struct Wanted {
   std::vector<double> values;
 };
 
+std::string quantity_text(Quantity q) {
+  switch (q) {
+    case Quantity::AngularRate: return "an angular-rate unit (rad/s, deg/s, deg/h, mrad/s)";
+    case Quantity::Temperature: return "a temperature unit (degC, K)";
+    case Quantity::Time: return "a time unit (s, ms, us, ns, h)";
+    case Quantity::Frequency: return "a frequency unit (Hz, kHz)";
+    case Quantity::Dimensionless: return "unit 1";
+  }
+  return "a unit";
+}
+
+// The one place where a mapping's unit is looked up and checked against its role.
 Unit unit_or_throw(const ColumnMapping& m) {
   auto u = find_unit(m.unit);
   if (!u) {
     std::string known;
     for (const auto& k : known_unit_spellings()) known += (known.empty() ? "" : ", ") + k;
-    throw ConfigError({"", 0, m.column}, "unknown unit '" + m.unit + "' (known: " + known + ")");
+    throw ConfigError({"", 0, m.column}, "unknown unit " + quoted_excerpt(m.unit) + " (known: " + known + ")");
   }
+  if (const auto q = quantity_of_role(m.role); q && *q != u->quantity)
+    throw ConfigError({"", 0, m.column}, "unit '" + u->symbol + "' does not fit the role '" + m.role +
+                                             "', which needs " + quantity_text(*q));
   return *u;
 }
 
+// "a, b, c" for a message, at most ~200 bytes of it.
+std::string names_excerpt(const std::vector<std::string_view>& names) {
+  std::string out;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (out.size() > 200) return out + ", ... (" + std::to_string(names.size()) + " columns)";
+    out += (i ? ", " : "") + std::string(names[i].substr(0, 80));
+  }
+  return out;
+}
+
+// Lines end in LF, CR LF or CR (old Mac files); a UTF-8 byte-order mark at the start is skipped.
 class LineCursor {
  public:
-  explicit LineCursor(const std::string& text) : text_(text) {}
+  explicit LineCursor(const std::string& text) : text_(text) {
+    if (text_.size() >= 3 && text_.compare(0, 3, "\xEF\xBB\xBF") == 0) pos_ = 3;
+  }
   // Next non-blank, non-comment line; false at end of file.
   bool next(std::string_view& line) {
     while (pos_ < text_.size()) {
       const char* begin = text_.data() + pos_;
       const void* nl = std::memchr(begin, '\n', text_.size() - pos_);
-      const std::size_t len = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - begin) : text_.size() - pos_;
-      pos_ += len + 1;
+      std::size_t len = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - begin) : text_.size() - pos_;
+      std::size_t advance = len + 1;
+      if (const void* cr = std::memchr(begin, '\r', len)) {  // CR LF, or a CR-only line end
+        len = static_cast<std::size_t>(static_cast<const char*>(cr) - begin);
+        advance = len + 1 + (len + 1 < text_.size() - pos_ && begin[len + 1] == '\n' ? 1 : 0);
+      }
+      pos_ += advance;
       ++line_;
       line = std::string_view(begin, len);
-      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
       if (line.empty() || line.front() == '#' || trim(line).empty()) continue;
       return true;
     }
@@ -123,6 +161,14 @@ class LineCursor {
 };
 
 }  // namespace
+
+std::optional<Quantity> quantity_of_role(const std::string& role) {
+  if (role == "time") return Quantity::Time;
+  if (role == role::kRate || role == role::kTrueRate) return Quantity::AngularRate;
+  if (role == role::kTemperature || role == role::kDieTemperature) return Quantity::Temperature;
+  if (role == role::kDriveFrequency) return Quantity::Frequency;
+  return std::nullopt;
+}
 
 ColumnMapping parse_column_mapping(const std::string& text) {
   const Location where{"--column", 0, text};
@@ -145,13 +191,22 @@ ColumnMapping parse_column_mapping(const std::string& text) {
   }
   if (m.role.empty()) m.role = m.column;
   if (m.column.empty()) throw ConfigError(where, "empty column name");
-  unit_or_throw(m);
+  try {
+    unit_or_throw(m);
+  } catch (const ConfigError& e) {
+    throw ConfigError(where, e.problems().front().message);
+  }
   return m;
 }
 
 TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& options) {
-  const std::string file = path.string();
-  const std::string text = read_file(path);
+  return parse_csv(read_file(path), path.string(), options);
+}
+
+TimeSeries parse_csv(const std::string& text, const std::string& file, const CsvReadOptions& options) {
+  if (!std::isfinite(options.sample_rate_hz) || options.sample_rate_hz > 1.0 / kMinTimeStep)
+    throw ConfigError({file, 0, "--fs"}, "the sample rate must be finite and at most 1e9 Hz");
+  if (!std::isfinite(options.max_gap_factor)) throw ConfigError({file, 0, "--max-gap"}, "must be a finite number");
   LineCursor cursor(text);
   std::string_view line;
   if (!cursor.next(line)) throw DataError({file, 0, ""}, "file is empty (expected a header row and data rows)");
@@ -163,19 +218,22 @@ TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& opt
     if (std::all_of(header.begin(), header.end(), [&](std::string_view c) { return parse_number(c, dummy); }))
       throw DataError({file, header_line, ""}, "missing header row (the first row holds only numbers)");
   }
-  std::string available;
-  for (const auto& h : header) available += (available.empty() ? "" : ", ") + std::string(h);
+  const std::string available = names_excerpt(header);
+  std::unordered_map<std::string_view, std::size_t> index_of;  // linear in the number of columns
+  index_of.reserve(header.size());
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (header[i].empty()) continue;
+    if (!index_of.emplace(header[i], i).second)
+      throw DataError({file, header_line, ""}, "duplicated column name " + quoted_excerpt(header[i]) +
+                                                   " (columns " + std::to_string(index_of[header[i]] + 1) + " and " +
+                                                   std::to_string(i + 1) + ")");
+  }
   const auto find_index = [&](const std::string& column, bool required) -> std::optional<std::size_t> {
-    for (std::size_t i = 0; i < header.size(); ++i)
-      if (header[i] == column) return i;
+    if (auto it = index_of.find(column); it != index_of.end()) return it->second;
     if (required)
       throw DataError({file, header_line, column}, "missing column (the header has: " + available + ")");
     return std::nullopt;
   };
-  for (std::size_t i = 0; i < header.size(); ++i)
-    for (std::size_t j = i + 1; j < header.size(); ++j)
-      if (header[i] == header[j] && !header[i].empty())
-        throw DataError({file, header_line, std::string(header[i])}, "duplicated column name");
 
   std::vector<Wanted> wanted;
   std::optional<ColumnMapping> time_mapping;
@@ -232,10 +290,15 @@ TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& opt
         double v;
         if (cell.empty()) throw DataError({file, lineno, w.mapping.column}, "empty cell (expected a number)");
         if (!parse_number(cell, v))
-          throw DataError({file, lineno, w.mapping.column}, "expected a number, got '" + std::string(cell) + "'");
+          throw DataError({file, lineno, w.mapping.column}, "expected a number, got " + quoted_excerpt(cell));
         if (!std::isfinite(v))
-          throw DataError({file, lineno, w.mapping.column}, "value is " + std::string(cell) + " (NaN/Inf not allowed)");
-        w.values.push_back(to_internal(v, w.unit));
+          throw DataError({file, lineno, w.mapping.column}, "value is " + quoted_excerpt(cell) + " (NaN/Inf not allowed)");
+        const double internal = to_internal(v, w.unit);
+        if (!(std::abs(internal) <= kMaxMagnitude))
+          throw DataError({file, lineno, w.mapping.column},
+                          "value " + quoted_excerpt(cell) + " is too large to compute with (at most 1e100 " +
+                              internal_unit_symbol(w.unit.quantity) + " in magnitude; its squares and sums would overflow)");
+        w.values.push_back(internal);
         ++next_wanted;
       }
       if (comma == std::string_view::npos) break;
@@ -262,6 +325,11 @@ TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& opt
         throw DataError({file, line_of_row[i], time_mapping->column},
                         "time stamps must increase (this one is earlier than line " +
                             std::to_string(line_of_row[i - 1]) + ")");
+      if (tv[i] - tv[i - 1] < kMinTimeStep)
+        throw DataError({file, line_of_row[i], time_mapping->column},
+                        "time step of " + std::to_string(tv[i] - tv[i - 1]) + " s after line " +
+                            std::to_string(line_of_row[i - 1]) +
+                            " is below 1 ns (a sample rate above 1 GHz; its rates and deviations would overflow)");
     }
     if (options.max_gap_factor > 0.0 && rows > 2) {
       std::vector<double> steps(rows - 1);
@@ -291,14 +359,23 @@ TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& opt
   return series;
 }
 
-void write_csv(const std::filesystem::path& path, const std::vector<CsvColumn>& columns) {
+std::string format_csv(const std::vector<CsvColumn>& columns, const std::string& label) {
   std::vector<Unit> units;
   Eigen::Index rows = columns.empty() ? 0 : columns.front().values.size();
+  std::unordered_map<std::string_view, std::size_t> seen;
   for (const auto& c : columns) {
+    const auto bad = c.name.empty() || c.name.find_first_of(",\"\r\n") != std::string::npos ||
+                     c.name.front() == ' ' || c.name.back() == ' ' || c.name.front() == '#';
+    if (bad)
+      throw ConfigError({label, 0, ""}, "column name " + quoted_excerpt(c.name) +
+                                            " is not a valid CSV header cell (empty, a comma, quote or line "
+                                            "break, surrounding spaces, or a leading #)");
+    if (!seen.emplace(c.name, seen.size()).second)
+      throw ConfigError({label, 0, c.name}, "two output columns have this name; column names must be unique");
     auto u = find_unit(c.unit);
-    if (!u) throw ConfigError({path.string(), 0, c.name}, "unknown output unit '" + c.unit + "'");
+    if (!u) throw ConfigError({label, 0, c.name}, "unknown output unit '" + c.unit + "'");
     if (c.values.size() != rows)
-      throw DataError({path.string(), 0, c.name}, "column length differs from the first column");
+      throw DataError({label, 0, c.name}, "column length differs from the first column");
     units.push_back(*u);
   }
   std::string out;
@@ -309,12 +386,23 @@ void write_csv(const std::filesystem::path& path, const std::vector<CsvColumn>& 
   for (Eigen::Index i = 0; i < rows; ++i) {
     for (std::size_t j = 0; j < columns.size(); ++j) {
       if (j) out += ',';
-      const auto res = std::to_chars(buf, buf + sizeof buf, from_internal(columns[j].values[i], units[j]));
+      const double v = columns[j].absolute ? from_internal(columns[j].values[i], units[j])
+                                           : difference_from_internal(columns[j].values[i], units[j]);
+      if (!std::isfinite(v))
+        throw Error(Diagnostic{{label, 0, columns[j].name},
+                               "computed value in row " + std::to_string(i + 1) +
+                                   " is not finite (the computation overflowed); nothing was written"}
+                        .to_string());
+      const auto res = std::to_chars(buf, buf + sizeof buf, v);
       out.append(buf, res.ptr);
     }
     out += '\n';
   }
-  write_file_atomically(path, out);
+  return out;
+}
+
+void write_csv(const std::filesystem::path& path, const std::vector<CsvColumn>& columns) {
+  write_file_atomically(path, format_csv(columns, path.string()));
 }
 
 }  // namespace driftlab

@@ -11,20 +11,28 @@
 // Values are converted to internal units at this boundary (rate rad/s, temperature degC, time s).
 //
 // Every problem is a DataError naming file, line and column: missing file, empty file, missing
-// header, missing column, wrong number of cells, non-numeric or empty cell, NaN/Inf,
+// header, missing column, wrong number of cells, non-numeric or empty cell, NaN/Inf, a value
+// beyond kMaxMagnitude (its arithmetic would overflow), a time step below kMinTimeStep,
 // duplicated or decreasing time stamps, a gap larger than max_gap_factor x the median step, a
-// unit the mapping does not know (ConfigError). Parsing uses std::from_chars on one in-memory
-// buffer: O(file size), about 0.1 s per million 3-column rows on one core.
+// unit the mapping does not know or one of another dimension than the role (ConfigError).
+// Messages quote at most 80 bytes of a bad cell, control bytes escaped (quoted_excerpt).
+// A UTF-8 byte-order mark is skipped; lines end in LF, CR LF or CR. Parsing uses std::from_chars
+// on one in-memory buffer: O(file size), about 0.1 s per million 3-column rows on one core
+// (the header check is linear in the number of columns too).
 //
-// Writing goes through write_file_atomically (temporary file + rename).
+// Writing goes through write_file_atomically (temporary file + rename) or an OutputSet. Column
+// names must be valid, unique CSV header cells (ConfigError); values must be finite (Error: a
+// computation overflowed).
 #pragma once
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "framework/time_series.hpp"
+#include "framework/units.hpp"
 
 namespace driftlab {
 
@@ -34,8 +42,17 @@ struct ColumnMapping {
   std::string unit;    // unit spelling (see units.hpp)
 };
 
+// Largest magnitude of a value in internal units: squares and sums over 1e8 samples stay finite.
+inline constexpr double kMaxMagnitude = 1e100;
+// Smallest time step (s): a 1 GHz sample rate; 1/step and 1/step^2 stay finite.
+inline constexpr double kMinTimeStep = 1e-9;
+
+// The quantity a well-known role must carry (time, rate, true_rate, temperature, die_temperature,
+// drive_frequency); empty for other roles, which accept any unit.
+std::optional<Quantity> quantity_of_role(const std::string& role);
+
 // Parses `role=column:unit`, `column:unit` (role = column) or a suffixed name such as `rate_dps`.
-// Throws ConfigError for malformed text or an unknown unit.
+// Throws ConfigError for malformed text, an unknown unit or a unit of another dimension than the role.
 ColumnMapping parse_column_mapping(const std::string& text);
 
 struct CsvReadOptions {
@@ -46,14 +63,24 @@ struct CsvReadOptions {
 };
 
 TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& options = {});
+// The same on text already in memory; `file` names it in messages.
+TimeSeries parse_csv(const std::string& text, const std::string& file, const CsvReadOptions& options = {});
 
 // One output column: header name, values in internal units, and the unit to write them in
-// (e.g. {"rate_dps", values_rad_s, "deg/s"}).
+// (e.g. {"rate_dps", values_rad_s, "deg/s"}). `absolute` false: the values are differences
+// (deviations, IMFs, standard deviations): a unit with an offset (K) converts them by its scale
+// only, so a 1 degC deviation is written as 1 K, not 274.15 K.
 struct CsvColumn {
   std::string name;
   Eigen::VectorXd values;
   std::string unit = "1";
+  bool absolute = true;
 };
+
+// The CSV text of equal-length columns (shortest round-trip formatting); `label` names the
+// output in messages. Throws ConfigError for a bad or repeated column name, Error for a
+// non-finite value.
+std::string format_csv(const std::vector<CsvColumn>& columns, const std::string& label);
 
 // Writes columns of equal length with shortest round-trip formatting, atomically.
 void write_csv(const std::filesystem::path& path, const std::vector<CsvColumn>& columns);

@@ -1,5 +1,7 @@
 #include "framework/error.hpp"
 
+#include <algorithm>
+
 namespace driftlab {
 namespace {
 
@@ -13,6 +15,25 @@ std::string join_problems(const std::vector<Diagnostic>& problems) {
 }
 
 }  // namespace
+
+std::string quoted_excerpt(std::string_view text, std::size_t max_chars) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string out = "'";
+  const std::size_t shown = std::min(text.size(), max_chars);
+  for (std::size_t i = 0; i < shown; ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c < 0x20 || c >= 0x7f || c == '\\') {
+      out += "\\x";
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  out += "'";
+  if (shown < text.size()) out += "... (" + std::to_string(text.size()) + " bytes in all)";
+  return out;
+}
 
 std::string Diagnostic::to_string() const {
   std::string text;

@@ -4,6 +4,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace driftlab {
@@ -21,6 +22,10 @@ struct Diagnostic {
   std::string message;
   std::string to_string() const;  // "file:line: field: message"
 };
+
+// `text` quoted for a message: at most `max_chars` bytes (then "... (N bytes in all)"), control and
+// non-ASCII bytes escaped as \xNN, so a 2 MB cell or a binary file never floods a terminal.
+std::string quoted_excerpt(std::string_view text, std::size_t max_chars = 80);
 
 class Error : public std::runtime_error {
  public:

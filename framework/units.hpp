@@ -31,6 +31,10 @@ std::string internal_unit_symbol(Quantity q);
 
 inline double to_internal(double value, const Unit& u) { return value * u.scale + u.offset; }
 inline double from_internal(double value, const Unit& u) { return (value - u.offset) / u.scale; }
+// Differences (deviations, IMFs, standard deviations) convert by the scale only: an offset applies
+// to absolute values alone (a 1 K difference is a 1 degC difference).
+inline double difference_to_internal(double value, const Unit& u) { return value * u.scale; }
+inline double difference_from_internal(double value, const Unit& u) { return value / u.scale; }
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegPerRad = 180.0 / kPi;

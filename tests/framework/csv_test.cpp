@@ -1,5 +1,6 @@
 #include "framework/csv.hpp"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,6 +12,8 @@
 
 namespace driftlab {
 namespace {
+
+using ::testing::HasSubstr;
 
 const std::filesystem::path kCsvDir = std::filesystem::path(DRIFTLAB_TEST_DATA) / "csv";
 constexpr double kUnitConversionTolerance = 1e-12;  // a couple of double roundings
@@ -135,7 +138,67 @@ TEST(CsvWriter, WritesAtomicallyAndRoundTripsExactly) {
 }
 
 TEST(CsvWriter, FailsClearlyWhenTheDirectoryIsMissing) {
-  EXPECT_THROW(write_csv("/nonexistent-dir/out.csv", {{"t_s", Eigen::VectorXd::Zero(2), "s"}}), DataError);
+  // A usage error (exit 2), not bad input data: the user named a directory that is not there.
+  EXPECT_THROW(write_csv("/nonexistent-dir/out.csv", {{"t_s", Eigen::VectorXd::Zero(2), "s"}}), ConfigError);
+}
+
+TEST(CsvWriter, RefusesColumnNamesThatCannotBeReadBack) {
+  const Eigen::VectorXd v = Eigen::VectorXd::Zero(2);
+  EXPECT_THROW(format_csv({{"t_s", v, "s"}, {"a,b", v, "1"}}, "out.csv"), ConfigError);
+  EXPECT_THROW(format_csv({{"t_s", v, "s"}, {"t_s", v, "s"}}, "out.csv"), ConfigError);
+  EXPECT_THROW(format_csv({{"", v, "s"}}, "out.csv"), ConfigError);
+  EXPECT_THROW(format_csv({{"x", Eigen::VectorXd::Constant(2, 1e308), "deg/h"}}, "out.csv"), Error)
+      << "a value that overflows in its output unit is not written as inf";
+}
+
+TEST(CsvWriter, AnOffsetUnitConvertsOnlyAbsoluteColumns) {
+  const Eigen::VectorXd celsius = Eigen::VectorXd::Constant(1, 1.0);
+  EXPECT_EQ(format_csv({{"abs_k", celsius, "K"}, {"dev_k", celsius, "K", false}}, "o.csv"), "abs_k,dev_k\n274.15,1\n");
+}
+
+TEST(CsvReader, AcceptsAByteOrderMarkAndCrOrCrLfLineEnds) {
+  for (const std::string text : {"\xEF\xBB\xBFt_s,rate_dps\n0,1\n1,2\n", "t_s,rate_dps\r0,1\r1,2\r",
+                                 "t_s,rate_dps\r\n0,1\r\n1,2\r\n", "t_s,rate_dps\r\n0,1\r1,2"}) {
+    const auto series = parse_csv(text, "x.csv");
+    EXPECT_EQ(series.size(), 2) << text;
+  }
+}
+
+TEST(CsvReader, QuotesAtMostEightyBytesOfABadCellWithControlBytesEscaped) {
+  const std::string cell = "\x1b[2J" + std::string(100000, 'z');
+  try {
+    parse_csv("t_s,rate_dps\n0," + cell + "\n", "x.csv");
+    FAIL();
+  } catch (const DataError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("'\\x1b[2Jzzz"));
+    EXPECT_THAT(e.what(), HasSubstr("(100004 bytes in all)"));
+    EXPECT_LT(std::string(e.what()).size(), 300u);
+  }
+}
+
+TEST(CsvReader, FindsADuplicateAmongManyColumnsInOnePass) {
+  std::string header = "t_s";
+  for (int i = 0; i < 200000; ++i) header += ",c" + std::to_string(i);
+  header += ",c123456";
+  try {
+    parse_csv(header + "\n", "wide.csv");
+    FAIL();
+  } catch (const DataError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("wide.csv:1: duplicated column name 'c123456' (columns 123458 and 200002)"));
+  }
+}
+
+TEST(CsvReader, RefusesValuesWhoseArithmeticWouldOverflowAndSubNanosecondSteps) {
+  EXPECT_THROW(parse_csv("t_s,rate_dps\n0,1\n1,-1e308\n", "x.csv"), DataError);
+  EXPECT_THROW(parse_csv("t_s,rate_dps\n0,1\n1e-300,1\n", "x.csv"), DataError);
+}
+
+TEST(CsvMapping, EachRoleAcceptsOnlyUnitsOfItsDimension) {
+  EXPECT_THROW(parse_column_mapping("rate=rate_dps:K"), ConfigError);
+  EXPECT_THROW(parse_column_mapping("temperature=t:deg/s"), ConfigError);
+  EXPECT_THROW(parse_column_mapping("time=t:Hz"), ConfigError);
+  EXPECT_NO_THROW(parse_column_mapping("temperature=t:K"));
+  EXPECT_NO_THROW(parse_column_mapping("accel=a:1")) << "other roles take any unit";
 }
 
 }  // namespace

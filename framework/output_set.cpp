@@ -1,0 +1,148 @@
+#include "framework/output_set.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
+#include "framework/atomic_file.hpp"
+#include "framework/error.hpp"
+
+namespace driftlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The same file, whether or not it exists yet.
+bool same_file(const fs::path& a, const fs::path& b) {
+  std::error_code ec1, ec2;
+  if (fs::exists(a, ec1) && fs::exists(b, ec2)) return fs::equivalent(a, b, ec1);
+  return fs::weakly_canonical(a, ec1) == fs::weakly_canonical(b, ec2);
+}
+
+std::string errno_text() { return std::strerror(errno); }
+
+}  // namespace
+
+OutputSet::OutputSet(std::vector<fs::path> inputs) : inputs_(std::move(inputs)) {}
+
+OutputSet::~OutputSet() {
+  if (!committed_) discard();
+}
+
+void OutputSet::add_input(const fs::path& input) { inputs_.push_back(input); }
+
+void OutputSet::plan(const fs::path& path, const std::string& option) {
+  if (path.empty()) return;
+  const Location where{path.string(), 0, option};
+  for (const auto& e : entries_)
+    if (same_file(e.path, path))
+      throw ConfigError(where, "the same file is also given as " + (e.option.empty() ? e.path.string() : e.option) +
+                                   "; every output needs its own path");
+  std::vector<fs::path> inputs;
+  for (const auto& in : inputs_)
+    if (!in.empty()) inputs.push_back(in);
+  ensure_not_an_input(path, inputs);
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw ConfigError(where, "is a directory; expected a file path");
+  if (path.filename().empty() || path.filename() == "." || path.filename() == "..")
+    throw ConfigError(where, "expected a file path");
+  const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  if (!fs::is_directory(dir, ec))
+    throw ConfigError(where, "output directory " + dir.string() + " does not exist");
+  std::string temp = (dir / ("." + path.filename().string() + ".tmp-XXXXXX")).string();
+  const int fd = ::mkstemp(temp.data());
+  if (fd < 0) throw ConfigError(where, "cannot write to the output directory " + dir.string() + ": " + errno_text());
+  ::close(fd);
+  entries_.push_back({path, option, temp, false});
+}
+
+bool OutputSet::planned(const fs::path& path) const {
+  for (const auto& e : entries_)
+    if (e.path == path) return true;
+  return false;
+}
+
+OutputSet::Entry& OutputSet::entry(const fs::path& path) {
+  for (auto& e : entries_)
+    if (e.path == path) return e;
+  throw std::logic_error("OutputSet: output " + path.string() + " was not planned");
+}
+
+void OutputSet::write(const fs::path& path, std::string_view content) {
+  Entry& e = entry(path);
+  const auto fail = [&](const std::string& what) {
+    throw Error(Diagnostic{{path.string(), 0, e.option}, "cannot write output: " + what}.to_string());
+  };
+  const int fd = ::open(e.temp.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+  if (fd < 0) fail(errno_text());
+  std::size_t written = 0;
+  while (written < content.size()) {
+    const auto n = ::write(fd, content.data() + written, content.size() - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const std::string err = errno_text();
+      ::close(fd);
+      fail(err);
+    }
+    written += static_cast<std::size_t>(n);
+  }
+  if (::fsync(fd) != 0) {
+    const std::string err = errno_text();
+    ::close(fd);
+    fail(err);
+  }
+  if (::close(fd) != 0) fail(errno_text());
+  ::chmod(e.temp.c_str(), 0644);
+  e.written = true;
+}
+
+void OutputSet::write_csv(const fs::path& path, const std::vector<CsvColumn>& columns) {
+  write(path, format_csv(columns, path.string()));
+}
+
+void OutputSet::commit() {
+  for (const auto& e : entries_)
+    if (!e.written) throw std::logic_error("OutputSet: output " + e.path.string() + " was planned but not written");
+  // Keep a hard link to every file that will be replaced, so a failed rename can be undone.
+  std::vector<std::string> backups(entries_.size());
+  std::error_code ec;
+  for (std::size_t i = 0; i < entries_.size(); ++i) {
+    if (!fs::exists(entries_[i].path, ec)) continue;
+    std::string b = entries_[i].temp + ".old";
+    if (::link(entries_[i].path.c_str(), b.c_str()) == 0) backups[i] = b;
+  }
+  std::size_t done = 0;
+  std::string failure;
+  for (; done < entries_.size(); ++done) {
+    if (std::rename(entries_[done].temp.c_str(), entries_[done].path.c_str()) != 0) {
+      failure = entries_[done].path.string() + ": cannot write output: " + errno_text();
+      break;
+    }
+  }
+  if (failure.empty()) {
+    committed_ = true;
+    for (const auto& b : backups)
+      if (!b.empty()) std::remove(b.c_str());
+    return;
+  }
+  for (std::size_t i = 0; i < done; ++i) {  // undo: restore or remove what was renamed
+    if (!backups[i].empty()) std::rename(backups[i].c_str(), entries_[i].path.c_str());
+    else std::remove(entries_[i].path.c_str());
+  }
+  for (std::size_t i = done; i < entries_.size(); ++i)
+    if (!backups[i].empty()) std::remove(backups[i].c_str());
+  discard();
+  committed_ = true;  // nothing left to clean up
+  throw Error(failure + " (no output of this command was written)");
+}
+
+void OutputSet::discard() noexcept {
+  for (const auto& e : entries_) std::remove(e.temp.c_str());
+}
+
+}  // namespace driftlab

@@ -1,0 +1,65 @@
+// All outputs of one command, planned and checked before any computation and committed together
+// (DESIGN.md §5: outputs atomic, inputs never overwritten; issue 17: all or nothing).
+//
+//   OutputSet outputs({data_path, device_path});       // the command's inputs
+//   outputs.plan(o.out, "--out");                      // every output, before reading data:
+//   outputs.plan(o.json, "--json");                    //   empty paths are skipped
+//   ... compute ...
+//   outputs.write_csv(o.out, columns);                 // staged in a temporary file next to it
+//   outputs.write(o.json, text);
+//   outputs.commit();                                  // renames every staged file into place
+//
+// plan() refuses (ConfigError, exit 2) a path that is an input, that another option of the same
+// command already names, that is a directory, or whose directory is missing or not writable; it
+// creates the temporary file right away, so a path that cannot be written fails before any work.
+// commit() requires every planned output to have been written, then renames them all; if one
+// rename fails, the ones already renamed are put back (an earlier file of that name is restored).
+// An OutputSet destroyed without commit() (an exception on the way) removes its temporary files:
+// a failed command leaves no output behind.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "framework/csv.hpp"
+
+namespace driftlab {
+
+class OutputSet {
+ public:
+  explicit OutputSet(std::vector<std::filesystem::path> inputs = {});
+  ~OutputSet();
+  OutputSet(const OutputSet&) = delete;
+  OutputSet& operator=(const OutputSet&) = delete;
+
+  // Adds an input that outputs must never overwrite (e.g. a file named inside a pipeline).
+  void add_input(const std::filesystem::path& input);
+  // Checks and reserves one output; `option` names it in messages ("--json"). Empty path: no-op.
+  void plan(const std::filesystem::path& path, const std::string& option);
+  bool planned(const std::filesystem::path& path) const;
+
+  // Stage the content of a planned output (throws std::logic_error when the path was not planned).
+  void write(const std::filesystem::path& path, std::string_view content);
+  void write_csv(const std::filesystem::path& path, const std::vector<CsvColumn>& columns);
+
+  // Renames every staged file into place, all or nothing.
+  void commit();
+
+ private:
+  struct Entry {
+    std::filesystem::path path;
+    std::string option;
+    std::string temp;  // temporary file next to `path`
+    bool written = false;
+  };
+  Entry& entry(const std::filesystem::path& path);
+  void discard() noexcept;
+
+  std::vector<std::filesystem::path> inputs_;
+  std::vector<Entry> entries_;
+  bool committed_ = false;
+};
+
+}  // namespace driftlab
