@@ -1,6 +1,7 @@
 #include "devices/device_file.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <sstream>
 
@@ -42,7 +43,8 @@ class DeviceReader {
       y_.problem(y_.child(root, "", "format", false), "format",
                  "unsupported format '" + *format + "'; expected " + kDeviceFormat);
     read_identity(y_.child(root, "", "identity", true), d);
-    d.physics.reference_temp_c = y_.number_or(root, "", "reference_temp_c", 25.0, Bounds::between(-273.15, 500.0));
+    // Above absolute zero: Q(T) scales with the absolute temperature ratio.
+    d.physics.reference_temp_c = y_.number_or(root, "", "reference_temp_c", 25.0, Bounds{-273.15, 500.0, true});
     d.error_model.reference_temp_c = d.physics.reference_temp_c;
     read_structure(y_.child(root, "", "structure", true), d.physics.structure);
     read_modes(y_.child(root, "", "modes", true), d.physics);
@@ -231,11 +233,53 @@ class DeviceReader {
     }
   }
 
+  // Bounds from the physics rather than per-key ranges: over the temperature range the device is
+  // used in (its temperature channel's range, else -55..125 degC) both modes keep a positive
+  // frequency and Q, and every model response is finite.
+  void check_responses(const YAML::Node& root, const DeviceDefinition& d, const DeviceModel& model) {
+    double lo = -55.0, hi = 125.0;
+    for (const auto& c : d.channels)
+      if (c.role == "temperature" && std::isfinite(c.range_min) && std::isfinite(c.range_max)) {
+        lo = std::max(c.range_min, -273.0);
+        hi = c.range_max;
+      }
+    const YAML::Node modes = y_.child(root, "", "modes", false);
+    constexpr int kPoints = 64;
+    for (int i = 0; i <= kPoints; ++i) {
+      const double t = lo + (hi - lo) * i / kPoints;
+      for (const auto* mode : {&d.physics.drive, &d.physics.sense}) {
+        const std::string name = mode == &d.physics.drive ? "drive" : "sense";
+        const double f = model.frequency_hz(*mode, t), q = model.quality_factor(*mode, t);
+        if (!(f > 0.0) || !std::isfinite(f) || !(q > 0.0) || !std::isfinite(q)) {
+          std::ostringstream msg;
+          msg << "at " << t << " degC (inside the device's temperature range [" << lo << ", " << hi
+              << "] degC) the " << name << " mode would have frequency " << f << " Hz and Q " << q
+              << "; its temperature coefficients are not physical";
+          const YAML::Node m = y_.child(modes, "modes", name, false);
+          y_.problem(m.IsDefined() ? m : root, "modes." + name, msg.str());
+          return;
+        }
+      }
+      const auto r = model.response(t);
+      const auto sense = model.sense_response(t);
+      if (!std::isfinite(r.scale_factor) || !std::isfinite(r.bias_rad_s) || !std::isfinite(r.drive_frequency_hz) ||
+          !std::isfinite(sense.amplitude_m_per_rad_s) || !std::isfinite(sense.phase_lag_rad) ||
+          !std::isfinite(model.drive_force_n(t))) {
+        std::ostringstream msg;
+        msg << "the device model gives a non-finite response at " << t << " degC (scale factor " << r.scale_factor
+            << ", bias " << r.bias_rad_s << " rad/s); check the modes, electronics and reference_temp_c";
+        y_.problem(root, "modes", msg.str());
+        return;
+      }
+    }
+  }
+
   void check_consistency(const YAML::Node& root, DeviceDefinition& d) {
     const YAML::Node structure = y_.child(root, "", "structure", false);
     const YAML::Node suspension = y_.child(structure, "structure", "suspension", false);
     try {
       const DeviceModel model(d.physics);
+      check_responses(root, d, model);
       const double die_size = std::max(d.physics.structure.length_m, d.physics.structure.width_m);
       for (const auto* mode : {&d.physics.drive, &d.physics.sense}) {
         const double beam = model.implied_beam_length_m(*mode);
@@ -366,12 +410,7 @@ void apply_effect_option(const std::string& text, error_model::Effects& effects)
   }
   yaml += "}}";
   std::vector<Diagnostic> problems;
-  YAML::Node node;
-  try {
-    node = YAML::Load(yaml);
-  } catch (const YAML::ParserException& e) {
-    throw ConfigError({"", 0, field}, "cannot parse: " + e.msg);
-  }
+  const YAML::Node node = parse_yaml_text(yaml, "--effect " + field);  // syntax, repeated keys
   parse_effects(node, "", "", effects, problems);
   for (auto& p : problems) {
     p.where.line = 0;

@@ -5,6 +5,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "framework/yaml_io.hpp"
+
 namespace driftlab::devices {
 namespace {
 
@@ -16,7 +18,7 @@ std::string joined(const std::vector<std::string>& items) {
 
 std::string bounds_text(const Bounds& b) {
   std::ostringstream out;
-  if (b.min && b.max) out << "in [" << *b.min << ", " << *b.max << "]";
+  if (b.min && b.max) out << "in " << (b.min_exclusive ? "(" : "[") << *b.min << ", " << *b.max << "]";
   else if (b.min) out << (b.min_exclusive ? "> " : ">= ") << *b.min;
   else if (b.max) out << "<= " << *b.max;
   return out.str();
@@ -74,15 +76,15 @@ std::optional<double> YamlFields::number(const YAML::Node& parent, const std::st
     if (!node.IsScalar()) throw YAML::BadConversion(node.Mark());
     value = node.as<double>();
   } catch (const YAML::BadConversion&) {
-    problem(node, field, "expected a number, got '" + (node.IsScalar() ? node.Scalar() : std::string("a collection")) + "'");
+    problem(node, field, "expected a number, got " + yaml_shape(node));
     return std::nullopt;
   }
   if (!std::isfinite(value)) {
-    problem(node, field, "must be finite, got '" + node.Scalar() + "'");
+    problem(node, field, "must be finite, got " + yaml_shape(node));
     return std::nullopt;
   }
   if (!within(bounds, value)) {
-    problem(node, field, "must be " + bounds_text(bounds) + ", got " + node.Scalar());
+    problem(node, field, "must be " + bounds_text(bounds) + ", got " + quoted_excerpt(node.Scalar(), 40));
     return std::nullopt;
   }
   return value;
@@ -98,7 +100,7 @@ std::optional<std::string> YamlFields::text(const YAML::Node& parent, const std:
   const YAML::Node node = child(parent, path, key, required);
   if (!node.IsDefined()) return std::nullopt;
   if (!node.IsScalar() || node.Scalar().empty()) {
-    problem(node, join(path, key), "expected non-empty text");
+    problem(node, join(path, key), "expected non-empty text, got " + yaml_shape(node));
     return std::nullopt;
   }
   return node.Scalar();
@@ -118,8 +120,7 @@ std::optional<std::vector<double>> YamlFields::numbers(const YAML::Node& parent,
       values.push_back(v);
       return true;
     } catch (const YAML::BadConversion&) {
-      problem(item, field, "expected a list of finite numbers, got '" +
-                               (item.IsScalar() ? item.Scalar() : std::string("a collection")) + "'");
+      problem(item, field, "expected a list of finite numbers, got " + yaml_shape(item));
       return false;
     }
   };
@@ -133,11 +134,16 @@ std::optional<std::vector<double>> YamlFields::numbers(const YAML::Node& parent,
 }
 
 YAML::Node parse_yaml_text(const std::string& text, const std::string& file) {
+  YAML::Node root;
   try {
-    return YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
     throw ConfigError({file, e.mark.line >= 0 ? e.mark.line + 1 : 0, ""}, "YAML syntax error: " + e.msg);
   }
+  std::vector<Diagnostic> problems;  // the shared rules (framework/yaml_io.hpp): repeated keys, size
+  find_duplicate_keys(root, file, problems);
+  if (!problems.empty()) throw ConfigError(problems);
+  return root;
 }
 
 YAML::Node load_yaml_file(const std::string& path) {

@@ -1,13 +1,15 @@
 #include "framework/params_io.hpp"
 
 #include <cmath>
+#include <set>
 
 #include "framework/registry.hpp"
+#include "framework/yaml_io.hpp"
 
 namespace driftlab {
 namespace {
 
-int line_of(const YAML::Node& node) { return node.Mark().line >= 0 ? node.Mark().line + 1 : 0; }
+int line_of(const YAML::Node& node) { return yaml_line(node); }
 
 std::string joined(const std::vector<std::string>& items) {
   std::string s;
@@ -20,23 +22,26 @@ std::string convert(const ParamSpec& spec, const YAML::Node& node, ParamValue& o
   try {
     switch (spec.type) {
       case ParamType::Integer: {
-        if (!node.IsScalar()) return "expected an integer";
+        if (!node.IsScalar()) return "expected an integer, got " + yaml_shape(node);
         const double d = node.as<double>();
         if (std::floor(d) != d || std::abs(d) > 9.0e15) return "expected an integer, got '" + node.Scalar() + "'";
         out = static_cast<std::int64_t>(d);
         return "";
       }
-      case ParamType::Real:
-        if (!node.IsScalar()) return "expected a real number";
-        out = node.as<double>();
+      case ParamType::Real: {
+        if (!node.IsScalar()) return "expected a real number, got " + yaml_shape(node);
+        const double d = node.as<double>();
+        if (!std::isfinite(d)) return "expected a finite real number, got " + yaml_shape(node);
+        out = d;
         return "";
+      }
       case ParamType::Boolean:
-        if (!node.IsScalar()) return "expected true or false";
+        if (!node.IsScalar()) return "expected true or false, got " + yaml_shape(node);
         out = node.as<bool>();
         return "";
       case ParamType::Text:
       case ParamType::Choice:
-        if (!node.IsScalar()) return "expected text";
+        if (!node.IsScalar()) return "expected text, got " + yaml_shape(node);
         out = node.as<std::string>();
         return "";
       case ParamType::RealList: {
@@ -44,17 +49,22 @@ std::string convert(const ParamSpec& spec, const YAML::Node& node, ParamValue& o
         if (node.IsScalar()) {
           v.push_back(node.as<double>());
         } else if (node.IsSequence()) {
-          for (const auto& e : node) v.push_back(e.as<double>());
+          for (const auto& e : node) {
+            if (!e.IsScalar()) return "expected a list of real numbers, got " + yaml_shape(e) + " in it";
+            v.push_back(e.as<double>());
+          }
         } else {
-          return "expected a list of real numbers";
+          return "expected a list of real numbers, got " + yaml_shape(node);
         }
+        for (const double d : v)
+          if (!std::isfinite(d)) return "expected finite real numbers, got " + yaml_shape(node);
         out = std::move(v);
         return "";
       }
       case ParamType::Plugin: return "nested plugins are converted separately";
     }
-  } catch (const YAML::BadConversion&) {
-    return "expected " + to_string(spec.type) + ", got '" + (node.IsScalar() ? node.Scalar() : "a collection") + "'";
+  } catch (const YAML::Exception&) {
+    return "expected " + to_string(spec.type) + ", got " + yaml_shape(node);
   }
   return "unsupported type";
 }
@@ -68,9 +78,18 @@ ParamValue resolve_nested(const Registry& registry, const ParamSpec& spec, const
       name = node.Scalar();
     } else if (node.IsMap()) {
       for (const auto& kv : node) {
-        const auto k = kv.first.as<std::string>();
-        if (k == "plugin") name = kv.second.as<std::string>();
-        else if (k == "params") params = kv.second;
+        const auto k = scalar_text(kv.first).value_or("?");
+        if (k == "plugin") {
+          if (const auto text = scalar_text(kv.second)) {
+            name = *text;
+          } else {
+            problems.push_back({{file, line_of(kv.second), path + ".plugin"},
+                                "expected a plugin name (" + spec.plugin_kind + "/NAME), got " + yaml_shape(kv.second)});
+            return std::make_shared<const PluginSpec>(PluginSpec{name, {}});
+          }
+        } else if (k == "params") {
+          params = kv.second;
+        }
         else problems.push_back({{file, line_of(kv.first), path + "." + k}, "unknown key (expected plugin, params)"});
       }
     } else {
@@ -106,7 +125,7 @@ ParamValues resolve_params(const Registry& registry, const std::string& plugin, 
     problems.push_back({{file, line_of(node), key_prefix}, "expected a map of parameters"});
   } else if (node) {
     for (const auto& kv : node) {
-      const auto key = kv.first.as<std::string>();
+      const auto key = scalar_text(kv.first).value_or(yaml_shape(kv.first));
       if (!table.find(key))
         problems.push_back({{file, line_of(kv.first), path_of(key)},
                             "unknown parameter of " + plugin + " (valid: " + joined(table.keys()) + ")"});
@@ -142,16 +161,22 @@ ParamValues params_from_assignments(const Registry& registry, const std::string&
                                     const std::vector<std::string>& assignments) {
   YAML::Node node(YAML::NodeType::Map);
   std::vector<Diagnostic> problems;
+  std::set<std::string> given;
   for (const auto& a : assignments) {
     const auto eq = a.find('=');
     if (eq == std::string::npos || eq == 0) {
       problems.push_back({{"--set", 0, a}, "expected key=value"});
       continue;
     }
+    const std::string key = a.substr(0, eq);
+    if (!given.insert(key).second) {
+      problems.push_back({{"--set", 0, key}, "given twice; each parameter may be set once"});
+      continue;
+    }
     try {
-      node[a.substr(0, eq)] = YAML::Load(a.substr(eq + 1));
-    } catch (const YAML::Exception& e) {
-      problems.push_back({{"--set", 0, a.substr(0, eq)}, std::string("value is not valid YAML: ") + e.msg});
+      node[key] = load_yaml_checked(a.substr(eq + 1), "--set " + key);
+    } catch (const ConfigError& e) {
+      for (const auto& p : e.problems()) problems.push_back(p);
     }
   }
   auto values = resolve_params(registry, plugin, node, "--set", "", problems);

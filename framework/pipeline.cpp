@@ -10,11 +10,20 @@
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
+#include "framework/yaml_io.hpp"
 
 namespace driftlab {
 namespace {
 
-int line_of(const YAML::Node& node) { return node && node.Mark().line >= 0 ? node.Mark().line + 1 : 0; }
+int line_of(const YAML::Node& node) { return yaml_line(node); }
+
+// Output names become CSV columns (name + unit suffix) that driftlab must read back: identifiers,
+// and none that would read back as the record's own channels.
+const std::set<std::string>& reserved_output_names() {
+  static const std::set<std::string> names{"t",    "time",     "rate",     "true_rate", "temperature",
+                                           "temp", "die_temp", "die_temperature", "drive_freq", "drive_frequency"};
+  return names;
+}
 
 struct RawStep {
   PipelineStep step;
@@ -30,7 +39,8 @@ std::int64_t derived_seed(std::int64_t pipeline_seed, const std::string& step_na
 
 class Parser {
  public:
-  Parser(const Registry& registry, std::string file) : registry_(registry), file_(std::move(file)) {}
+  Parser(const Registry& registry, std::string file, std::vector<Diagnostic> problems = {})
+      : registry_(registry), file_(std::move(file)), problems_(std::move(problems)) {}
 
   Pipeline parse(const YAML::Node& root) {
     Pipeline p;
@@ -40,7 +50,7 @@ class Parser {
       finish();
     }
     for (const auto& kv : root) {
-      const auto key = kv.first.as<std::string>();
+      const auto key = scalar_text(kv.first).value_or("?");
       if (key != "format" && key != "seed" && key != "inputs" && key != "steps" && key != "outputs")
         problem(kv.first, key, "unknown key (expected format, seed, inputs, steps, outputs)");
     }
@@ -81,11 +91,16 @@ class Parser {
     }
     if (!node.IsMap()) return problem(node, "inputs", "expected a map of input name to channel role");
     for (const auto& kv : node) {
-      if (!kv.second.IsScalar()) {
-        problem(kv.second, "inputs." + kv.first.as<std::string>(), "expected a channel role");
+      const auto name = scalar_text(kv.first);
+      if (!name) {
+        problem(kv.first, "inputs", "expected an input name, got " + yaml_shape(kv.first));
         continue;
       }
-      p.inputs[kv.first.as<std::string>()] = kv.second.as<std::string>();
+      if (!kv.second.IsScalar()) {
+        problem(kv.second, "inputs." + *name, "expected a channel role, got " + yaml_shape(kv.second));
+        continue;
+      }
+      p.inputs[*name] = kv.second.Scalar();
     }
   }
 
@@ -107,7 +122,7 @@ class Parser {
       RawStep r;
       r.step.line = line_of(s);
       for (const auto& kv : s) {
-        const auto key = kv.first.as<std::string>();
+        const auto key = scalar_text(kv.first).value_or("?");
         if (key != "name" && key != "plugin" && key != "inputs" && key != "params" && key != "sum")
           problem(kv.first, where + "." + key, "unknown key (expected name, plugin, inputs, params, or sum)");
       }
@@ -138,8 +153,12 @@ class Parser {
     const auto list = s["sum"];
     if (!list.IsSequence() || list.size() == 0) return problem(list, label + ".sum", "expected a list of references");
     for (const auto& ref : list) {
-      r.step.inputs["terms"].push_back(ref.as<std::string>());
-      r.refs.emplace_back(ref.as<std::string>(), line_of(ref));
+      if (!ref.IsScalar()) {
+        problem(ref, label + ".sum", "expected a reference (input name or step.output), got " + yaml_shape(ref));
+        continue;
+      }
+      r.step.inputs["terms"].push_back(ref.Scalar());
+      r.refs.emplace_back(ref.Scalar(), line_of(ref));
     }
   }
 
@@ -163,7 +182,7 @@ class Parser {
     if (inputs && !inputs.IsMap()) problem(inputs, label + ".inputs", "expected a map of port to reference");
     if (inputs && inputs.IsMap()) {
       for (const auto& kv : inputs) {
-        const auto port = kv.first.as<std::string>();
+        const auto port = scalar_text(kv.first).value_or("?");
         const auto spec = std::find_if(ports.inputs.begin(), ports.inputs.end(),
                                        [&](const PortSpec& ps) { return ps.name == port; });
         if (spec == ports.inputs.end()) {
@@ -175,8 +194,11 @@ class Parser {
         if (kv.second.IsSequence() && !spec->many)
           problem(kv.second, label + ".inputs." + port, "this port takes a single reference");
         const auto add = [&](const YAML::Node& ref) {
-          r.step.inputs[port].push_back(ref.as<std::string>());
-          r.refs.emplace_back(ref.as<std::string>(), line_of(ref));
+          if (!ref.IsScalar())
+            return problem(ref, label + ".inputs." + port,
+                           "expected a reference (input name or step.output), got " + yaml_shape(ref));
+          r.step.inputs[port].push_back(ref.Scalar());
+          r.refs.emplace_back(ref.Scalar(), line_of(ref));
         };
         if (kv.second.IsSequence())
           for (const auto& ref : kv.second) add(ref);
@@ -199,10 +221,26 @@ class Parser {
   void read_outputs(const YAML::Node& node, Pipeline& p) {
     if (!node || !node.IsMap() || node.size() == 0)
       return problem(node ? node : YAML::Node(), "outputs", "expected a map of output name to step.output");
+    static const std::regex name_re("[A-Za-z_][A-Za-z0-9_]*");
     for (const auto& kv : node) {
-      if (p.outputs.emplace(kv.first.as<std::string>(), kv.second.as<std::string>()).second)
-        p.output_order.push_back(kv.first.as<std::string>());
-      output_refs_.emplace_back(kv.second.as<std::string>(), line_of(kv.second));
+      const auto name = scalar_text(kv.first);
+      if (!name || !std::regex_match(*name, name_re)) {
+        problem(kv.first, "outputs", "output name " + yaml_shape(kv.first) +
+                                         " must be an identifier (letters, digits, _): it becomes a CSV column");
+        continue;
+      }
+      if (reserved_output_names().count(*name)) {
+        problem(kv.first, "outputs." + *name,
+                "output name is reserved: its CSV column would read back as the record's own '" + *name +
+                    "' channel; choose another name");
+        continue;
+      }
+      if (!kv.second.IsScalar()) {
+        problem(kv.second, "outputs." + *name, "expected a step.output reference, got " + yaml_shape(kv.second));
+        continue;
+      }
+      if (p.outputs.emplace(*name, kv.second.Scalar()).second) p.output_order.push_back(*name);
+      output_refs_.emplace_back(kv.second.Scalar(), line_of(kv.second));
     }
   }
 
@@ -310,13 +348,9 @@ Signal side_by_side(const std::vector<Signal>& parts) {
 }  // namespace
 
 Pipeline parse_pipeline(const std::string& yaml_text, const std::string& file_label, const Registry& registry) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::ParserException& e) {
-    throw ConfigError({file_label, e.mark.line + 1, ""}, "not valid YAML: " + e.msg);
-  }
-  return Parser(registry, file_label).parse(root);
+  std::vector<Diagnostic> duplicates;  // reported together with every other problem
+  const YAML::Node root = load_yaml_checked(yaml_text, file_label, &duplicates);
+  return Parser(registry, file_label, std::move(duplicates)).parse(root);
 }
 
 Pipeline load_pipeline(const std::filesystem::path& path, const Registry& registry) {
