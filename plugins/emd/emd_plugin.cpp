@@ -100,7 +100,7 @@ std::vector<ParamSpec> sift_params(const std::string& max_imfs_doc) {
 
 std::vector<ParamSpec> ensemble_params(double noise_strength) {
   return {
-      param::integer("ensemble_size", 100, "1", "number of noise realizations I").at_least(1),
+      param::integer("ensemble_size", 100, "1", "number of noise realizations I").at_least(1).at_most(1e5),
       param::real("noise_strength", noise_strength, "1",
                   "added white-noise standard deviation as a multiple of the signal's population "
                   "standard deviation (eps0)")

@@ -56,7 +56,7 @@ void register_ga_plugins(Registry& registry) {
        .reference = "Li et al. 2023 (GA tuning of the RBF network); Deb & Agrawal 1995 (SBX); Deb & Goyal 1996 (mutation)",
        .params =
            ParamTable{
-               {param::integer("population", 40, "1", "individuals per generation").at_least(2),
+               {param::integer("population", 40, "1", "individuals per generation").at_least(2).at_most(1e6),
                 param::integer("generations", 50, "1", "G_MAX: generations bred after the random initial one")
                     .at_least(0),
                 param::integer("tournament_size", 2, "1", "individuals drawn per selection tournament; the best wins")
