@@ -62,7 +62,7 @@ TEST(Cli, ACsvWithANanOnLine1234ExitsThreeNamingFileLineAndColumn) {
   const auto r = run_driftlab(kPlugins + " run --pipeline " + kData + "/pipelines/external.yaml --data " + data +
                               " --out " + dir.string());
   EXPECT_EQ(r.exit_code, 3);
-  EXPECT_THAT(r.err, HasSubstr(data + ":1234: rate_dps: value is nan (NaN/Inf not allowed)"));
+  EXPECT_THAT(r.err, HasSubstr(data + ":1234: rate_dps: value is 'nan' (NaN/Inf not allowed)"));
 }
 
 TEST(Cli, RunsAPipelineWithAnExternalPluginAndTheEffectivePipelineReproducesIt) {

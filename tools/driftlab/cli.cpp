@@ -2,7 +2,10 @@
 
 #include <unistd.h>
 
+#include <charconv>
+#include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <cstdlib>
 
 #include "framework/atomic_file.hpp"
@@ -30,26 +33,60 @@ void CommandEnv::progress(const std::string& label, double fraction) const {
   std::fflush(stderr);
 }
 
+CLI::Validator finite_number(double lo, double hi, bool lo_open) {
+  std::ostringstream desc;
+  desc << (lo_open ? "(" : "[") << lo << ", " << hi << "]";
+  return CLI::Validator(
+      [lo, hi, lo_open, d = desc.str()](std::string& text) -> std::string {
+        double v = 0.0;
+        const char* end = text.data() + text.size();
+        const auto res = std::from_chars(text.data(), end, v);
+        if (res.ec != std::errc() || res.ptr != end) return "expected a number, got " + quoted_excerpt(text);
+        if (!std::isfinite(v)) return "expected a finite number, got " + quoted_excerpt(text);
+        if ((lo_open ? !(v > lo) : !(v >= lo)) || !(v <= hi)) return "value " + text + " is not in " + d;
+        return "";
+      },
+      "NUMBER in " + desc.str());
+}
+
+CLI::Validator whole_number(double lo, double hi) {
+  std::ostringstream desc;
+  desc << "[" << static_cast<long long>(lo) << ", " << static_cast<long long>(hi) << "]";
+  return CLI::Validator(
+      [lo, hi, d = desc.str()](std::string& text) -> std::string {
+        const bool digits = !text.empty() && text.size() <= 20 &&
+                            text.find_first_not_of("0123456789", text.front() == '-' ? 1 : 0) == std::string::npos &&
+                            text != "-";
+        if (!digits) return "expected a whole number, got " + quoted_excerpt(text);
+        const double v = std::strtod(text.c_str(), nullptr);
+        if (v < lo || v > hi) return "value " + text + " is not in " + d;
+        return "";
+      },
+      "INTEGER in " + desc.str());
+}
+
 void add_data_options(CLI::App* command, DataOptions& data, const std::string& column_help) {
   command->add_option("--data", data.path, "input CSV (header row; default columns t_s, rate_dps, temp_c)");
   command->add_option("--column", data.columns, column_help);
   command->add_option("--fs", data.sample_rate_hz, "sample rate in Hz, for files without a time column")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_number(0.0, 1e9, true));
   command->add_option("--max-gap", data.max_gap_factor,
                       "largest allowed time step, as a multiple of the median step (0 allows gaps)")
+      ->check(finite_number(0.0, 1e12))
       ->capture_default_str();
 }
 
 std::string primary_role(const DataOptions& data) {
-  return data.columns.empty() ? std::string(role::kRate) : parse_column_mapping(data.columns.front()).role;
+  for (const auto& c : data.columns)
+    if (auto m = parse_column_mapping(c); m.role != "time") return m.role;
+  return role::kRate;
 }
 
 TimeSeries load_record(const DataOptions& data, std::vector<std::string> required_roles) {
   if (data.path.empty()) throw ConfigError({"", 0, "--data"}, "--data is required");
   CsvReadOptions options;
   for (const auto& c : data.columns) options.columns.push_back(parse_column_mapping(c));
-  if (!options.columns.empty() && !required_roles.empty() && required_roles.front() == role::kRate)
-    required_roles.front() = options.columns.front().role;
+  if (!required_roles.empty() && required_roles.front() == role::kRate) required_roles.front() = primary_role(data);
   options.required_roles = std::move(required_roles);
   options.sample_rate_hz = data.sample_rate_hz;
   options.max_gap_factor = data.max_gap_factor;

@@ -40,16 +40,26 @@ struct DataOptions {
   double max_gap_factor = 3.0;       // --max-gap
 };
 
+// Validators for number options (CLI11's Range and PositiveNumber let NaN through): the text must be
+// a finite number in [lo, hi] (lo excluded when lo_open); otherwise a usage error, exit 2.
+CLI::Validator finite_number(double lo, double hi, bool lo_open = false);
+// A whole number in [lo, hi] written as digits: "-1" for an unsigned seed, "1e3" or "2.5" are refused.
+CLI::Validator whole_number(double lo, double hi);
+inline constexpr double kMaxSeed = 9007199254740992.0;  // 2^53: every seed survives JSON and YAML
+
 // Adds --data, --column, --fs and --max-gap to a subcommand.
 void add_data_options(CLI::App* command, DataOptions& data, const std::string& column_help);
-// Reads the record; `required_roles` must be present (the first --column's role replaces "rate").
+// Reads the record; `required_roles` must be present (the role of the first --column that is not
+// the time column replaces "rate").
 TimeSeries load_record(const DataOptions& data, std::vector<std::string> required_roles = {"rate"});
-// Role analysed by single-signal commands: the first --column's role, else "rate".
+// Role analysed by single-signal commands: the role of the first --column that is not `time`
+// (so --column time=t:s --column rate=r:deg/s analyses rate), else "rate".
 std::string primary_role(const DataOptions& data);
 // Unit a channel is written back in: the unit it was read in when known ("deg/s" for rates).
 std::string display_unit(const TimeSeries& record, const std::string& role, const DataOptions& data);
 
-// Throws ConfigError when `output` would overwrite one of the inputs.
+// Throws ConfigError when `output` would overwrite one of the inputs. Prefer an OutputSet
+// (framework/output_set.hpp), which also checks the directory and commits all outputs together.
 void check_output(const std::string& output, const std::vector<std::string>& inputs);
 
 }  // namespace driftlab::cli

@@ -12,9 +12,9 @@
 #include <optional>
 #include <nlohmann/json.hpp>
 
-#include "framework/atomic_file.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
+#include "framework/output_set.hpp"
 #include "framework/units.hpp"
 #include "models/allan/confidence.hpp"
 #include "models/allan/deviation.hpp"
@@ -140,9 +140,10 @@ Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& c
 }
 
 void allan_command(const AllanOptions& o) {
-  check_output(o.out, {o.data.path});
-  if (!o.json.empty()) check_output(o.json, {o.data.path});
-  if (!o.plot.empty()) check_output(o.plot, {o.data.path});
+  OutputSet outputs({o.data.path});
+  outputs.plan(o.out, "--out");
+  outputs.plan(o.json, "--json");
+  outputs.plan(o.plot, "--plot");
   const auto kind = allan::parse_kind(o.kind);
   if (!kind) throw ConfigError({"", 0, "--kind"}, "unknown kind '" + o.kind + "'");
   const auto input = o.input == "angle" ? allan::InputType::Angle : allan::InputType::Rate;
@@ -151,6 +152,7 @@ void allan_command(const AllanOptions& o) {
   const auto record = load_record(o.data);
   const std::string role = primary_role(o.data);
   const auto& channel = record.channel(role);
+  const bool constant_record = (channel.values.array() == channel.values[0]).all();
   const double fs = record.sample_rate_hz();
   if (!(fs > 0.0)) throw DataError({o.data.path, 0, "t_s"}, "cannot derive a sample interval");
   const double tau0 = 1.0 / fs;
@@ -164,8 +166,9 @@ void allan_command(const AllanOptions& o) {
   const std::string unit = display_unit(record, role, o.data);
   const auto display = find_unit(unit);
   const double scale = display ? display->scale : 1.0;
-  std::vector<CsvColumn> columns{{"tau_s", {}, "s"}, {"dev", {}, unit}, {"dev_lo", {}, unit},
-                                 {"dev_hi", {}, unit}, {"n", {}, "1"}};
+  // Deviations are differences: a unit with an offset (K) converts them by its scale only.
+  std::vector<CsvColumn> columns{{"tau_s", {}, "s"}, {"dev", {}, unit, false}, {"dev_lo", {}, unit, false},
+                                 {"dev_hi", {}, unit, false}, {"n", {}, "1"}};
   for (auto& c : columns) c.values.resize(static_cast<Eigen::Index>(curve.size()));
   for (std::size_t i = 0; i < curve.size(); ++i) {
     const auto k = static_cast<Eigen::Index>(i);
@@ -175,28 +178,33 @@ void allan_command(const AllanOptions& o) {
     columns[3].values(k) = curve[i].dev_hi;
     columns[4].values(k) = static_cast<double>(curve[i].terms);
   }
-  write_csv(o.out, columns);
+  outputs.write_csv(o.out, columns);
 
   std::optional<allan::Analysis> analysis;
   try {
     analysis = allan::analyze_angle(angle, tau0, {.confidence = o.confidence});
   } catch (const DataError& e) {
-    if (!o.json.empty()) throw;
-    std::cerr << "note: no Allan readings: " << e.what() << "\n";
+    const std::string why = constant_record ? " (the record is constant: every deviation is 0, there is no noise to fit)"
+                                            : "";
+    if (!o.json.empty()) throw DataError({o.data.path, 0, channel.source}, std::string(e.what()) + why);
+    std::cerr << "note: no Allan readings: " << e.what() << why << "\n";
   }
   const allan::NoiseFit* fit = analysis && analysis->fit ? &*analysis->fit : nullptr;
   if (analysis && !fit) {
-    if (!o.json.empty()) throw DataError({o.data.path, 0, role}, "too few Allan points for the noise-term fit");
-    std::cerr << "note: no noise-term fit: too few Allan points\n";
+    const std::string why = constant_record ? " (the record is constant: every deviation is 0, there is no noise to fit)"
+                                            : "";
+    if (!o.json.empty()) throw DataError({o.data.path, 0, role}, "too few Allan points for the noise-term fit" + why);
+    std::cerr << "note: no noise-term fit: too few Allan points" << why << "\n";
   }
   const bool angular = channel.unit == "rad/s";
   const std::size_t samples = input == allan::InputType::Rate ? n - 1 : n;
   if (!o.json.empty()) {
     auto summary = summary_json(o, *fit, angular, channel.unit, samples, tau0);
     summary["readings"] = readings_json(*analysis, angular, channel.unit);
-    write_file_atomically(o.json, summary.dump(2) + "\n");
+    outputs.write(o.json, summary.dump(2) + "\n");
   }
-  if (!o.plot.empty()) write_file_atomically(o.plot, render_svg(allan_figure(o, curve, fit, scale, unit)));
+  if (!o.plot.empty()) outputs.write(o.plot, render_svg(allan_figure(o, curve, fit, scale, unit)));
+  outputs.commit();
 
   std::cout << o.kind << " of " << role << ": " << curve.size() << " taus from " << curve.front().tau
             << " s to " << curve.back().tau << " s, " << samples << " samples at " << fs << " Hz\n";
@@ -235,7 +243,7 @@ void add_allan_command(CLI::App& app, CommandEnv&) {
   cmd->add_option("--taus", options->taus, "tau grid: octave, decade, dense, dense:P or a list of taus in s")
       ->capture_default_str();
   cmd->add_option("--confidence", options->confidence, "confidence level of the intervals")
-      ->check(CLI::Range(0.01, 0.999))
+      ->check(finite_number(0.01, 0.999))
       ->capture_default_str();
   cmd->add_option("--out", options->out, "output CSV: tau_s,dev,dev_lo,dev_hi,n")->required();
   cmd->add_option("--json", options->json, "summary JSON with the fitted noise terms");

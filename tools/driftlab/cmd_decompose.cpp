@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
-#include "framework/atomic_file.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
+#include "framework/output_set.hpp"
 #include "framework/params_io.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
@@ -77,8 +77,10 @@ Figure component_figure(const DecomposeOptions& o, const Eigen::VectorXd& t, con
 }
 
 void decompose_command(const DecomposeOptions& o, CommandEnv& env) {
-  for (const auto* path : {&o.out, &o.json, &o.plot})
-    if (!path->empty()) check_output(*path, {o.data.path});
+  OutputSet outputs({o.data.path});
+  outputs.plan(o.out, "--out");
+  outputs.plan(o.json, "--json");
+  outputs.plan(o.plot, "--plot");
   const Registry& registry = env.registry();
   if (registry.info(o.plugin).kind() != "decomposition")
     throw ConfigError({"", 0, "--plugin"}, "'" + o.plugin + "' is not a decomposition plugin");
@@ -107,11 +109,13 @@ void decompose_command(const DecomposeOptions& o, CommandEnv& env) {
   const std::string unit = display_unit(record, role, o.data);
   const auto display = find_unit(unit);
   const double scale = display ? display->scale : 1.0;
+  // IMFs are differences (zero-mean oscillations): a unit with an offset (K) converts them by its
+  // scale only; the residue carries the absolute level, so imf1 + ... + residue is the signal.
   std::vector<CsvColumn> columns{{"t_s", record.time(), "s"}};
   for (Eigen::Index k = 0; k < d.imfs.cols(); ++k)
-    columns.push_back({"imf" + std::to_string(k + 1), d.imfs.col(k), unit});
+    columns.push_back({"imf" + std::to_string(k + 1), d.imfs.col(k), unit, false});
   columns.push_back({"residue", d.residue, unit});
-  write_csv(o.out, columns);
+  outputs.write_csv(o.out, columns);
 
   const double total_energy = d.imfs.colwise().squaredNorm().sum() + d.residue.squaredNorm();
   auto share = [&](double energy) { return total_energy > 0.0 ? energy / total_energy : 0.0; };
@@ -155,10 +159,11 @@ void decompose_command(const DecomposeOptions& o, CommandEnv& env) {
                                  {"log", classify_ctx.diagnostics}};
     summary["mean_frequency_method"] = "zero crossings / (2 N / fs)";
     summary["energy_share_definition"] = "sum of squares of the component / sum over IMFs and residue";
-    write_file_atomically(o.json, summary.dump(2) + "\n");
+    outputs.write(o.json, summary.dump(2) + "\n");
   }
   if (!o.plot.empty())
-    write_file_atomically(o.plot, render_svg(component_figure(o, record.time(), x, d.imfs, d.residue, scale, unit, groups)));
+    outputs.write(o.plot, render_svg(component_figure(o, record.time(), x, d.imfs, d.residue, scale, unit, groups)));
+  outputs.commit();
 }
 
 }  // namespace

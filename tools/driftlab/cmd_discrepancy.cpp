@@ -14,9 +14,9 @@
 #include "devices/device_file_update.hpp"
 #include "devices/discrepancy_options.hpp"
 #include "framework/effect_catalogue.hpp"
-#include "framework/atomic_file.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
+#include "framework/output_set.hpp"
 #include "framework/params_io.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
@@ -52,8 +52,11 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
   options.max_effects = o.max_effects;
   if (!o.update_device.empty() && device_path.empty())
     throw ConfigError({"", 0, "--update-device"}, "needs --device: the named effects are added to a copy of that file");
-  for (const auto& out : {o.report, o.series, o.html, o.update_device})
-    if (!out.empty()) check_output(out, inputs);
+  OutputSet outputs({inputs.begin(), inputs.end()});
+  outputs.plan(o.report, "--report");
+  outputs.plan(o.series, "--series");
+  outputs.plan(o.html, "--html");
+  outputs.plan(o.update_device, "--update-device");
 
   const Registry& registry = env.registry();
   std::vector<std::string> names = o.effects;
@@ -111,13 +114,13 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
   env.progress("discrepancy", 1.0);
 
   const DiscrepancyReportInfo info{o.data.path, device_path, &options};
-  write_file_atomically(o.report, discrepancy_json(result, info).dump(2) + "\n");
+  outputs.write(o.report, discrepancy_json(result, info).dump(2) + "\n");
   if (!o.series.empty())
-    write_csv(o.series, {{"t_s", record.time(), "s"},
+    outputs.write_csv(o.series, {{"t_s", record.time(), "s"},
                          {"measured_dps", record.channel(role::kRate).values, "deg/s"},
                          {"model_initial_dps", result.model_initial_rad_s, "deg/s"},
                          {"model_final_dps", result.model_final_rad_s, "deg/s"}});
-  if (!o.html.empty()) write_file_atomically(o.html, discrepancy_html(result, info));
+  if (!o.html.empty()) outputs.write(o.html, discrepancy_html(result, info));
   std::vector<std::string> not_written;
   if (!o.update_device.empty()) {
     std::vector<devices::NamedEffect> named;
@@ -133,11 +136,12 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
     std::ifstream in(device_path, std::ios::binary);
     std::ostringstream text;
     text << in.rdbuf();
-    write_file_atomically(o.update_device,
+    outputs.write(o.update_device,
                           devices::add_effects_to_device_text(
                               text.str(), o.update_device, named,
                               "effects named by `driftlab discrepancy` on " + o.data.path));
   }
+  outputs.commit();
 
   std::cout << "gap " << result.gap_initial_rad_s * kDphPerRadPerSec << " -> " << result.gap_final_rad_s * kDphPerRadPerSec
             << " deg/h (noise floor " << result.noise_floor_rad_s * kDphPerRadPerSec << " deg/h, " << result.blocks
@@ -193,9 +197,9 @@ void add_discrepancy_command(CLI::App& app, CommandEnv& env) {
          "degree of the fitted bias correction polynomial (default: the device file's, at least 1; 2 without a device)")
       ->check(CLI::Range(0, 6));
   cmd->add_option("--block", options->block_s, "block length for the fit, s (default: duration / 400)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finite_number(0.0, 1e12));
   cmd->add_option("--significance", options->significance, "delta BIC needed to name an effect")
-      ->check(CLI::NonNegativeNumber)
+      ->check(finite_number(0.0, 1e12))
       ->capture_default_str();
   cmd->add_option("--max-effects", options->max_effects, "stop after naming this many effects")
       ->check(CLI::Range(0, 20))

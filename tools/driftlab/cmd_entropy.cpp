@@ -1,10 +1,12 @@
 // `driftlab entropy`: sample entropy SampEn(m, r) of one channel, r relative to its population
 // standard deviation (PhysioNet convention), with the match counts A and B and the sample count.
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 #include <span>
 
+#include "framework/error.hpp"
 #include "framework/units.hpp"
 #include "plugins/sample_entropy/sample_entropy.hpp"
 #include "tools/driftlab/cli.hpp"
@@ -30,6 +32,11 @@ void entropy_command(const EntropyOptions& o) {
   const auto& values = record.channel(role).values;
   const std::span<const double> x(values.data(), static_cast<std::size_t>(values.size()));
   const double sd = sampen::population_sd(x);
+  if (std::all_of(x.begin(), x.end(), [&](double v) { return v == x.front(); }))
+    throw DataError({o.data.path, 0, record.channel(role).source},
+                    "the channel is constant (all " + std::to_string(x.size()) +
+                        " samples equal): its standard deviation is 0, so the tolerance r x SD is 0 and SampEn is "
+                        "undefined (a constant record has no irregularity to measure)");
   const auto result = sampen::sample_entropy(x, o.m, o.r * sd);
 
   const std::string unit = display_unit(record, role, o.data);
@@ -38,7 +45,7 @@ void entropy_command(const EntropyOptions& o) {
 
   std::cout << "SampEn(m=" << o.m << ", r=" << o.r << ") = ";
   switch (result.status) {
-    case sampen::Status::Finite: std::cout << number(result.value, "%.6f") << "\n"; break;
+    case sampen::Status::Finite: std::cout << number(std::max(0.0, result.value), "%.6f") << "\n"; break;  // A <= B: never -0
     case sampen::Status::NoMatches:
       std::cout << "Inf  (no template pairs match over m+1 = " << o.m + 1 << " samples: A = 0)\n";
       break;
@@ -62,7 +69,7 @@ void add_entropy_command(CLI::App& app, CommandEnv&) {
   add_data_options(cmd, options->data, "column to analyse, role=column:unit (default rate_dps)");
   cmd->add_option("--m", options->m, "template length")->check(CLI::Range(0, 10))->capture_default_str();
   cmd->add_option("--r", options->r, "tolerance as a multiple of the population standard deviation")
-      ->check(CLI::PositiveNumber)
+      ->check(finite_number(0.0, 1e6, true))
       ->capture_default_str();
   cmd->callback([options] { entropy_command(*options); });
 }

@@ -6,6 +6,7 @@
 #include "framework/atomic_file.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
+#include "framework/output_set.hpp"
 #include "framework/pipeline.hpp"
 #include "tools/driftlab/cli.hpp"
 #include "tools/driftlab/run_report.hpp"
@@ -49,8 +50,11 @@ void run(const RunOptions& o, CommandEnv& env) {
   const auto out_dir = std::filesystem::path(o.out);
   const auto outputs_csv = out_dir / "outputs.csv", effective = out_dir / "pipeline.effective.yaml",
              report_json = out_dir / "report.json", report_html = out_dir / "report.html";
-  for (const auto& f : {outputs_csv, effective, report_json, report_html})
-    check_output(f.string(), {o.data.path, o.pipeline});
+  OutputSet files({o.data.path, o.pipeline});  // all planned now, committed together at the end
+  files.plan(outputs_csv, "outputs.csv");
+  files.plan(effective, "pipeline.effective.yaml");
+  files.plan(report_json, "report.json");
+  files.plan(report_html, "report.html");
 
   nlohmann::json report{{"format", "driftlab-run-report/1"},
                         {"driftlab_version", kVersion},
@@ -99,15 +103,18 @@ void run(const RunOptions& o, CommandEnv& env) {
     }
     env.progress("scoring (Allan analysis of every stage)", 1.0);
   }
-  write_csv(outputs_csv, columns);
-  write_file_atomically(effective, effective_pipeline_yaml(pipeline, registry));
-  write_file_atomically(report_json, report.dump(2) + "\n");
+  files.write_csv(outputs_csv, columns);
+  files.write(effective, effective_pipeline_yaml(pipeline, registry));
+  files.write(report_json, report.dump(2) + "\n");
   if (scores) {
     env.progress("figures (gnuplot)", 0.0);
-    write_run_html(report_html, "driftlab run: " + pipeline.file, record, pipeline, outputs, step_signals, report, *scores);
+    write_run_html(files.stage_path(report_html), "driftlab run: " + pipeline.file, record, pipeline, outputs, step_signals, report, *scores);
     env.progress("figures (gnuplot)", 1.0);
     std::cout << table2_text(*scores);
+  } else {
+    files.drop(report_html);
   }
+  files.commit();
   if (!env.quiet)
     std::cerr << "wrote " << outputs_csv.string() << ", " << effective.string() << ", " << report_json.string()
               << (scores ? ", " + report_html.string() : std::string()) << "\n";

@@ -1,6 +1,7 @@
 // `driftlab simulate`: run a device file through the oven simulator and write a CSV record
 // (t_s, rate_dps, temp_c, true_rate_dps, systematic_dps, die_temp_c, drive_freq_hz).
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <memory>
 
@@ -8,6 +9,8 @@
 #include "devices/simulator.hpp"
 #include "framework/csv.hpp"
 #include "framework/effect_catalogue.hpp"
+#include "framework/output_set.hpp"
+#include "framework/resources.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
 #include "tools/driftlab/devices_dir.hpp"
@@ -45,12 +48,18 @@ void simulate_command(const SimulateOptions& o, CommandEnv& env) {
   auto device = devices::load_device_file(device_path);
   for (const auto& effect : o.effects) devices::apply_effect_option(effect, device.error_model.effects);
   const auto profile = o.profile == "oven" ? devices::default_oven_profile() : devices::load_profile_file(o.profile);
-  check_output(o.out, {device_path.string(), o.profile});
+  OutputSet outputs({device_path, o.profile == "oven" ? std::filesystem::path() : std::filesystem::path(o.profile)});
+  outputs.plan(o.out, "--out");
 
   devices::SimulationOptions options;
   options.sample_rate_hz = o.fs;
   options.seed = o.seed;
   if (o.duration > 0.0) options.duration_s = o.duration;
+  // The record (6 channels) and its CSV text: about 250 bytes per sample.
+  const double samples = std::floor(options.duration_s.value_or(profile.duration_s()) * o.fs) + 1.0;
+  char what[96];
+  std::snprintf(what, sizeof what, "%.3g samples (--fs x --duration) at 250 bytes each", samples);
+  check_memory_estimate(samples * 250.0, {"", 0, "--fs, --duration"}, what);
   env.progress("simulate " + device.name, 0.0);
   const auto record = devices::simulate(device, profile, options);
   env.progress("simulate " + device.name, 0.5);
@@ -65,7 +74,8 @@ void simulate_command(const SimulateOptions& o, CommandEnv& env) {
   if (record.drive_frequency_hz.size() == record.time_s.size())
     columns.push_back(output_column("drive_freq_hz", record.drive_frequency_hz, "Hz",
                                     device.find_channel(role::kDriveFrequency)));
-  write_csv(o.out, columns);
+  outputs.write_csv(o.out, columns);
+  outputs.commit();
   env.progress("simulate " + device.name, 1.0);
 
   const auto effects = devices::describe_effects(device.error_model.effects);
@@ -97,9 +107,12 @@ void add_simulate_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--profile", options->profile,
                   "chamber/rate profile: 'oven' (-30 -> +60 -> -30 degC, 4.5 h) or a driftlab-profile/1 YAML file")
       ->capture_default_str();
-  cmd->add_option("--fs", options->fs, "sample rate, Hz")->check(CLI::PositiveNumber)->capture_default_str();
-  cmd->add_option("--duration", options->duration, "duration, s (default: the profile's)")->check(CLI::PositiveNumber);
-  cmd->add_option("--seed", options->seed, "random seed; same seed, same record")->capture_default_str();
+  cmd->add_option("--fs", options->fs, "sample rate, Hz")->check(finite_number(0.0, 1e9, true))->capture_default_str();
+  cmd->add_option("--duration", options->duration, "duration, s (default: the profile's)")
+      ->check(finite_number(0.0, 1e10, true));
+  cmd->add_option("--seed", options->seed, "random seed; same seed, same record")
+      ->check(whole_number(0, kMaxSeed))
+      ->capture_default_str();
   cmd->add_option("--effect", options->effects, effect_help());
   cmd->add_option("--devices-dir", options->devices_dir, "directory of device files");
   cmd->add_option("--out", options->out, "output CSV (written atomically)")->required();
