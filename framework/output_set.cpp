@@ -105,6 +105,18 @@ void OutputSet::write_csv(const fs::path& path, const std::vector<CsvColumn>& co
   write(path, format_csv(columns, path.string()));
 }
 
+void OutputSet::drop(const fs::path& path) {
+  Entry& e = entry(path);
+  std::remove(e.temp.c_str());
+  entries_.erase(entries_.begin() + (&e - entries_.data()));
+}
+
+fs::path OutputSet::stage_path(const fs::path& path) {
+  Entry& e = entry(path);
+  e.written = true;
+  return e.temp;
+}
+
 void OutputSet::commit() {
   for (const auto& e : entries_)
     if (!e.written) throw std::logic_error("OutputSet: output " + e.path.string() + " was planned but not written");

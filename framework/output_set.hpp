@@ -43,6 +43,14 @@ class OutputSet {
   // Stage the content of a planned output (throws std::logic_error when the path was not planned).
   void write(const std::filesystem::path& path, std::string_view content);
   void write_csv(const std::filesystem::path& path, const std::vector<CsvColumn>& columns);
+  // For a writer that needs a file name (a library writing the file itself, e.g. an MRPT rawlog):
+  // the staged temporary file to write into, in the output's directory; the output counts as
+  // written. The writer may replace the file (its own temp + rename) but must not rename it away.
+  std::filesystem::path stage_path(const std::filesystem::path& path);
+
+  // Gives up a planned output that will not be written after all (an optional figure that could
+  // not be drawn); its temporary file is removed.
+  void drop(const std::filesystem::path& path);
 
   // Renames every staged file into place, all or nothing.
   void commit();

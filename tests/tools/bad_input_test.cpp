@@ -74,7 +74,15 @@ outputs: {smoothed: smooth.signal}
             "entropy --data " + csv,
             "decompose --data " + csv + " --out " + p("d.csv") + " --json " + p("d.json"),
             "discrepancy --data " + csv + " --report " + p("r.json") + " --series " + p("s.csv"),
-            "run --pipeline " + p("smooth.yaml") + " --data " + csv + " --out " + p("run")};
+            "run --pipeline " + p("smooth.yaml") + " --data " + csv + " --out " + p("run"),
+            "calibrate --data " + csv + " --bin 1 --out " + p("m.json") + " --report " + p("report"),
+            "compensate --data " + csv + " --model " + p("model.json") + " --out " + p("c.csv")};
+  }
+  // A calibration model of good.csv, for compensate.
+  void make_model() {
+    const auto r = run_driftlab("calibrate --data " + p("good.csv") + " --bin 1 --out " + p("model.json"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    inputs_.push_back("model.json");
   }
   void expect_clean(const std::string& what) {
     EXPECT_THAT(stray_files(dir_, inputs_), ::testing::IsEmpty()) << what;
@@ -99,6 +107,7 @@ TEST_F(BadInput, EveryDataCommandRefusesEveryBadCsvClassWithFileLineColumnAndNoO
     for (int i = 2; std::getline(in, l); ++i) out += (i == line ? text : l) + "\n";
     return header + out;
   };
+  make_model();
   const std::string huge(2 << 20, 'x');
   const std::vector<CsvClass> classes{
       {"non_numeric.csv", replace_line(7, "0.5,abc,20"), "non_numeric.csv:7: rate_dps", "expected a number"},
@@ -122,6 +131,7 @@ TEST_F(BadInput, EveryDataCommandRefusesEveryBadCsvClassWithFileLineColumnAndNoO
       EXPECT_LT(r.err.size(), 2000u) << "a bad cell is quoted whole: " << command;
       expect_clean(command);
       fs::remove_all(dir_ / "run");
+      fs::remove_all(dir_ / "report");
     }
   }
 }
@@ -291,7 +301,11 @@ TEST_F(BadInput, OutputsArePlannedUpFrontAndAppearTogetherOrNotAtAll) {
       {"decompose --data " + p("good.csv") + " --out " + p("d.csv") + " --json " + p(".") + "/d.csv", "--json"},
       {"discrepancy --data " + p("good.csv") + " --report " + p("r.json") + " --series " + p("good.csv"), ""},
       {"allan --data " + p("good.csv") + " --out " + p("."), "--out"},
+      {"calibrate --data " + p("good.csv") + " --bin 1 --out " + missing + ".json", "--out"},
+      {"calibrate --data " + p("good.csv") + " --bin 1 --out " + p("m.json") + " --report " + p("good.csv"), "--report"},
+      {"compensate --data " + p("good.csv") + " --model " + p("model.json") + " --out " + p("model.json"), "--out"},
   };
+  make_model();
   for (const auto& [command, option] : cases) {
     const auto r = run_driftlab(command, "DRIFTLAB_DEVICES_DIR=" + std::string(DRIFTLAB_SOURCE_DIR) + "/devices");
     EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
@@ -307,7 +321,9 @@ TEST_F(BadInput, CommandLineNumbersMustBeFiniteAndInRange) {
         "entropy --data " + p("good.csv") + " --fs nan", "entropy --data " + p("good.csv") + " --r inf",
         "simulate --device fmvmg --fs nan --out " + p("s.csv"), "simulate --device fmvmg --seed -1 --out " + p("s.csv"),
         "simulate --device fmvmg --duration -5 --out " + p("s.csv"),
-        "discrepancy --data " + p("good.csv") + " --significance nan --report " + p("r.json")}) {
+        "discrepancy --data " + p("good.csv") + " --significance nan --report " + p("r.json"),
+        "calibrate --data " + p("good.csv") + " --bin nan --out " + p("m.json"),
+        "compensate --data " + p("good.csv") + " --model x.json --fs inf --out " + p("c.csv")}) {
     const auto r = run_driftlab(command, "DRIFTLAB_DEVICES_DIR=" + std::string(DRIFTLAB_SOURCE_DIR) + "/devices");
     EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
     expect_clean(command);

@@ -20,9 +20,10 @@ void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, b
                   "column mapping role=column:unit for rate, temperature, true_rate, time "
                   "(e.g. rate=gyro_x_rad_s:rad/s)");
   cmd->add_option("--fs", data.sample_rate_hz, "sample rate in Hz, for files without a time column")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_number(0.0, 1e9, true));
   cmd->add_option("--max-gap", data.max_gap_factor,
                   "largest allowed time step, as a multiple of the median step (0 allows gaps)")
+      ->check(finite_number(0.0, 1e12))
       ->capture_default_str();
 }
 

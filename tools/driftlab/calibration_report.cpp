@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "framework/atomic_file.hpp"
+#include "framework/error.hpp"
 #include "models/calibration/evidence.hpp"
 #include "tools/driftlab/html_report.hpp"
 
@@ -101,8 +101,15 @@ nlohmann::json model_json(const CompetingModel& m) {
 
 }  // namespace
 
-nlohmann::json write_calibration_report(const ReportInput& in, const std::filesystem::path& dir) {
-  std::filesystem::create_directories(dir);
+void plan_calibration_report(OutputSet& outputs, const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (!std::filesystem::is_directory(dir)) throw ConfigError({dir.string(), 0, "--report"}, "cannot create the report directory");
+  outputs.plan(dir / "report.json", "--report");
+  outputs.plan(dir / "report.html", "--report");
+}
+
+nlohmann::json write_calibration_report(const ReportInput& in, const std::filesystem::path& dir, OutputSet& outputs) {
   nlohmann::json j;
   j["format"] = "driftlab-calibrate-report/1";
   j["command"] = in.command;
@@ -211,8 +218,8 @@ nlohmann::json write_calibration_report(const ReportInput& in, const std::filesy
     }
     j["evaluations"].push_back(ej);
   }
-  write_file_atomically(dir / "report.json", j.dump(2) + "\n");
-  html.write(dir / "report.html");
+  outputs.write(dir / "report.json", j.dump(2) + "\n");
+  outputs.write(dir / "report.html", html.html());
   return j;
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "framework/output_set.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "models/calibration/fit.hpp"
 
@@ -37,8 +38,13 @@ struct ReportInput {
   std::vector<std::string> notes;                // e.g. a baseline that could not be fitted
 };
 
-// Scores every model on every held-out record and writes DIR/report.json and DIR/report.html
-// (figures need gnuplot; without it the HTML says so). Returns the JSON.
-nlohmann::json write_calibration_report(const ReportInput& input, const std::filesystem::path& dir);
+// DIR/report.json and DIR/report.html: the outputs write_calibration_report stages. Plan them in the
+// command's OutputSet before any work (plan_calibration_report creates DIR).
+void plan_calibration_report(OutputSet& outputs, const std::filesystem::path& dir);
+
+// Scores every model on every held-out record and stages DIR/report.json and DIR/report.html in
+// `outputs` (figures need gnuplot; without it the HTML says so); the caller commits. Returns the JSON.
+nlohmann::json write_calibration_report(const ReportInput& input, const std::filesystem::path& dir,
+                                        OutputSet& outputs);
 
 }  // namespace driftlab::cli

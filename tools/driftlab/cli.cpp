@@ -8,7 +8,7 @@
 #include <sstream>
 #include <cstdlib>
 
-#include "framework/atomic_file.hpp"
+#include "framework/output_set.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
 
@@ -103,8 +103,8 @@ std::string display_unit(const TimeSeries& record, const std::string& role, cons
 }
 
 void check_output(const std::string& output, const std::vector<std::string>& inputs) {
-  std::vector<std::filesystem::path> paths(inputs.begin(), inputs.end());
-  ensure_not_an_input(output, paths);
+  OutputSet check({inputs.begin(), inputs.end()});  // the same rules as a planned output
+  check.plan(output, "--out");
 }
 
 }  // namespace driftlab::cli

@@ -47,7 +47,10 @@ TimeSeries as_time_series(const calibration::Record& r) {
 void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
   std::vector<std::string> inputs = o.data.paths;
   inputs.insert(inputs.end(), o.evaluate.begin(), o.evaluate.end());
-  check_output(o.out, inputs);
+  if (!o.paper_pipeline.empty()) inputs.push_back(o.paper_pipeline);
+  OutputSet files({inputs.begin(), inputs.end()});  // the model and the report appear together
+  files.plan(o.out, "--out");
+  if (!o.report.empty()) plan_calibration_report(files, o.report);
   if (o.train_until_s > 0 && o.data.paths.size() != 1) {
     throw ConfigError({"", 0, "--train-until"}, "--train-until splits a single --data record");
   }
@@ -65,10 +68,12 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
 
   const calibration::FitOptions base = fit_options(o, env);
   const auto model = calibration::fit_calibration(records, base);
-  calibration::write_calibration_model(model, o.out);
-  print_model_summary(std::cout, model);
-  std::cout << "wrote " << o.out << "\n";
+  model.validate();
+  files.write(o.out, calibration::to_json_text(model));
   if (o.report.empty()) {
+    files.commit();
+    print_model_summary(std::cout, model);
+    std::cout << "wrote " << o.out << "\n";
     if (!held_out.empty()) std::cout << "note: held-out records are scored only with --report DIR\n";
     return;
   }
@@ -127,7 +132,10 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
                              "below fs/2: noise IMFs dropped, RBF + Kalman smoothing", e, it->second.sum()});
     }
   }
-  const auto j = write_calibration_report(in, o.report);
+  const auto j = write_calibration_report(in, o.report, files);
+  files.commit();
+  print_model_summary(std::cout, model);
+  std::cout << "wrote " << o.out << "\n";
   for (const auto& ev : j["evaluations"]) {
     std::cout << "held-out " << ev["record"].get<std::string>() << ":\n";
     for (const auto& m : ev["methods"]) {
@@ -174,10 +182,10 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
       ->check(CLI::Range(2, 1000))
       ->capture_default_str();
   cmd->add_option("--bin", o->fit.bin_s, "fitting bin length, s (features and target are averaged per bin)")
-      ->check(CLI::PositiveNumber)
+      ->check(finite_number(0.0, 1e12, true))
       ->capture_default_str();
   cmd->add_option("--derivative-tau", o->fit.derivative_tau_s, "smoothing time constant of the causal dT/dt estimate, s")
-      ->check(CLI::PositiveNumber)
+      ->check(finite_number(0.0, 1e12, true))
       ->capture_default_str();
   cmd->add_flag("--heating-only", o->fit.heating_only, "fit on heating samples only (PX4 practice; for comparison)");
   cmd->add_option("--device", o->fit.device, "device name stored in the model");
@@ -190,7 +198,7 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--evaluate", o->evaluate, "held-out record(s) to score in the report (other seed / profile)");
   cmd->add_option("--train-until", o->train_until_s,
                   "calibrate on t < this (s) of the single --data record and score the rest in the report")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_number(0.0, 1e12, true));
   cmd->add_option("--report", o->report,
                   "write DIR/report.json and DIR/report.html: no compensation, PX4-style polynomial, poly, "
                   "physical and rbf scored on the held-out records");

@@ -18,7 +18,7 @@
 #include <string_view>
 #include <vector>
 
-#include "framework/atomic_file.hpp"
+#include "framework/output_set.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/units.hpp"
@@ -113,7 +113,8 @@ class Engine {
 
 void batch(const calibration::CalibrationModel& model, const CompensateOptions& o) {
   if (o.out.empty()) throw ConfigError({"", 0, "--out"}, "--out is required without --stream");
-  check_output(o.out, {o.data.paths.front(), o.model});
+  OutputSet outputs({o.data.paths.front(), o.model});
+  outputs.plan(o.out, "--out");
   const auto record = load_calibration_record(o.data.paths.front(), o.data);
   Engine engine(model, o);
   std::string text = engine.header();
@@ -125,7 +126,8 @@ void batch(const calibration::CalibrationModel& model, const CompensateOptions& 
       throw DataError({record.name, static_cast<int>(i) + 2, e.where().field}, e.what());
     }
   }
-  write_file_atomically(o.out, text);
+  outputs.write(o.out, text);
+  outputs.commit();
 }
 
 // ---- streaming ------------------------------------------------------------------------------
@@ -194,7 +196,7 @@ double cell(const std::vector<std::string_view>& cells, int index, long line, co
   double v = 0.0;
   const auto res = std::from_chars(text.data(), text.data() + text.size(), v);
   if (text.empty() || res.ec != std::errc() || res.ptr != text.data() + text.size()) {
-    throw DataError({"<stdin>", static_cast<int>(line), name}, "not a number: '" + std::string(text) + "'");
+    throw DataError({"<stdin>", static_cast<int>(line), name}, "not a number: " + quoted_excerpt(text));
   }
   if (!std::isfinite(v)) throw DataError({"<stdin>", static_cast<int>(line), name}, "NaN or Inf");
   return v;
@@ -282,9 +284,10 @@ void add_compensate_command(CLI::App& app, CommandEnv&) {
   cmd->add_option("--data", o->data.paths, "input CSV (default columns t_s, rate_dps, temp_c)")->expected(1);
   cmd->add_option("--column", o->data.columns, "column mapping role=column:unit for rate, temperature, time");
   cmd->add_option("--fs", o->data.sample_rate_hz, "sample rate in Hz, for input without a time column")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_number(0.0, 1e9, true));
   cmd->add_option("--max-gap", o->data.max_gap_factor,
                   "batch: largest allowed time step, as a multiple of the median step (0 allows gaps)")
+      ->check(finite_number(0.0, 1e12))
       ->capture_default_str();
   cmd->add_option("--out", o->out, "output CSV (written atomically)");
   cmd->add_flag("--stream", o->stream,
@@ -292,11 +295,11 @@ void add_compensate_command(CLI::App& app, CommandEnv&) {
   cmd->add_flag("--kalman", o->kalman, "add a causal Kalman stage (random walk + white noise, plugins/kalman)");
   cmd->add_option("--kalman-q", o->kalman_q, "Kalman random-walk variance per sample, (rad/s)^2 (default: K^2/fs "
                                              "from the model's noise terms)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finite_number(0.0, 1e12));
   cmd->add_option("--kalman-r", o->kalman_r, "Kalman measurement variance, (rad/s)^2 (default: N^2 fs)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finite_number(0.0, 1e12));
   cmd->add_option("--kalman-fs", o->kalman_fs, "sample rate for the noise-term conversion, Hz (default: the model's)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finite_number(0.0, 1e12));
   cmd->callback([o] {
     if (o->stream == !o->data.paths.empty()) {
       throw ConfigError({"", 0, "--data"}, "give either --data (with --out) or --stream");

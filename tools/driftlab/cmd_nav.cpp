@@ -11,9 +11,9 @@
 
 #include "devices/device_file.hpp"
 #include "devices/simulator.hpp"
-#include "framework/atomic_file.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
+#include "framework/output_set.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
 #include "tools/driftlab/devices_dir.hpp"
@@ -67,8 +67,12 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
   if (fs::exists(out) && !fs::is_directory(out))
     throw ConfigError(Location{o.out, 0, "--out"}, "exists and is not a directory");
   fs::create_directories(out);
-  for (const auto* name : {"summary.json", "trajectory.csv", "errors.csv", "drive.rawlog", "nav.svg", "model.json", "nav_info.json"})
-    check_output((out / name).string(), {device_path.string(), scenario_path.string(), o.model});
+  // Every output planned before the drive is simulated, committed together at the end.
+  OutputSet outputs({device_path, scenario_path, o.model});
+  for (const auto* name : {"summary.json", "trajectory.csv", "errors.csv", "nav.svg", "nav_info.json"})
+    outputs.plan(out / name, name);
+  if (!o.no_rawlog) outputs.plan(out / "drive.rawlog", "drive.rawlog");
+  if (o.model.empty()) outputs.plan(out / "model.json", "model.json");
 
   std::cerr << "driftlab nav: device " << device.name << ", scenario " << scenario_path.string() << " ("
             << scenario.duration_s() << " s at " << scenario.sample_rate_hz << " Hz, seed " << scenario.seed << ")\n";
@@ -93,7 +97,8 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
               << " model on a simulated oven run of the same device (seed " << scenario.calibration_seed
               << "; the drive uses seed " << scenario.seed << ")\n";
     model = mrpt_bridge::calibrate_on_oven_run(device, oven);
-    calibration::write_calibration_model(model, out / "model.json");
+    model.validate();
+    outputs.write(out / "model.json", calibration::to_json_text(model));
     model_source = (out / "model.json").string() + " (" + o.calibration_kind + ", calibrated by nav on a " +
                    (model.fit.records.empty() ? std::string("simulated oven run") : model.fit.records.front()) + ")";
   }
@@ -135,7 +140,7 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
   summary["heading_error_final_deg"] = heading_final;
   summary["position_error_final_m"] = position_final;
   summary["heading_error_rms_deg"] = heading_rms;
-  write_file_atomically(out / "summary.json", summary.dump(2) + "\n");
+  outputs.write(out / "summary.json", summary.dump(2) + "\n");
 
   nlohmann::ordered_json info;
   info["device"] = device_path.string();
@@ -169,7 +174,7 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
                      {"errors.csv", "t_s, temp_c, per run: heading error (deg, estimate - truth, accumulated: not wrapped), its EKF sigma (deg), position error (m), bias estimate (deg/h)"},
                      {"drive.rawlog", "the drive: CObservationIMU (raw IMU_WZ rad/s, IMU_TEMPERATURE degC) with odometry actions"},
                      {"nav.svg", "heading and position error over time"}};
-  write_file_atomically(out / "nav_info.json", info.dump(2) + "\n");
+  outputs.write(out / "nav_info.json", info.dump(2) + "\n");
 
   // trajectory.csv and errors.csv, decimated to --every seconds.
   const auto step = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::llround(o.every_s * scenario.sample_rate_hz)));
@@ -189,8 +194,8 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
     errs.push_back({run.name + "_position_error_m", pick(run.track.position_error_m, idx), "1"});
     errs.push_back({run.name + "_bias_dph", pick(run.track.bias_rad_s, idx, kDegPerRad * 3600.0), "1"});
   }
-  write_csv(out / "trajectory.csv", traj);
-  write_csv(out / "errors.csv", errs);
+  outputs.write_csv(out / "trajectory.csv", traj);
+  outputs.write_csv(out / "errors.csv", errs);
 
   // The plot.
   Figure figure;
@@ -204,8 +209,9 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
   }
   figure.panels = {heading, position};
   try {
-    write_file_atomically(out / "nav.svg", render_svg(figure));
+    outputs.write(out / "nav.svg", render_svg(figure));
   } catch (const PlotError& e) {  // the numbers stand without the figure
+    outputs.drop(out / "nav.svg");
     std::cerr << "driftlab nav: warning: nav.svg not written: " << e.what() << "\n";
   }
 
@@ -225,8 +231,9 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
                      {"odom_dy_m", Eigen::VectorXd::Zero(n), "1"},
                      {"odom_dphi_rad", Eigen::VectorXd::Zero(n), "1"},
                      {"odom_speed_mps", drive.odometry_speed_mps, "1"}};
-    mrpt_bridge::export_rawlog(table, out / "drive.rawlog");
+    mrpt_bridge::export_rawlog(table, outputs.stage_path(out / "drive.rawlog"));
   }
+  outputs.commit();
   env.progress("nav", 1.0);
 
   std::cout << std::fixed << std::setprecision(3);
@@ -264,10 +271,10 @@ void add_nav_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--out", o->out, "output directory (created; files written atomically)")->required();
   cmd->add_flag("--fixes", o->fixes, "use the scenario's absolute position fixes as EKF observations");
   cmd->add_option("--every", o->every_s, "spacing of trajectory.csv / errors.csv rows, s")
-      ->check(CLI::PositiveNumber)
+      ->check(finite_number(0.0, 1e12, true))
       ->capture_default_str();
   cmd->add_option("--bias-prior", o->bias_prior_dph, "prior standard deviation of the gyro bias state, deg/h")
-      ->check(CLI::PositiveNumber)
+      ->check(finite_number(0.0, 1e12, true))
       ->capture_default_str();
   cmd->add_option("--calibration-kind", o->calibration_kind,
                   "model nav calibrates when given no --model: poly or physical (see driftlab calibrate)")
