@@ -12,6 +12,7 @@ packages=(
   gnuplot-nox
   libfftw3-dev libgsl-dev
   libpagmo-dev libdlib-dev   # optimizer/pagmo, regressor/svr
+  clang libclang-rt-14-dev   # libFuzzer harnesses of tests/fuzz (ASan + UBSan runtimes)
 )
 # The MRPT bridge (tools/mrpt): libmrpt-obs-dev alone pulls the obs, bayes, poses, math, io and
 # serialization modules (~170 MB); mrpt-apps gives rawlog-edit, which the bridge's tests use.
