@@ -7,13 +7,12 @@
 
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <string>
 
 #include "framework/error.hpp"
 #include "models/calibration/calibration_model.hpp"
+#include "tests/fuzz/fuzz_oracle.hpp"
 
 namespace {
 
@@ -32,17 +31,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const auto model = calibration::read_calibration_model(path);
     const std::string text = calibration::to_json_text(model);
     write(path, text.data(), text.size());
-    if (calibration::to_json_text(calibration::read_calibration_model(path)) != text) {
-      std::fprintf(stderr, "property violated: the model's JSON does not read back to itself:\n%s\n", text.c_str());
-      std::abort();
-    }
+    fuzz::require(calibration::to_json_text(calibration::read_calibration_model(path)) == text,
+                  "the model's JSON reads back to itself", text);
     try {
       calibration::CausalCompensator comp(model);
-      const double w = comp.step(0.0, 0.01, 25.0);
-      if (!std::isfinite(w)) {
-        std::fprintf(stderr, "property violated: non-finite compensated rate\n%s\n", text.c_str());
-        std::abort();
-      }
+      fuzz::require(std::isfinite(comp.step(0.0, 0.01, 25.0)), "a finite compensated rate", text);
     } catch (const DataError&) {
     }
   } catch (const ConfigError&) {

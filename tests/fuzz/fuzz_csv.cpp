@@ -6,26 +6,16 @@
 // exception, a crash, a sanitizer report) is a finding.
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <string>
 
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
-
-namespace {
-
-void check(bool ok, const char* what) {
-  if (!ok) {
-    std::fprintf(stderr, "property violated: %s\n", what);
-    std::abort();
-  }
-}
-
-}  // namespace
+#include "tests/fuzz/fuzz_oracle.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
   using namespace driftlab;
+  using fuzz::require;
   const std::uint8_t mode = data[0];
   const std::string text(reinterpret_cast<const char*>(data + 1), size - 1);
   CsvReadOptions options;
@@ -37,14 +27,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const TimeSeries series = parse_csv(text, "fuzz.csv", options);
     const auto& t = series.time();
-    check(t.size() > 0, "no samples");
+    require(t.size() > 0, "no samples");
     for (Eigen::Index i = 0; i < t.size(); ++i) {
-      check(std::isfinite(t[i]), "time not finite");
-      if (i > 0) check(t[i] - t[i - 1] >= kMinTimeStep, "time not strictly increasing by >= 1 ns");
+      require(std::isfinite(t[i]), "time not finite");
+      if (i > 0) require(t[i] - t[i - 1] >= kMinTimeStep, "time not strictly increasing by >= 1 ns");
     }
     for (const auto& c : series.channels()) {
-      check(c.values.size() == t.size(), "channel length differs from time");
-      for (const double v : c.values) check(std::isfinite(v) && std::abs(v) <= kMaxMagnitude, "value out of range");
+      require(c.values.size() == t.size(), "channel length differs from time");
+      for (const double v : c.values) require(std::isfinite(v) && std::abs(v) <= kMaxMagnitude, "value out of range");
     }
   } catch (const ConfigError&) {
   } catch (const DataError&) {

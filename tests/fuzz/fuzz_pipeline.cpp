@@ -3,13 +3,12 @@
 // loads again and writes itself unchanged (the effective pipeline reloads to itself). Rejections
 // must be ConfigError; anything else is a finding.
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <string>
 
 #include "framework/error.hpp"
 #include "framework/pipeline.hpp"
 #include "framework/registry.hpp"
+#include "tests/fuzz/fuzz_oracle.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace driftlab;
@@ -23,11 +22,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const Pipeline p = parse_pipeline(text, "fuzz.yaml", *registry);
     const std::string effective = effective_pipeline_yaml(p, *registry);
     const Pipeline again = parse_pipeline(effective, "effective.yaml", *registry);
-    if (effective_pipeline_yaml(again, *registry) != effective) {
-      std::fprintf(stderr, "property violated: the effective pipeline does not reload to itself:\n%s\n",
-                   effective.c_str());
-      std::abort();
-    }
+    fuzz::require(effective_pipeline_yaml(again, *registry) == effective,
+                  "the effective pipeline reloads to itself", effective);
   } catch (const ConfigError&) {
   }
   return 0;

@@ -19,12 +19,7 @@ void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, b
   cmd->add_option("--column", data.columns,
                   "column mapping role=column:unit for rate, temperature, true_rate, time "
                   "(e.g. rate=gyro_x_rad_s:rad/s)");
-  cmd->add_option("--fs", data.sample_rate_hz, "sample rate in Hz, for files without a time column")
-      ->check(finite_number(0.0, 1e9, true));
-  cmd->add_option("--max-gap", data.max_gap_factor,
-                  "largest allowed time step, as a multiple of the median step (0 allows gaps)")
-      ->check(finite_number(0.0, 1e12))
-      ->capture_default_str();
+  add_sampling_options(cmd, data.sample_rate_hz, data.max_gap_factor);
 }
 
 calibration::Record load_calibration_record(const std::string& path, const CalibrationDataOptions& data) {

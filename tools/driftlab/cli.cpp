@@ -68,12 +68,13 @@ CLI::Validator whole_number(double lo, double hi) {
 void add_data_options(CLI::App* command, DataOptions& data, const std::string& column_help) {
   command->add_option("--data", data.path, "input CSV (header row; default columns t_s, rate_dps, temp_c)");
   command->add_option("--column", data.columns, column_help);
-  command->add_option("--fs", data.sample_rate_hz, "sample rate in Hz, for files without a time column")
-      ->check(finite_number(0.0, 1e9, true));
-  command->add_option("--max-gap", data.max_gap_factor,
-                      "largest allowed time step, as a multiple of the median step (0 allows gaps)")
-      ->check(finite_number(0.0, 1e12))
-      ->capture_default_str();
+  add_sampling_options(command, data.sample_rate_hz, data.max_gap_factor);
+}
+
+void add_sampling_options(CLI::App* command, double& sample_rate_hz, double& max_gap_factor,
+                          const std::string& fs_help, const std::string& gap_help) {
+  command->add_option("--fs", sample_rate_hz, fs_help)->check(finite_number(0.0, 1e9, true));
+  command->add_option("--max-gap", max_gap_factor, gap_help)->check(finite_number(0.0, 1e12))->capture_default_str();
 }
 
 std::string primary_role(const DataOptions& data) {

@@ -47,6 +47,12 @@ CLI::Validator finite_number(double lo, double hi, bool lo_open = false);
 CLI::Validator whole_number(double lo, double hi);
 inline constexpr double kMaxSeed = 9007199254740992.0;  // 2^53: every seed survives JSON and YAML
 
+// Adds --fs (a finite rate in (0, 1e9] Hz) and --max-gap (a finite factor >= 0) to a subcommand:
+// the one definition of the two sampling options every record-reading command shares.
+void add_sampling_options(CLI::App* command, double& sample_rate_hz, double& max_gap_factor,
+                          const std::string& fs_help = "sample rate in Hz, for files without a time column",
+                          const std::string& gap_help = "largest allowed time step, as a multiple of the median "
+                                                        "step (0 allows gaps)");
 // Adds --data, --column, --fs and --max-gap to a subcommand.
 void add_data_options(CLI::App* command, DataOptions& data, const std::string& column_help);
 // Reads the record; `required_roles` must be present (the role of the first --column that is not

@@ -283,12 +283,9 @@ void add_compensate_command(CLI::App& app, CommandEnv&) {
   cmd->add_option("--model", o->model, "driftlab-calibration/1 model JSON (from driftlab calibrate)")->required();
   cmd->add_option("--data", o->data.paths, "input CSV (default columns t_s, rate_dps, temp_c)")->expected(1);
   cmd->add_option("--column", o->data.columns, "column mapping role=column:unit for rate, temperature, time");
-  cmd->add_option("--fs", o->data.sample_rate_hz, "sample rate in Hz, for input without a time column")
-      ->check(finite_number(0.0, 1e9, true));
-  cmd->add_option("--max-gap", o->data.max_gap_factor,
-                  "batch: largest allowed time step, as a multiple of the median step (0 allows gaps)")
-      ->check(finite_number(0.0, 1e12))
-      ->capture_default_str();
+  add_sampling_options(cmd, o->data.sample_rate_hz, o->data.max_gap_factor,
+                       "sample rate in Hz, for input without a time column",
+                       "batch: largest allowed time step, as a multiple of the median step (0 allows gaps)");
   cmd->add_option("--out", o->out, "output CSV (written atomically)");
   cmd->add_flag("--stream", o->stream,
                 "read CSV rows from standard input and write compensated rows to standard output, one by one");
