@@ -9,7 +9,6 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "framework/atomic_file.hpp"
 #include "framework/error.hpp"
 
 namespace driftlab {
@@ -43,10 +42,10 @@ void OutputSet::plan(const fs::path& path, const std::string& option) {
     if (same_file(e.path, path))
       throw ConfigError(where, "the same file is also given as " + (e.option.empty() ? e.path.string() : e.option) +
                                    "; every output needs its own path");
-  std::vector<fs::path> inputs;
   for (const auto& in : inputs_)
-    if (!in.empty()) inputs.push_back(in);
-  ensure_not_an_input(path, inputs);
+    if (!in.empty() && same_file(path, in))
+      throw ConfigError(where, "would overwrite the input " + in.string() +
+                                   "; inputs are never overwritten, choose another path");
   std::error_code ec;
   if (fs::is_directory(path, ec)) throw ConfigError(where, "is a directory; expected a file path");
   if (path.filename().empty() || path.filename() == "." || path.filename() == "..")

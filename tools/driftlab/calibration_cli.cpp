@@ -6,6 +6,7 @@
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/time_series.hpp"
+#include "tools/driftlab/cli.hpp"
 
 namespace driftlab::cli {
 
