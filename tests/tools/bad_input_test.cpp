@@ -5,6 +5,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -266,13 +267,15 @@ TEST_F(BadInput, DeviceFilesAreCheckedAgainstThePhysics) {
     EXPECT_NE(at, std::string::npos) << from;
     return s.replace(at, from.size(), to);
   };
+  const auto line = std::to_string(std::count(device.begin(), device.begin() + device.find("reference_temp_c:"), '\n') + 1);
+  const auto next_line = std::to_string(std::stoi(line) + 1);
   const std::vector<std::tuple<std::string, std::string, std::string>> cases{
       {"absolute_zero.yaml", variant("reference_temp_c: 25", "reference_temp_c: -273.15"),
-       "absolute_zero.yaml:25: reference_temp_c: must be in (-273.15, 500]"},
+       "absolute_zero.yaml:" + line + ": reference_temp_c: must be in (-273.15, 500]"},
       {"negative_frequency.yaml", variant("frequency_tc_ppm_per_k: -30.0", "frequency_tc_ppm_per_k: -1e6"),
        "modes.drive: at "},
       {"duplicate_key.yaml", variant("reference_temp_c: 25", "reference_temp_c: 25\nreference_temp_c: 30"),
-       "duplicate_key.yaml:26: reference_temp_c: duplicate key"},
+       "duplicate_key.yaml:" + next_line + ": reference_temp_c: duplicate key"},
   };
   for (const auto& [name, text, expected] : cases) {
     write(dir_ / name, text);
