@@ -153,6 +153,7 @@ void allan_command(const AllanOptions& o) {
   const std::string role = primary_role(o.data);
   const auto& channel = record.channel(role);
   const bool constant_record = (channel.values.array() == channel.values[0]).all();
+  const std::string why = constant_record ? " (the record is constant: every deviation is 0, there is no noise to fit)" : "";
   const double fs = record.sample_rate_hz();
   if (!(fs > 0.0)) throw DataError({o.data.path, 0, "t_s"}, "cannot derive a sample interval");
   const double tau0 = 1.0 / fs;
@@ -184,15 +185,11 @@ void allan_command(const AllanOptions& o) {
   try {
     analysis = allan::analyze_angle(angle, tau0, {.confidence = o.confidence});
   } catch (const DataError& e) {
-    const std::string why = constant_record ? " (the record is constant: every deviation is 0, there is no noise to fit)"
-                                            : "";
     if (!o.json.empty()) throw DataError({o.data.path, 0, channel.source}, std::string(e.what()) + why);
     std::cerr << "note: no Allan readings: " << e.what() << why << "\n";
   }
   const allan::NoiseFit* fit = analysis && analysis->fit ? &*analysis->fit : nullptr;
   if (analysis && !fit) {
-    const std::string why = constant_record ? " (the record is constant: every deviation is 0, there is no noise to fit)"
-                                            : "";
     if (!o.json.empty()) throw DataError({o.data.path, 0, role}, "too few Allan points for the noise-term fit" + why);
     std::cerr << "note: no noise-term fit: too few Allan points" << why << "\n";
   }
