@@ -130,8 +130,9 @@ nlohmann::json scores_json(const RunScores& s) {
 std::string table2_text(const RunScores& s) {
   std::string out;
   char line[256];
-  std::snprintf(line, sizeof line, "%-16s %10s %10s  %16s %12s %10s %14s\n", "stage", "paper B", "paper N", "B (deg/h)",
-                "N (dph/rtHz)", "bandw (Hz)", "resid. drift");
+  out += "Table 2 (B in deg/h, N in deg/h/sqrt(Hz), noise bandwidth in Hz, residual drift in deg/h)\n";
+  std::snprintf(line, sizeof line, "%-16s %10s %10s  %16s %12s %10s %14s\n", "stage", "paper B", "paper N", "B [68% CI]",
+                "N", "bandwidth", "resid. drift");
   out += line;
   const auto cell = [](std::optional<double> v, const char* fmt) {
     char b[32];
@@ -250,7 +251,6 @@ Figure allan_figure(const RunScores& scores) {
   p.x_label = "tau (s)";
   p.y_label = "Allan deviation (°/h)";
   p.log_x = p.log_y = true;
-  p.legend = PlotPanel::Legend::BottomLeft;
   const auto add = [&](const std::string& label, const allan::Analysis& a, PlotSeries::Style style) {
     PlotSeries s;
     s.label = label;
