@@ -714,14 +714,13 @@ template <class V>
 
 // The 4x4 transpose of rows v[0..3]: lane i of v[k] becomes lane k of v[i].
 [[gnu::always_inline]] inline void transpose(Group* v) {
-  using Mask = long __attribute__((vector_size(kGroup * sizeof(long))));
-  constexpr Mask kEven{0, 4, 2, 6}, kOdd{1, 5, 3, 7}, kLow{0, 1, 4, 5}, kHigh{2, 3, 6, 7};
-  const Group t0 = __builtin_shuffle(v[0], v[1], kEven), t1 = __builtin_shuffle(v[0], v[1], kOdd);
-  const Group t2 = __builtin_shuffle(v[2], v[3], kEven), t3 = __builtin_shuffle(v[2], v[3], kOdd);
-  v[0] = __builtin_shuffle(t0, t2, kLow);
-  v[1] = __builtin_shuffle(t1, t3, kLow);
-  v[2] = __builtin_shuffle(t0, t2, kHigh);
-  v[3] = __builtin_shuffle(t1, t3, kHigh);
+  // __builtin_shufflevector (GCC >= 12 and clang) with constant lane indices: even, odd, low, high.
+  const Group t0 = __builtin_shufflevector(v[0], v[1], 0, 4, 2, 6), t1 = __builtin_shufflevector(v[0], v[1], 1, 5, 3, 7);
+  const Group t2 = __builtin_shufflevector(v[2], v[3], 0, 4, 2, 6), t3 = __builtin_shufflevector(v[2], v[3], 1, 5, 3, 7);
+  v[0] = __builtin_shufflevector(t0, t2, 0, 1, 4, 5);
+  v[1] = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+  v[2] = __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
+  v[3] = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
 }
 
 // Pieces j .. j+3 of a spline, each starting at its left knot (out[0] is sample `from`), kGroups
