@@ -227,7 +227,7 @@ CalibrationModel read_calibration_model(const std::filesystem::path& path) {
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(buffer.str());
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // syntax, and numbers beyond double (out_of_range)
     r.fail("", std::string("not valid JSON: ") + e.what());
   }
   if (!j.is_object()) r.fail("", "expected a JSON object");

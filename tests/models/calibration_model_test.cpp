@@ -61,6 +61,8 @@ std::string error_of(const std::string& text) {
 TEST(CalibrationModelJson, BadFilesNameTheFileAndTheKey) {
   const std::string good = to_json_text(poly_model());
   EXPECT_NE(error_of("{ not json").find("not valid JSON"), std::string::npos);
+  // A number beyond double (found by the fuzzer, tests/fuzz/corpus/calibration/number_overflow.json).
+  EXPECT_NE(error_of("{\"format\": 2.3e905}").find("not valid JSON"), std::string::npos);
   EXPECT_NE(error_of("{\"format\": \"other/1\"}").find("format"), std::string::npos);
   std::string missing = good;
   missing.replace(missing.find("\"reference_temp_c\""), 18, "\"reference_temp\"");
