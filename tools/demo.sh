@@ -23,7 +23,7 @@ cat <<EOF
 
 Reading the table: B is the flat floor of the overlapping Allan deviation / 0.664 (IEEE 952), read beyond
 each output's correlation time; N is read at tau = 1 s and is only comparable at equal noise bandwidth
-(bandw). Residual drift: rms of 60-s block means of output - true rate. The paper's last row owes its
+(bandwidth). Residual drift: rms of 60-s block means of output - true rate. The paper's last row owes its
 N = 0.97 to the Kalman filter's narrow bandwidth; ours states the bandwidth instead. "intrinsic floor":
 the same analysis of measured - true systematic rate, the gyro's own noise. px4_polynomial: third-order
 polynomial in temperature fitted on the heating leg, clipped (the PX4 thermal calibration).
