@@ -9,16 +9,18 @@
 
 namespace driftlab::evaluation {
 
-double block_mean_rms(const Eigen::VectorXd& x, double sample_rate_hz, double block_s) {
+Eigen::VectorXd block_means(const Eigen::VectorXd& x, double sample_rate_hz, double block_s) {
   const auto per_block = static_cast<Eigen::Index>(std::llround(block_s * sample_rate_hz));
   const Eigen::Index blocks = per_block > 0 ? x.size() / per_block : 0;
-  if (blocks == 0) throw DataError({"", 0, "rate"}, "the record is shorter than one " + std::to_string(block_s) + "-s block");
-  double sum = 0.0;
-  for (Eigen::Index b = 0; b < blocks; ++b) {
-    const double mean = x.segment(b * per_block, per_block).mean();
-    sum += mean * mean;
-  }
-  return std::sqrt(sum / static_cast<double>(blocks));
+  Eigen::VectorXd means(blocks);
+  for (Eigen::Index b = 0; b < blocks; ++b) means[b] = x.segment(b * per_block, per_block).mean();
+  return means;
+}
+
+double block_mean_rms(const Eigen::VectorXd& x, double sample_rate_hz, double block_s) {
+  const Eigen::VectorXd means = block_means(x, sample_rate_hz, block_s);
+  if (means.size() == 0) throw DataError({"", 0, "rate"}, "the record is shorter than one " + std::to_string(block_s) + "-s block");
+  return std::sqrt(means.squaredNorm() / static_cast<double>(means.size()));
 }
 
 StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_rad_s, double sample_rate_hz,

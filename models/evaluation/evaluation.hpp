@@ -42,8 +42,11 @@ struct StageScore {
   std::optional<allan::Analysis> error;         // Allan analysis of output - true rate
 };
 
-// rms over consecutive whole blocks of block_s seconds of the block means of x (rad/s). Throws
-// DataError when the record is shorter than one block.
+// Means of x over consecutive whole blocks of block_s seconds (a partial block at the end is left
+// out); empty when the record is shorter than one block.
+Eigen::VectorXd block_means(const Eigen::VectorXd& x, double sample_rate_hz, double block_s = kResidualBlockS);
+
+// rms of block_means(x) (rad/s). Throws DataError when the record is shorter than one block.
 double block_mean_rms(const Eigen::VectorXd& x, double sample_rate_hz, double block_s = kResidualBlockS);
 
 // Scores one output. reference_arw_rad_sqrt_s: N of the original record (for the bandwidth).

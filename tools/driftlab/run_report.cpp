@@ -276,6 +276,7 @@ Figure residual_figure(const TimeSeries& record, const std::vector<std::string>&
   const auto per_block = static_cast<Eigen::Index>(std::llround(evaluation::kResidualBlockS * fs));
   const Eigen::VectorXd& temp = record.channel(role::kTemperature).values;
   const Eigen::VectorXd& truth = record.channel(role::kTrueRate).values;
+  const Eigen::VectorXd temperature = evaluation::block_means(temp, fs);
   Figure f;
   f.columns = static_cast<int>(std::min<std::size_t>(stages.size(), 2));
   f.width = 1100;
@@ -292,15 +293,12 @@ Figure residual_figure(const TimeSeries& record, const std::vector<std::string>&
     heat.style = cool.style = PlotSeries::Style::Markers;
     heat.color = "#d62728";
     cool.color = "#1f77b4";
-    const Eigen::VectorXd& y = outputs.at(stage);
-    for (Eigen::Index b = 0; (b + 1) * per_block <= y.size(); ++b) {
-      const Eigen::Index s = b * per_block;
-      const double r = (y.segment(s, per_block) - truth.segment(s, per_block)).mean() * kDphPerRadPerSec;
-      const double t = temp.segment(s, per_block).mean();
-      const double slope = temp[s + per_block - 1] - temp[s];
+    const Eigen::VectorXd residual = evaluation::block_means(outputs.at(stage) - truth, fs);
+    for (Eigen::Index b = 0; b < residual.size(); ++b) {
+      const double slope = temp[(b + 1) * per_block - 1] - temp[b * per_block];
       auto& series = slope >= 0 ? heat : cool;
-      series.x.push_back(t);
-      series.y.push_back(r);
+      series.x.push_back(temperature[b]);
+      series.y.push_back(residual[b] * kDphPerRadPerSec);
     }
     p.series = {heat, cool};
     f.panels.push_back(p);
@@ -432,23 +430,15 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
   }
   {
     // Minute means: the noise of a 10-Hz record hides the drift the stages remove.
-    const auto per_block = static_cast<Eigen::Index>(std::llround(evaluation::kResidualBlockS * record.sample_rate_hz()));
-    const auto minute_means = [&](const Eigen::VectorXd& x) {
-      const Eigen::Index blocks = x.size() / std::max<Eigen::Index>(per_block, 1);
-      Eigen::VectorXd t(blocks), m(blocks);
-      for (Eigen::Index b = 0; b < blocks; ++b) {
-        t[b] = record.time().segment(b * per_block, per_block).mean();
-        m[b] = x.segment(b * per_block, per_block).mean();
-      }
-      return std::pair{t, m};
-    };
+    const double fs = record.sample_rate_hz();
+    const Eigen::VectorXd minutes = evaluation::block_means(record.time(), fs);
     PlotPanel p;
     p.title = "Reconstructed rate per stage, 60-s means (paper Fig. 14)";
     p.x_label = "time (h)";
     p.y_label = "rate (°/h)";
     for (const auto& name : stage_names) {
-      const auto [t, m] = minute_means(stage_outputs[name]);
-      p.series.push_back(line(name, t, m, kHoursPerSecond, kDphPerRadPerSec));
+      p.series.push_back(line(name, minutes, evaluation::block_means(stage_outputs[name], fs), kHoursPerSecond,
+                              kDphPerRadPerSec));
     }
     PlotPanel mixed;
     mixed.title = "Mixed group before and after the Kalman filter, first 10 minutes";
