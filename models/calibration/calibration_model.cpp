@@ -197,6 +197,14 @@ class Reader {
     const auto* v = optional(parent, key);
     return v ? number(*v, join(path, key)) : def;
   }
+  // A whole, non-negative number that fits std::size_t (sample and block counts).
+  std::size_t count_or(const nlohmann::json& parent, const std::string& path, const std::string& key) const {
+    const double x = number_or(parent, path, key, 0.0);
+    if (x < 0 || x != std::floor(x) || x >= 9007199254740992.0) {
+      fail(join(path, key), "expected a whole number of at least 0 and below 2^53");
+    }
+    return static_cast<std::size_t>(x);
+  }
   std::vector<double> numbers(const nlohmann::json& v, const std::string& key) const {
     if (!v.is_array()) fail(key, "expected a list of numbers, got " + std::string(v.type_name()));
     std::vector<double> out;
@@ -313,10 +321,10 @@ CalibrationModel read_calibration_model(const std::filesystem::path& path) {
         if (x.is_string()) m.fit.records.push_back(x.get<std::string>());
       }
     }
-    m.fit.samples = static_cast<std::size_t>(r.number_or(*f, "fit", "samples", 0.0));
+    m.fit.samples = r.count_or(*f, "fit", "samples");
     m.fit.bin_s = r.number_or(*f, "fit", "bin_s", 0.0);
     if (r.optional(*f, "selection")) m.fit.selection = r.text(*f, "fit", "selection");
-    m.fit.holdout_blocks = static_cast<std::size_t>(r.number_or(*f, "fit", "holdout_blocks", 0.0));
+    m.fit.holdout_blocks = r.count_or(*f, "fit", "holdout_blocks");
     m.fit.holdout_rms_rad_s = r.number_or(*f, "fit", "holdout_rms_rad_s", 0.0);
     m.fit.train_rms_rad_s = r.number_or(*f, "fit", "train_rms_rad_s", 0.0);
     if (const auto* h = r.optional(*f, "heating_only"); h && h->is_boolean()) m.fit.heating_only = h->get<bool>();

@@ -1,16 +1,22 @@
 #!/usr/bin/env bash
 # Builds and runs the libFuzzer harnesses of tests/fuzz (clang, ASan + UBSan).
 #   tests/fuzz/run_fuzzers.sh build FUZZ_BUILD_DIR            configure + build (clang++-14 or clang++)
-#   tests/fuzz/run_fuzzers.sh run FUZZ_BUILD_DIR NAME SECONDS run fuzz_NAME (csv, pipeline, device)
-# ctest runs `build` once and each harness for DRIFTLAB_FUZZ_SECONDS (default 60). A longer run
-# for developers (an hour each, new inputs kept in the build directory):
+#   tests/fuzz/run_fuzzers.sh run FUZZ_BUILD_DIR NAME SECONDS   a random campaign of fuzz_NAME
+#                                                                (csv, pipeline, device, calibration)
+#   tests/fuzz/run_fuzzers.sh check FUZZ_BUILD_DIR NAME RUNS     a reproducible run: seed 1, RUNS
+#                                                                inputs, from the seed corpus only
+# ctest runs `build` once and `check` for each harness with DRIFTLAB_FUZZ_RUNS inputs: the same
+# inputs on every machine, so the test command passes or fails the same way everywhere (a random
+# campaign in CI would fail at random on whatever it happens to find). Random campaigns are for
+# developers, before a commit that touches a reader (an hour each, new inputs kept in the build
+# directory):
 #   tests/fuzz/run_fuzzers.sh build build-fuzz && tests/fuzz/run_fuzzers.sh run build-fuzz csv 3600
 # A finding (crash, sanitizer report, violated property, uncaught exception) fails the run and
 # leaves the input in FUZZ_BUILD_DIR/findings/<name>/; reproduce with build-fuzz/tests/fuzz/fuzz_NAME FILE.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 source_dir=$(cd "$here/../.." && pwd)
-mode=${1:?usage: run_fuzzers.sh build|run FUZZ_BUILD_DIR [NAME SECONDS]}
+mode=${1:?usage: run_fuzzers.sh build|run|check FUZZ_BUILD_DIR [NAME SECONDS|RUNS]}
 build_dir=${2:?fuzz build directory}
 
 case "$mode" in
@@ -28,23 +34,30 @@ build)
     >/dev/null
   cmake --build "$build_dir" -j "${JOBS:-2}" --target fuzzers
   ;;
-run)
-  name=${3:?harness name: csv, pipeline or device}
-  seconds=${4:-60}
+run|check)
+  name=${3:?harness name: csv, pipeline, device or calibration}
+  budget=${4:-60}
   exe="$build_dir/tests/fuzz/fuzz_$name"
   [[ -x "$exe" ]] || { echo "run_fuzzers.sh: $exe not built (run: run_fuzzers.sh build $build_dir)" >&2; exit 1; }
-  work="$build_dir/corpus/$name"
   findings="$build_dir/findings/$name"
+  if [[ "$mode" == run ]]; then
+    work="$build_dir/corpus/$name"
+    limits=(-max_total_time="$budget")
+  else
+    work="$build_dir/check-corpus/$name"
+    rm -rf "$work"
+    limits=(-seed=1 -runs="$budget" -reload=0)
+  fi
   mkdir -p "$work" "$findings"
   export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=0:abort_on_error=1}
   export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
   # New inputs go to $work (outside the source tree); the seed corpus is read only.
-  "$exe" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=2048 -max_len=8192 -print_final_stats=1 \
+  "$exe" "${limits[@]}" -timeout=20 -rss_limit_mb=2048 -max_len=8192 -print_final_stats=1 \
     -artifact_prefix="$findings/" "$work" "$here/corpus/$name" 2>&1 | tail -n 25
   exit "${PIPESTATUS[0]}"
   ;;
 *)
-  echo "usage: run_fuzzers.sh build|run FUZZ_BUILD_DIR [NAME SECONDS]" >&2
+  echo "usage: run_fuzzers.sh build|run|check FUZZ_BUILD_DIR [NAME SECONDS|RUNS]" >&2
   exit 2
   ;;
 esac

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <random>
 
 #include "framework/error.hpp"
@@ -64,6 +65,12 @@ TEST(CalibrationModelJson, BadFilesNameTheFileAndTheKey) {
   // A number beyond double (found by the fuzzer, tests/fuzz/corpus/calibration/number_overflow.json).
   EXPECT_NE(error_of("{\"format\": 2.3e905}").find("not valid JSON"), std::string::npos);
   EXPECT_NE(error_of("{\"format\": \"other/1\"}").find("format"), std::string::npos);
+  // A count beyond std::size_t (found by the fuzzer in CI, corpus/calibration/count_overflow.json).
+  std::string huge_count = good;
+  huge_count = std::regex_replace(huge_count, std::regex("\"samples\": [0-9]+"), "\"samples\": 1e300");
+  const std::string c = error_of(huge_count);
+  EXPECT_NE(c.find("fit.samples"), std::string::npos) << c;
+  EXPECT_NE(c.find("whole number"), std::string::npos) << c;
   std::string missing = good;
   missing.replace(missing.find("\"reference_temp_c\""), 18, "\"reference_temp\"");
   const std::string e = error_of(missing);
