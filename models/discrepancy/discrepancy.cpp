@@ -229,7 +229,22 @@ class Workflow {
         }
         reach.push_back({c, score.theta});
       }
-      const Eigen::VectorXd residual = record_.channel(role::kRate).values - full_model(fitted(std::move(reach)));
+      const State reached = fitted(std::move(reach));
+      Eigen::VectorXd residual = record_.channel(role::kRate).values - full_model(reached);
+      // ... and what the views that live in temperature take (a step at one temperature, a
+      // branch offset, dT/dt terms); the views in time are left out: they would take the random
+      // walk itself.
+      const Thermal block = thermal(reached.design.moved);
+      const Thermal full = thermal(design(smooth_record_, reached.terms).moved);
+      const double level = temperature_step(reached, block, full.temp).level_c;
+      const auto columns = [&](const Thermal& th, const Eigen::VectorXd& step) {
+        Eigen::MatrixXd m(th.temp.size(), 6);
+        m << step, branch_columns(th), rate_columns(th);
+        return m;
+      };
+      const Eigen::VectorXd full_step = step_column(full.temp, level);
+      const Eigen::MatrixXd block_columns = columns(block, block_means(blocks_, full_step));
+      residual -= columns(full, full_step) * least_squares(block_columns, y_ - block_model(reached)).beta;
       noise_ = estimated_noise(residual);
       result.noise_estimated = true;
     }
@@ -529,13 +544,102 @@ class Workflow {
     return m;
   }
 
+  // What the generic views see of a record: its (model) temperature, x = T - T0, dT/dt and the
+  // branch sgn(dT/dt) (0 while the chamber holds).
+  struct Thermal {
+    Eigen::VectorXd temp, rate;
+    Eigen::ArrayXd x, branch;
+  };
+  Thermal thermal(const TimeSeries& rec) const {
+    Thermal th;
+    th.temp = rec.channel(role::kTemperature).values;
+    th.x = th.temp.array() - options_.reference_temp_c;
+    th.rate = signal::time_derivative(rec.time(), th.temp);
+    const double soak = 1e-3 * th.rate.cwiseAbs().maxCoeff();  // below this the chamber holds
+    th.branch = th.rate.array().unaryExpr([&](double r) { return r > soak ? 1.0 : r < -soak ? -1.0 : 0.0; });
+    return th;
+  }
+  static Eigen::MatrixXd branch_columns(const Thermal& th) {
+    Eigen::MatrixXd m(th.temp.size(), 2);
+    m.col(0) = th.branch.matrix();
+    m.col(1) = (th.branch * th.x).matrix();
+    return m;
+  }
+  static Eigen::MatrixXd rate_columns(const Thermal& th) {
+    Eigen::MatrixXd m(th.temp.size(), 3);
+    m.col(0) = th.rate;
+    m.col(1) = (th.rate.array() * th.x).matrix();
+    m.col(2) = (th.rate.array() * th.x.square()).matrix();
+    return m;
+  }
+  // 1 where the temperature is above level_c; at the blocks, the block mean of that at full rate
+  // (a crossing inside a block gives the fraction of the block above the level).
+  static Eigen::VectorXd step_column(const Eigen::VectorXd& temp_c, double level_c) {
+    return (temp_c.array() > level_c).cast<double>().matrix();
+  }
+  Eigen::VectorXd block_step_column(const Eigen::VectorXd& full_temp_c, double level_c) const {
+    return block_means(blocks_, step_column(full_temp_c, level_c));
+  }
+  Eigen::VectorXd full_model_temperature(const State& s) const {
+    return design(smooth_record_, s.terms).moved.channel(role::kTemperature).values;
+  }
+
+  // The temperature view's second form: a step in bias where the temperature crosses one level,
+  // searched over kStepLevels equal-count levels between the kStepTail and 1 - kStepTail quantiles
+  // (q = 2: size and level). Bins cannot follow a sharp edge that falls between their own edges.
+  static constexpr int kStepLevels = 64;
+  static constexpr double kStepTail = 0.05;
+  struct StepView {
+    StructureTest test;
+    double level_c = 0.0;
+  };
+  StepView temperature_step(const State& state, const Thermal& th, const Eigen::VectorXd& full_temp_c) const {
+    std::vector<double> sorted(th.temp.data(), th.temp.data() + th.temp.size());
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<double> levels;
+    for (int l = 0; l < kStepLevels; ++l) {
+      const double f = kStepTail + (1.0 - 2.0 * kStepTail) * l / (kStepLevels - 1);
+      levels.push_back(sorted[static_cast<std::size_t>(f * static_cast<double>(sorted.size() - 1))]);
+    }
+    const auto chi2_at = [&](double level) { return added_columns_chi2(state, block_step_column(full_temp_c, level)); };
+    std::size_t best = 0;
+    double best_chi2 = std::numeric_limits<double>::infinity();
+    for (std::size_t l = 0; l < levels.size(); ++l) {
+      const auto a = chi2_at(levels[l]);
+      if (a.kept > 0 && a.chi2 < best_chi2) best_chi2 = a.chi2, best = l;
+    }
+    StepView view{{"temperature", 0.0, -std::numeric_limits<double>::infinity(), 0, 0.0, ""}, levels[best]};
+    if (!std::isfinite(best_chi2)) return view;
+    // The level between the neighbouring grid levels (golden section, as for the candidates).
+    double refined = levels[best];
+    const double lo = levels[best == 0 ? 0 : best - 1], hi = levels[std::min(best + 1, levels.size() - 1)];
+    if (golden_section([&](double level) { return chi2_at(level).chi2; }, lo, hi, options_.golden_iterations, refined) <
+        best_chi2)
+      view.level_c = refined;
+    const auto a = chi2_at(view.level_c);
+    const int q = static_cast<int>(a.kept) + 1;
+    view.test.delta_chi2 = state.fit.chi2 - a.chi2;
+    view.test.delta_bic = view.test.delta_chi2 / chi2_scale(state) - q * std::log(static_cast<double>(blocks_.size()));
+    view.test.parameters = q;
+    view.test.size_rad_s = rms(a.component);
+    // The step's size from the joint fit with the model (the view's component is only the part
+    // the model cannot take: a polynomial absorbs much of a step).
+    Design joint = state.design;
+    joint.columns.conservativeResize(Eigen::NoChange, joint.columns.cols() + 1);
+    joint.columns.rightCols(1) = block_step_column(full_temp_c, view.level_c);
+    const Fit f = fit(joint);
+    view.test.step = StructureTest::TemperatureStep{view.level_c, f.beta[f.beta.size() - 1]};
+    char text[160];
+    std::snprintf(text, sizeof text, "a step of %+.3g deg/h where the temperature crosses %.3g degC",
+                  view.test.step->size_rad_s * kDphPerRadPerSec, view.level_c);
+    view.test.where = text;
+    return view;
+  }
+
   Unexplained structure_tests(const State& state) const {
     const TimeSeries& rec = state.design.moved;
-    const Eigen::VectorXd& temp = rec.channel(role::kTemperature).values;
-    const Eigen::ArrayXd x = temp.array() - options_.reference_temp_c;
-    const Eigen::VectorXd rate = signal::time_derivative(rec.time(), temp);
-    const double soak = 1e-3 * rate.cwiseAbs().maxCoeff();  // below this the chamber holds
-    const Eigen::ArrayXd branch = rate.array().unaryExpr([&](double r) { return r > soak ? 1.0 : r < -soak ? -1.0 : 0.0; });
+    const Thermal th = thermal(rec);
+    const Eigen::VectorXd& temp = th.temp;
     constexpr double kDph = kDphPerRadPerSec;  // the texts are in deg/h
     const double scale = chi2_scale(state);
     const double log_blocks = std::log(static_cast<double>(blocks_.size()));
@@ -572,30 +676,25 @@ class Workflow {
     std::vector<double> temp_edges, time_edges;
     const Eigen::MatrixXd temp_bins = bin_columns(temp, true, temp_edges);
     add("temperature", temp_bins, [&](const Eigen::VectorXd& c) { return largest_bin(temp, temp_edges, c, "degC"); });
-    Eigen::MatrixXd branches(rec.size(), 2);
-    branches.col(0) = branch.matrix();
-    branches.col(1) = (branch * x).matrix();
-    add("heating_vs_cooling", branches, [&](const Eigen::VectorXd& c) {
+    if (auto step = temperature_step(state, th, full_model_temperature(state)); step.test.delta_bic > u.views.back().delta_bic)
+      u.views.back() = std::move(step.test);
+    add("heating_vs_cooling", branch_columns(th), [&](const Eigen::VectorXd& c) {
       double heating = 0.0, cooling = 0.0;
       int nh = 0, nc = 0;
       for (Eigen::Index k = 0; k < c.size(); ++k) {
-        if (branch[k] > 0) heating += c[k], ++nh;
-        if (branch[k] < 0) cooling += c[k], ++nc;
+        if (th.branch[k] > 0) heating += c[k], ++nh;
+        if (th.branch[k] < 0) cooling += c[k], ++nc;
       }
       char text[160];
       std::snprintf(text, sizeof text, "heating %+.3g deg/h, cooling %+.3g deg/h on average",
                     nh ? heating / nh * kDph : 0.0, nc ? cooling / nc * kDph : 0.0);
       return std::string(text);
     });
-    Eigen::MatrixXd rates(rec.size(), 3);
-    rates.col(0) = rate;
-    rates.col(1) = (rate.array() * x).matrix();
-    rates.col(2) = (rate.array() * x.square()).matrix();
-    add("temperature_rate", rates, [&](const Eigen::VectorXd& c) {
+    add("temperature_rate", rate_columns(th), [&](const Eigen::VectorXd& c) {
       const Eigen::Index k = [&] { Eigen::Index i; c.cwiseAbs().maxCoeff(&i); return i; }();
       char text[160];
       std::snprintf(text, sizeof text, "follows dT/dt with a temperature-dependent factor; largest %+.3g deg/h at %.3g degC, "
-                    "%.3g degC/min", c[k] * kDph, temp[k], rate[k] * 60.0);
+                    "%.3g degC/min", c[k] * kDph, temp[k], th.rate[k] * 60.0);
       return std::string(text);
     });
     add("time", bin_columns(rec.time(), false, time_edges),

@@ -134,7 +134,8 @@ struct Step {
 
 // Structure left in the residual that no candidate explains, tested in generic views of it (the
 // same GLS criterion as the candidates, q = the view's columns outside the model's span):
-//   temperature         bias by temperature: indicators of 8 equal-count temperature bins
+//   temperature         bias by temperature: indicators of 8 equal-count temperature bins, or a
+//                       step at one temperature level (whichever scores higher; see below)
 //   heating_vs_cooling  branch offset: sgn(dT/dt) and sgn(dT/dt) (T - T0)
 //   temperature_rate    dT/dt times a quadratic in T - T0 (dT/dt, x dT/dt, x^2 dT/dt)
 //   time                indicators of 8 equal time spans
@@ -148,6 +149,13 @@ struct StructureTest {
   int parameters = 0;        // q
   double size_rad_s = 0.0;   // rms over the blocks of the view's fitted component
   std::string where;         // e.g. "largest at 14.2 .. 25.8 degC (+160 deg/h)"
+  // The temperature view has a second form, a step in bias where the temperature crosses one
+  // level (q = 2: size and level, the level searched); it replaces the bins when it scores higher.
+  struct TemperatureStep {
+    double level_c = 0.0;
+    double size_rad_s = 0.0;  // from the joint fit with the model
+  };
+  std::optional<TemperatureStep> step;
 };
 
 struct Unexplained {

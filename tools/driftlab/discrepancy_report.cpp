@@ -173,13 +173,16 @@ std::string parameter_text(const discrepancy::ReportedValue& v) {
 
 nlohmann::json unexplained_json(const discrepancy::Unexplained& u) {
   nlohmann::json views = nlohmann::json::array();
-  for (const auto& v : u.views)
-    views.push_back({{"view", v.view},
-                     {"delta_bic", number_or_null(v.delta_bic)},
-                     {"delta_chi2", v.delta_chi2},
-                     {"parameters", v.parameters},
-                     {"size_dph", dph(v.size_rad_s)},
-                     {"where", v.where}});
+  for (const auto& v : u.views) {
+    nlohmann::json view{{"view", v.view},
+                        {"delta_bic", number_or_null(v.delta_bic)},
+                        {"delta_chi2", v.delta_chi2},
+                        {"parameters", v.parameters},
+                        {"size_dph", dph(v.size_rad_s)},
+                        {"where", v.where}};
+    if (v.step) view["step"] = {{"level_c", v.step->level_c}, {"size_dph", dph(v.step->size_rad_s)}};
+    views.push_back(std::move(view));
+  }
   return {{"found", u.found}, {"views", views}};
 }
 
