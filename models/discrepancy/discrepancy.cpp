@@ -236,13 +236,14 @@ class Workflow {
       // walk itself.
       const Thermal block = thermal(reached.design.moved);
       const Thermal full = thermal(design(smooth_record_, reached.terms).moved);
-      const double level = temperature_step(reached, block, full.temp).level_c;
-      const auto columns = [&](const Thermal& th, const Eigen::VectorXd& step) {
+      const auto step = temperature_step(reached, block, full.temp).step;
+      const Eigen::VectorXd full_step =
+          step ? step_column(full.temp, step->level_c) : Eigen::VectorXd(Eigen::VectorXd::Zero(full.temp.size()));
+      const auto columns = [&](const Thermal& th, const Eigen::VectorXd& step_values) {
         Eigen::MatrixXd m(th.temp.size(), 6);
-        m << step, branch_columns(th), rate_columns(th);
+        m << step_values, branch_columns(th), rate_columns(th);
         return m;
       };
-      const Eigen::VectorXd full_step = step_column(full.temp, level);
       const Eigen::MatrixXd block_columns = columns(block, block_means(blocks_, full_step));
       residual -= columns(full, full_step) * least_squares(block_columns, y_ - block_model(reached)).beta;
       noise_ = estimated_noise(residual);
@@ -589,11 +590,8 @@ class Workflow {
   // (q = 2: size and level). Bins cannot follow a sharp edge that falls between their own edges.
   static constexpr int kStepLevels = 64;
   static constexpr double kStepTail = 0.05;
-  struct StepView {
-    StructureTest test;
-    double level_c = 0.0;
-  };
-  StepView temperature_step(const State& state, const Thermal& th, const Eigen::VectorXd& full_temp_c) const {
+  // Empty `step` when no level leaves a column outside the model's span.
+  StructureTest temperature_step(const State& state, const Thermal& th, const Eigen::VectorXd& full_temp_c) const {
     std::vector<double> sorted(th.temp.data(), th.temp.data() + th.temp.size());
     std::sort(sorted.begin(), sorted.end());
     std::vector<double> levels;
@@ -608,31 +606,30 @@ class Workflow {
       const auto a = chi2_at(levels[l]);
       if (a.kept > 0 && a.chi2 < best_chi2) best_chi2 = a.chi2, best = l;
     }
-    StepView view{{"temperature", 0.0, -std::numeric_limits<double>::infinity(), 0, 0.0, ""}, levels[best]};
+    StructureTest view{"temperature", 0.0, -std::numeric_limits<double>::infinity(), 0, 0.0, "", std::nullopt};
     if (!std::isfinite(best_chi2)) return view;
     // The level between the neighbouring grid levels (golden section, as for the candidates).
-    double refined = levels[best];
+    double level = levels[best], refined = level;
     const double lo = levels[best == 0 ? 0 : best - 1], hi = levels[std::min(best + 1, levels.size() - 1)];
-    if (golden_section([&](double level) { return chi2_at(level).chi2; }, lo, hi, options_.golden_iterations, refined) <
+    if (golden_section([&](double l) { return chi2_at(l).chi2; }, lo, hi, options_.golden_iterations, refined) <
         best_chi2)
-      view.level_c = refined;
-    const auto a = chi2_at(view.level_c);
-    const int q = static_cast<int>(a.kept) + 1;
-    view.test.delta_chi2 = state.fit.chi2 - a.chi2;
-    view.test.delta_bic = view.test.delta_chi2 / chi2_scale(state) - q * std::log(static_cast<double>(blocks_.size()));
-    view.test.parameters = q;
-    view.test.size_rad_s = rms(a.component);
+      level = refined;
+    const auto a = chi2_at(level);
+    view.parameters = static_cast<int>(a.kept) + 1;
+    view.delta_chi2 = state.fit.chi2 - a.chi2;
+    view.delta_bic = view.delta_chi2 / chi2_scale(state) - view.parameters * std::log(static_cast<double>(blocks_.size()));
+    view.size_rad_s = rms(a.component);
     // The step's size from the joint fit with the model (the view's component is only the part
     // the model cannot take: a polynomial absorbs much of a step).
     Design joint = state.design;
     joint.columns.conservativeResize(Eigen::NoChange, joint.columns.cols() + 1);
-    joint.columns.rightCols(1) = block_step_column(full_temp_c, view.level_c);
+    joint.columns.rightCols(1) = block_step_column(full_temp_c, level);
     const Fit f = fit(joint);
-    view.test.step = StructureTest::TemperatureStep{view.level_c, f.beta[f.beta.size() - 1]};
+    view.step = StructureTest::TemperatureStep{level, f.beta[f.beta.size() - 1]};
     char text[160];
     std::snprintf(text, sizeof text, "a step of %+.3g deg/h where the temperature crosses %.3g degC",
-                  view.test.step->size_rad_s * kDphPerRadPerSec, view.level_c);
-    view.test.where = text;
+                  view.step->size_rad_s * kDphPerRadPerSec, level);
+    view.where = text;
     return view;
   }
 
@@ -676,8 +673,8 @@ class Workflow {
     std::vector<double> temp_edges, time_edges;
     const Eigen::MatrixXd temp_bins = bin_columns(temp, true, temp_edges);
     add("temperature", temp_bins, [&](const Eigen::VectorXd& c) { return largest_bin(temp, temp_edges, c, "degC"); });
-    if (auto step = temperature_step(state, th, full_model_temperature(state)); step.test.delta_bic > u.views.back().delta_bic)
-      u.views.back() = std::move(step.test);
+    if (auto step = temperature_step(state, th, full_model_temperature(state)); step.delta_bic > u.views.back().delta_bic)
+      u.views.back() = std::move(step);
     add("heating_vs_cooling", branch_columns(th), [&](const Eigen::VectorXd& c) {
       double heating = 0.0, cooling = 0.0;
       int nh = 0, nc = 0;

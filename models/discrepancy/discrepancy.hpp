@@ -52,7 +52,9 @@
 // Noise terms: the device's (Options::noise). Without them they are estimated from the overlapping
 // Allan deviation (models/allan noise fit: N, B, K) of the part of the full-rate residual that no
 // candidate reaches: the model plus every applicable candidate at its best parameters, fitted by
-// ordinary least squares on the blocks (one temperature-moving candidate, the best). The initial
+// ordinary least squares on the blocks (one temperature-moving candidate, the best), and minus what
+// the views that live in temperature take (the temperature step, heating_vs_cooling,
+// temperature_rate; not the time bins, which would take the random walk itself). The initial
 // residual alone still holds the structure being looked for (a 310-s lag read as K = 75 deg/h/sqrt(h)
 // and hid itself); the candidates' extra freedom absorbs little noise (measured: no noise-only
 // record names anything, tests/models/discrepancy_test.cpp, WithoutTheDeviceFile). A record with
