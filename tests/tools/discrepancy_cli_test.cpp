@@ -4,7 +4,10 @@
 
 #include <cmath>
 #include <filesystem>
+#include <algorithm>
 #include <functional>
+#include <iomanip>
+#include <sstream>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -60,6 +63,53 @@ TEST(DiscrepancyCommand, NamesASimulatedDisturbanceAndWritesReportSeriesAndHtml)
   const std::string html = read_text(dir / "report.html");
   EXPECT_THAT(html, HasSubstr("<svg"));
   EXPECT_THAT(html, HasSubstr("periodic_disturbance"));
+}
+
+// A copy of a simulated record with `step_dph` added to rate_dps where die_temp_c is above level_c:
+// an effect no candidate describes.
+std::filesystem::path with_bias_step(const std::filesystem::path& csv, double level_c, double step_dph) {
+  std::ifstream in(csv);
+  std::string header, line;
+  std::getline(in, header);
+  const auto split = [](const std::string& text) {
+    std::vector<std::string> cells;
+    std::stringstream stream(text);
+    for (std::string cell; std::getline(stream, cell, ',');) cells.push_back(cell);
+    return cells;
+  };
+  const auto names = split(header);
+  const auto column = [&](const std::string& name) {
+    return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
+  };
+  const std::size_t rate = column("rate_dps"), die = column("die_temp_c");
+  const auto out_path = csv.parent_path() / "with_step.csv";
+  std::ofstream out(out_path);
+  out << header << "\n" << std::setprecision(17);
+  while (std::getline(in, line)) {
+    auto cells = split(line);
+    if (std::stod(cells.at(die)) > level_c) cells[rate] = std::to_string(std::stod(cells[rate]) + step_dph / 3600.0);
+    for (std::size_t i = 0; i < cells.size(); ++i) out << (i ? "," : "") << cells[i];
+    out << "\n";
+  }
+  return out_path;
+}
+
+TEST(DiscrepancyCommand, ReportsABiasStepAtOneTemperatureAsUnexplainedWithItsLevelAndSize) {
+  const auto dir = scratch_dir("discrepancy_step");
+  const auto csv = with_bias_step(simulated(dir, ""), 20.0, 300.0);
+  for (const std::string device : {" --device fmvmg", " --column time=t_s:s --column rate=rate_dps:deg/s "
+                                                      "--column temperature=temp_c:degC --column true_rate=true_rate_dps:deg/s"}) {
+    const auto r = run_driftlab("discrepancy --data " + csv.string() + device + " --report " + (dir / "r.json").string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_THAT(r.out, HasSubstr("unexplained: structure remains that no candidate explains, in the temperature view"));
+    EXPECT_THAT(r.out, ::testing::Not(HasSubstr("named "))) << device;
+    const auto report = nlohmann::json::parse(read_text(dir / "r.json"));
+    EXPECT_TRUE(report["named_effects"].empty()) << device;
+    const auto& best = report["unexplained"]["views"][0];
+    ASSERT_EQ(best["view"], "temperature") << best.dump();
+    EXPECT_NEAR(best["step"]["level_c"].get<double>(), 20.0, 0.5) << device;
+    EXPECT_NEAR(best["step"]["size_dph"].get<double>(), 300.0, 30.0) << device;
+  }
 }
 
 TEST(DiscrepancyCommand, SaysNothingIsMissingWhenTheDeviceFileIsTheTruth) {
