@@ -1,38 +1,9 @@
 #include "models/calibration/evidence.hpp"
 
-#include <algorithm>
-#include <cmath>
-
 #include "framework/error.hpp"
 #include "models/allan/analysis.hpp"
 
 namespace driftlab::calibration {
-
-double residual_drift_rad_s(const Eigen::VectorXd& time_s, const Eigen::VectorXd& output, const Eigen::VectorXd& truth,
-                            double block_s) {
-  double sum = 0.0, ss = 0.0, count = 0.0;
-  long current = -1;
-  std::size_t blocks = 0;
-  const auto close = [&] {
-    if (count > 0) {
-      const double m = sum / count;
-      ss += m * m;
-      ++blocks;
-    }
-    sum = count = 0.0;
-  };
-  for (Eigen::Index i = 0; i < time_s.size(); ++i) {
-    const long k = static_cast<long>(std::floor((time_s[i] - time_s[0]) / block_s));
-    if (k != current) {
-      close();
-      current = k;
-    }
-    sum += output[i] - (truth.size() ? truth[i] : 0.0);
-    count += 1.0;
-  }
-  close();
-  return blocks ? std::sqrt(ss / static_cast<double>(blocks)) : 0.0;
-}
 
 std::optional<AllanFigures> allan_figures(const Eigen::VectorXd& error, double fs) {
   if (!(fs > 0) || static_cast<double>(error.size()) / fs < 3.0) return std::nullopt;

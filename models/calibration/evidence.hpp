@@ -1,19 +1,15 @@
-// Scores of a compensated record against its truth (issue 13 evidence):
-//   residual drift  rms over blocks of block_s seconds (60 s) of the block means of
-//                   (output - truth); blocks without samples are skipped (burst records).
-//   B, N            from the overlapping Allan deviation of (output - truth) on an octave grid:
-//                   B = min ADEV / sqrt(2 ln 2 / pi) (IEEE-952 flicker floor, the paper's reading),
-//                   N = ADEV at tau = 1 s (white rate noise: sigma(tau) = N / sqrt(tau)).
-// Units: rad/s (B, drift), rad/sqrt(s) (N).
+// Allan figures of a compensated record against its truth (issue 13 evidence):
+//   B, N  from the overlapping Allan deviation of (output - truth) on an octave grid:
+//         B = min ADEV / sqrt(2 ln 2 / pi) (IEEE-952 flicker floor, the paper's reading),
+//         N = ADEV at tau = 1 s (white rate noise: sigma(tau) = N / sqrt(tau)).
+// Units: rad/s (B), rad/sqrt(s) (N). The residual drift (rms of 60-s block means of output - truth)
+// is evaluation::block_mean_rms (models/evaluation/evaluation.hpp).
 #pragma once
 
 #include <Eigen/Core>
 #include <optional>
 
 namespace driftlab::calibration {
-
-double residual_drift_rad_s(const Eigen::VectorXd& time_s, const Eigen::VectorXd& output,
-                            const Eigen::VectorXd& truth, double block_s = 60.0);
 
 struct AllanFigures {
   double bias_instability_rad_s = 0.0;  // B

@@ -417,4 +417,18 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
   return m;
 }
 
+CalibrationModel fit_px4_style(const std::vector<Record>& records, const FitOptions& base) {
+  FitOptions o = base;
+  o.kind = ModelKind::Polynomial;
+  o.min_order = o.max_order = 3;
+  o.extrapolation = Extrapolation::Clamp;
+  o.heating_only = true;
+  try {
+    return fit_calibration(records, o);
+  } catch (const DataError&) {
+    o.heating_only = false;
+    return fit_calibration(records, o);
+  }
+}
+
 }  // namespace driftlab::calibration

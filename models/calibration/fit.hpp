@@ -64,4 +64,14 @@ struct FitOptions {
 // ConfigError for inconsistent options.
 CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOptions& options);
 
+// The PX4/ArduPilot thermal calibration practice, the one home of every "PX4-style" figure (the
+// baseline of `driftlab calibrate --report` and the px4_polynomial row of `driftlab run`'s Table 2):
+// fit_calibration with `base`'s records, bins, blocks and reference temperature, and
+//   kind poly, order 3 (no selection), heating bins only (dT/dt estimate > 0: every heating leg of
+//   every record), clamped outside the range of those bins.
+// When the records hold too few heating bins (a cooling-only run), the same cubic is fitted on all
+// bins instead; the model says which in fit.heating_only. Throws what fit_calibration throws when
+// even that is impossible.
+CalibrationModel fit_px4_style(const std::vector<Record>& records, const FitOptions& base);
+
 }  // namespace driftlab::calibration

@@ -9,22 +9,59 @@
 
 namespace driftlab::evaluation {
 
-Eigen::VectorXd block_means(const Eigen::VectorXd& x, double sample_rate_hz, double block_s) {
-  const auto per_block = static_cast<Eigen::Index>(std::llround(block_s * sample_rate_hz));
-  const Eigen::Index blocks = per_block > 0 ? x.size() / per_block : 0;
-  Eigen::VectorXd means(blocks);
-  for (Eigen::Index b = 0; b < blocks; ++b) means[b] = x.segment(b * per_block, per_block).mean();
-  return means;
+namespace {
+
+constexpr double kBoundaryTolerance = 1e-9;  // of a block: time stamps like k * 0.1 s
+
+bool has_gaps(const Eigen::VectorXd& time_s) {
+  if (time_s.size() < 3) return false;
+  const Eigen::VectorXd steps = time_s.tail(time_s.size() - 1) - time_s.head(time_s.size() - 1);
+  std::vector<double> sorted(steps.data(), steps.data() + steps.size());
+  const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+  std::nth_element(sorted.begin(), middle, sorted.end());
+  return steps.maxCoeff() > kGapFactor * *middle;
 }
 
-double block_mean_rms(const Eigen::VectorXd& x, double sample_rate_hz, double block_s) {
-  const Eigen::VectorXd means = block_means(x, sample_rate_hz, block_s);
+}  // namespace
+
+BlockMeans block_means(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, double block_s) {
+  if (time_s.size() != x.size()) throw DataError({"", 0, "t_s"}, "time and values differ in length");
+  BlockMeans out;
+  const Eigen::Index n = x.size();
+  if (n == 0 || !(block_s > 0)) return out;
+  const auto block_of = [&](Eigen::Index i) {
+    return static_cast<long>(std::floor((time_s[i] - time_s[0]) / block_s + kBoundaryTolerance));
+  };
+  std::vector<double> means;
+  long last_block = -1;
+  for (Eigen::Index first = 0, end = 0; first < n; first = end) {
+    const long k = block_of(first);
+    while (end < n && block_of(end) == k) ++end;
+    means.push_back(x.segment(first, end - first).mean());
+    out.first.push_back(first);
+    out.samples.push_back(end - first);
+    last_block = k;
+  }
+  const double last_step = n > 1 ? time_s[n - 1] - time_s[n - 2] : 0.0;
+  const double block_end = time_s[0] + static_cast<double>(last_block + 1) * block_s;
+  const bool reaches_end = n > 1 && time_s[n - 1] + last_step >= block_end - kBoundaryTolerance * block_s;
+  if (!reaches_end && !has_gaps(time_s)) {
+    means.pop_back();
+    out.first.pop_back();
+    out.samples.pop_back();
+  }
+  out.means = Eigen::Map<const Eigen::VectorXd>(means.data(), static_cast<Eigen::Index>(means.size()));
+  return out;
+}
+
+double block_mean_rms(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, double block_s) {
+  const Eigen::VectorXd means = block_means(time_s, x, block_s).means;
   if (means.size() == 0) throw DataError({"", 0, "rate"}, "the record is shorter than one " + std::to_string(block_s) + "-s block");
   return std::sqrt(means.squaredNorm() / static_cast<double>(means.size()));
 }
 
-StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_rad_s, double sample_rate_hz,
-                       double reference_arw_rad_sqrt_s, const Truth* truth) {
+StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_rad_s, const Eigen::VectorXd& time_s,
+                       double sample_rate_hz, double reference_arw_rad_sqrt_s, const Truth* truth) {
   StageScore s;
   s.stage = stage;
   s.bandwidth_hz = std::min(allan::noise_bandwidth_hz(output_rad_s, sample_rate_hz, reference_arw_rad_sqrt_s),
@@ -35,7 +72,7 @@ StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_r
   s.analysis = allan::analyze_rate(output_rad_s, sample_rate_hz, options);
   if (truth != nullptr) {
     const Eigen::VectorXd error = output_rad_s - truth->true_rate_rad_s;
-    s.residual_drift_rad_s = block_mean_rms(error, sample_rate_hz);
+    s.residual_drift_rad_s = block_mean_rms(time_s, error);
     s.error = allan::analyze_rate(error, sample_rate_hz, options);
   }
   return s;
@@ -60,37 +97,6 @@ FloorComparison compare_to_floor(const allan::Analysis& error, const allan::Anal
     if (e.dev_lo > factor * f->dev_hi) c.within = false;
   }
   return c;
-}
-
-PolynomialBaseline px4_style_baseline(const Eigen::VectorXd& rate_rad_s, const Eigen::VectorXd& temp_c,
-                                      double reference_temp_c) {
-  PolynomialBaseline b;
-  b.reference_temp_c = reference_temp_c;
-  Eigen::Index hottest = 0, coldest = 0;
-  temp_c.maxCoeff(&hottest);
-  temp_c.head(hottest + 1).minCoeff(&coldest);
-  if (hottest - coldest + 1 < 10)
-    throw DataError({"", 0, "temperature"}, "no heating leg of at least 10 samples for the polynomial baseline");
-  b.fit_first = coldest;
-  b.fit_last = hottest;
-  b.fit_min_c = temp_c[coldest];
-  b.fit_max_c = temp_c[hottest];
-  const Eigen::Index n = hottest - coldest + 1;
-  const double scale = std::max(1.0, (b.fit_max_c - b.fit_min_c) / 2.0);  // conditioning only
-  Eigen::MatrixXd A(n, 4);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const double x = (temp_c[coldest + k] - reference_temp_c) / scale;
-    A.row(k) << 1.0, x, x * x, x * x * x;
-  }
-  const Eigen::Vector4d c = A.colPivHouseholderQr().solve(rate_rad_s.segment(coldest, n));
-  b.coefficients_rad_s = {c[0], c[1] / scale, c[2] / (scale * scale), c[3] / (scale * scale * scale)};
-  b.compensated_rad_s.resize(rate_rad_s.size());
-  for (Eigen::Index k = 0; k < rate_rad_s.size(); ++k) {
-    const double x = std::clamp(temp_c[k], b.fit_min_c, b.fit_max_c) - reference_temp_c;
-    const auto& p = b.coefficients_rad_s;
-    b.compensated_rad_s[k] = rate_rad_s[k] - (p[0] + x * (p[1] + x * (p[2] + x * p[3])));
-  }
-  return b;
 }
 
 }  // namespace driftlab::evaluation

@@ -10,9 +10,9 @@
 //     (output - true rate), and the Allan curve of (output - true rate) against the intrinsic floor.
 // Intrinsic floor: the same analysis of (measured - true systematic rate), i.e. the gyro's own noise,
 // which no compensation can remove.
-// Baseline: the PX4-style thermal calibration, a third-order polynomial in (T - T0) fitted by least
-// squares on the first heating leg only (from the coldest point before the hottest to the hottest),
-// evaluated with T clipped to that leg's range, subtracted from the rate.
+// The block means here are the one home of the residual-drift metric: `driftlab run`, `driftlab
+// compare` and the held-out scores of `driftlab calibrate` (models/calibration) all use them.
+// The PX4-style baseline is a calibration model (calibration::fit_px4_style), not a score.
 // Units: rates rad/s, temperatures degC, times s.
 #pragma once
 
@@ -27,6 +27,7 @@
 namespace driftlab::evaluation {
 
 inline constexpr double kResidualBlockS = 60.0;  // block length of the residual-drift metric
+inline constexpr double kGapFactor = 3.0;        // a step > 3 x the median step is a gap (as the CSV reader's default)
 
 struct Truth {
   Eigen::VectorXd true_rate_rad_s;                 // the table's rate
@@ -42,16 +43,32 @@ struct StageScore {
   std::optional<allan::Analysis> error;         // Allan analysis of output - true rate
 };
 
-// Means of x over consecutive whole blocks of block_s seconds (a partial block at the end is left
-// out); empty when the record is shorter than one block.
-Eigen::VectorXd block_means(const Eigen::VectorXd& x, double sample_rate_hz, double block_s = kResidualBlockS);
+// Means of x over blocks of block_s seconds of time, for evenly sampled records and for records with
+// gaps alike (bursts, like the LSM6DSM cooling run: 5 s of samples every ~5 min).
+//   - Block k holds the samples with t0 + k block_s <= t < t0 + (k+1) block_s, t0 = time_s[0]; the
+//     boundaries allow 1e-9 block_s for time stamps such as k * 0.1 s that do not add up exactly.
+//   - A block without samples gives no mean (a gap, or the time between bursts).
+//   - An evenly sampled record is scored on whole blocks: its last block is left out when the record
+//     ends inside it (last time stamp + the record's last step < the block's end). A record with
+//     gaps (a step longer than kGapFactor x the median step) keeps every non-empty block, the last
+//     one too: its blocks are partial anyway (a burst record's last burst counts like the others).
+// On an evenly sampled record with block_s x rate a whole number of samples this is exactly the
+// sample-count blocking (whole blocks of block_s x rate samples, the remainder left out).
+// Throws DataError when time_s and x differ in length.
+struct BlockMeans {
+  Eigen::VectorXd means;                     // one per kept block, unit of x
+  std::vector<Eigen::Index> first, samples;  // the samples of each kept block: [first, first + samples)
+};
+BlockMeans block_means(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, double block_s = kResidualBlockS);
 
-// rms of block_means(x) (rad/s). Throws DataError when the record is shorter than one block.
-double block_mean_rms(const Eigen::VectorXd& x, double sample_rate_hz, double block_s = kResidualBlockS);
+// rms of block_means(time_s, x).means, unit of x. Throws DataError when no block is kept (a record
+// shorter than one block).
+double block_mean_rms(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, double block_s = kResidualBlockS);
 
-// Scores one output. reference_arw_rad_sqrt_s: N of the original record (for the bandwidth).
-StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_rad_s, double sample_rate_hz,
-                       double reference_arw_rad_sqrt_s, const Truth* truth);
+// Scores one output. reference_arw_rad_sqrt_s: N of the original record (for the bandwidth);
+// time_s: the record's time stamps (for the residual drift's blocks).
+StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_rad_s, const Eigen::VectorXd& time_s,
+                       double sample_rate_hz, double reference_arw_rad_sqrt_s, const Truth* truth);
 
 // Allan analysis of measured - systematic (read like the original record: full bandwidth).
 allan::Analysis intrinsic_floor(const Eigen::VectorXd& measured_rad_s, const Eigen::VectorXd& systematic_rad_s,
@@ -65,16 +82,5 @@ struct FloorComparison {
   bool within = true;
 };
 FloorComparison compare_to_floor(const allan::Analysis& error, const allan::Analysis& floor, double factor);
-
-struct PolynomialBaseline {
-  std::vector<double> coefficients_rad_s;  // c0 + c1 dT + c2 dT^2 + c3 dT^3, dT = T - T0
-  double reference_temp_c = 25.0;
-  double fit_min_c = 0.0, fit_max_c = 0.0;  // the heating leg's range; T is clipped to it
-  Eigen::Index fit_first = 0, fit_last = 0;  // samples of the heating leg used
-  Eigen::VectorXd compensated_rad_s;
-};
-// Throws DataError when the record has no heating leg of at least 10 samples.
-PolynomialBaseline px4_style_baseline(const Eigen::VectorXd& rate_rad_s, const Eigen::VectorXd& temp_c,
-                                      double reference_temp_c = 25.0);
 
 }  // namespace driftlab::evaluation

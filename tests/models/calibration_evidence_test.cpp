@@ -8,8 +8,8 @@
 #include "devices/device_file.hpp"
 #include "devices/simulator.hpp"
 #include "models/calibration/calibration_model.hpp"
-#include "models/calibration/evidence.hpp"
 #include "models/calibration/fit.hpp"
+#include "models/evaluation/evaluation.hpp"
 
 namespace driftlab::calibration {
 namespace {
@@ -46,7 +46,7 @@ devices::SimulationProfile other_profile() {
 
 double drift(const Record& r, const std::optional<CalibrationModel>& m) {
   const Eigen::VectorXd out = m ? compensate(*m, r.time_s, r.rate_rad_s, r.temp_c).rate_rad_s : r.rate_rad_s;
-  return residual_drift_rad_s(r.time_s, out, r.true_rate_rad_s);
+  return evaluation::block_mean_rms(r.time_s, out - r.true_rate_rad_s);
 }
 
 CalibrationModel fit(const Record& r, ModelKind kind) {

@@ -9,8 +9,8 @@
 #include <random>
 
 #include "framework/error.hpp"
-#include "models/calibration/evidence.hpp"
 #include "models/calibration/fit.hpp"
+#include "models/evaluation/evaluation.hpp"
 #include "tests/models/calibration_fixtures.hpp"
 
 namespace driftlab::calibration {
@@ -180,7 +180,7 @@ TEST(FitCalibration, FitsTheScaleFactorWhenTheTrueRateVaries) {
   EXPECT_NEAR(m.scale_factor_per_k[0], 2e-3, 10 * kNoise);
   EXPECT_NEAR(m.scale_factor_per_k[1], 5e-5, kNoise);
   const auto out = compensate(m, r.time_s, r.rate_rad_s, r.temp_c);
-  EXPECT_LT(residual_drift_rad_s(r.time_s, out.rate_rad_s, r.true_rate_rad_s), 1e-4);
+  EXPECT_LT(evaluation::block_mean_rms(r.time_s, out.rate_rad_s - r.true_rate_rad_s), 1e-4);
 }
 
 }  // namespace

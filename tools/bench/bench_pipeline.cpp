@@ -8,6 +8,7 @@
 
 #include "framework/pipeline.hpp"
 #include "framework/registry.hpp"
+#include "models/calibration/fit.hpp"
 #include "models/evaluation/evaluation.hpp"
 #include "tools/bench/bench_signals.hpp"
 
@@ -31,8 +32,9 @@ void BM_Li2023Pipeline(benchmark::State& state) {
     const double fs = record.sample_rate_hz();
     const double n_ref = allan::analyze_rate(signal->rate_rad_s, fs, {.fit_terms = false}).arw_rad_sqrt_s;
     for (const auto& [name, out] : outputs)
-      benchmark::DoNotOptimize(evaluation::score_stage(name, out.columns.col(0), fs, n_ref, nullptr));
-    benchmark::DoNotOptimize(evaluation::px4_style_baseline(signal->rate_rad_s, signal->temp_c));
+      benchmark::DoNotOptimize(evaluation::score_stage(name, out.columns.col(0), signal->time_s, fs, n_ref, nullptr));
+    const auto baseline = calibration::fit_px4_style({{"bench", signal->time_s, signal->rate_rad_s, signal->temp_c, {}, {}}}, {});
+    benchmark::DoNotOptimize(calibration::compensate(baseline, signal->time_s, signal->rate_rad_s, signal->temp_c));
   }
   state.SetItemsProcessed(state.iterations() * state.range(0));
 }

@@ -6,6 +6,7 @@
 
 #include "framework/error.hpp"
 #include "models/calibration/evidence.hpp"
+#include "models/evaluation/evaluation.hpp"
 #include "tools/driftlab/html_report.hpp"
 
 namespace driftlab::cli {
@@ -23,7 +24,8 @@ Scored score(const std::string& name, const std::string& description, const cali
              const Eigen::VectorXd& out, const std::vector<char>* extrapolated) {
   Scored s{name, description, ""};
   const Eigen::VectorXd truth = r.true_rate_rad_s.size() ? r.true_rate_rad_s : Eigen::VectorXd::Zero(r.time_s.size());
-  s.drift_dph = calibration::residual_drift_rad_s(r.time_s, out, truth) * kDph;
+  const Eigen::VectorXd error = out - truth;
+  s.drift_dph = evaluation::block_mean_rms(r.time_s, error) * kDph;
   const double fs = static_cast<double>(r.time_s.size() - 1) / (r.time_s[r.time_s.size() - 1] - r.time_s[0]);
   // Allan figures need an evenly sampled record: none for records with gaps (bursts).
   std::vector<double> steps(static_cast<std::size_t>(r.time_s.size() - 1));
@@ -32,7 +34,7 @@ Scored score(const std::string& name, const std::string& description, const cali
   const double median_step = steps[steps.size() / 2];
   const double max_step = (r.time_s.tail(r.time_s.size() - 1) - r.time_s.head(r.time_s.size() - 1)).maxCoeff();
   const bool even = max_step <= 3.0 * median_step;
-  if (const auto a = even ? calibration::allan_figures(out - truth, fs) : std::nullopt) {
+  if (const auto a = even ? calibration::allan_figures(error, fs) : std::nullopt) {
     s.b_dph = a->bias_instability_rad_s * kDph;
     s.n_dph_rthz = a->arw_rad_sqrt_s * kDph;
   }
@@ -41,24 +43,11 @@ Scored score(const std::string& name, const std::string& description, const cali
     for (char c : *extrapolated) n += c;
     s.extrapolated = n / static_cast<double>(extrapolated->size());
   }
-  // 60-s block means for the figure
-  double sum = 0, count = 0, t_sum = 0;
-  long current = -1;
-  for (Eigen::Index i = 0; i <= r.time_s.size(); ++i) {
-    const long k = i < r.time_s.size() ? static_cast<long>(std::floor((r.time_s[i] - r.time_s[0]) / 60.0)) : -2;
-    if (k != current) {
-      if (count > 0) {
-        s.block_t.push_back(t_sum / count);
-        s.block_mean_dph.push_back(sum / count * kDph);
-      }
-      sum = count = t_sum = 0;
-      current = k;
-    }
-    if (i < r.time_s.size()) {
-      sum += out[i] - truth[i];
-      t_sum += r.time_s[i];
-      count += 1;
-    }
+  const auto blocks = evaluation::block_means(r.time_s, error);
+  for (Eigen::Index b = 0; b < blocks.means.size(); ++b) {
+    const auto k = static_cast<std::size_t>(b);
+    s.block_t.push_back(r.time_s.segment(blocks.first[k], blocks.samples[k]).mean());
+    s.block_mean_dph.push_back(blocks.means[b] * kDph);
   }
   return s;
 }
@@ -178,7 +167,7 @@ nlohmann::json write_calibration_report(const ReportInput& in, const std::filesy
     if (r.systematic_rad_s.size()) {
       const Eigen::VectorXd floor_err = r.rate_rad_s - r.systematic_rad_s;
       ej["intrinsic_floor_drift_dph"] =
-          calibration::residual_drift_rad_s(r.time_s, floor_err, Eigen::VectorXd::Zero(floor_err.size())) * kDph;
+          evaluation::block_mean_rms(r.time_s, floor_err) * kDph;
     }
     ej["methods"] = nlohmann::json::array();
     HtmlTable t{"Held-out record " + r.name, {"method", "residual drift (deg/h)", "B (deg/h)", "N (deg/h/sqrt(Hz))", "output bandwidth", "extrapolated (%)"}};

@@ -89,22 +89,14 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
                               "compensated output itself (Earth rate and any constant offset included)";
   in.models.push_back({"none", "raw output", std::nullopt});
   {
-    calibration::FitOptions px4 = base;
-    px4.kind = calibration::ModelKind::Polynomial;
-    px4.min_order = px4.max_order = 3;
-    px4.heating_only = true;
-    px4.extrapolation = calibration::Extrapolation::Clamp;
-    try {
-      in.models.push_back({"PX4-style poly", "order 3, heating samples only, clamped outside the range",
-                           calibration::fit_calibration(records, px4)});
-    } catch (const DataError& e) {
-      // A record without a heating leg (e.g. a cooling-only run): the same cubic on all samples.
-      in.notes.push_back(std::string("PX4-style baseline not fitted on heating only (") + e.what() +
-                         "); fitted on all samples instead");
+    auto px4 = calibration::fit_px4_style(records, base);
+    if (px4.fit.heating_only) {
+      in.models.push_back({"PX4-style poly", "order 3, heating samples only, clamped outside the range", std::move(px4)});
+    } else {
+      in.notes.push_back("PX4-style baseline fitted on all samples: too few heating bins (dT/dt > 0)");
       std::cerr << "note: " << in.notes.back() << "\n";
-      px4.heating_only = false;
       in.models.push_back({"PX4-style poly", "order 3, all samples (no heating leg), clamped outside the range",
-                           calibration::fit_calibration(records, px4)});
+                           std::move(px4)});
     }
   }
   for (const auto kind : {calibration::ModelKind::Polynomial, calibration::ModelKind::Physical,

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "framework/units.hpp"
+#include "models/calibration/fit.hpp"
 #include "tools/driftlab/html_report.hpp"
 #include "tools/driftlab/plot.hpp"
 
@@ -57,16 +58,20 @@ RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const st
   const evaluation::Truth* t = truth ? &*truth : nullptr;
   const double reference_n = allan::analyze_rate(rate, fs, {.fit_terms = false}).arw_rad_sqrt_s;
 
-  s.stages.push_back(evaluation::score_stage("original", rate, fs, reference_n, t));
+  const Eigen::VectorXd& time = record.time();
+  s.stages.push_back(evaluation::score_stage("original", rate, time, fs, reference_n, t));
   for (const auto& name : pipeline.output_order) {
     const auto it = outputs.find(name);
     if (it == outputs.end() || it->second.unit != "rad/s" || it->second.columns.cols() != 1) continue;
     if (name == "drift_model") continue;  // a model of the drift, not a compensated rate
-    s.stages.push_back(evaluation::score_stage(name, it->second.columns.col(0), fs, reference_n, t));
+    s.stages.push_back(evaluation::score_stage(name, it->second.columns.col(0), time, fs, reference_n, t));
   }
   if (record.has(role::kTemperature)) {
-    s.baseline = evaluation::px4_style_baseline(rate, record.channel(role::kTemperature).values);
-    s.stages.push_back(evaluation::score_stage("px4_polynomial", s.baseline->compensated_rad_s, fs, reference_n, t));
+    const Eigen::VectorXd& temp = record.channel(role::kTemperature).values;
+    auto model = calibration::fit_px4_style({{"the record", time, rate, temp, {}, {}}}, {});
+    Eigen::VectorXd compensated = calibration::compensate(model, time, rate, temp).rate_rad_s;
+    s.baseline = Px4Baseline{std::move(model), std::move(compensated)};
+    s.stages.push_back(evaluation::score_stage("px4_polynomial", s.baseline->compensated_rad_s, time, fs, reference_n, t));
   }
   if (truth && truth->systematic_rad_s) {
     s.intrinsic = evaluation::intrinsic_floor(rate, *truth->systematic_rad_s, fs);
@@ -111,13 +116,18 @@ nlohmann::json scores_json(const RunScores& s) {
     curves["intrinsic_floor"] = curve_json(a);
   }
   if (s.baseline) {
-    const auto& b = *s.baseline;
+    const auto& m = s.baseline->model;
     nlohmann::json c = nlohmann::json::array();
-    for (double v : b.coefficients_rad_s) c.push_back(v * kDphPerRadPerSec);
-    j["baseline"] = {{"what", "PX4-style: third-order polynomial in T - T0 fitted on the first heating leg, T clipped to it"},
+    for (double v : m.bias_rad_s) c.push_back(v * kDphPerRadPerSec);
+    j["baseline"] = {{"what", std::string("PX4-style (driftlab calibrate's PX4-style poly, fitted on this record): "
+                                          "third-order polynomial in T - T0 fitted on ") +
+                                  (m.fit.heating_only ? "the heating bins" : "all bins (too few heating bins)") +
+                                  ", T clamped to their range"},
                      {"coefficients_deg_h_per_c_pow_i", c},
-                     {"reference_temp_c", b.reference_temp_c},
-                     {"fit_range_c", {b.fit_min_c, b.fit_max_c}}};
+                     {"reference_temp_c", m.reference_temp_c},
+                     {"fit_range_c", {m.valid_min_c, m.valid_max_c}},
+                     {"heating_only", m.fit.heating_only},
+                     {"bin_s", m.fit.bin_s}};
   }
   j["units"] = {{"B", "deg/h"}, {"N", "deg/h/sqrt(Hz)"}, {"bandwidth", "Hz (one-sided equivalent noise bandwidth)"},
                 {"residual_drift", "deg/h, rms of 60-s block means of output - true rate"}, {"allan", "deg/h"}};
@@ -272,11 +282,10 @@ Figure allan_figure(const RunScores& scores) {
 // Block means (60 s) of the residual of a stage against temperature, heating and cooling apart.
 Figure residual_figure(const TimeSeries& record, const std::vector<std::string>& stages,
                        const std::map<std::string, Eigen::VectorXd>& outputs) {
-  const double fs = record.sample_rate_hz();
-  const auto per_block = static_cast<Eigen::Index>(std::llround(evaluation::kResidualBlockS * fs));
+  const Eigen::VectorXd& time = record.time();
   const Eigen::VectorXd& temp = record.channel(role::kTemperature).values;
   const Eigen::VectorXd& truth = record.channel(role::kTrueRate).values;
-  const Eigen::VectorXd temperature = evaluation::block_means(temp, fs);
+  const Eigen::VectorXd temperature = evaluation::block_means(time, temp).means;
   Figure f;
   f.columns = static_cast<int>(std::min<std::size_t>(stages.size(), 2));
   f.width = 1100;
@@ -293,12 +302,13 @@ Figure residual_figure(const TimeSeries& record, const std::vector<std::string>&
     heat.style = cool.style = PlotSeries::Style::Markers;
     heat.color = "#d62728";
     cool.color = "#1f77b4";
-    const Eigen::VectorXd residual = evaluation::block_means(outputs.at(stage) - truth, fs);
-    for (Eigen::Index b = 0; b < residual.size(); ++b) {
-      const double slope = temp[(b + 1) * per_block - 1] - temp[b * per_block];
+    const auto residual = evaluation::block_means(time, outputs.at(stage) - truth);
+    for (Eigen::Index b = 0; b < residual.means.size(); ++b) {
+      const auto first = residual.first[static_cast<std::size_t>(b)];
+      const double slope = temp[first + residual.samples[static_cast<std::size_t>(b)] - 1] - temp[first];
       auto& series = slope >= 0 ? heat : cool;
       series.x.push_back(temperature[b]);
-      series.y.push_back(residual[b] * kDphPerRadPerSec);
+      series.y.push_back(residual.means[b] * kDphPerRadPerSec);
     }
     p.series = {heat, cool};
     f.panels.push_back(p);
@@ -430,14 +440,14 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
   }
   {
     // Minute means: the noise of a 10-Hz record hides the drift the stages remove.
-    const double fs = record.sample_rate_hz();
-    const Eigen::VectorXd minutes = evaluation::block_means(record.time(), fs);
+    const Eigen::VectorXd& time = record.time();
+    const Eigen::VectorXd minutes = evaluation::block_means(time, time).means;
     PlotPanel p;
     p.title = "Reconstructed rate per stage, 60-s means (paper Fig. 14)";
     p.x_label = "time (h)";
     p.y_label = "rate (°/h)";
     for (const auto& name : stage_names) {
-      p.series.push_back(line(name, minutes, evaluation::block_means(stage_outputs[name], fs), kHoursPerSecond,
+      p.series.push_back(line(name, minutes, evaluation::block_means(time, stage_outputs[name]).means, kHoursPerSecond,
                               kDphPerRadPerSec));
     }
     PlotPanel mixed;

@@ -1,7 +1,9 @@
 // The Table 2 report of `driftlab run` (issue 12; Li et al. 2023, Table 2 and Figs. 10-15): every
 // pipeline output in a rate unit is a stage, scored by models/evaluation beside the original record,
 // the intrinsic floor (when the record has a systematic_dps column) and the PX4-style polynomial
-// baseline (when it has a temperature). Units in the JSON: deg/h for B and the residual drift,
+// baseline (when it has a temperature): calibration::fit_px4_style fitted on the scored record itself
+// (rate and temperature, never the truth; in-sample like the pipeline's stages) and applied by the
+// model's causal compensator. Units in the JSON: deg/h for B and the residual drift,
 // deg/h/sqrt(Hz) for N, Hz for bandwidths, s for taus.
 #pragma once
 
@@ -14,14 +16,20 @@
 
 #include "framework/pipeline.hpp"
 #include "framework/time_series.hpp"
+#include "models/calibration/calibration_model.hpp"
 #include "models/evaluation/evaluation.hpp"
 
 namespace driftlab::cli {
 
+struct Px4Baseline {
+  calibration::CalibrationModel model;
+  Eigen::VectorXd compensated_rad_s;
+};
+
 struct RunScores {
   std::vector<evaluation::StageScore> stages;  // "original", the pipeline's rate outputs, "px4_polynomial"
   std::optional<allan::Analysis> intrinsic;    // measured - systematic
-  std::optional<evaluation::PolynomialBaseline> baseline;
+  std::optional<Px4Baseline> baseline;
   std::map<std::string, evaluation::FloorComparison> against_floor;  // per stage, factor 1.5
 };
 

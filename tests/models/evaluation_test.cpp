@@ -1,0 +1,87 @@
+// The 60-s block means of models/evaluation, the one home of the residual-drift metric: time blocks
+// that agree with the sample-count blocking on evenly sampled records (a partial last block left
+// out), skip gaps, and keep every block of a record with gaps, a burst record's last burst too.
+#include "models/evaluation/evaluation.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "framework/error.hpp"
+
+namespace driftlab::evaluation {
+namespace {
+
+constexpr double kSum = 1e-12;  // the same sums in another order
+
+Eigen::VectorXd values(Eigen::Index n) {
+  Eigen::VectorXd x(n);
+  for (Eigen::Index i = 0; i < n; ++i) x[i] = std::sin(0.37 * static_cast<double>(i)) + 1e-3 * static_cast<double>(i);
+  return x;
+}
+
+Eigen::VectorXd times(Eigen::Index n, double rate_hz, double start_s = 0.0) {
+  Eigen::VectorXd t(n);
+  for (Eigen::Index i = 0; i < n; ++i) t[i] = start_s + static_cast<double>(i) / rate_hz;
+  return t;
+}
+
+TEST(BlockMeans, OnAnEvenlySampledRecordEqualTheWholeBlocksOfSamples) {
+  // 10 Hz: 600 samples a block; 10 345 samples = 17 whole blocks and 145 samples left over. Time
+  // stamps k / 10 do not add up to whole minutes exactly, and the record does not start at 0.
+  const Eigen::Index n = 10345, per_block = 600;
+  const Eigen::VectorXd x = values(n);
+  const auto b = block_means(times(n, 10.0, 1234.567), x);
+  ASSERT_EQ(b.means.size(), n / per_block);
+  for (Eigen::Index k = 0; k < n / per_block; ++k) {
+    EXPECT_NEAR(b.means[k], x.segment(k * per_block, per_block).mean(), kSum) << "block " << k;
+    EXPECT_EQ(b.first[static_cast<std::size_t>(k)], k * per_block);
+    EXPECT_EQ(b.samples[static_cast<std::size_t>(k)], per_block);
+  }
+}
+
+TEST(BlockMeans, KeepTheLastBlockWhenTheRecordFillsIt) {
+  const Eigen::Index n = 18000;  // 30 min at 10 Hz
+  EXPECT_EQ(block_means(times(n, 10.0), values(n)).means.size(), 30);
+  EXPECT_EQ(block_means(times(n - 1, 10.0), values(n - 1)).means.size(), 29);
+}
+
+TEST(BlockMeans, SkipBlocksWithoutSamplesAndAverageWhatAGapLeavesThePartialLastBlockIncluded) {
+  // 1 Hz, 0..619 s with 130..249 s missing: block 2 (120..179 s) holds 120..129 s, block 3
+  // (180..239 s) is empty, block 4 (240..299 s) holds 250..299 s, block 10 (600..659 s) 600..619 s.
+  std::vector<double> t;
+  for (int s = 0; s < 620; ++s)
+    if (s < 130 || s >= 250) t.push_back(s);
+  const Eigen::VectorXd time = Eigen::Map<const Eigen::VectorXd>(t.data(), static_cast<Eigen::Index>(t.size()));
+  const auto b = block_means(time, time);
+  ASSERT_EQ(b.means.size(), 10);
+  EXPECT_DOUBLE_EQ(b.means[2], (120.0 + 129.0) / 2.0);
+  EXPECT_DOUBLE_EQ(b.means[3], (250.0 + 299.0) / 2.0);
+  EXPECT_DOUBLE_EQ(b.means[8], (540.0 + 599.0) / 2.0);
+  EXPECT_DOUBLE_EQ(b.means[9], (600.0 + 619.0) / 2.0);
+}
+
+TEST(BlockMeans, GiveOneMeanPerBurstOfABurstRecordTheLastBurstIncluded) {
+  // Bursts of 5 s at 10 Hz every 300 s (the LSM6DSM cooling run's pattern): every burst is its own
+  // block, none fills it, the last one counts like the others.
+  std::vector<double> t;
+  for (int burst = 0; burst < 6; ++burst)
+    for (int i = 0; i < 50; ++i) t.push_back(300.0 * burst + 0.1 * i);
+  const Eigen::VectorXd time = Eigen::Map<const Eigen::VectorXd>(t.data(), static_cast<Eigen::Index>(t.size()));
+  const auto b = block_means(time, time);
+  ASSERT_EQ(b.means.size(), 6);
+  for (Eigen::Index k = 0; k < 6; ++k) EXPECT_NEAR(b.means[k], 300.0 * static_cast<double>(k) + 2.45, kSum);
+}
+
+TEST(BlockMeanRms, IsTheRmsOfTheBlockMeansAndRefusesARecordShorterThanOneBlock) {
+  const Eigen::VectorXd t = times(1800, 10.0);
+  Eigen::VectorXd x(1800);
+  x << Eigen::VectorXd::Constant(600, 3.0), Eigen::VectorXd::Constant(600, -4.0), Eigen::VectorXd::Constant(600, 0.0);
+  EXPECT_NEAR(block_mean_rms(t, x), std::sqrt(25.0 / 3.0), kSum);
+  EXPECT_THROW(block_mean_rms(t.head(599), x.head(599)), DataError);
+  EXPECT_THROW(block_means(t, x.head(10)), DataError);
+}
+
+}  // namespace
+}  // namespace driftlab::evaluation
