@@ -26,7 +26,8 @@ each output's correlation time; N is read at tau = 1 s and is only comparable at
 (bandwidth). Residual drift: rms of 60-s block means of output - true rate. The paper's last row owes its
 N = 0.97 to the Kalman filter's narrow bandwidth; ours states the bandwidth instead. "intrinsic floor":
 the same analysis of measured - true systematic rate, the gyro's own noise. px4_polynomial: third-order
-polynomial in temperature fitted on the heating leg, clipped (the PX4 thermal calibration).
+polynomial in temperature fitted on the heating bins, clamped outside their range (the PX4 thermal
+calibration: driftlab calibrate's PX4-style model, fitted on this record).
 
 Report with Table 2 and the paper's figures: $out/run/report.html
 EOF
