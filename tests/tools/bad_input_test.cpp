@@ -307,6 +307,8 @@ TEST_F(BadInput, OutputsArePlannedUpFrontAndAppearTogetherOrNotAtAll) {
       {"calibrate --data " + p("good.csv") + " --bin 1 --out " + missing + ".json", "--out"},
       {"calibrate --data " + p("good.csv") + " --bin 1 --out " + p("m.json") + " --report " + p("good.csv"), "--report"},
       {"compensate --data " + p("good.csv") + " --model " + p("model.json") + " --out " + p("model.json"), "--out"},
+      {"run --pipeline " + p("smooth.yaml") + " --data " + p("good.csv") + " --out " + p("good.csv"), "--out"},
+      {"compare --data " + p("good.csv") + " --pipeline " + p("smooth.yaml") + " --out " + p("smooth.yaml"), "--out"},
   };
   make_model();
   for (const auto& [command, option] : cases) {

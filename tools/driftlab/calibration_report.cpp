@@ -90,15 +90,7 @@ nlohmann::json model_json(const CompetingModel& m) {
 
 }  // namespace
 
-void plan_calibration_report(OutputSet& outputs, const std::filesystem::path& dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (!std::filesystem::is_directory(dir)) throw ConfigError({dir.string(), 0, "--report"}, "cannot create the report directory");
-  outputs.plan(dir / "report.json", "--report");
-  outputs.plan(dir / "report.html", "--report");
-}
-
-nlohmann::json write_calibration_report(const ReportInput& in, const std::filesystem::path& dir, OutputSet& outputs) {
+nlohmann::json write_calibration_report(const ReportInput& in, const ReportFiles& files, OutputSet& outputs) {
   nlohmann::json j;
   j["format"] = "driftlab-calibrate-report/1";
   j["command"] = in.command;
@@ -207,8 +199,8 @@ nlohmann::json write_calibration_report(const ReportInput& in, const std::filesy
     }
     j["evaluations"].push_back(ej);
   }
-  outputs.write(dir / "report.json", j.dump(2) + "\n");
-  outputs.write(dir / "report.html", html.html());
+  outputs.write(files.json, j.dump(2) + "\n");
+  outputs.write(files.html, html.html());
   return j;
 }
 

@@ -11,6 +11,7 @@
 #include "framework/output_set.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "models/calibration/fit.hpp"
+#include "tools/driftlab/cli.hpp"
 
 namespace driftlab::cli {
 
@@ -38,13 +39,9 @@ struct ReportInput {
   std::vector<std::string> notes;                // e.g. a baseline that could not be fitted
 };
 
-// DIR/report.json and DIR/report.html: the outputs write_calibration_report stages. Plan them in the
-// command's OutputSet before any work (plan_calibration_report creates DIR).
-void plan_calibration_report(OutputSet& outputs, const std::filesystem::path& dir);
-
-// Scores every model on every held-out record and stages DIR/report.json and DIR/report.html in
-// `outputs` (figures need gnuplot; without it the HTML says so); the caller commits. Returns the JSON.
-nlohmann::json write_calibration_report(const ReportInput& input, const std::filesystem::path& dir,
-                                        OutputSet& outputs);
+// Scores every model on every held-out record and stages `files` (report.json, report.html; planned
+// with plan_report_files, cli.hpp) in `outputs` (figures need gnuplot; without it the HTML says so);
+// the caller commits. Returns the JSON.
+nlohmann::json write_calibration_report(const ReportInput& input, const ReportFiles& files, OutputSet& outputs);
 
 }  // namespace driftlab::cli

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "framework/output_set.hpp"
 #include "framework/registry.hpp"
 #include "framework/time_series.hpp"
 
@@ -69,5 +70,14 @@ std::string display_unit(const TimeSeries& record, const std::string& role, cons
 // a library that writes atomically itself; commands with several outputs use an OutputSet
 // (framework/output_set.hpp), which also commits them together.
 void check_output(const std::string& output, const std::vector<std::string>& inputs);
+
+// The report pair of a command that writes into a directory (run and compare --out, calibrate
+// --report): DIR/report.json and DIR/report.html.
+struct ReportFiles {
+  std::filesystem::path json, html;
+};
+// Creates `dir` when missing and plans both report files in `outputs` under `option`. Throws
+// ConfigError (exit 2) when `dir` cannot be created or a report file cannot be planned.
+ReportFiles plan_report_files(OutputSet& outputs, const std::filesystem::path& dir, const std::string& option);
 
 }  // namespace driftlab::cli

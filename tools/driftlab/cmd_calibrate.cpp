@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
@@ -50,7 +51,8 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
   if (!o.paper_pipeline.empty()) inputs.push_back(o.paper_pipeline);
   OutputSet files({inputs.begin(), inputs.end()});  // the model and the report appear together
   files.plan(o.out, "--out");
-  if (!o.report.empty()) plan_calibration_report(files, o.report);
+  std::optional<ReportFiles> report_files;
+  if (!o.report.empty()) report_files = plan_report_files(files, o.report, "--report");
   if (o.train_until_s > 0 && o.data.paths.size() != 1) {
     throw ConfigError({"", 0, "--train-until"}, "--train-until splits a single --data record");
   }
@@ -70,7 +72,7 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
   const auto model = calibration::fit_calibration(records, base);
   model.validate();
   files.write(o.out, calibration::to_json_text(model));
-  if (o.report.empty()) {
+  if (!report_files) {
     files.commit();
     print_model_summary(std::cout, model);
     std::cout << "wrote " << o.out << "\n";
@@ -124,7 +126,7 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
                              "below fs/2: noise IMFs dropped, RBF + Kalman smoothing", e, it->second.sum()});
     }
   }
-  const auto j = write_calibration_report(in, o.report, files);
+  const auto j = write_calibration_report(in, *report_files, files);
   files.commit();
   print_model_summary(std::cout, model);
   std::cout << "wrote " << o.out << "\n";
@@ -143,7 +145,7 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
                 << " deg/h\n";
     }
   }
-  std::cout << "wrote " << (std::filesystem::path(o.report) / "report.json").string() << " and report.html\n";
+  std::cout << "wrote " << report_files->json.string() << " and " << report_files->html.string() << "\n";
 }
 
 }  // namespace

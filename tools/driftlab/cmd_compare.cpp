@@ -6,6 +6,8 @@
 //   report.html  one table (B with its interval, N with the output's noise bandwidth, residual drift
 //                against the truth when the record has one, run time) per pipeline and per stage,
 //                and the Allan curves of every output in one figure.
+// Both are planned before the record is read (an input, a directory or an unwritable --out is a
+// usage error) and appear together at the end or not at all (framework/output_set.hpp).
 // A stage's run time is the time until the step that produces it has finished (steps run in file
 // order), so the last stage's time is the pipeline's.
 #include <chrono>
@@ -14,8 +16,8 @@
 #include <memory>
 #include <set>
 
-#include "framework/atomic_file.hpp"
 #include "framework/error.hpp"
+#include "framework/output_set.hpp"
 #include "framework/pipeline.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
@@ -100,17 +102,11 @@ void compare(const CompareOptions& o, CommandEnv& env) {
       if (role != "time") roles_needed.insert(role);
     results.push_back(std::move(r));
   }
-  const auto record = load_record(o.data, std::vector<std::string>(roles_needed.begin(), roles_needed.end()));
-
-  std::error_code ec;
-  std::filesystem::create_directories(o.out, ec);
-  if (!std::filesystem::is_directory(o.out))
-    throw ConfigError({o.out, 0, "--out"}, "cannot create the output directory");
-  const auto out_dir = std::filesystem::path(o.out);
-  const auto report_json = out_dir / "report.json", report_html = out_dir / "report.html";
-  std::vector<std::string> inputs{o.data.path};
+  std::vector<std::filesystem::path> inputs{o.data.path};
   inputs.insert(inputs.end(), o.pipelines.begin(), o.pipelines.end());
-  for (const auto& f : {report_json, report_html}) check_output(f.string(), inputs);
+  OutputSet files(inputs);  // planned before the data is read, committed together at the end
+  const auto [report_json, report_html] = plan_report_files(files, o.out, "--out");
+  const auto record = load_record(o.data, std::vector<std::string>(roles_needed.begin(), roles_needed.end()));
 
   for (std::size_t i = 0; i < results.size(); ++i) {
     auto& r = results[i];
@@ -187,7 +183,7 @@ void compare(const CompareOptions& o, CommandEnv& env) {
       if (t["stage"] != "original" && t["stage"] != "px4_polynomial") t["seconds"] = stage_seconds(r, t["stage"]);
     report["pipelines"].push_back(p);
   }
-  write_file_atomically(report_json, report.dump(2) + "\n");
+  files.write(report_json, report.dump(2) + "\n");
 
   HtmlReport html("driftlab compare on " + o.data.path);
   html.paragraph("Pipelines: " + [&] {
@@ -198,7 +194,8 @@ void compare(const CompareOptions& o, CommandEnv& env) {
   html.table(table);
   html.figure(figure, "Allan deviation of the record, the PX4-style baseline, the intrinsic floor (when the record "
                       "has a systematic column) and every pipeline output");
-  html.write(report_html);
+  files.write(report_html, html.html());
+  files.commit();
 
   for (const auto& cells : table.rows) {
     std::string line;

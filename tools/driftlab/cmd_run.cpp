@@ -38,23 +38,17 @@ void run(const RunOptions& o, CommandEnv& env) {
     std::cout << o.pipeline << ": valid (" << pipeline.steps.size() << " steps)\n";
     return;
   }
+  const auto out_dir = std::filesystem::path(o.out);
+  const auto outputs_csv = out_dir / "outputs.csv", effective = out_dir / "pipeline.effective.yaml";
+  OutputSet files({o.data.path, o.pipeline});  // all planned before the data is read, committed together
+  const auto [report_json, report_html] = plan_report_files(files, out_dir, "--out");
+  files.plan(outputs_csv, "--out");
+  files.plan(effective, "--out");
+
   std::vector<std::string> roles;
   for (const auto& [name, role] : pipeline.inputs)
     if (role != "time") roles.push_back(role);
   const auto record = load_record(o.data, roles);
-
-  std::error_code ec;
-  std::filesystem::create_directories(o.out, ec);
-  if (!std::filesystem::is_directory(o.out))
-    throw ConfigError({o.out, 0, "--out"}, "cannot create the output directory");
-  const auto out_dir = std::filesystem::path(o.out);
-  const auto outputs_csv = out_dir / "outputs.csv", effective = out_dir / "pipeline.effective.yaml",
-             report_json = out_dir / "report.json", report_html = out_dir / "report.html";
-  OutputSet files({o.data.path, o.pipeline});  // all planned now, committed together at the end
-  files.plan(outputs_csv, "outputs.csv");
-  files.plan(effective, "pipeline.effective.yaml");
-  files.plan(report_json, "report.json");
-  files.plan(report_html, "report.html");
 
   nlohmann::json report{{"format", "driftlab-run-report/1"},
                         {"driftlab_version", kVersion},
