@@ -2,14 +2,12 @@
 
 #include <cmath>
 #include <cstdio>
-#include <sstream>
 
 #include "framework/units.hpp"
 #include "tools/driftlab/html_report.hpp"
 
 namespace driftlab::cli {
 namespace {
-
 
 double dph(double rad_s) { return rad_s * kDphPerRadPerSec; }
 
@@ -63,16 +61,11 @@ nlohmann::json views_json(const discrepancy::Views& v) {
           {"allan_deviation", allan}};
 }
 
-std::string format(double v, const char* f = "%.4g") {
+// ΔBIC and Δχ² as the report prints them: one decimal.
+std::string one_decimal(double v) {
   char text[64];
-  std::snprintf(text, sizeof text, f, v);
+  std::snprintf(text, sizeof text, "%.1f", v);
   return text;
-}
-
-std::string escape(const std::string& s) {
-  std::string out;
-  for (char c : s) out += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : std::string(1, c);
-  return out;
 }
 
 std::vector<double> to_vector(const Eigen::VectorXd& v, double scale) {
@@ -165,10 +158,10 @@ Figure residual_figure(const discrepancy::Result& r) {
 std::string parameter_text(const discrepancy::ReportedValue& v) {
   std::string text = v.key + " = ";
   for (std::size_t i = 0; i < v.values.size(); ++i) {
-    text += (i ? ", " : "") + format(v.values[i]);
-    if (std::isfinite(v.sigmas[i])) text += " &plusmn; " + format(v.sigmas[i], "%.2g");
+    text += (i ? ", " : "") + format_number(v.values[i]);
+    if (std::isfinite(v.sigmas[i])) text += " ± " + format_number(v.sigmas[i], 2);
   }
-  return text + " " + escape(v.unit);
+  return text + " " + v.unit;
 }
 
 nlohmann::json unexplained_json(const discrepancy::Unexplained& u) {
@@ -223,7 +216,7 @@ nlohmann::json discrepancy_json(const discrepancy::Result& r, const DiscrepancyR
           {"gap_initial", dph(r.gap_initial_rad_s)},
           {"gap_final", dph(r.gap_final_rad_s)},
           {"gap_metric", "rms of the block-mean residual (measured - modelled systematic rate) over " +
-                             std::to_string(r.blocks) + " blocks of " + format(r.block_s) + " s, deg/h"},
+                             std::to_string(r.blocks) + " blocks of " + format_number(r.block_s) + " s, deg/h"},
           {"gap_unit", "deg/h"},
           {"noise_floor", dph(r.noise_floor_rad_s)},
           {"criterion",
@@ -251,59 +244,56 @@ nlohmann::json discrepancy_json(const discrepancy::Result& r, const DiscrepancyR
 }
 
 std::string discrepancy_html(const discrepancy::Result& r, const DiscrepancyReportInfo& info) {
-  std::ostringstream h;
-  h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>driftlab discrepancy: " << escape(info.data)
-    << "</title>\n<style>body{font-family:sans-serif;max-width:960px;margin:2em auto;color:#222}"
-       "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:4px 8px;text-align:left}"
-       ".gap{font-size:1.2em}</style></head><body>\n";
-  h << "<h1>Discrepancy report</h1>\n<p>Data: <code>" << escape(info.data) << "</code>; device: <code>"
-    << escape(info.device.empty() ? "none (bias polynomial only)" : info.device) << "</code>.</p>\n";
-  h << "<p class=\"gap\">Gap (rms of the block-mean residual, " << r.blocks << " blocks of " << format(r.block_s)
-    << " s): <b>" << format(dph(r.gap_initial_rad_s)) << " deg/h</b> with the device's model, <b>"
-    << format(dph(r.gap_final_rad_s)) << " deg/h</b> after the named effects. Noise alone would leave about "
-    << format(dph(r.noise_floor_rad_s)) << " deg/h.</p>\n";
-  h << "<h2>Named effects</h2>\n";
+  HtmlReport html("driftlab discrepancy: " + info.data);
+  html.paragraph("Data: " + info.data + "; device: " + (info.device.empty() ? "none (bias polynomial only)" : info.device) +
+                 ".");
+  html.paragraph("Gap (rms of the block-mean residual, " + std::to_string(r.blocks) + " blocks of " +
+                 format_number(r.block_s) + " s): " + format_number(dph(r.gap_initial_rad_s)) +
+                 " deg/h with the device's model, " + format_number(dph(r.gap_final_rad_s)) +
+                 " deg/h after the named effects. Noise alone would leave about " +
+                 format_number(dph(r.noise_floor_rad_s)) + " deg/h.");
+  html.section("Named effects");
   if (r.unexplained.found) {
     const auto& v = r.unexplained.views.front();
-    h << "<p><b>Unexplained:</b> structure remains that no candidate explains, in the <b>" << escape(v.view)
-      << "</b> view (&Delta;BIC = " << format(v.delta_bic, "%.1f") << ", " << format(dph(v.size_rad_s))
-      << " deg/h rms): " << escape(v.where) << ". See the residual plots below.</p>\n";
+    html.paragraph("Unexplained: structure remains that no candidate explains, in the " + v.view + " view (ΔBIC = " +
+                   one_decimal(v.delta_bic) + ", " + format_number(dph(v.size_rad_s)) + " deg/h rms): " + v.where +
+                   ". See the residual plots below.");
   }
   if (r.steps.empty() && !r.unexplained.found) {
-    h << "<p>Nothing significant is missing";
+    std::string text = "Nothing significant is missing";
     if (!r.final_scores.empty() && r.final_scores.front().applicable)
-      h << " (best candidate " << escape(r.final_scores.front().effect)
-        << ", &Delta;BIC = " << format(r.final_scores.front().delta_bic, "%.1f") << ", needs &gt; "
-        << format(info.options->significance) << ")";
-    h << ".</p>\n";
+      text += " (best candidate " + r.final_scores.front().effect + ", ΔBIC = " +
+              one_decimal(r.final_scores.front().delta_bic) + ", needs > " +
+              format_number(info.options->significance) + ")";
+    html.paragraph(text + ".");
   } else if (!r.steps.empty()) {
-    h << "<table><tr><th>step</th><th>effect</th><th>parameters (final model)</th><th>&Delta;BIC</th>"
-         "<th>gap before &rarr; after (deg/h)</th></tr>\n";
+    HtmlTable named{"", {"step", "effect", "parameters (final model)", "ΔBIC", "gap before → after (deg/h)"}};
     for (std::size_t i = 0; i < r.steps.size(); ++i) {
       const auto& s = r.steps[i];
-      h << "<tr><td>" << i + 1 << "</td><td>" << escape(s.effect) << "</td><td>";
-      for (const auto& p : s.parameters) h << parameter_text(p) << "<br>";
-      h << "</td><td>" << format(s.delta_bic, "%.1f") << "</td><td>" << format(dph(s.gap_before_rad_s)) << " &rarr; "
-        << format(dph(s.gap_after_rad_s)) << "</td></tr>\n";
+      std::string parameters;
+      for (const auto& p : s.parameters) parameters += (parameters.empty() ? "" : "; ") + parameter_text(p);
+      named.rows.push_back({static_cast<double>(i + 1), s.effect, parameters, one_decimal(s.delta_bic),
+                            format_number(dph(s.gap_before_rad_s)) + " → " + format_number(dph(s.gap_after_rad_s))});
     }
-    h << "</table>\n";
+    html.table(named);
   }
-  h << "<h2>Where the model misses: before and after</h2>\n" << inline_svg(render_svg(residual_figure(r)), "residual-") << "\n";
-  h << "<h2>Last round of scores</h2>\n<table><tr><th>effect</th><th>&Delta;&chi;&sup2;</th><th>&Delta;BIC</th>"
-       "<th>parameters added</th></tr>\n";
+  html.section("Where the model misses: before and after");
+  html.figure(residual_figure(r), "The residual (measured - modelled systematic rate) of the device's model and of the "
+                                  "final model with the named effects, in the views the candidates are scored on");
+  html.section("Last round of scores");
+  HtmlTable scores{"", {"effect", "Δχ²", "ΔBIC", "parameters added"}};
   for (const auto& s : r.final_scores) {
-    h << "<tr><td>" << escape(s.effect) << "</td>";
     if (s.applicable)
-      h << "<td>" << format(s.delta_chi2, "%.1f") << "</td><td>" << format(s.delta_bic, "%.1f") << "</td><td>"
-        << s.added_parameters << "</td></tr>\n";
+      scores.rows.push_back({s.effect, one_decimal(s.delta_chi2), one_decimal(s.delta_bic),
+                             static_cast<double>(s.added_parameters)});
     else
-      h << "<td colspan=\"3\">not applicable: " << escape(s.note) << "</td></tr>\n";
+      scores.rows.push_back({s.effect, "not applicable: " + s.note, std::string(), std::string()});
   }
-  h << "</table>\n<p>An effect is named when &Delta;BIC = &Delta;&chi;&sup2;/s&sup2; - q ln(blocks) &gt; "
-    << format(info.options->significance)
-    << ", with &chi;&sup2; from the generalized least-squares fit under the covariance the noise terms predict "
-       "(see models/discrepancy/discrepancy.hpp).</p>\n</body></html>\n";
-  return h.str();
+  html.table(scores);
+  html.paragraph("An effect is named when ΔBIC = Δχ²/s² - q ln(blocks) > " + format_number(info.options->significance) +
+                 ", with χ² from the generalized least-squares fit under the covariance the noise terms predict "
+                 "(see models/discrepancy/discrepancy.hpp).");
+  return html.html();
 }
 
 }  // namespace driftlab::cli

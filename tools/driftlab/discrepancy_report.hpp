@@ -1,4 +1,4 @@
-// Outputs of `driftlab discrepancy`: report.json and a self-contained report.html with SVG plots of
+// Outputs of `driftlab discrepancy`: report.json and a self-contained report.html (html_report.hpp) with plots of
 // the residual views (models/discrepancy/views.hpp) before the first and after the last named
 // effect. Rates are shown in deg/h (the unit of the device file's bias and effect keys).
 //
