@@ -162,6 +162,23 @@ TEST_F(CalibrateCli, TheReportScoresEveryModelOnAHeldOutRunOfAnotherProfile) {
   EXPECT_NE(read_text(dir_ + "/report/report.html").find("Held-out record"), std::string::npos);
 }
 
+TEST_F(CalibrateCli, ThePaperPipelineIsScoredOnTheHeldOutRecordByItsFinalStage) {
+  // The main job's pipeline as the offline reference: its final stage (the last rate output,
+  // rbf_ga_kf in li2023.yaml) is scored beside the causal models.
+  const auto sim = run_driftlab("simulate --device fmvmg --fs 2 --seed 5 --profile " + std::string(DRIFTLAB_SOURCE_DIR) +
+                                "/models/calibration/heldout_profile.yaml --out " + dir_ + "/heldout_paper.csv");
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const auto r = run_driftlab("-q calibrate --data " + dir_ + "/oven.csv --model poly --out " + dir_ +
+                              "/poly_paper.json --evaluate " + dir_ + "/heldout_paper.csv --report " + dir_ +
+                              "/report_paper --paper-pipeline " + DRIFTLAB_SOURCE_DIR + "/models/pipelines/li2023.yaml");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(read_text(dir_ + "/report_paper/report.json"));
+  const auto& methods = j["evaluations"][0]["methods"];
+  const auto& paper = methods.back();
+  EXPECT_EQ(paper["name"], "paper pipeline (offline, stage rbf_ga_kf)") << methods.dump(1);
+  EXPECT_LT(paper["residual_drift_dph"].get<double>(), methods[0]["residual_drift_dph"].get<double>());
+}
+
 TEST_F(CalibrateCli, EveryCommandHasHelp) {
   EXPECT_EQ(run_driftlab("calibrate --help").exit_code, 0);
   EXPECT_EQ(run_driftlab("compensate --help").exit_code, 0);

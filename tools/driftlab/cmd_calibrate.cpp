@@ -13,6 +13,7 @@
 #include "tools/driftlab/calibration_cli.hpp"
 #include "tools/driftlab/calibration_report.hpp"
 #include "tools/driftlab/cli.hpp"
+#include "tools/driftlab/run_report.hpp"
 
 namespace driftlab::cli {
 namespace {
@@ -120,10 +121,13 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
         env.progress("paper pipeline [" + std::to_string(i + 1) + "/" + std::to_string(n) + "] " + step, f);
       };
       const auto outputs = run_pipeline(pipeline, registry, as_time_series(held_out[e]), po, report);
-      const auto it = outputs.find("compensated");
-      if (it == outputs.end()) throw ConfigError({o.paper_pipeline, 0, "outputs"}, "needs an output named 'compensated'");
-      in.external.push_back({"paper pipeline (offline)", "fitted in-sample on this very record, non-causal",
-                             "below fs/2: noise IMFs dropped, RBF + Kalman smoothing", e, it->second.sum()});
+      const auto stages = rate_stages(pipeline, outputs);
+      if (stages.empty())
+        throw ConfigError({o.paper_pipeline, 0, "outputs"}, "needs an output that is a compensated rate (rad/s)");
+      in.external.push_back({"paper pipeline (offline, stage " + stages.back() + ")",
+                             "fitted in-sample on this very record, non-causal",
+                             "below fs/2: noise IMFs dropped, RBF + Kalman smoothing", e,
+                             outputs.at(stages.back()).sum()});
     }
   }
   const auto j = write_calibration_report(in, *report_files, files);

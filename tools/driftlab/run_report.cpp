@@ -46,6 +46,16 @@ nlohmann::json fit_json(const allan::Analysis& a) {
 
 }  // namespace
 
+std::vector<std::string> rate_stages(const Pipeline& pipeline, const std::map<std::string, Signal>& outputs) {
+  std::vector<std::string> names;
+  for (const auto& name : pipeline.output_order) {
+    const auto it = outputs.find(name);
+    if (it == outputs.end() || it->second.unit != "rad/s" || it->second.columns.cols() != 1) continue;
+    if (name != "drift_model") names.push_back(name);
+  }
+  return names;
+}
+
 RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const std::map<std::string, Signal>& outputs) {
   RunScores s;
   const double fs = record.sample_rate_hz();
@@ -60,12 +70,8 @@ RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const st
 
   const Eigen::VectorXd& time = record.time();
   s.stages.push_back(evaluation::score_stage("original", rate, time, fs, reference_n, t));
-  for (const auto& name : pipeline.output_order) {
-    const auto it = outputs.find(name);
-    if (it == outputs.end() || it->second.unit != "rad/s" || it->second.columns.cols() != 1) continue;
-    if (name == "drift_model") continue;  // a model of the drift, not a compensated rate
-    s.stages.push_back(evaluation::score_stage(name, it->second.columns.col(0), time, fs, reference_n, t));
-  }
+  for (const auto& name : rate_stages(pipeline, outputs))
+    s.stages.push_back(evaluation::score_stage(name, outputs.at(name).columns.col(0), time, fs, reference_n, t));
   if (record.has(role::kTemperature)) {
     const Eigen::VectorXd& temp = record.channel(role::kTemperature).values;
     auto model = calibration::fit_px4_style({{"the record", time, rate, temp, {}, {}}}, {});

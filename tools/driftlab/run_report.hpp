@@ -21,6 +21,11 @@
 
 namespace driftlab::cli {
 
+// The pipeline's compensated-rate stages, in the pipeline file's output order: every output that
+// is one rad/s column, except `drift_model` (li2023.yaml's model of the drift, not a compensated
+// rate). The last is the pipeline's final stage.
+std::vector<std::string> rate_stages(const Pipeline& pipeline, const std::map<std::string, Signal>& outputs);
+
 struct Px4Baseline {
   calibration::CalibrationModel model;
   Eigen::VectorXd compensated_rad_s;
