@@ -102,6 +102,16 @@ void CalibrationModel::validate() const {
       bad("rbf.weights_rad_s", "needs one weight per centre");
     }
     if (!(rbf->sigma > 0)) bad("rbf.sigma", "must be > 0");
+    if (!rbf->input_min.empty() || !rbf->input_max.empty()) {
+      if (rbf->input_min.size() != 3 || rbf->input_max.size() != 3) {
+        bad("rbf.input_min", "needs 3 values (and rbf.input_max too), or neither");
+      } else {
+        for (int k = 0; k < 3; ++k) {
+          if (!(rbf->input_min[static_cast<std::size_t>(k)] <= rbf->input_max[static_cast<std::size_t>(k)]))
+            bad("rbf.input_max", "each value must be >= the matching rbf.input_min");
+        }
+      }
+    }
   }
   if (!problems.empty()) throw ConfigError(std::move(problems));
 }
@@ -141,6 +151,10 @@ std::string to_json_text(const CalibrationModel& m) {
                 {"centres", centres},
                 {"weights_rad_s", m.rbf->weights_rad_s},
                 {"bias_rad_s", m.rbf->bias_rad_s}};
+    if (!m.rbf->input_min.empty()) {
+      j["rbf"]["input_min"] = m.rbf->input_min;
+      j["rbf"]["input_max"] = m.rbf->input_max;
+    }
   } else {
     j["rbf"] = nullptr;
   }
@@ -301,6 +315,8 @@ CalibrationModel read_calibration_model(const std::filesystem::path& path) {
     t.weights_rad_s = r.numbers(r.at(*b, "rbf", "weights_rad_s"), "rbf.weights_rad_s");
     if (t.weights_rad_s.size() != centres.size()) r.fail("rbf.weights_rad_s", "needs one weight per centre");
     t.bias_rad_s = r.number(*b, "rbf", "bias_rad_s");
+    if (const auto* lo = r.optional(*b, "input_min")) t.input_min = r.numbers(*lo, "rbf.input_min");
+    if (const auto* hi = r.optional(*b, "input_max")) t.input_max = r.numbers(*hi, "rbf.input_max");
     m.rbf = std::move(t);
   }
   if (m.kind == ModelKind::Rbf && !m.rbf) r.fail("rbf", "kind is rbf but the rbf section is missing");
@@ -381,9 +397,12 @@ CausalCompensator::CausalCompensator(const CalibrationModel& model)
 
 double CausalCompensator::rbf_value(double tc) const {
   const RbfTerm& r = *model_.rbf;
-  const double u0 = (tc - r.mean[0]) / r.scale[0];
-  const double u1 = (state_.temp_rate_k_s() - r.mean[1]) / r.scale[1];
-  const double u2 = (state_.hysteresis_state() - r.mean[2]) / r.scale[2];
+  const auto input = [&](std::size_t k, double x) {
+    return ((r.input_min.empty() ? x : std::clamp(x, r.input_min[k], r.input_max[k])) - r.mean[k]) / r.scale[k];
+  };
+  const double u0 = input(0, tc);
+  const double u1 = input(1, state_.temp_rate_k_s());
+  const double u2 = input(2, state_.hysteresis_state());
   const double g = -0.5 / (r.sigma * r.sigma);
   double y = r.bias_rad_s;
   for (Eigen::Index k = 0; k < r.centres.rows(); ++k) {

@@ -52,8 +52,13 @@ std::optional<Extrapolation> parse_extrapolation(const std::string& text);  // i
 
 // Gaussian RBF network on standardized inputs u = (x - mean) / scale, x = (T_c degC, D K/s, s 1):
 // rbf(x) = bias_rad_s + sum_k weights_rad_s[k] exp(-|u - centres.row(k)|^2 / (2 sigma^2)).
+// Each input is first clamped to [input_min, input_max], the range of the data the network was
+// fitted on: far from its data a Gaussian network returns its bias, not the physics (measured: a
+// held-out profile ramping twice as fast as the calibration made an unclamped network worse than
+// none). Empty ranges (files written before they existed): no clamp.
 struct RbfTerm {
   std::vector<double> mean, scale;  // per input (3)
+  std::vector<double> input_min, input_max;  // per input (3), x units; or both empty
   Eigen::MatrixXd centres;          // K x 3, standardized units
   double sigma = 1.0;               // standardized units
   std::vector<double> weights_rad_s;

@@ -236,6 +236,10 @@ ExportResult export_c_header(const CalibrationModel& m, const ExportOptions& o) 
       for (int c = 0; c < 3; ++c) centres.push_back(m.rbf->centres(k, c));
     }
     array("rbf_mean", m.rbf->mean);
+    if (!m.rbf->input_min.empty()) {
+      array("rbf_input_min", m.rbf->input_min);
+      array("rbf_input_max", m.rbf->input_max);
+    }
     array("rbf_scale", m.rbf->scale);
     array("rbf_centres", centres);
     array("rbf_weights", m.rbf->weights_rad_s);
@@ -326,10 +330,23 @@ static inline double P_step(P_state* st, double t_s, double rate_rad_s, double t
     b += P_RATE_COEF * st->rate + P_HYST_COEF * st->s;
 )";
   if (rbf) {
+    const bool ranged = !m.rbf->input_min.empty();
     s << R"(    {
-      const double u0 = (tc - P_rbf_mean[0]) / P_rbf_scale[0];
-      const double u1 = (st->rate - P_rbf_mean[1]) / P_rbf_scale[1];
-      const double u2 = (st->s - P_rbf_mean[2]) / P_rbf_scale[2];
+      double x[3];
+      x[0] = tc;
+      x[1] = st->rate;
+      x[2] = st->s;
+)";
+    if (ranged) {
+      s << R"(      {
+        int i;
+        for (i = 0; i < 3; ++i) x[i] = x[i] < P_rbf_input_min[i] ? P_rbf_input_min[i] : (x[i] > P_rbf_input_max[i] ? P_rbf_input_max[i] : x[i]);
+      }
+)";
+    }
+    s << R"(      const double u0 = (x[0] - P_rbf_mean[0]) / P_rbf_scale[0];
+      const double u1 = (x[1] - P_rbf_mean[1]) / P_rbf_scale[1];
+      const double u2 = (x[2] - P_rbf_mean[2]) / P_rbf_scale[2];
       const double g = -0.5 / (P_RBF_SIGMA * P_RBF_SIGMA);
       double y = P_RBF_BIAS;
       int k;

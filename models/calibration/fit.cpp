@@ -383,6 +383,8 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
       for (int k = 0; k < 3; ++k) {
         t.mean.push_back(net.mean()[k]);
         t.scale.push_back(net.scale()[k]);
+        t.input_min.push_back(X.col(k).minCoeff());
+        t.input_max.push_back(X.col(k).maxCoeff());
       }
       t.centres = net.centres();
       t.sigma = net.sigma();
@@ -393,7 +395,7 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
                          " vs " + std::to_string(no_rbf) + " rad/s without it)";
     } else {
       // Honest fallback: the network did not help on held-out bins, so the model stays physical.
-      m.rbf = RbfTerm{{0, 0, 0}, {1, 1, 1}, Eigen::MatrixXd::Zero(0, 3), 1.0, {}, 0.0};
+      m.rbf = RbfTerm{{0, 0, 0}, {1, 1, 1}, {}, {}, Eigen::MatrixXd::Zero(0, 3), 1.0, {}, 0.0};
       m.fit.selection += "; RBF did not improve the held-out residual (" + std::to_string(no_rbf) +
                          " rad/s), network left empty";
     }

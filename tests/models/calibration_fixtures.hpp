@@ -34,6 +34,8 @@ inline CalibrationModel example_full_model() {
   RbfTerm r;
   r.mean = {20, 0, 0};
   r.scale = {15, 0.01, 0.5};
+  r.input_min = {-20, -0.02, -1};  // dT/dt within +-1.2 degC/min: the test records leave it
+  r.input_max = {55, 0.02, 1};
   r.centres = Eigen::MatrixXd(3, 3);
   r.centres << 0.1, -0.2, 0.3, -1.0, 0.5, 0.0, 0.7, 0.0, -0.9;
   r.sigma = 0.8;

@@ -99,6 +99,26 @@ TEST(CausalCompensator, SubtractsThePolynomialAndFlagsAndClampsOutsideTheRange) 
   EXPECT_NEAR(ev.polynomial_bias_rad_s(60.0), p(60.0), kRounding);
 }
 
+// The compensated rate (input 0) at 30 degC after a 1200-s ramp at rate_c_per_min, at 10 Hz (long
+// enough for the dT/dt estimate and the hysteresis state to settle).
+double after_ramp(const CalibrationModel& m, double rate_c_per_min) {
+  CausalCompensator c(m);
+  double out = 0.0;
+  for (int k = 0; k <= 12000; ++k) out = c.step(0.1 * k, 0.0, 30.0 - rate_c_per_min * (12000 - k) / 600.0);
+  return out;
+}
+
+TEST(CausalCompensator, EvaluatesTheRbfNetworkInsideTheRangeOfItsFittingData) {
+  CalibrationModel m = testing::example_full_model();  // dT/dt range +-0.02 K/s = +-1.2 degC/min
+  m.temperature_rate_rad_s_per_k_s = 0.0;               // only the network sees dT/dt
+  m.lag_tau_s = 0.0;                                    // the same model temperature on both ramps
+  // 1.5 and 2.4 degC/min are both beyond the range: the network sees its edge both times.
+  EXPECT_NEAR(after_ramp(m, 1.5), after_ramp(m, 2.4), 1e-12);
+  m.rbf->input_min.clear();
+  m.rbf->input_max.clear();
+  EXPECT_GT(std::abs(after_ramp(m, 1.5) - after_ramp(m, 2.4)), 1e-10) << "without the range the network extrapolates";
+}
+
 TEST(CausalCompensator, RejectsTimeThatDoesNotIncrease) {
   CausalCompensator c(poly_model());
   c.step(1.0, 0.0, 20.0);
