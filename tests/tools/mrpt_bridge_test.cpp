@@ -481,3 +481,13 @@ TEST(NavPlot, ALargeTwoPanelFigureIsRenderedWithoutBlocking) {
   EXPECT_GT(svg.size(), 65536u);
   EXPECT_NE(svg.find("</svg>"), std::string::npos);
 }
+
+TEST(MrptNav, AnOutputDirectoryThatCannotBeMadeIsAUsageErrorBeforeTheDrive) {
+  SKIP_WITHOUT_MRPT();
+  const auto dir = driftlab::testing_cli::scratch_dir("nav_bad_out");
+  std::ofstream(dir / "a_file") << "x";
+  const auto r = run_driftlab("nav --device fmvmg --out " + (dir / "a_file" / "sub").string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("cannot create the directory"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("simulate drive"), std::string::npos) << "refused before the drive is simulated";
+}

@@ -79,5 +79,8 @@ struct ReportFiles {
 // Creates `dir` when missing and plans both report files in `outputs` under `option`. Throws
 // ConfigError (exit 2) when `dir` cannot be created or a report file cannot be planned.
 ReportFiles plan_report_files(OutputSet& outputs, const std::filesystem::path& dir, const std::string& option);
+// Creates the output directory `dir` (option `option`) when missing. Throws ConfigError (exit 2)
+// when it cannot be created or exists and is not a directory.
+void make_output_directory(const std::filesystem::path& dir, const std::string& option);
 
 }  // namespace driftlab::cli

@@ -64,9 +64,7 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
     throw ConfigError(Location{scenario_path.string(), 0, "fixes.period_s"},
                       "--fixes needs a scenario with position fixes (fixes.period_s > 0)");
   const fs::path out(o.out);
-  if (fs::exists(out) && !fs::is_directory(out))
-    throw ConfigError(Location{o.out, 0, "--out"}, "exists and is not a directory");
-  fs::create_directories(out);
+  make_output_directory(out, "--out");
   // Every output planned before the drive is simulated, committed together at the end.
   OutputSet outputs({device_path, scenario_path, o.model});
   for (const auto* name : {"summary.json", "trajectory.csv", "errors.csv", "nav.svg", "nav_info.json"})

@@ -245,11 +245,12 @@ nlohmann::json discrepancy_json(const discrepancy::Result& r, const DiscrepancyR
 
 std::string discrepancy_html(const discrepancy::Result& r, const DiscrepancyReportInfo& info) {
   HtmlReport html("driftlab discrepancy: " + info.data);
+  const std::string initial_model = info.device.empty() ? "the bias polynomial" : "the device's model";
   html.paragraph("Data: " + info.data + "; device: " + (info.device.empty() ? "none (bias polynomial only)" : info.device) +
                  ".");
   html.paragraph("Gap (rms of the block-mean residual, " + std::to_string(r.blocks) + " blocks of " +
                  format_number(r.block_s) + " s): " + format_number(dph(r.gap_initial_rad_s)) +
-                 " deg/h with the device's model, " + format_number(dph(r.gap_final_rad_s)) +
+                 " deg/h with " + initial_model + ", " + format_number(dph(r.gap_final_rad_s)) +
                  " deg/h after the named effects. Noise alone would leave about " +
                  format_number(dph(r.noise_floor_rad_s)) + " deg/h.");
   html.section("Named effects");
@@ -278,8 +279,9 @@ std::string discrepancy_html(const discrepancy::Result& r, const DiscrepancyRepo
     html.table(named);
   }
   html.section("Where the model misses: before and after");
-  html.figure(residual_figure(r), "The residual (measured - modelled systematic rate) of the device's model and of the "
-                                  "final model with the named effects, in the views the candidates are scored on");
+  html.figure(residual_figure(r), "The residual (measured - modelled systematic rate) of " + initial_model +
+                                      " and of the final model with the named effects, in the views the candidates are "
+                                      "scored on");
   html.section("Last round of scores");
   HtmlTable scores{"", {"effect", "Δχ²", "ΔBIC", "parameters added"}};
   for (const auto& s : r.final_scores) {
