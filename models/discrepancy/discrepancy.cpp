@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "framework/error.hpp"
+#include "framework/golden_section.hpp"
 #include "framework/signal.hpp"
 #include "framework/units.hpp"
 #include "models/allan/analysis.hpp"
@@ -20,7 +21,6 @@ constexpr double kRankThreshold = 1e-10;  // relative column norm below which a 
 constexpr double kDifferenceStep = 1e-4;  // relative step of the finite differences
 constexpr int kMaxPeriodGrid = 4000;
 constexpr double kGapFactor = 1.5;  // a step above 1.5 x the median step is a gap
-constexpr double kGoldenRatio = 0.6180339887498949;
 
 struct Term {
   std::size_t candidate;
@@ -80,24 +80,6 @@ LeastSquares least_squares(const Eigen::MatrixXd& a, const Eigen::VectorXd& b) {
 
 double rms(const Eigen::VectorXd& x) {
   return std::sqrt(x.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, x.size())));
-}
-
-double golden_section(const std::function<double(double)>& f, double a, double b, int iterations, double& best_u) {
-  double c = b - kGoldenRatio * (b - a), d = a + kGoldenRatio * (b - a);
-  double fc = f(c), fd = f(d);
-  for (int i = 0; i < iterations; ++i) {
-    if (fc < fd) {
-      b = d, d = c, fd = fc;
-      c = b - kGoldenRatio * (b - a);
-      fc = f(c);
-    } else {
-      a = c, c = d, fc = fd;
-      d = a + kGoldenRatio * (b - a);
-      fd = f(d);
-    }
-  }
-  best_u = fc < fd ? c : d;
-  return std::min(fc, fd);
 }
 
 class Workflow {
@@ -410,11 +392,9 @@ class Workflow {
       if (v < best_value) best_value = v, best = i;
     }
     const double lo = u[best == 0 ? 0 : best - 1], hi = u[std::min(best + 1, u.size() - 1)];
-    double refined_u = u[best];
-    const double refined =
-        golden_section(at, std::min(lo, hi), std::max(lo, hi), options_.golden_iterations, refined_u);
-    theta[k] = a.from_u(refined < best_value ? refined_u : u[best]);
-    return std::min(refined, best_value);
+    const auto refined = golden_section_minimize(at, std::min(lo, hi), std::max(lo, hi), options_.golden_iterations);
+    theta[k] = a.from_u(refined.value < best_value ? refined.x : u[best]);
+    return std::min(refined.value, best_value);
   }
 
   // Golden-section refinement of coordinate k within one grid step around its value.
@@ -431,8 +411,8 @@ class Workflow {
       return chi2(th);
     };
     const double current = at(center);
-    double refined_u = center;
-    if (golden_section(at, lo, hi, options_.golden_iterations, refined_u) < current) theta[k] = a.from_u(refined_u);
+    if (const auto refined = golden_section_minimize(at, lo, hi, options_.golden_iterations); refined.value < current)
+      theta[k] = a.from_u(refined.x);
   }
 
   std::vector<Score> score_all(const State& state) const {
@@ -609,11 +589,12 @@ class Workflow {
     StructureTest view{"temperature", 0.0, -std::numeric_limits<double>::infinity(), 0, 0.0, "", std::nullopt};
     if (!std::isfinite(best_chi2)) return view;
     // The level between the neighbouring grid levels (golden section, as for the candidates).
-    double level = levels[best], refined = level;
+    double level = levels[best];
     const double lo = levels[best == 0 ? 0 : best - 1], hi = levels[std::min(best + 1, levels.size() - 1)];
-    if (golden_section([&](double l) { return chi2_at(l).chi2; }, lo, hi, options_.golden_iterations, refined) <
-        best_chi2)
-      level = refined;
+    if (const auto refined = golden_section_minimize([&](double l) { return chi2_at(l).chi2; }, lo, hi,
+                                                     options_.golden_iterations);
+        refined.value < best_chi2)
+      level = refined.x;
     const auto a = chi2_at(level);
     view.parameters = static_cast<int>(a.kept) + 1;
     view.delta_chi2 = state.fit.chi2 - a.chi2;
