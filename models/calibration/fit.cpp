@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "framework/error.hpp"
+#include "framework/golden_section.hpp"
 #include "models/calibration/evidence.hpp"
 #include "plugins/ga/ga.hpp"
 #include "plugins/polynomial/polynomial.hpp"
@@ -268,6 +269,38 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
     }
   }
   if (!std::isfinite(best.cv)) throw DataError({records.front().name, 0, "rate"}, "no candidate model could be fitted");
+
+  // ---- refinement of the best cell's lag and width between their grid neighbours ------------
+  const auto cv_at = [&](double lag, double width) {
+    const Design d = design(features_for(lag, width), st.rows, t0, best.order, best.rate_term, width > 0, with_sf);
+    try {
+      return polynomial::blocked_cv_rmse(d.A, y, o.holdout_blocks, st.group_ends);
+    } catch (const std::invalid_argument&) {
+      return std::numeric_limits<double>::infinity();
+    }
+  };
+  const auto refine = [&](const std::vector<double>& grid, double value, const std::function<double(double)>& cv) {
+    if (!(value > 0) || o.refine_iterations <= 0) return value;
+    std::vector<double> sorted = grid;
+    std::sort(sorted.begin(), sorted.end());
+    const auto at = std::find(sorted.begin(), sorted.end(), value);
+    if (at == sorted.end()) return value;
+    const double lo = at == sorted.begin() || *std::prev(at) <= 0 ? value / 2 : *std::prev(at);
+    const double hi = std::next(at) == sorted.end() ? value : *std::next(at);
+    const auto m = golden_section_minimize([&](double u) { return cv(std::exp(u)); }, std::log(lo), std::log(hi),
+                                           o.refine_iterations);
+    if (m.value < best.cv) {
+      best.cv = m.value;
+      return std::exp(m.x);
+    }
+    return value;
+  };
+  if (physical) {
+    o.progress("calibrate: refining lag and hysteresis width", 0.0);
+    best.lag_s = refine(lags, best.lag_s, [&](double lag) { return cv_at(lag, best.width_k); });
+    best.width_k = refine(widths, best.width_k, [&](double width) { return cv_at(best.lag_s, width); });
+    o.progress("calibrate: refining lag and hysteresis width", 1.0);
+  }
 
   // ---- final linear fit -------------------------------------------------------------------
   const auto fs = features_for(best.lag_s, best.width_k);

@@ -10,7 +10,10 @@
 // Selection, on held-out contiguous time blocks of each record (blocked cross-validation):
 //   poly      order in [min_order, max_order]
 //   physical  order x lag_tau_s (lag_grid_s) x with/without dT/dt x hysteresis width
-//             (hysteresis_width_grid_k; 0 = no hysteresis term)
+//             (hysteresis_width_grid_k; 0 = no hysteresis term); then the best cell's lag and width
+//             (when not 0) are refined on a log scale between their grid neighbours by golden
+//             section (refine_iterations each, framework/golden_section.hpp) on the same score: the
+//             grid doubles, so without it a 400-s lag was fitted as 480 s
 //   rbf       the physical model, plus a Gaussian RBF network on (T_c, D, s) fitted to the physical
 //             residual; its width, ridge and number of centres are tuned by the GA (plugins/ga) on
 //             a blocked holdout (rbf::blocked_holdout), then refitted on all bins
@@ -54,6 +57,7 @@ struct FitOptions {
   double derivative_tau_s = 30.0;            // smoothing of dT/dt and of the hysteresis path, s
   std::vector<double> lag_grid_s{0, 15, 30, 60, 120, 240, 480, 960};
   std::vector<double> hysteresis_width_grid_k{0, 0.5, 1, 2, 4, 8};
+  int refine_iterations = 12;                // golden-section steps per refined parameter (0: grid only)
   std::size_t ga_population = 16, ga_generations = 10;  // RBF tuning
   std::uint64_t seed = 1;
   // Progress: (stage label, fraction in [0, 1]).

@@ -2,6 +2,8 @@
 // score on another seed with another chamber profile (warm start, other ramp rates, partial range).
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include <cmath>
 #include <numbers>
 
@@ -73,6 +75,25 @@ TEST(CalibrationEvidence, ThePhysicalModelBeatsThePolynomialWhereTheDriftIsNotPo
   const double rbf = drift(test, fit(cal, ModelKind::Rbf));
   EXPECT_LT(physical, 0.8 * poly) << "physical " << physical / kRadPerSecPerDph << " vs poly " << poly / kRadPerSecPerDph;
   EXPECT_LT(rbf, 0.8 * poly) << "rbf " << rbf / kRadPerSecPerDph << " vs poly " << poly / kRadPerSecPerDph;
+}
+
+TEST(CalibrationEvidence, ThePhysicalModelRecoversTheLagAndReachesTheIntrinsicFloorOnAnotherProfile) {
+  // The lag grid doubles (240, 480 s): the fitted lag is refined between its neighbours. Measured
+  // on this single 2-Hz calibration run: grid only 480 s and 18.1 deg/h held out (both checks
+  // fail); refined 433 s and 15.2 deg/h against an intrinsic floor of 12.7 deg/h.
+  constexpr double kLagTolerance = 0.125;
+  constexpr double kFloorFactor = 1.3;
+  const auto device = fmvmg(true);
+  const Record cal = run(device, devices::default_oven_profile(), 1);
+  const Record test = run(device, other_profile(), 2);
+  const CalibrationModel m = fit(cal, ModelKind::Physical);
+  EXPECT_NEAR(m.lag_tau_s, 400.0, kLagTolerance * 400.0);
+  const double floor = evaluation::block_mean_rms(test.time_s, test.rate_rad_s - test.systematic_rad_s);
+  const double physical = drift(test, m);
+  EXPECT_LT(physical, kFloorFactor * floor) << "physical " << physical / kRadPerSecPerDph << " deg/h, floor "
+                                            << floor / kRadPerSecPerDph << " deg/h";
+  std::printf("[ summary  ] lag %.1f s (truth 400); held-out drift %.2f deg/h, intrinsic floor %.2f deg/h\n",
+              m.lag_tau_s, physical / kRadPerSecPerDph, floor / kRadPerSecPerDph);
 }
 
 TEST(CalibrationEvidence, ThePhysicalModelDoesNoWorseWhereTheDriftIsPolynomial) {
