@@ -13,6 +13,7 @@
 #include "framework/atomic_file.hpp"
 #include "framework/error.hpp"
 #include "framework/resources.hpp"
+#include "framework/signal.hpp"
 #include "framework/units.hpp"
 
 namespace driftlab {
@@ -332,16 +333,13 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
                             " is below 1 ns (a sample rate above 1 GHz; its rates and deviations would overflow)");
     }
     if (options.max_gap_factor > 0.0 && rows > 2) {
-      std::vector<double> steps(rows - 1);
-      for (std::size_t i = 1; i < rows; ++i) steps[i - 1] = tv[i] - tv[i - 1];
-      auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
-      std::nth_element(steps.begin(), mid, steps.end());
-      const double limit = options.max_gap_factor * *mid;
+      const double median = signal::median_step(Eigen::Map<const Eigen::VectorXd>(tv.data(), static_cast<Eigen::Index>(rows)));
+      const double limit = options.max_gap_factor * median;
       for (std::size_t i = 1; i < rows; ++i)
         if (tv[i] - tv[i - 1] > limit)
           throw DataError({file, line_of_row[i], time_mapping->column},
                           "gap of " + std::to_string(tv[i] - tv[i - 1]) + " s after line " +
-                              std::to_string(line_of_row[i - 1]) + " (median step " + std::to_string(*mid) +
+                              std::to_string(line_of_row[i - 1]) + " (median step " + std::to_string(median) +
                               " s; allowed up to " + std::to_string(options.max_gap_factor) +
                               " x median, see --max-gap)");
     }

@@ -1,6 +1,9 @@
 #include "framework/signal.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <vector>
 
 namespace driftlab::signal {
 
@@ -39,6 +42,16 @@ double hysteresis_step(double state, double step_k, double width_k) {
   if (step_k == 0.0) return state;
   const double target = step_k > 0.0 ? 1.0 : -1.0;
   return target + (state - target) * std::exp(-std::abs(step_k) / width_k);
+}
+
+double median_step(const Eigen::VectorXd& time_s) {
+  const Eigen::Index n = time_s.size();
+  if (n < 2) throw std::invalid_argument("the record has fewer than 2 samples");
+  std::vector<double> steps(static_cast<std::size_t>(n - 1));
+  for (Eigen::Index k = 0; k + 1 < n; ++k) steps[static_cast<std::size_t>(k)] = time_s[k + 1] - time_s[k];
+  const auto middle = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+  std::nth_element(steps.begin(), middle, steps.end());
+  return *middle;
 }
 
 }  // namespace driftlab::signal

@@ -30,4 +30,8 @@ Eigen::VectorXd hysteresis_state(const Eigen::VectorXd& temp_c, double width_k);
 // One step of hysteresis_state, for streaming use: the state after a temperature step (K).
 double hysteresis_step(double state, double step_k, double width_k);
 
+// Median of the time steps (s): the sampling interval of a record with gaps or jitter, and the
+// yardstick a gap is measured against. Throws std::invalid_argument for fewer than 2 samples.
+double median_step(const Eigen::VectorXd& time_s);
+
 }  // namespace driftlab::signal

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "framework/signal.hpp"
+
 namespace driftlab::discrepancy {
 namespace {
 
@@ -22,19 +24,10 @@ double gauss_markov_covariance(double sigma, double tau, double length_i, double
 
 }  // namespace
 
-double median_interval(const Eigen::VectorXd& time_s) {
-  const Eigen::Index n = time_s.size();
-  if (n < 2) throw std::invalid_argument("the record has fewer than 2 samples");
-  std::vector<double> steps(static_cast<std::size_t>(n - 1));
-  for (Eigen::Index k = 0; k + 1 < n; ++k) steps[static_cast<std::size_t>(k)] = time_s[k + 1] - time_s[k];
-  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
-  return steps[steps.size() / 2];
-}
-
 GapPattern gap_pattern(const Eigen::VectorXd& time_s, double gap_factor) {
   GapPattern g;
   if (time_s.size() < 3) return g;
-  const double limit = gap_factor * median_interval(time_s);
+  const double limit = gap_factor * signal::median_step(time_s);
   std::vector<double> starts{time_s[0]};
   for (Eigen::Index k = 0; k + 1 < time_s.size(); ++k) {
     if (time_s[k + 1] - time_s[k] <= limit) continue;
@@ -53,7 +46,7 @@ Blocks make_blocks(const Eigen::VectorXd& time_s, double block_s) {
   const Eigen::Index n = time_s.size();
   if (!(block_s > 0.0)) throw std::invalid_argument("block length must be positive");
   Blocks b;
-  b.sample_interval_s = median_interval(time_s);
+  b.sample_interval_s = signal::median_step(time_s);
   b.record_start_s = time_s[0];
   std::vector<double> start, end, mean;
   Eigen::Index current = -1;
@@ -84,7 +77,7 @@ Blocks make_blocks(const Eigen::VectorXd& time_s, double block_s) {
   return b;
 }
 
-double Blocks::median_spacing_s() const { return size() < 2 ? duration_s() : median_interval(time_s); }
+double Blocks::median_spacing_s() const { return size() < 2 ? duration_s() : signal::median_step(time_s); }
 
 Eigen::VectorXd block_means(const Blocks& blocks, const Eigen::VectorXd& x) {
   Eigen::VectorXd means(blocks.size());

@@ -43,9 +43,6 @@ struct Blocks {
   double median_spacing_s() const;
 };
 
-// Median of the sample intervals. Throws std::invalid_argument for fewer than 2 samples.
-double median_interval(const Eigen::VectorXd& time_s);
-
 // Gaps of a record: time steps longer than gap_factor x the median step. Bursts (a gap after every
 // burst, like a logger that wakes every 5 min) are regular when the times from one burst's start
 // to the next vary by at most kRegularBurstSpread; block averaging then handles them like evenly

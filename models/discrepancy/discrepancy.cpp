@@ -92,7 +92,7 @@ class Workflow {
     record.channel(role::kRate);
     record.channel(role::kTemperature);
     const double duration = t[t.size() - 1] - t[0];
-    block_s_ = options.block_s > 0.0 ? options.block_s : std::max(median_interval(t), duration / kTargetBlocks);
+    block_s_ = options.block_s > 0.0 ? options.block_s : std::max(signal::median_step(t), duration / kTargetBlocks);
     blocks_ = make_blocks(t, block_s_);
     evenly_sampled_ = true;
     for (Eigen::Index k = 0; k + 1 < t.size(); ++k)
@@ -217,7 +217,7 @@ class Workflow {
       // branch offset, dT/dt terms); the views in time are left out: they would take the random
       // walk itself.
       const Thermal block = thermal(reached.design.moved);
-      const Thermal full = thermal(design(smooth_record_, reached.terms).moved);
+      const Thermal full = thermal(moved_record(smooth_record_, reached.terms));
       const auto step = temperature_step(reached, block, full.temp).step;
       const Eigen::VectorXd full_step =
           step ? step_column(full.temp, step->level_c) : Eigen::VectorXd(Eigen::VectorXd::Zero(full.temp.size()));
@@ -261,15 +261,22 @@ class Workflow {
   // ---- model ----------------------------------------------------------------------------------
   const Effect& effect(const Term& t) const { return *candidates_[t.candidate].effect; }
 
-  Design design(const TimeSeries& rec, const std::vector<Term>& terms) const {
-    Design d;
-    d.moved = rec;
-    Eigen::VectorXd temp = rec.channel(role::kTemperature).values;
+  // The record as the model sees it: its temperature replaced by the model temperature of the
+  // term that moves it, if any (at most one).
+  TimeSeries moved_record(const TimeSeries& rec, const std::vector<Term>& terms) const {
+    TimeSeries moved = rec;
     for (const auto& t : terms) {
       if (!effect(t).moves_model_temperature()) continue;
-      temp = effect(t).evaluate(rec, context_, t.theta).model_temperature_c;
-      d.moved.set_channel({role::kTemperature, "degC", "model temperature", temp});
+      moved.set_channel(
+          {role::kTemperature, "degC", "model temperature", effect(t).evaluate(rec, context_, t.theta).model_temperature_c});
     }
+    return moved;
+  }
+
+  Design design(const TimeSeries& rec, const std::vector<Term>& terms) const {
+    Design d;
+    d.moved = moved_record(rec, terms);
+    const Eigen::VectorXd& temp = d.moved.channel(role::kTemperature).values;
     const Eigen::Index n = rec.size();
     std::vector<Eigen::MatrixXd> bases;
     Eigen::Index columns = model_columns();
@@ -562,7 +569,7 @@ class Workflow {
     return block_means(blocks_, step_column(full_temp_c, level_c));
   }
   Eigen::VectorXd full_model_temperature(const State& s) const {
-    return design(smooth_record_, s.terms).moved.channel(role::kTemperature).values;
+    return moved_record(smooth_record_, s.terms).channel(role::kTemperature).values;
   }
 
   // The temperature view's second form: a step in bias where the temperature crosses one level,

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "framework/error.hpp"
+#include "framework/signal.hpp"
 
 namespace driftlab::evaluation {
 
@@ -16,10 +17,7 @@ constexpr double kBoundaryTolerance = 1e-9;  // of a block: time stamps like k *
 bool has_gaps(const Eigen::VectorXd& time_s) {
   if (time_s.size() < 3) return false;
   const Eigen::VectorXd steps = time_s.tail(time_s.size() - 1) - time_s.head(time_s.size() - 1);
-  std::vector<double> sorted(steps.data(), steps.data() + steps.size());
-  const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
-  std::nth_element(sorted.begin(), middle, sorted.end());
-  return steps.maxCoeff() > kGapFactor * *middle;
+  return steps.maxCoeff() > kGapFactor * signal::median_step(time_s);
 }
 
 }  // namespace
