@@ -1,6 +1,7 @@
 #include "framework/csv.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +13,7 @@
 
 #include "framework/atomic_file.hpp"
 #include "framework/error.hpp"
+#include "framework/imu.hpp"
 #include "framework/resources.hpp"
 #include "framework/signal.hpp"
 #include "framework/units.hpp"
@@ -34,7 +36,34 @@ std::string role_of_stem(const std::string& stem) {
   return stem;
 }
 
+// Time columns people log, by header (case-insensitive): t_s, time_s, time, time_ms, time_us,
+// timeus (ArduPilot TimeUS), timestamp (PX4/pyulog, us), time_ns.
+std::optional<ColumnMapping> time_mapping_of(const std::string& column) {
+  std::string h(column);
+  std::transform(h.begin(), h.end(), h.begin(), [](unsigned char c) { return std::tolower(c); });
+  static const std::pair<std::string_view, std::string_view> known[] = {
+      {"t_s", "s"},        {"time_s", "s"},       {"time", "s"},  {"time_ms", "ms"},
+      {"time_us", "us"},   {"timeus", "us"},      {"timestamp", "us"}, {"timestamp_us", "us"},
+      {"time_ns", "ns"},   {"timestamp_ns", "ns"}};
+  for (const auto& [name, unit] : known)
+    if (h == name) return ColumnMapping{"time", column, std::string(unit)};
+  return std::nullopt;
+}
+
+// "device_id", "device_id1", ...: the numeric identity of IMU instance 0, 1, ... (PX4 device_id).
+std::optional<int> device_id_instance(std::string_view role) {
+  if (!role.starts_with("device_id")) return std::nullopt;
+  role.remove_prefix(9);
+  if (role.empty()) return 0;
+  int instance = 0;
+  const auto res = std::from_chars(role.data(), role.data() + role.size(), instance);
+  if (res.ec != std::errc() || res.ptr != role.data() + role.size() || instance < 1 || instance > 99) return std::nullopt;
+  return instance;
+}
+
 std::optional<ColumnMapping> mapping_from_suffix(const std::string& column) {
+  if (device_id_instance(column)) return ColumnMapping{column, column, "1"};
+  if (auto m = imu::recognize_imu_column(column)) return ColumnMapping{m->role, column, m->unit};
   for (const auto& s : kSuffixes) {
     if (column.size() > s.suffix.size() && column.ends_with(s.suffix))
       return ColumnMapping{role_of_stem(column.substr(0, column.size() - s.suffix.size())), column,
@@ -68,34 +97,16 @@ bool parse_number(std::string_view cell, double& value) {
   return res.ec == std::errc() && res.ptr == cell.data() + cell.size();
 }
 
-std::string read_file(const std::filesystem::path& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    throw DataError({path.string(), 0, ""}, "file does not exist or is not a regular file");
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw DataError({path.string(), 0, ""}, std::string("cannot open: ") + std::strerror(errno));
-  const auto size = std::filesystem::file_size(path);
-  // The text and the parsed values of every column: at most about three times the file size.
-  check_memory_estimate(3.0 * static_cast<double>(size), {path.string(), 0, ""},
-                        "reading a " + std::to_string(size >> 20) + " MB file");
-  std::string buffer(size, '\0');
-  const auto n = std::fread(buffer.data(), 1, buffer.size(), f);
-  std::fclose(f);
-  buffer.resize(n);
-  return buffer;
-}
 
-// A column that is read: where it sits in each row and how to convert it.
-struct Wanted {
-  ColumnMapping mapping;
-  Unit unit;
-  std::size_t index = 0;
+// A column that is read, and its values.
+struct Wanted : PlannedColumn {
   std::vector<double> values;
 };
 
 std::string quantity_text(Quantity q) {
   switch (q) {
-    case Quantity::AngularRate: return "an angular-rate unit (rad/s, deg/s, deg/h, mrad/s)";
+    case Quantity::AngularRate: return "an angular-rate unit (rad/s, deg/s, deg/h, mrad/s, mdps)";
+    case Quantity::Acceleration: return "an acceleration unit (m/s^2, g, mg)";
     case Quantity::Temperature: return "a temperature unit (degC, K)";
     case Quantity::Time: return "a time unit (s, ms, us, ns, h)";
     case Quantity::Frequency: return "a frequency unit (Hz, kHz)";
@@ -128,43 +139,16 @@ std::string names_excerpt(const std::vector<std::string_view>& names) {
   return out;
 }
 
-// Lines end in LF, CR LF or CR (old Mac files); a UTF-8 byte-order mark at the start is skipped.
-class LineCursor {
- public:
-  explicit LineCursor(const std::string& text) : text_(text) {
-    if (text_.size() >= 3 && text_.compare(0, 3, "\xEF\xBB\xBF") == 0) pos_ = 3;
-  }
-  // Next non-blank, non-comment line; false at end of file.
-  bool next(std::string_view& line) {
-    while (pos_ < text_.size()) {
-      const char* begin = text_.data() + pos_;
-      const void* nl = std::memchr(begin, '\n', text_.size() - pos_);
-      std::size_t len = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - begin) : text_.size() - pos_;
-      std::size_t advance = len + 1;
-      if (const void* cr = std::memchr(begin, '\r', len)) {  // CR LF, or a CR-only line end
-        len = static_cast<std::size_t>(static_cast<const char*>(cr) - begin);
-        advance = len + 1 + (len + 1 < text_.size() - pos_ && begin[len + 1] == '\n' ? 1 : 0);
-      }
-      pos_ += advance;
-      ++line_;
-      line = std::string_view(begin, len);
-      if (line.empty() || line.front() == '#' || trim(line).empty()) continue;
-      return true;
-    }
-    return false;
-  }
-  int line_number() const { return line_; }
-
- private:
-  const std::string& text_;
-  std::size_t pos_ = 0;
-  int line_ = 0;
-};
 
 }  // namespace
 
 std::optional<Quantity> quantity_of_role(const std::string& role) {
   if (role == "time") return Quantity::Time;
+  for (const std::string_view prefix : {"", "true_", "systematic_"}) {
+    if (const auto id = imu::parse_role(role, prefix))
+      return id->sensor == imu::Sensor::Gyro ? Quantity::AngularRate : Quantity::Acceleration;
+  }
+  if (imu::parse_temperature_role(role)) return Quantity::Temperature;
   if (role == role::kRate || role == role::kTrueRate) return Quantity::AngularRate;
   if (role == role::kTemperature || role == role::kDieTemperature) return Quantity::Temperature;
   if (role == role::kDriveFrequency) return Quantity::Frequency;
@@ -182,13 +166,19 @@ ColumnMapping parse_column_mapping(const std::string& text) {
   if (const auto colon = rest.rfind(':'); colon != std::string::npos) {
     m.column = rest.substr(0, colon);
     m.unit = rest.substr(colon + 1);
+    // Raw counts: column:lsb*FACTOR:unit (e.g. gx:lsb*0.061:mdps) is the unit "lsb*FACTOR*unit".
+    if (const auto lsb = m.column.rfind(":lsb*"); lsb != std::string::npos) {
+      m.unit = m.column.substr(lsb + 1) + "*" + m.unit;
+      m.column.resize(lsb);
+    }
   } else if (auto s = mapping_from_suffix(rest)) {
     m.column = s->column;
     m.unit = s->unit;
     if (m.role.empty()) m.role = s->role;
   } else {
-    throw ConfigError(where, "expected role=column:unit, column:unit or a column name with a unit suffix "
-                             "(_dps, _rps, _dph, _c, _k, _hz, _s)");
+    throw ConfigError(where, "expected role=column:unit, column:lsb*FACTOR:unit, column:unit or a column name "
+                             "with a unit suffix (_dps, _rps, _dph, _c, _k, _hz, _s) or an IMU name (gyro_x, "
+                             "accel_z_mps2, temp, ...)");
   }
   if (m.role.empty()) m.role = m.column;
   if (m.column.empty()) throw ConfigError(where, "empty column name");
@@ -200,25 +190,35 @@ ColumnMapping parse_column_mapping(const std::string& text) {
   return m;
 }
 
-TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& options) {
-  return parse_csv(read_file(path), path.string(), options);
+CsvLineCursor::CsvLineCursor(const std::string& text) : text_(text) {
+  if (text_.size() >= 3 && text_.compare(0, 3, "\xEF\xBB\xBF") == 0) pos_ = 3;
 }
 
-TimeSeries parse_csv(const std::string& text, const std::string& file, const CsvReadOptions& options) {
-  if (!std::isfinite(options.sample_rate_hz) || options.sample_rate_hz > 1.0 / kMinTimeStep)
-    throw ConfigError({file, 0, "--fs"}, "the sample rate must be finite and at most 1e9 Hz");
-  if (!std::isfinite(options.max_gap_factor)) throw ConfigError({file, 0, "--max-gap"}, "must be a finite number");
-  LineCursor cursor(text);
-  std::string_view line;
-  if (!cursor.next(line)) throw DataError({file, 0, ""}, "file is empty (expected a header row and data rows)");
-
-  const int header_line = cursor.line_number();
-  const auto header = split(line);
-  {
-    double dummy;
-    if (std::all_of(header.begin(), header.end(), [&](std::string_view c) { return parse_number(c, dummy); }))
-      throw DataError({file, header_line, ""}, "missing header row (the first row holds only numbers)");
+bool CsvLineCursor::next(std::string_view& line) {
+  while (pos_ < text_.size()) {
+    const char* begin = text_.data() + pos_;
+    const void* nl = std::memchr(begin, '\n', text_.size() - pos_);
+    std::size_t len = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - begin) : text_.size() - pos_;
+    std::size_t advance = len + 1;
+    if (const void* cr = std::memchr(begin, '\r', len)) {  // CR LF, or a CR-only line end
+      len = static_cast<std::size_t>(static_cast<const char*>(cr) - begin);
+      advance = len + 1 + (len + 1 < text_.size() - pos_ && begin[len + 1] == '\n' ? 1 : 0);
+    }
+    pos_ += advance;
+    ++line_;
+    line = std::string_view(begin, len);
+    if (line.empty() || line.front() == '#' || trim(line).empty()) continue;
+    return true;
   }
+  return false;
+}
+
+std::vector<std::string_view> split_csv_row(std::string_view line) { return split(line); }
+
+bool parse_csv_number(std::string_view cell, double& value) { return parse_number(cell, value); }
+
+std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& header, const CsvReadOptions& options,
+                                        const std::string& file, int header_line) {
   const std::string available = names_excerpt(header);
   std::unordered_map<std::string_view, std::size_t> index_of;  // linear in the number of columns
   index_of.reserve(header.size());
@@ -236,33 +236,60 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
     return std::nullopt;
   };
 
-  std::vector<Wanted> wanted;
+  std::vector<PlannedColumn> wanted;
   std::optional<ColumnMapping> time_mapping;
   const auto add_wanted = [&](const ColumnMapping& m, std::size_t index) {
     if (m.role == "time") {
       time_mapping = m;
     }
     try {
-      wanted.push_back({m, unit_or_throw(m), index, {}});
+      wanted.push_back({m, unit_or_throw(m), index});
     } catch (const ConfigError& e) {
       throw ConfigError({file, header_line, m.column}, e.problems().front().message);
     }
   };
+  // A role read from two columns, or a column read as two roles, is an error naming both.
+  const auto check_unique = [&](const ColumnMapping& m) {
+    for (const auto& w : wanted) {
+      if (w.mapping.role == m.role)
+        throw ConfigError({file, header_line, m.column},
+                          "the '" + m.role + "' channel is claimed by two columns: " + quoted_excerpt(w.mapping.column) +
+                              " and " + quoted_excerpt(m.column) + " (map one of them with --column)");
+      if (w.mapping.column == m.column)
+        throw ConfigError({file, header_line, m.column},
+                          "column " + quoted_excerpt(m.column) + " is claimed by two channels: '" + w.mapping.role +
+                              "' and '" + m.role + "'");
+    }
+  };
   if (options.columns.empty()) {
-    for (std::size_t i = 0; i < header.size(); ++i)
-      if (auto m = mapping_from_suffix(std::string(header[i]))) add_wanted(*m, i);
+    std::optional<std::size_t> time_index;
+    for (std::size_t i = 0; i < header.size(); ++i) {
+      const std::string name(header[i]);
+      if (name == "t_s" || (!time_index && time_mapping_of(name))) time_index = i;
+    }
+    for (std::size_t i = 0; i < header.size(); ++i) {
+      const std::string name(header[i]);
+      std::optional<ColumnMapping> m = i == time_index ? time_mapping_of(name) : std::nullopt;
+      if (!m && !time_mapping_of(name)) m = mapping_from_suffix(name);
+      if (!m) continue;
+      check_unique(*m);
+      add_wanted(*m, i);
+    }
   } else {
     bool has_time = false;
     for (const auto& m : options.columns) has_time = has_time || m.role == "time";
     if (!has_time && options.sample_rate_hz <= 0.0) add_wanted({"time", "t_s", "s"}, *find_index("t_s", true));
-    for (const auto& m : options.columns) add_wanted(m, *find_index(m.column, true));
+    for (const auto& m : options.columns) {
+      check_unique(m);
+      add_wanted(m, *find_index(m.column, true));
+    }
   }
   if (!time_mapping && options.sample_rate_hz <= 0.0)
     throw DataError({file, header_line, "t_s"},
                     "missing time column (the header has: " + available + "); give one with --column "
                     "time=NAME:UNIT or a sample rate with --fs");
   for (const auto& r : options.required_roles) {
-    const bool found = std::any_of(wanted.begin(), wanted.end(), [&](const Wanted& w) { return w.mapping.role == r; });
+    const bool found = std::any_of(wanted.begin(), wanted.end(), [&](const PlannedColumn& w) { return w.mapping.role == r; });
     if (!found)
       throw DataError({file, header_line, r},
                       "no column for the '" + r + "' channel (the header has: " + available +
@@ -270,6 +297,51 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
   }
   if (time_mapping && options.sample_rate_hz > 0.0)
     throw ConfigError({file, header_line, time_mapping->column}, "the file has a time column; do not also give --fs");
+
+  return wanted;
+}
+
+std::string read_text_file(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw DataError({path.string(), 0, ""}, "file does not exist or is not a regular file");
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw DataError({path.string(), 0, ""}, std::string("cannot open: ") + std::strerror(errno));
+  const auto size = std::filesystem::file_size(path);
+  // The text and the parsed values of every column: at most about three times the file size.
+  check_memory_estimate(3.0 * static_cast<double>(size), {path.string(), 0, ""},
+                        "reading a " + std::to_string(size >> 20) + " MB file");
+  std::string buffer(size, '\0');
+  const auto n = std::fread(buffer.data(), 1, buffer.size(), f);
+  std::fclose(f);
+  buffer.resize(n);
+  return buffer;
+}
+
+TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& options) {
+  return parse_csv(read_text_file(path), path.string(), options);
+}
+
+TimeSeries parse_csv(const std::string& text, const std::string& file, const CsvReadOptions& options) {
+  if (!std::isfinite(options.sample_rate_hz) || options.sample_rate_hz > 1.0 / kMinTimeStep)
+    throw ConfigError({file, 0, "--fs"}, "the sample rate must be finite and at most 1e9 Hz");
+  if (!std::isfinite(options.max_gap_factor)) throw ConfigError({file, 0, "--max-gap"}, "must be a finite number");
+  CsvLineCursor cursor(text);
+  std::string_view line;
+  if (!cursor.next(line)) throw DataError({file, 0, ""}, "file is empty (expected a header row and data rows)");
+
+  const int header_line = cursor.line_number();
+  const auto header = split(line);
+  {
+    double dummy;
+    if (std::all_of(header.begin(), header.end(), [&](std::string_view c) { return parse_number(c, dummy); }))
+      throw DataError({file, header_line, ""}, "missing header row (the first row holds only numbers)");
+  }
+  std::vector<Wanted> wanted;
+  for (auto& p : plan_columns(header, options, file, header_line)) wanted.push_back({std::move(p), {}});
+  const auto time_it = std::find_if(wanted.begin(), wanted.end(), [](const Wanted& w) { return w.mapping.role == "time"; });
+  const std::optional<ColumnMapping> time_mapping =
+      time_it == wanted.end() ? std::nullopt : std::optional<ColumnMapping>(time_it->mapping);
 
   std::vector<int> line_of_row;
   const std::size_t estimated_rows = text.size() / std::max<std::size_t>(1, line.size() + 1);
@@ -350,8 +422,19 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
   TimeSeries series(std::move(time));
   for (auto& w : wanted) {
     if (w.mapping.role == "time") continue;
+    if (const auto instance = device_id_instance(w.mapping.role)) {
+      for (std::size_t i = 1; i < rows; ++i)
+        if (w.values[i] != w.values[0])
+          throw DataError({file, line_of_row[i], w.mapping.column},
+                          "the device id changes within the record (one file holds one device)");
+      char id[32];
+      const auto res = std::to_chars(id, id + sizeof id, w.values[0]);
+      series.set_device_id(*instance, std::string(id, res.ptr));
+      continue;
+    }
     Channel c{w.mapping.role, internal_unit_symbol(w.unit.quantity), w.mapping.column,
-              Eigen::Map<const Eigen::VectorXd>(w.values.data(), static_cast<Eigen::Index>(w.values.size()))};
+              Eigen::Map<const Eigen::VectorXd>(w.values.data(), static_cast<Eigen::Index>(w.values.size())),
+              w.unit.symbol};
     series.set_channel(std::move(c));
   }
   return series;

@@ -29,6 +29,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "framework/time_series.hpp"
@@ -62,7 +63,42 @@ struct CsvReadOptions {
   std::vector<std::string> required_roles{"rate"};
 };
 
+// The same rules, exposed for readers that keep the text of every row (driftlab compensate passes
+// the columns it does not correct through byte for byte):
+// the lines of a CSV text as the reader walks them: a UTF-8 byte-order mark skipped; LF, CR LF or
+// CR line ends; blank and '#' lines skipped. `text` must outlive the cursor.
+class CsvLineCursor {
+ public:
+  explicit CsvLineCursor(const std::string& text);
+  bool next(std::string_view& line);  // the next line (without its end); false at the end
+  int line_number() const { return line_; }  // 1-based number of the last line returned
+
+ private:
+  const std::string& text_;
+  std::size_t pos_ = 0;
+  int line_ = 0;
+};
+// The cells of one row, surrounding blanks and quotes trimmed.
+std::vector<std::string_view> split_csv_row(std::string_view line);
+// A number cell as the reader parses it (C locale, an optional leading '+'; the whole cell).
+bool parse_csv_number(std::string_view cell, double& value);
+// A column a read takes: its mapping, unit and position in the row.
+struct PlannedColumn {
+  ColumnMapping mapping;
+  Unit unit;
+  std::size_t index = 0;
+};
+// The columns read_csv takes from a header row (the time column unless options.sample_rate_hz > 0,
+// and every channel), with the errors read_csv gives (a role or a column claimed twice, a missing
+// column, a required role absent, a unit of the wrong dimension), naming `file` and `header_line`.
+// "device_id[N]" columns (constant per file) become the record's device ids, not channels.
+std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& header, const CsvReadOptions& options,
+                                        const std::string& file, int header_line);
+
 TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& options = {});
+// The whole text of an input file, with read_csv's checks (a regular file; enough memory for it and
+// its parsed columns); DataError naming the file otherwise.
+std::string read_text_file(const std::filesystem::path& path);
 // The same on text already in memory; `file` names it in messages.
 TimeSeries parse_csv(const std::string& text, const std::string& file, const CsvReadOptions& options = {});
 

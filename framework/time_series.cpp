@@ -38,3 +38,18 @@ const Channel& TimeSeries::channel(const std::string& role) const {
 }
 
 }  // namespace driftlab
+
+namespace driftlab {
+
+const std::string& TimeSeries::device_id(int instance) const {
+  static const std::string none;
+  return instance >= 0 && static_cast<std::size_t>(instance) < device_ids_.size() ? device_ids_[instance] : none;
+}
+
+void TimeSeries::set_device_id(int instance, std::string id) {
+  if (instance < 0) return;
+  if (static_cast<std::size_t>(instance) >= device_ids_.size()) device_ids_.resize(instance + 1);
+  device_ids_[instance] = std::move(id);
+}
+
+}  // namespace driftlab

@@ -20,10 +20,11 @@ inline constexpr const char* kDriveFrequency = "drive_frequency";  // Hz
 }  // namespace role
 
 struct Channel {
-  std::string role;      // "rate", "temperature", ...
-  std::string unit;      // internal unit symbol ("rad/s", "degC", "Hz", "s", "1")
+  std::string role;      // "rate", "temperature", "gyro_x", ... (IMU roles: framework/imu.hpp)
+  std::string unit;      // internal unit symbol ("rad/s", "m/s^2", "degC", "Hz", "s", "1")
   std::string source;    // where it came from (CSV column name), for messages
   Eigen::VectorXd values;
+  std::string read_unit = {};  // the unit spelling the source holds it in (outputs are written back in it)
 };
 
 class TimeSeries {
@@ -43,9 +44,15 @@ class TimeSeries {
   const Channel& channel(const std::string& role) const;
   const std::vector<Channel>& channels() const { return channels_; }
 
+  // Identity of the unit that recorded instance `instance` (device id / serial), when the source
+  // states it; empty otherwise.
+  const std::string& device_id(int instance) const;
+  void set_device_id(int instance, std::string id);
+
  private:
   Eigen::VectorXd time_;
   std::vector<Channel> channels_;
+  std::vector<std::string> device_ids_;
 };
 
 }  // namespace driftlab

@@ -10,7 +10,7 @@
 
 namespace driftlab {
 
-enum class Quantity { AngularRate, Temperature, Time, Frequency, Dimensionless };
+enum class Quantity { AngularRate, Acceleration, Temperature, Time, Frequency, Dimensionless };
 
 struct Unit {
   std::string symbol;   // canonical spelling, e.g. "deg/s"
@@ -19,8 +19,10 @@ struct Unit {
   double offset;
 };
 
-// Looks a unit up by any accepted spelling ("deg/s", "dps", "°/s", "rad/s", "deg/h", "degC",
-// "C", "°C", "K", "s", "ms", "us", "h", "Hz", "kHz", "1"). Empty optional when unknown.
+// Looks a unit up by any accepted spelling ("deg/s", "dps", "°/s", "mdps", "rad/s", "mrad/s",
+// "deg/h", "m/s^2", "g", "mg", "degC", "C", "°C", "K", "s", "ms", "us", "ns", "h", "Hz", "kHz",
+// "1"). Raw sensor counts are a scaled unit: "lsb*0.061*mdps" (or "0.061*mdps") is 0.061 mdps per
+// count. Empty optional when unknown or when the scale is not a finite number > 0.
 std::optional<Unit> find_unit(std::string_view spelling);
 
 // Every accepted spelling, for error messages.
@@ -33,7 +35,6 @@ inline double to_internal(double value, const Unit& u) { return value * u.scale 
 inline double from_internal(double value, const Unit& u) { return (value - u.offset) / u.scale; }
 // Differences (deviations, IMFs, standard deviations) convert by the scale only: an offset applies
 // to absolute values alone (a 1 K difference is a 1 degC difference).
-inline double difference_to_internal(double value, const Unit& u) { return value * u.scale; }
 inline double difference_from_internal(double value, const Unit& u) { return value / u.scale; }
 
 constexpr double kPi = 3.14159265358979323846;
@@ -43,5 +44,6 @@ constexpr double kSecondsPerHour = 3600.0;
 constexpr double kRadPerSecPerDph = kRadPerDeg / kSecondsPerHour;  // rad/s per deg/h (gyro bias unit)
 constexpr double kDphPerRadPerSec = 1.0 / kRadPerSecPerDph;         // deg/h per rad/s
 constexpr double kPpm = 1e-6;                                        // parts per million
+constexpr double kStandardGravity = 9.80665;                         // m/s^2 per g (CGPM 1901)
 
 }  // namespace driftlab
