@@ -6,9 +6,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "framework/atomic_file.hpp"
 #include "framework/error.hpp"
 #include "framework/signal.hpp"
+#include "framework/units.hpp"
 #include "plugins/polynomial/polynomial.hpp"
 
 namespace driftlab::calibration {
@@ -118,26 +118,43 @@ void CalibrationModel::validate() const {
 
 // ---- JSON ------------------------------------------------------------------------------------
 
-std::string to_json_text(const CalibrationModel& m) {
+namespace {
+
+// JSON key spellings of a channel's units: a gyro's in rad/s, an accelerometer's in m/s^2.
+struct KeyUnits {
+  std::string value;        // "rad_s" | "m_s2"
+  std::string unit;         // "rad/s" | "m/s^2"
+  std::string white;        // N: angle / velocity random walk
+  std::string instability;  // B
+  std::string random_walk;  // K: rate / acceleration random walk
+};
+
+const KeyUnits& key_units(imu::Sensor sensor) {
+  static const KeyUnits gyro{"rad_s", "rad/s", "arw_rad_sqrt_s", "bias_instability_rad_s",
+                             "rate_random_walk_rad_s_sqrt_s"};
+  static const KeyUnits accel{"m_s2", "m/s^2", "vrw_m_s_sqrt_s", "bias_instability_m_s2",
+                              "acceleration_random_walk_m_s2_sqrt_s"};
+  return sensor == imu::Sensor::Gyro ? gyro : accel;
+}
+
+nlohmann::json model_body(const CalibrationModel& m, imu::Sensor sensor) {
   using nlohmann::json;
+  const KeyUnits& u = key_units(sensor);
   json j;
-  j["format"] = kFormat;
   j["kind"] = to_string(m.kind);
-  j["device"] = m.device;
-  j["axis"] = m.axis;
-  j["units"] = {{"rate", "rad/s"}, {"temperature", "degC"}, {"time", "s"},
-                {"bias", "bias(T) = sum_i a_i (T - reference_temp_c)^i, a_i in rad/s/K^i"},
+  j["units"] = {{"value", u.unit}, {"temperature", "degC"}, {"time", "s"},
+                {"bias", "bias(T) = sum_i a_i (T - reference_temp_c)^i, a_i in " + u.unit + "/K^i"},
                 {"compensated", "(measured - bias) / (1 + sum_j k_j (T - reference_temp_c)^j)"}};
   j["reference_temp_c"] = m.reference_temp_c;
   j["valid_range_c"] = {m.valid_min_c, m.valid_max_c};
   j["extrapolation"] = to_string(m.extrapolation);
-  j["bias"] = {{"polynomial_rad_s_per_k_i", m.bias_rad_s}, {"sigma_rad_s_per_k_i", m.bias_sigma_rad_s}};
+  j["bias"] = {{"polynomial_" + u.value + "_per_k_i", m.bias_rad_s}, {"sigma_" + u.value + "_per_k_i", m.bias_sigma_rad_s}};
   j["physical"] = {{"lag_tau_s", m.lag_tau_s},
                    {"derivative_tau_s", m.derivative_tau_s},
-                   {"temperature_rate_rad_s_per_k_s", m.temperature_rate_rad_s_per_k_s},
+                   {"temperature_rate_" + u.value + "_per_k_s", m.temperature_rate_rad_s_per_k_s},
                    {"temperature_rate_sigma", m.temperature_rate_sigma},
-                   {"hysteresis_rad_s", m.hysteresis_rad_s},
-                   {"hysteresis_sigma_rad_s", m.hysteresis_sigma_rad_s},
+                   {"hysteresis_" + u.value, m.hysteresis_rad_s},
+                   {"hysteresis_sigma_" + u.value, m.hysteresis_sigma_rad_s},
                    {"hysteresis_width_k", m.hysteresis_width_k}};
   if (m.rbf) {
     json centres = json::array();
@@ -149,8 +166,8 @@ std::string to_json_text(const CalibrationModel& m) {
                 {"scale", m.rbf->scale},
                 {"sigma", m.rbf->sigma},
                 {"centres", centres},
-                {"weights_rad_s", m.rbf->weights_rad_s},
-                {"bias_rad_s", m.rbf->bias_rad_s}};
+                {"weights_" + u.value, m.rbf->weights_rad_s},
+                {"bias_" + u.value, m.rbf->bias_rad_s}};
     if (!m.rbf->input_min.empty()) {
       j["rbf"]["input_min"] = m.rbf->input_min;
       j["rbf"]["input_max"] = m.rbf->input_max;
@@ -159,28 +176,21 @@ std::string to_json_text(const CalibrationModel& m) {
     j["rbf"] = nullptr;
   }
   j["scale_factor"] = {{"polynomial_per_k_j", m.scale_factor_per_k}};
-  j["noise"] = {{"arw_rad_sqrt_s", m.noise.arw_rad_sqrt_s},
-                {"bias_instability_rad_s", m.noise.bias_instability_rad_s},
-                {"rate_random_walk_rad_s_sqrt_s", m.noise.rate_random_walk_rad_s_sqrt_s},
+  j["noise"] = {{u.white, m.noise.arw_rad_sqrt_s},
+                {u.instability, m.noise.bias_instability_rad_s},
+                {u.random_walk, m.noise.rate_random_walk_rad_s_sqrt_s},
                 {"sample_rate_hz", m.noise.sample_rate_hz}};
   j["fit"] = {{"records", m.fit.records},
               {"samples", m.fit.samples},
               {"bin_s", m.fit.bin_s},
               {"selection", m.fit.selection},
               {"holdout_blocks", m.fit.holdout_blocks},
-              {"holdout_rms_rad_s", m.fit.holdout_rms_rad_s},
-              {"train_rms_rad_s", m.fit.train_rms_rad_s},
+              {"holdout_rms_" + u.value, m.fit.holdout_rms_rad_s},
+              {"train_rms_" + u.value, m.fit.train_rms_rad_s},
               {"heating_only", m.fit.heating_only},
               {"scale_factor_fitted", m.fit.scale_factor_fitted}};
-  return j.dump(2) + "\n";
+  return j;
 }
-
-void write_calibration_model(const CalibrationModel& model, const std::filesystem::path& json) {
-  model.validate();
-  write_file_atomically(json, to_json_text(model));
-}
-
-namespace {
 
 class Reader {
  public:
@@ -238,10 +248,168 @@ class Reader {
   std::string file_;
 };
 
+
+// The model of one channel from `j` (the v1 file's top level, or a v2 channel's "model");
+// `at` is the key path of `j` in messages ("" or "channels[2].model").
+CalibrationModel read_model_body(const Reader& r, const nlohmann::json& j, const std::string& at, imu::Sensor sensor) {
+  const KeyUnits& u = key_units(sensor);
+  const auto key = [&](const std::string& k) { return Reader::join(at, k); };
+  CalibrationModel m;
+  const std::string kind = r.text(j, at, "kind");
+  const auto parsed_kind = parse_model_kind(kind);
+  if (!parsed_kind) r.fail(key("kind"), "expected poly, physical or rbf, got \"" + kind + "\"");
+  m.kind = *parsed_kind;
+  m.reference_temp_c = r.number(j, at, "reference_temp_c");
+  const auto range = r.numbers(r.at(j, at, "valid_range_c"), key("valid_range_c"));
+  if (range.size() != 2 || !(range[0] <= range[1])) r.fail(key("valid_range_c"), "expected [min, max] with min <= max");
+  m.valid_min_c = range[0];
+  m.valid_max_c = range[1];
+  const std::string policy = r.text(j, at, "extrapolation");
+  const auto parsed_policy = parse_extrapolation(policy);
+  if (!parsed_policy) r.fail(key("extrapolation"), "expected clamp, linear or evaluate, got \"" + policy + "\"");
+  m.extrapolation = *parsed_policy;
+  const std::string bias_at = key("bias");
+  const auto& bias = r.at(j, at, "bias");
+  const std::string poly_key = "polynomial_" + u.value + "_per_k_i", sigma_key = "sigma_" + u.value + "_per_k_i";
+  m.bias_rad_s = r.numbers(r.at(bias, bias_at, poly_key), Reader::join(bias_at, poly_key));
+  if (m.bias_rad_s.empty()) r.fail(Reader::join(bias_at, poly_key), "needs at least one coefficient");
+  if (const auto* s = r.optional(bias, sigma_key)) m.bias_sigma_rad_s = r.numbers(*s, Reader::join(bias_at, sigma_key));
+  if (!m.bias_sigma_rad_s.empty() && m.bias_sigma_rad_s.size() != m.bias_rad_s.size()) {
+    r.fail(Reader::join(bias_at, sigma_key), "needs one value per coefficient");
+  }
+  if (const auto* p = r.optional(j, "physical")) {
+    const std::string pa = key("physical");
+    m.lag_tau_s = r.number_or(*p, pa, "lag_tau_s", 0.0);
+    m.derivative_tau_s = r.number_or(*p, pa, "derivative_tau_s", m.derivative_tau_s);
+    m.temperature_rate_rad_s_per_k_s = r.number_or(*p, pa, "temperature_rate_" + u.value + "_per_k_s", 0.0);
+    m.temperature_rate_sigma = r.number_or(*p, pa, "temperature_rate_sigma", 0.0);
+    m.hysteresis_rad_s = r.number_or(*p, pa, "hysteresis_" + u.value, 0.0);
+    m.hysteresis_sigma_rad_s = r.number_or(*p, pa, "hysteresis_sigma_" + u.value, 0.0);
+    m.hysteresis_width_k = r.number_or(*p, pa, "hysteresis_width_k", 0.0);
+    if (m.lag_tau_s < 0) r.fail(Reader::join(pa, "lag_tau_s"), "must be >= 0 s");
+    if (!(m.derivative_tau_s > 0)) r.fail(Reader::join(pa, "derivative_tau_s"), "must be > 0 s");
+    if (m.hysteresis_width_k < 0) r.fail(Reader::join(pa, "hysteresis_width_k"), "must be >= 0 K");
+  }
+  if (const auto* b = r.optional(j, "rbf")) {
+    const std::string ba = key("rbf");
+    const auto bkey = [&](const std::string& k) { return Reader::join(ba, k); };
+    RbfTerm t;
+    t.mean = r.numbers(r.at(*b, ba, "mean"), bkey("mean"));
+    t.scale = r.numbers(r.at(*b, ba, "scale"), bkey("scale"));
+    if (t.mean.size() != 3) r.fail(bkey("mean"), "needs 3 values (model_temp_c, temp_rate_k_s, hysteresis_state)");
+    if (t.scale.size() != 3) r.fail(bkey("scale"), "needs 3 values");
+    for (double s : t.scale) {
+      if (!(s > 0)) r.fail(bkey("scale"), "values must be > 0");
+    }
+    t.sigma = r.number(*b, ba, "sigma");
+    if (!(t.sigma > 0)) r.fail(bkey("sigma"), "must be > 0");
+    const auto& centres = r.at(*b, ba, "centres");
+    if (!centres.is_array()) r.fail(bkey("centres"), "expected a list of [T, D, s] rows");
+    t.centres.resize(static_cast<Eigen::Index>(centres.size()), 3);
+    for (std::size_t k = 0; k < centres.size(); ++k) {
+      const std::string ck = bkey("centres[" + std::to_string(k) + "]");
+      const auto row = r.numbers(centres[k], ck);
+      if (row.size() != 3) r.fail(ck, "needs 3 values");
+      for (int c = 0; c < 3; ++c) t.centres(static_cast<Eigen::Index>(k), c) = row[static_cast<std::size_t>(c)];
+    }
+    t.weights_rad_s = r.numbers(r.at(*b, ba, "weights_" + u.value), bkey("weights_" + u.value));
+    if (t.weights_rad_s.size() != centres.size()) r.fail(bkey("weights_" + u.value), "needs one weight per centre");
+    t.bias_rad_s = r.number(*b, ba, "bias_" + u.value);
+    if (const auto* lo = r.optional(*b, "input_min")) t.input_min = r.numbers(*lo, bkey("input_min"));
+    if (const auto* hi = r.optional(*b, "input_max")) t.input_max = r.numbers(*hi, bkey("input_max"));
+    m.rbf = std::move(t);
+  }
+  if (m.kind == ModelKind::Rbf && !m.rbf) r.fail(key("rbf"), "kind is rbf but the rbf section is missing");
+  if (const auto* s = r.optional(j, "scale_factor")) {
+    if (const auto* c = r.optional(*s, "polynomial_per_k_j")) {
+      m.scale_factor_per_k = r.numbers(*c, key("scale_factor.polynomial_per_k_j"));
+    }
+  }
+  if (const auto* n = r.optional(j, "noise")) {
+    const std::string na = key("noise");
+    m.noise.arw_rad_sqrt_s = r.number_or(*n, na, u.white, 0.0);
+    m.noise.bias_instability_rad_s = r.number_or(*n, na, u.instability, 0.0);
+    m.noise.rate_random_walk_rad_s_sqrt_s = r.number_or(*n, na, u.random_walk, 0.0);
+    m.noise.sample_rate_hz = r.number_or(*n, na, "sample_rate_hz", 0.0);
+  }
+  if (const auto* f = r.optional(j, "fit")) {
+    const std::string fa = key("fit");
+    if (const auto* recs = r.optional(*f, "records"); recs && recs->is_array()) {
+      for (const auto& x : *recs) {
+        if (x.is_string()) m.fit.records.push_back(x.get<std::string>());
+      }
+    }
+    m.fit.samples = r.count_or(*f, fa, "samples");
+    m.fit.bin_s = r.number_or(*f, fa, "bin_s", 0.0);
+    if (r.optional(*f, "selection")) m.fit.selection = r.text(*f, fa, "selection");
+    m.fit.holdout_blocks = r.count_or(*f, fa, "holdout_blocks");
+    m.fit.holdout_rms_rad_s = r.number_or(*f, fa, "holdout_rms_" + u.value, 0.0);
+    m.fit.train_rms_rad_s = r.number_or(*f, fa, "train_rms_" + u.value, 0.0);
+    if (const auto* h = r.optional(*f, "heating_only"); h && h->is_boolean()) m.fit.heating_only = h->get<bool>();
+    if (const auto* h = r.optional(*f, "scale_factor_fitted"); h && h->is_boolean()) {
+      m.fit.scale_factor_fitted = h->get<bool>();
+    }
+  }
+  return m;
+}
+
 }  // namespace
 
-CalibrationModel read_calibration_model(const std::filesystem::path& path) {
+const ChannelCalibration* ImuCalibration::find(const imu::ChannelId& id) const {
+  for (const auto& c : channels)
+    if (c.id == id) return &c;
+  return nullptr;
+}
+
+void ImuCalibration::validate() const {
+  if (channels.empty()) throw ConfigError({"", 0, "channels"}, "the model has no channel");
+  for (std::size_t i = 0; i < channels.size(); ++i) {
+    for (std::size_t k = 0; k < i; ++k)
+      if (channels[k].id == channels[i].id)
+        throw ConfigError({"", 0, "channels"}, "channel " + channels[i].id.role() + " appears twice");
+    try {
+      channels[i].model.validate();
+    } catch (const ConfigError& e) {
+      throw ConfigError({"", 0, "channels[" + std::to_string(i) + "] (" + channels[i].id.role() + ")"},
+                        e.problems().front().message);
+    }
+  }
+}
+
+ImuCalibration single_axis(CalibrationModel model, char axis, std::string device) {
+  ImuCalibration out;
+  out.device = std::move(device);
+  out.channels.push_back({{imu::Sensor::Gyro, axis, 0}, "rate", "rate", "rad/s", "temperature", "", true, std::move(model)});
+  return out;
+}
+
+std::string to_json_text(const ImuCalibration& imu_model) {
+  using nlohmann::json;
+  json j;
+  j["format"] = kImuFormat;
+  j["device"] = imu_model.device;
+  json channels = json::array();
+  for (const auto& c : imu_model.channels) {
+    channels.push_back({{"sensor", imu::to_string(c.id.sensor)},
+                        {"axis", std::string(1, c.id.axis)},
+                        {"instance", c.id.instance},
+                        {"role", c.role},
+                        {"column", c.column},
+                        {"unit", c.unit()},
+                        {"read_unit", c.read_unit},
+                        {"temperature_column", c.temperature_column},
+                        {"device_id", c.device_id},
+                        {"offset_observable", c.offset_observable},
+                        {"model", model_body(c.model, c.id.sensor)}});
+  }
+  j["channels"] = std::move(channels);
+  return j.dump(2) + "\n";
+}
+
+ImuCalibration read_calibration(const std::filesystem::path& path) {
   const Reader r(path.string());
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) r.fail("", "cannot open the calibration model file (not a regular file)");
   std::ifstream in(path, std::ios::binary);
   if (!in) r.fail("", "cannot open the calibration model file");
   std::stringstream buffer;
@@ -254,101 +422,54 @@ CalibrationModel read_calibration_model(const std::filesystem::path& path) {
   }
   if (!j.is_object()) r.fail("", "expected a JSON object");
   const std::string format = r.text(j, "", "format");
-  if (format != kFormat) r.fail("format", "expected \"" + std::string(kFormat) + "\", got \"" + format + "\"");
-
-  CalibrationModel m;
-  const std::string kind = r.text(j, "", "kind");
-  const auto parsed_kind = parse_model_kind(kind);
-  if (!parsed_kind) r.fail("kind", "expected poly, physical or rbf, got \"" + kind + "\"");
-  m.kind = *parsed_kind;
-  if (r.optional(j, "device")) m.device = r.text(j, "", "device");
-  if (r.optional(j, "axis")) m.axis = r.text(j, "", "axis");
-  if (m.axis != "x" && m.axis != "y" && m.axis != "z") r.fail("axis", "expected x, y or z, got \"" + m.axis + "\"");
-  m.reference_temp_c = r.number(j, "", "reference_temp_c");
-  const auto range = r.numbers(r.at(j, "", "valid_range_c"), "valid_range_c");
-  if (range.size() != 2 || !(range[0] <= range[1])) r.fail("valid_range_c", "expected [min, max] with min <= max");
-  m.valid_min_c = range[0];
-  m.valid_max_c = range[1];
-  const std::string policy = r.text(j, "", "extrapolation");
-  const auto parsed_policy = parse_extrapolation(policy);
-  if (!parsed_policy) r.fail("extrapolation", "expected clamp, linear or evaluate, got \"" + policy + "\"");
-  m.extrapolation = *parsed_policy;
-  const auto& bias = r.at(j, "", "bias");
-  m.bias_rad_s = r.numbers(r.at(bias, "bias", "polynomial_rad_s_per_k_i"), "bias.polynomial_rad_s_per_k_i");
-  if (m.bias_rad_s.empty()) r.fail("bias.polynomial_rad_s_per_k_i", "needs at least one coefficient");
-  if (const auto* s = r.optional(bias, "sigma_rad_s_per_k_i")) m.bias_sigma_rad_s = r.numbers(*s, "bias.sigma_rad_s_per_k_i");
-  if (!m.bias_sigma_rad_s.empty() && m.bias_sigma_rad_s.size() != m.bias_rad_s.size()) {
-    r.fail("bias.sigma_rad_s_per_k_i", "needs one value per coefficient");
+  ImuCalibration out;
+  if (r.optional(j, "device")) out.device = r.text(j, "", "device");
+  if (format == kFormat) {  // a single-axis gyro of earlier versions: the record's "rate" column
+    std::string axis = "z";
+    if (r.optional(j, "axis")) axis = r.text(j, "", "axis");
+    if (axis != "x" && axis != "y" && axis != "z") r.fail("axis", "expected x, y or z, got \"" + axis + "\"");
+    return single_axis(read_model_body(r, j, "", imu::Sensor::Gyro), axis[0], out.device);
   }
-  if (const auto* p = r.optional(j, "physical")) {
-    m.lag_tau_s = r.number_or(*p, "physical", "lag_tau_s", 0.0);
-    m.derivative_tau_s = r.number_or(*p, "physical", "derivative_tau_s", m.derivative_tau_s);
-    m.temperature_rate_rad_s_per_k_s = r.number_or(*p, "physical", "temperature_rate_rad_s_per_k_s", 0.0);
-    m.temperature_rate_sigma = r.number_or(*p, "physical", "temperature_rate_sigma", 0.0);
-    m.hysteresis_rad_s = r.number_or(*p, "physical", "hysteresis_rad_s", 0.0);
-    m.hysteresis_sigma_rad_s = r.number_or(*p, "physical", "hysteresis_sigma_rad_s", 0.0);
-    m.hysteresis_width_k = r.number_or(*p, "physical", "hysteresis_width_k", 0.0);
-    if (m.lag_tau_s < 0) r.fail("physical.lag_tau_s", "must be >= 0 s");
-    if (!(m.derivative_tau_s > 0)) r.fail("physical.derivative_tau_s", "must be > 0 s");
-    if (m.hysteresis_width_k < 0) r.fail("physical.hysteresis_width_k", "must be >= 0 K");
-  }
-  if (const auto* b = r.optional(j, "rbf")) {
-    RbfTerm t;
-    t.mean = r.numbers(r.at(*b, "rbf", "mean"), "rbf.mean");
-    t.scale = r.numbers(r.at(*b, "rbf", "scale"), "rbf.scale");
-    if (t.mean.size() != 3) r.fail("rbf.mean", "needs 3 values (model_temp_c, temp_rate_k_s, hysteresis_state)");
-    if (t.scale.size() != 3) r.fail("rbf.scale", "needs 3 values");
-    for (double s : t.scale) {
-      if (!(s > 0)) r.fail("rbf.scale", "values must be > 0");
+  if (format != kImuFormat)
+    r.fail("format", "expected \"" + std::string(kImuFormat) + "\" (or \"" + kFormat + "\"), got \"" + format + "\"");
+  const auto& channels = r.at(j, "", "channels");
+  if (!channels.is_array() || channels.empty()) r.fail("channels", "expected a non-empty list of channels");
+  for (std::size_t i = 0; i < channels.size(); ++i) {
+    const std::string at = "channels[" + std::to_string(i) + "]";
+    const auto& cj = channels[i];
+    ChannelCalibration c;
+    const std::string sensor = r.text(cj, at, "sensor");
+    if (sensor != "gyro" && sensor != "accel") r.fail(at + ".sensor", "expected gyro or accel, got \"" + sensor + "\"");
+    c.id.sensor = sensor == "gyro" ? imu::Sensor::Gyro : imu::Sensor::Accel;
+    const std::string axis = r.text(cj, at, "axis");
+    if (axis != "x" && axis != "y" && axis != "z") r.fail(at + ".axis", "expected x, y or z, got \"" + axis + "\"");
+    c.id.axis = axis[0];
+    const double instance = r.number(cj, at, "instance");
+    if (instance < 0 || instance > 99 || instance != std::floor(instance))
+      r.fail(at + ".instance", "expected a whole number from 0 to 99");
+    c.id.instance = static_cast<int>(instance);
+    c.role = r.text(cj, at, "role");
+    if (c.role != c.id.role() && !(c.role == "rate" && c.id.sensor == imu::Sensor::Gyro && c.id.instance == 0))
+      r.fail(at + ".role", "expected \"" + c.id.role() + "\" (or \"rate\" for a single-axis gyro), got \"" + c.role + "\"");
+    c.column = r.text(cj, at, "column");
+    if (c.column.empty()) r.fail(at + ".column", "must not be empty");
+    c.read_unit = r.text(cj, at, "read_unit");
+    const auto unit = find_unit(c.read_unit);
+    const Quantity want = c.id.sensor == imu::Sensor::Gyro ? Quantity::AngularRate : Quantity::Acceleration;
+    if (!unit || unit->quantity != want)
+      r.fail(at + ".read_unit", "expected " + std::string(sensor == "gyro" ? "an angular-rate" : "an acceleration") +
+                                    " unit, got \"" + c.read_unit + "\"");
+    c.temperature_column = r.text(cj, at, "temperature_column");
+    if (r.optional(cj, "device_id")) c.device_id = r.text(cj, at, "device_id");
+    if (const auto* o = r.optional(cj, "offset_observable")) {
+      if (!o->is_boolean()) r.fail(at + ".offset_observable", "expected true or false");
+      c.offset_observable = o->get<bool>();
     }
-    t.sigma = r.number(*b, "rbf", "sigma");
-    if (!(t.sigma > 0)) r.fail("rbf.sigma", "must be > 0");
-    const auto& centres = r.at(*b, "rbf", "centres");
-    if (!centres.is_array()) r.fail("rbf.centres", "expected a list of [T, D, s] rows");
-    t.centres.resize(static_cast<Eigen::Index>(centres.size()), 3);
-    for (std::size_t k = 0; k < centres.size(); ++k) {
-      const std::string key = "rbf.centres[" + std::to_string(k) + "]";
-      const auto row = r.numbers(centres[k], key);
-      if (row.size() != 3) r.fail(key, "needs 3 values");
-      for (int c = 0; c < 3; ++c) t.centres(static_cast<Eigen::Index>(k), c) = row[static_cast<std::size_t>(c)];
-    }
-    t.weights_rad_s = r.numbers(r.at(*b, "rbf", "weights_rad_s"), "rbf.weights_rad_s");
-    if (t.weights_rad_s.size() != centres.size()) r.fail("rbf.weights_rad_s", "needs one weight per centre");
-    t.bias_rad_s = r.number(*b, "rbf", "bias_rad_s");
-    if (const auto* lo = r.optional(*b, "input_min")) t.input_min = r.numbers(*lo, "rbf.input_min");
-    if (const auto* hi = r.optional(*b, "input_max")) t.input_max = r.numbers(*hi, "rbf.input_max");
-    m.rbf = std::move(t);
+    c.model = read_model_body(r, r.at(cj, at, "model"), at + ".model", c.id.sensor);
+    if (out.find(c.id)) r.fail(at, "channel " + c.id.role() + " appears twice");
+    out.channels.push_back(std::move(c));
   }
-  if (m.kind == ModelKind::Rbf && !m.rbf) r.fail("rbf", "kind is rbf but the rbf section is missing");
-  if (const auto* s = r.optional(j, "scale_factor")) {
-    if (const auto* c = r.optional(*s, "polynomial_per_k_j")) {
-      m.scale_factor_per_k = r.numbers(*c, "scale_factor.polynomial_per_k_j");
-    }
-  }
-  if (const auto* n = r.optional(j, "noise")) {
-    m.noise.arw_rad_sqrt_s = r.number_or(*n, "noise", "arw_rad_sqrt_s", 0.0);
-    m.noise.bias_instability_rad_s = r.number_or(*n, "noise", "bias_instability_rad_s", 0.0);
-    m.noise.rate_random_walk_rad_s_sqrt_s = r.number_or(*n, "noise", "rate_random_walk_rad_s_sqrt_s", 0.0);
-    m.noise.sample_rate_hz = r.number_or(*n, "noise", "sample_rate_hz", 0.0);
-  }
-  if (const auto* f = r.optional(j, "fit")) {
-    if (const auto* recs = r.optional(*f, "records"); recs && recs->is_array()) {
-      for (const auto& x : *recs) {
-        if (x.is_string()) m.fit.records.push_back(x.get<std::string>());
-      }
-    }
-    m.fit.samples = r.count_or(*f, "fit", "samples");
-    m.fit.bin_s = r.number_or(*f, "fit", "bin_s", 0.0);
-    if (r.optional(*f, "selection")) m.fit.selection = r.text(*f, "fit", "selection");
-    m.fit.holdout_blocks = r.count_or(*f, "fit", "holdout_blocks");
-    m.fit.holdout_rms_rad_s = r.number_or(*f, "fit", "holdout_rms_rad_s", 0.0);
-    m.fit.train_rms_rad_s = r.number_or(*f, "fit", "train_rms_rad_s", 0.0);
-    if (const auto* h = r.optional(*f, "heating_only"); h && h->is_boolean()) m.fit.heating_only = h->get<bool>();
-    if (const auto* h = r.optional(*f, "scale_factor_fitted"); h && h->is_boolean()) {
-      m.fit.scale_factor_fitted = h->get<bool>();
-    }
-  }
-  return m;
+  return out;
 }
 
 // ---- causal evaluation -----------------------------------------------------------------------

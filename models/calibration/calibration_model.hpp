@@ -1,5 +1,16 @@
-// Deployable temperature calibration of a single-axis gyro (issue 13): the model object, its JSON
-// file ("driftlab-calibration/1") and the causal, constant-memory compensator.
+// Deployable temperature calibration of an IMU: the per-channel model, the whole-IMU model (one
+// model per gyro / accelerometer channel of every instance), its JSON file and the causal,
+// constant-memory compensator.
+//
+// Files: "driftlab-calibration/2" holds the whole IMU (ImuCalibration: per channel its identity,
+// source column and units, and the model); "driftlab-calibration/1", the single-axis gyro file of
+// earlier versions, still reads (as an ImuCalibration with one gyro channel whose column is the
+// record's "rate"). Keys carry their units: a gyro channel's in rad/s, an accelerometer's in m/s^2
+// (e.g. bias.polynomial_rad_s_per_k_i / bias.polynomial_m_s2_per_k_i).
+//
+// The model of one channel. Its numbers are in the channel's internal unit: rad/s for a gyro,
+// m/s^2 for an accelerometer (the C++ field names say rad_s after the gyro; for an accelerometer
+// channel read them as m/s^2).
 //
 // The model, for a measured rate w_m (rad/s) and a case temperature T (degC) at time t (s):
 //
@@ -38,9 +49,12 @@
 #include <string>
 #include <vector>
 
+#include "framework/imu.hpp"
+
 namespace driftlab::calibration {
 
-inline constexpr const char* kFormat = "driftlab-calibration/1";
+inline constexpr const char* kFormat = "driftlab-calibration/1";     // single-axis gyro (read only)
+inline constexpr const char* kImuFormat = "driftlab-calibration/2";  // whole IMU
 
 enum class ModelKind { Polynomial, Physical, Rbf };
 std::string to_string(ModelKind kind);  // "poly", "physical", "rbf"
@@ -89,8 +103,6 @@ struct FitSummary {
 
 struct CalibrationModel {
   ModelKind kind = ModelKind::Polynomial;
-  std::string device;                    // free text (device name or file)
-  std::string axis = "z";                // the axis this model applies to (x, y, z), for exports
   double reference_temp_c = 25.0;        // T0, degC
   double valid_min_c = 0.0, valid_max_c = 0.0;  // range of the calibration model temperature, degC
   Extrapolation extrapolation = Extrapolation::Clamp;
@@ -123,9 +135,36 @@ struct CalibrationModel {
   void validate() const;
 };
 
-CalibrationModel read_calibration_model(const std::filesystem::path& json);
-void write_calibration_model(const CalibrationModel& model, const std::filesystem::path& json);
-std::string to_json_text(const CalibrationModel& model);  // what write_calibration_model writes
+// One channel of a whole-IMU model: what it was fitted on, and its model.
+struct ChannelCalibration {
+  imu::ChannelId id;
+  std::string role;                // the record role it applies to: id.role(), or "rate" (single-axis record)
+  std::string column;              // the source column the model was fitted on (and applies to)
+  std::string read_unit;           // the unit that column holds ("deg/s", "0.061*mdeg/s"), units.hpp
+  std::string temperature_column;  // the temperature the model is a function of
+  std::string device_id;           // of the instance that recorded it; empty when the source has none
+  // false for an accelerometer without a reference (a static record holds gravity along the axis):
+  // the constant term is not observable and is 0, the model corrects bias(T) - bias(T0).
+  bool offset_observable = true;
+  CalibrationModel model;
+  std::string unit() const { return imu::internal_unit(id.sensor); }
+};
+
+struct ImuCalibration {
+  std::string device;  // free text (device name or file)
+  std::vector<ChannelCalibration> channels;  // in the order gyro before accel, instance, axis
+  const ChannelCalibration* find(const imu::ChannelId& id) const;
+  void validate() const;  // every channel's model, and no channel twice (ConfigError)
+};
+
+// The model of a single-axis gyro record: one gyro channel (axis `axis`, instance 0) applied to the
+// record's "rate" column and its "temperature" (what a driftlab-calibration/1 file reads as).
+ImuCalibration single_axis(CalibrationModel model, char axis = 'z', std::string device = "");
+
+// Reads a driftlab-calibration/2 file, or a /1 file as a one-channel model. ConfigError naming the
+// file and the JSON key for anything wrong.
+ImuCalibration read_calibration(const std::filesystem::path& json);
+std::string to_json_text(const ImuCalibration& model);  // driftlab-calibration/2
 
 // The causal filters of the model: model temperature, dT/dt estimate, hysteresis state.
 class CausalState {

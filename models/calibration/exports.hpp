@@ -48,9 +48,9 @@ std::vector<double> cubic_about(const CalibrationModel& model, double t_ref, dou
 // Terms a temperature-only polynomial cannot carry (empty when none).
 std::vector<std::string> unrepresentable_terms(const CalibrationModel& model);
 
-ExportResult export_c_header(const CalibrationModel& model, const ExportOptions& options = {});
-ExportResult export_px4_params(const CalibrationModel& model, const ExportOptions& options = {});
-ExportResult export_ardupilot_params(const CalibrationModel& model, const ExportOptions& options = {});
-ExportResult export_kalibr_imu_yaml(const CalibrationModel& model, const ExportOptions& options = {});
+ExportResult export_c_header(const ChannelCalibration& channel, const ExportOptions& options = {});
+ExportResult export_px4_params(const ChannelCalibration& channel, const ExportOptions& options = {});
+ExportResult export_ardupilot_params(const ChannelCalibration& channel, const ExportOptions& options = {});
+ExportResult export_kalibr_imu_yaml(const ChannelCalibration& channel, const ExportOptions& options = {});
 
 }  // namespace driftlab::calibration

@@ -316,8 +316,6 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
 
   CalibrationModel m;
   m.kind = o.kind;
-  m.device = o.device;
-  m.axis = o.axis;
   m.reference_temp_c = t0;
   m.extrapolation = o.extrapolation;
   {
@@ -464,6 +462,69 @@ CalibrationModel fit_px4_style(const std::vector<Record>& records, const FitOpti
     o.heating_only = false;
     return fit_calibration(records, o);
   }
+}
+
+Disagreement largest_disagreement(const std::vector<Record>& records) {
+  constexpr double kBinS = 60.0;
+  constexpr int kOrder = 3;
+  struct Curve {
+    Eigen::VectorXd temp, bias, coefficients;
+    double t0 = 0.0, scale = 1.0, residual_rms = 0.0, lo = 0.0, hi = 0.0;
+    int order = 0;
+  };
+  std::vector<Curve> curves;
+  for (const auto& r : records) {
+    const Binning b = make_bins(r, kBinS);
+    Curve c;
+    c.temp = Eigen::VectorXd::Zero(b.bins);
+    c.bias = Eigen::VectorXd::Zero(b.bins);
+    for (Eigen::Index i = 0; i < r.time_s.size(); ++i) {
+      const int k = b.bin_of[static_cast<std::size_t>(i)];
+      c.temp[k] += r.temp_c[i];
+      c.bias[k] += r.rate_rad_s[i] - (r.true_rate_rad_s.size() ? r.true_rate_rad_s[i] : 0.0);
+    }
+    const Eigen::Map<const Eigen::VectorXd> n(b.count.data(), b.bins);
+    c.temp.array() /= n.array();
+    c.bias.array() /= n.array();
+    c.lo = c.temp.minCoeff();
+    c.hi = c.temp.maxCoeff();
+    c.t0 = 0.5 * (c.lo + c.hi);
+    c.scale = std::max(0.5 * (c.hi - c.lo), 1e-3);
+    c.order = std::clamp(static_cast<int>(b.bins) - 2, 0, kOrder);
+    const Eigen::MatrixXd V = polynomial::scaled_powers(c.temp, c.t0, c.scale, c.order);
+    try {
+      c.coefficients = polynomial::least_squares(V, c.bias).coefficients;
+    } catch (const std::invalid_argument&) {
+      c.order = 0;
+      c.coefficients = Eigen::VectorXd::Constant(1, c.bias.mean());
+    }
+    const Eigen::VectorXd fitted = polynomial::scaled_powers(c.temp, c.t0, c.scale, c.order) * c.coefficients;
+    c.residual_rms = b.bins > 1 ? std::sqrt((c.bias - fitted).squaredNorm() / static_cast<double>(b.bins)) : 0.0;
+    curves.push_back(std::move(c));
+  }
+  const auto evaluate = [](const Curve& c, const Eigen::VectorXd& t) -> Eigen::VectorXd {
+    return polynomial::scaled_powers(t, c.t0, c.scale, c.order) * c.coefficients;
+  };
+  Disagreement worst;
+  for (std::size_t a = 0; a < curves.size(); ++a) {
+    for (std::size_t b = 0; b < curves.size(); ++b) {
+      if (a == b) continue;
+      const Curve &ca = curves[a], &cb = curves[b];
+      std::vector<Eigen::Index> inside;
+      for (Eigen::Index k = 0; k < cb.temp.size(); ++k)
+        if (cb.temp[k] >= ca.lo && cb.temp[k] <= ca.hi) inside.push_back(k);
+      double diff = 0.0;
+      if (inside.size() >= 3) {
+        const Eigen::VectorXd t = cb.temp(inside);
+        diff = std::sqrt((evaluate(ca, t) - evaluate(cb, t)).squaredNorm() / static_cast<double>(inside.size()));
+      } else {
+        diff = std::abs(ca.bias.mean() - cb.bias.mean());
+      }
+      const double noise = std::max({ca.residual_rms, cb.residual_rms, std::numeric_limits<double>::min()});
+      if (diff / noise > worst.ratio) worst = {diff / noise, diff, records[a].name, records[b].name};
+    }
+  }
+  return worst;
 }
 
 }  // namespace driftlab::calibration

@@ -47,7 +47,7 @@ Record slice(const Record& r, double from_s, double to_s);
 
 struct FitOptions {
   ModelKind kind = ModelKind::Polynomial;
-  std::string device, axis = "z";
+
   double reference_temp_c = 25.0;            // T0, degC
   Extrapolation extrapolation = Extrapolation::Clamp;
   int min_order = 1, max_order = 5;          // polynomial orders scored
@@ -77,5 +77,21 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
 // bins instead; the model says which in fit.heating_only. Throws what fit_calibration throws when
 // even that is impossible.
 CalibrationModel fit_px4_style(const std::vector<Record>& records, const FitOptions& base);
+
+// Whether several records of one channel can be one device: each record's bias (60-s bin means of
+// signal - truth) gets a least-squares cubic in temperature; for every pair, the rms difference of
+// the two cubics over the other record's bins inside the first one's temperature range, divided by
+// the larger in-record rms of bin residuals about its own cubic. Repeated runs of one unit give a
+// ratio near 1 (the noise of the bin means); two units differ by their bias, tens to thousands of
+// times that. Pairs whose ranges overlap in fewer than 3 bins compare the mean levels instead.
+struct Disagreement {
+  double ratio = 0.0;           // largest over all pairs
+  double difference_rms = 0.0;  // channel unit (rad/s gyro, m/s^2 accel)
+  std::string first, second;    // the records of that pair
+};
+Disagreement largest_disagreement(const std::vector<Record>& records);
+// Records whose disagreement ratio exceeds this are refused as one device (driftlab calibrate
+// --same-device overrides): a bias difference 10x the noise of 60-s means is not one unit.
+inline constexpr double kSameDeviceRatio = 10.0;
 
 }  // namespace driftlab::calibration

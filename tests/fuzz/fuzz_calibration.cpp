@@ -1,5 +1,5 @@
 // libFuzzer harness: the calibration model reader (models/calibration, driftlab-calibration/1
-// JSON). read_calibration_model takes a path, so each input is written to one scratch file.
+// JSON). read_calibration takes a path, so each input is written to one scratch file.
 // Property oracle: an accepted model writes JSON that reads back to the same JSON, and its
 // compensator gives a finite rate (or a DataError) for an ordinary sample.
 // Rejections must be ConfigError; anything else is a finding.
@@ -28,14 +28,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   static const std::string path = "/tmp/driftlab_fuzz_calibration_" + std::to_string(::getpid()) + ".json";
   write(path, reinterpret_cast<const char*>(data), size);
   try {
-    const auto model = calibration::read_calibration_model(path);
+    const auto model = calibration::read_calibration(path);
     const std::string text = calibration::to_json_text(model);
     write(path, text.data(), text.size());
-    fuzz::require(calibration::to_json_text(calibration::read_calibration_model(path)) == text,
+    fuzz::require(calibration::to_json_text(calibration::read_calibration(path)) == text,
                   "the model's JSON reads back to itself", text);
     try {
-      calibration::CausalCompensator comp(model);
-      fuzz::require(std::isfinite(comp.step(0.0, 0.01, 25.0)), "a finite compensated rate", text);
+      for (const auto& channel : model.channels) {
+        calibration::CausalCompensator comp(channel.model);
+        fuzz::require(std::isfinite(comp.step(0.0, 0.01, 25.0)), "a finite compensated rate", text);
+      }
     } catch (const DataError&) {
     }
   } catch (const ConfigError&) {

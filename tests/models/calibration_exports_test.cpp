@@ -32,7 +32,7 @@ std::filesystem::path scratch() {
 TEST(CalibrationExports, TheCHeaderCompilesAsC99AndRunsTheCompensatorSampleForSample) {
   for (const auto& model : {cubic_model(), stateful_model()}) {
     const auto dir = scratch();
-    std::ofstream(dir / "cal.h") << export_c_header(model, {.symbol_prefix = "gyro_cal"}).text;
+    std::ofstream(dir / "cal.h") << export_c_header(testing::one_channel(model).channels.front(), {.symbol_prefix = "gyro_cal"}).text;
     std::ofstream(dir / "main.c") << R"(#include <stdio.h>
 #include "cal.h"
 int main(void) {
@@ -92,7 +92,7 @@ std::map<std::string, double> read_params(const std::string& text, bool qgc) {
 
 TEST(CalibrationExports, Px4ParamsEvaluateToTheModelBiasWithPx4sClamp) {
   const CalibrationModel m = cubic_model();
-  const auto p = read_params(export_px4_params(m).text, true);
+  const auto p = read_params(export_px4_params(testing::one_channel(m).channels.front()).text, true);
   EXPECT_EQ(p.at("TC_G_ENABLE"), 1);
   for (double t : kTemperatures) {
     const double dt = std::clamp(t, p.at("TC_G0_TMIN"), p.at("TC_G0_TMAX")) - p.at("TC_G0_TREF");
@@ -105,7 +105,7 @@ TEST(CalibrationExports, Px4ParamsEvaluateToTheModelBiasWithPx4sClamp) {
 
 TEST(CalibrationExports, ArduPilotParamsUseThe35DegreeReferenceAndMillionScaling) {
   const CalibrationModel m = cubic_model();
-  const auto p = read_params(export_ardupilot_params(m).text, false);
+  const auto p = read_params(export_ardupilot_params(testing::one_channel(m).channels.front()).text, false);
   const auto poly = [&](double tdiff) {  // ArduPilot's polynomial_eval, without the constant term
     return (p.at("INS_TCAL1_GYR1_Z") + (p.at("INS_TCAL1_GYR2_Z") + p.at("INS_TCAL1_GYR3_Z") * tdiff) * tdiff) * tdiff *
            1e-6;
@@ -121,19 +121,19 @@ TEST(CalibrationExports, ArduPilotParamsUseThe35DegreeReferenceAndMillionScaling
 TEST(CalibrationExports, KalibrYamlCarriesTheAllanTermsInSiUnits) {
   CalibrationModel m = cubic_model();
   m.noise = {2.9e-4, 5e-6, 3e-7, 100.0};
-  const YAML::Node y = YAML::Load(export_kalibr_imu_yaml(m).text);
+  const YAML::Node y = YAML::Load(export_kalibr_imu_yaml(testing::one_channel(m).channels.front()).text);
   EXPECT_NEAR(y["gyroscope_noise_density"].as<double>(), 2.9e-4, 2.9e-4 * kFloatText);
   EXPECT_NEAR(y["gyroscope_random_walk"].as<double>(), 3e-7, 3e-7 * kFloatText);
   EXPECT_EQ(y["update_rate"].as<double>(), 100.0);
   m.noise = {};
-  EXPECT_THROW(export_kalibr_imu_yaml(m), ConfigError) << "no noise terms: refused, not zeros";
+  EXPECT_THROW(export_kalibr_imu_yaml(testing::one_channel(m).channels.front()), ConfigError) << "no noise terms: refused, not zeros";
 }
 
 TEST(CalibrationExports, UnrepresentableModelsAreRefusedWhenStrictAndApproximatedWithNotesOtherwise) {
   const CalibrationModel m = stateful_model();
-  EXPECT_THROW(export_px4_params(m, {.strict = true}), ConfigError);
-  EXPECT_THROW(export_ardupilot_params(m, {.strict = true}), ConfigError);
-  const auto r = export_px4_params(m);
+  EXPECT_THROW(export_px4_params(testing::one_channel(m).channels.front(), {.strict = true}), ConfigError);
+  EXPECT_THROW(export_ardupilot_params(testing::one_channel(m).channels.front(), {.strict = true}), ConfigError);
+  const auto r = export_px4_params(testing::one_channel(m).channels.front());
   EXPECT_GE(r.notes.size(), 4u);
   EXPECT_NE(r.text.find("hysteresis"), std::string::npos) << "the file itself says what was dropped";
 
@@ -149,7 +149,7 @@ TEST(CalibrationExports, UnrepresentableModelsAreRefusedWhenStrictAndApproximate
   constexpr double kGridSlack = 1.05;  // the stated error is the maximum on a 201-point grid
   EXPECT_LE(worst, kGridSlack * stated);
   EXPECT_GT(stated, 0.0);
-  EXPECT_NE(export_px4_params(quintic).text.find("max error"), std::string::npos);
+  EXPECT_NE(export_px4_params(testing::one_channel(quintic).channels.front()).text.find("max error"), std::string::npos);
 }
 
 }  // namespace

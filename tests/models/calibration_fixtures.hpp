@@ -23,8 +23,6 @@ inline CalibrationModel example_polynomial_model(std::vector<double> coefficient
 inline CalibrationModel example_full_model() {
   CalibrationModel m = example_polynomial_model();
   m.kind = ModelKind::Rbf;
-  m.device = "fmvmg";
-  m.axis = "x";
   m.extrapolation = Extrapolation::Linear;
   m.lag_tau_s = 100.0;
   m.derivative_tau_s = 20.0;
@@ -49,6 +47,15 @@ inline CalibrationModel example_full_model() {
   m.fit.selection = "test";
   m.fit.holdout_rms_rad_s = 1e-5;
   return m;
+}
+
+// A whole-IMU model of one channel (for the tests of single-channel behaviour).
+inline ImuCalibration one_channel(CalibrationModel m, imu::ChannelId id = {imu::Sensor::Gyro, 'z', 0}) {
+  ImuCalibration out;
+  out.device = "fmvmg";
+  out.channels.push_back({id, id.role(), id.role(), "rad/s", "temperature", "", true, std::move(m)});
+  if (id.sensor == imu::Sensor::Accel) out.channels.back().read_unit = "m/s^2";
+  return out;
 }
 
 }  // namespace driftlab::calibration::testing

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -27,13 +29,18 @@ std::filesystem::path scratch(const std::string& name) {
 CalibrationModel poly_model() { return testing::example_polynomial_model(); }
 CalibrationModel full_model() { return testing::example_full_model(); }
 
-TEST(CalibrationModelJson, RoundTripsEveryField) {
+TEST(CalibrationModelJson, RoundTripsEveryFieldOfEveryChannel) {
   const auto path = scratch("full.json");
-  const CalibrationModel m = full_model();
-  write_calibration_model(m, path);
-  const CalibrationModel r = read_calibration_model(path);
+  ImuCalibration imu_model = testing::one_channel(full_model());
+  imu_model.channels.push_back({{imu::Sensor::Accel, 'z', 1}, "accel1_z", "az1", "mg", "temp1", "2490378", false,
+                                poly_model()});
+  std::ofstream(path) << to_json_text(imu_model);
+  const ImuCalibration back = read_calibration(path);
+  ASSERT_EQ(back.channels.size(), 2u);
+  const CalibrationModel& m = imu_model.channels[0].model;
+  const CalibrationModel& r = back.channels[0].model;
+  EXPECT_EQ(back.channels[0].id, (imu::ChannelId{imu::Sensor::Gyro, 'z', 0}));
   EXPECT_EQ(r.kind, ModelKind::Rbf);
-  EXPECT_EQ(r.axis, "x");
   EXPECT_EQ(r.extrapolation, Extrapolation::Linear);
   EXPECT_EQ(r.bias_rad_s, m.bias_rad_s);
   EXPECT_EQ(r.bias_sigma_rad_s, m.bias_sigma_rad_s);
@@ -45,14 +52,48 @@ TEST(CalibrationModelJson, RoundTripsEveryField) {
   EXPECT_EQ(r.scale_factor_per_k, m.scale_factor_per_k);
   EXPECT_EQ(r.noise.arw_rad_sqrt_s, m.noise.arw_rad_sqrt_s);
   EXPECT_EQ(r.fit.records, m.fit.records);
-  EXPECT_EQ(to_json_text(r), to_json_text(m)) << "a read-back model writes the same file";
+  const auto& accel = back.channels[1];
+  EXPECT_EQ(accel.id, (imu::ChannelId{imu::Sensor::Accel, 'z', 1}));
+  EXPECT_EQ(accel.column, "az1");
+  EXPECT_EQ(accel.read_unit, "mg");
+  EXPECT_EQ(accel.temperature_column, "temp1");
+  EXPECT_EQ(accel.device_id, "2490378");
+  EXPECT_FALSE(accel.offset_observable);
+  const std::string text = to_json_text(imu_model);
+  EXPECT_NE(text.find("polynomial_m_s2_per_k_i"), std::string::npos) << "accelerometer keys carry m/s^2";
+  EXPECT_EQ(to_json_text(back), text) << "a read-back model writes the same file";
+}
+
+TEST(CalibrationModelJson, AVersion1SingleAxisFileStillReadsAndCompensatesIdentically) {
+  const auto v1 = std::filesystem::path(DRIFTLAB_TEST_DATA) / "calibration" / "v1_rbf_ranged.json";
+  const ImuCalibration read = read_calibration(v1);
+  ASSERT_EQ(read.channels.size(), 1u);
+  const auto& c = read.channels.front();
+  EXPECT_EQ(c.role, "rate") << "a version-1 model applies to the record's single-axis rate column";
+  EXPECT_EQ(c.id.sensor, imu::Sensor::Gyro);
+  // The numbers are the file's, read independently.
+  nlohmann::json j;
+  std::ifstream(v1) >> j;
+  EXPECT_EQ(c.id.axis, j["axis"].get<std::string>()[0]);
+  EXPECT_EQ(c.model.bias_rad_s, j["bias"]["polynomial_rad_s_per_k_i"].get<std::vector<double>>());
+  EXPECT_EQ(c.model.rbf->weights_rad_s, j["rbf"]["weights_rad_s"].get<std::vector<double>>());
+  EXPECT_EQ(c.model.lag_tau_s, j["physical"]["lag_tau_s"].get<double>());
+  // Rewritten as version 2 and read back, it compensates bit for bit as the version-1 file does.
+  const auto v2 = scratch("v2_of_v1.json");
+  std::ofstream(v2) << to_json_text(read);
+  const ImuCalibration again = read_calibration(v2);
+  CausalCompensator a(c.model), b(again.channels.front().model);
+  for (int i = 0; i < 2000; ++i) {
+    const double t = 0.1 * i, temp = 20.0 + 10.0 * std::sin(0.003 * i), rate = 1e-3 * std::cos(0.01 * i);
+    ASSERT_EQ(a.step(t, rate, temp), b.step(t, rate, temp)) << "sample " << i;
+  }
 }
 
 std::string error_of(const std::string& text) {
   const auto path = scratch("bad.json");
   std::ofstream(path) << text;
   try {
-    read_calibration_model(path);
+    read_calibration(path);
   } catch (const ConfigError& e) {
     return e.what();
   }
@@ -60,7 +101,7 @@ std::string error_of(const std::string& text) {
 }
 
 TEST(CalibrationModelJson, BadFilesNameTheFileAndTheKey) {
-  const std::string good = to_json_text(poly_model());
+  const std::string good = to_json_text(testing::one_channel(poly_model()));
   EXPECT_NE(error_of("{ not json").find("not valid JSON"), std::string::npos);
   // A number beyond double (found by the fuzzer, tests/fuzz/corpus/calibration/number_overflow.json).
   EXPECT_NE(error_of("{\"format\": 2.3e905}").find("not valid JSON"), std::string::npos);
@@ -79,7 +120,10 @@ TEST(CalibrationModelJson, BadFilesNameTheFileAndTheKey) {
   std::string mistyped = good;
   mistyped.replace(mistyped.find("\"clamp\""), 7, "\"wild\"");
   EXPECT_NE(error_of(mistyped).find("extrapolation"), std::string::npos);
-  EXPECT_THROW(read_calibration_model(scratch("absent.json")), ConfigError);
+  EXPECT_THROW(read_calibration(scratch("absent.json")), ConfigError);
+  std::string wrong_role = good;
+  wrong_role = std::regex_replace(wrong_role, std::regex("\"role\": \"gyro_z\""), "\"role\": \"gyro_y\"");
+  EXPECT_NE(error_of(wrong_role).find("channels[0].role"), std::string::npos) << error_of(wrong_role);
 }
 
 TEST(CausalCompensator, SubtractsThePolynomialAndFlagsAndClampsOutsideTheRange) {

@@ -121,22 +121,27 @@ TEST_F(CalibrateCli, TheKalmanStageSmoothsAndStreamsLikeTheBatch) {
   ASSERT_EQ(std::system(command.c_str()), 0);
   const std::string batch = read_text(dir_ + "/kf.csv");
   EXPECT_EQ(batch, read_text(dir_ + "/kf_stream.csv"));
-  EXPECT_EQ(batch.substr(0, batch.find('\n')), "t_s,rate_dps,bias_dps,temp_c,extrapolated,compensated_dps");
+  // Every input column stays; the rate column holds the filtered output, the appended columns the
+  // correction and the compensated rate before the Kalman stage.
+  EXPECT_EQ(batch.substr(0, batch.find('\n')),
+            "t_s,rate_dps,temp_c,true_rate_dps,systematic_dps,die_temp_c,drive_freq_hz,bias_rate_dps,"
+            "compensated_rate_dps,extrapolated");
   // The filtered column varies less than the compensated one.
   std::istringstream in(batch);
   std::string line;
   std::getline(in, line);
   double n = 0, s_out = 0, ss_out = 0, s_in = 0, ss_in = 0;
   while (std::getline(in, line)) {
-    double v[6];
-    char comma;
+    std::vector<double> v;
     std::istringstream f(line);
-    f >> v[0] >> comma >> v[1] >> comma >> v[2] >> comma >> v[3] >> comma >> v[4] >> comma >> v[5];
+    std::string cell;
+    while (std::getline(f, cell, ',')) v.push_back(std::stod(cell));
+    ASSERT_EQ(v.size(), 10u) << line;
     n += 1;
     s_out += v[1];
     ss_out += v[1] * v[1];
-    s_in += v[5];
-    ss_in += v[5] * v[5];
+    s_in += v[8];
+    ss_in += v[8] * v[8];
   }
   EXPECT_LT(ss_out / n - (s_out / n) * (s_out / n), 0.1 * (ss_in / n - (s_in / n) * (s_in / n)));
   const auto missing = run_driftlab("compensate --model " + dir_ + "/poly.json --data " + dir_ + "/oven.csv --out " +

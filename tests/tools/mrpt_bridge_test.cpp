@@ -265,19 +265,18 @@ TEST(MrptBridge, CompensateCommandAppliesTheCalibrationModelsCorrectionExactly) 
   const auto dir = scratch_dir("mrpt_compensate_cli");
   export_test_rawlog(dir, 400, true);  // temperatures -10 .. -6 degC, inside the range below
   driftlab::calibration::CalibrationModel model;
-  model.device = "test";
   model.reference_temp_c = 25.0;
   model.valid_min_c = -40.0;
   model.valid_max_c = 85.0;
   model.bias_rad_s = {1e-3, 2e-5, -3e-7};  // rad/s, rad/s/K, rad/s/K^2
   model.bias_sigma_rad_s = {0.0, 0.0, 0.0};
-  driftlab::calibration::write_calibration_model(model, dir / "model.json");
+  std::ofstream(dir / "model.json") << driftlab::calibration::to_json_text(driftlab::calibration::single_axis(model, 'z', "test"));
   const auto r = run_driftlab("mrpt compensate --model " + (dir / "model.json").string() + " " +
                               (dir / "in.rawlog").string() + " --out " + (dir / "out.rawlog").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto before = read_imu(dir / "in.rawlog"), after = read_imu(dir / "out.rawlog");
   ASSERT_EQ(before.size(), after.size());
-  driftlab::calibration::CausalCompensator reference(driftlab::calibration::read_calibration_model(dir / "model.json"));
+  driftlab::calibration::CausalCompensator reference(driftlab::calibration::read_calibration(dir / "model.json").channels.front().model);
   for (std::size_t i = 0; i < before.size(); ++i) {
     const double t = static_cast<double>((before[i]->timestamp - before[0]->timestamp).count()) / 1e7;
     const double expected = reference.step(t, before[i]->get(mrpt::obs::IMU_WZ), before[i]->get(mrpt::obs::IMU_TEMPERATURE));

@@ -77,7 +77,7 @@ void BM_CompensateStreamCommand(benchmark::State& state) {
   const auto dir = std::filesystem::temp_directory_path() / ("driftlab_bench_stream_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const auto model = dir / "model.json", csv = dir / "in.csv";
-  calibration::write_calibration_model(physical_model(), model);
+  std::ofstream(model) << calibration::to_json_text(calibration::single_axis(physical_model()));
   {
     const Record& r = record(static_cast<std::size_t>(state.range(0)));
     std::ofstream out(csv);

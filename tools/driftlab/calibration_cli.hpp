@@ -1,5 +1,6 @@
-// Pieces shared by `driftlab calibrate`, `driftlab compensate` and the calibration exports:
-// loading calibration records (rate, temperature, optional true rate), option parsing, summaries.
+// Pieces shared by `driftlab calibrate`, `driftlab compensate` and the calibration exports: the
+// whole-IMU records to calibrate (every gyro and accelerometer channel of every instance, or the
+// single-axis "rate" column), option parsing, summaries.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -7,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "framework/imu.hpp"
+#include "framework/time_series.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "models/calibration/fit.hpp"
 
@@ -17,16 +20,37 @@ struct CalibrationDataOptions {
   std::vector<std::string> columns;   // --column role=column:unit
   double sample_rate_hz = 0.0;        // --fs
   double max_gap_factor = 3.0;        // --max-gap
+  std::string channels;               // --channels (empty: every channel)
+  std::string axis = "z";             // --axis: the axis of a single-axis "rate" column
+  bool same_device = false;           // --same-device: records of several devices are not refused
 };
 
 void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, bool repeatable);
-// Reads every --data file; rate and temperature are required, true_rate is used when present.
-std::vector<calibration::Record> load_calibration_records(const CalibrationDataOptions& data);
-calibration::Record load_calibration_record(const std::string& path, const CalibrationDataOptions& data);
+
+// One channel to calibrate: its identity, where it comes from, and one calibration::Record per file
+// (signal in the channel's internal unit, its instance's temperature, the truth when the file has it).
+struct ChannelRecords {
+  imu::ChannelId id;
+  std::string role;                 // record role: id.role(), or "rate" for a single-axis record
+  std::string column, read_unit;    // as in the first file
+  std::string temperature_column;
+  std::string device_id;
+  bool has_truth = false;
+  std::vector<calibration::Record> records;
+};
+
+// Reads every file and collects the selected channels (--channels; every gyro/accel channel, or the
+// "rate" column, by default). Throws DataError when a file lacks a channel the first one has or an
+// instance has no temperature, and ConfigError when the files come from different devices (their
+// device ids differ, or a channel's bias disagrees beyond what one device's noise explains; see
+// calibration::largest_disagreement) without --same-device.
+std::vector<ChannelRecords> load_channel_records(const std::vector<std::string>& paths, const CalibrationDataOptions& data);
 
 calibration::ModelKind model_kind_option(const std::string& text);  // ConfigError naming --model
 calibration::Extrapolation extrapolation_option(const std::string& text);  // ConfigError naming --extrapolation
 
-void print_model_summary(std::ostream& out, const calibration::CalibrationModel& model);
+// The model of one channel in words, in the channel's display unit (deg/h for a gyro, mg for an
+// accelerometer).
+void print_model_summary(std::ostream& out, const calibration::ChannelCalibration& channel);
 
 }  // namespace driftlab::cli

@@ -1,5 +1,6 @@
-// `driftlab calibrate`: fits a causal temperature-calibration model (poly | physical | rbf) on one
-// or more oven records and writes it as driftlab-calibration/1 JSON (models/calibration/).
+// `driftlab calibrate`: fits a causal temperature-calibration model (poly | physical | rbf) for every
+// gyro and accelerometer channel of one or more oven records of one IMU and writes it as
+// driftlab-calibration/2 JSON (models/calibration/).
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -29,13 +30,14 @@ struct CalibrateOptions {
   std::string report;                 // report directory
   std::string paper_pipeline;         // optional offline reference pipeline (e.g. models/pipelines/li2023.yaml)
   std::string command_line;
+  std::string device;                 // free text stored in the model
 };
 
-calibration::FitOptions fit_options(const CalibrateOptions& o, const CommandEnv& env) {
+calibration::FitOptions fit_options(const CalibrateOptions& o, const CommandEnv& env, const std::string& channel) {
   calibration::FitOptions f = o.fit;
   f.kind = model_kind_option(o.model);
   f.extrapolation = extrapolation_option(o.extrapolation);
-  f.progress = [&env](const std::string& label, double fraction) { env.progress(label, fraction); };
+  f.progress = [&env, channel](const std::string& label, double fraction) { env.progress(channel + ": " + label, fraction); };
   return f;
 }
 
@@ -46,41 +48,39 @@ TimeSeries as_time_series(const calibration::Record& r) {
   return ts;
 }
 
-void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
-  std::vector<std::string> inputs = o.data.paths;
-  inputs.insert(inputs.end(), o.evaluate.begin(), o.evaluate.end());
-  if (!o.paper_pipeline.empty()) inputs.push_back(o.paper_pipeline);
-  OutputSet files({inputs.begin(), inputs.end()});  // the model and the report appear together
-  files.plan(o.out, "--out");
-  std::optional<ReportFiles> report_files;
-  if (!o.report.empty()) report_files = plan_report_files(files, o.report, "--report");
-  if (o.train_until_s > 0 && o.data.paths.size() != 1) {
-    throw ConfigError({"", 0, "--train-until"}, "--train-until splits a single --data record");
+// The model of one channel: the fit, with the constant term of an accelerometer without a
+// reference set to 0 (a static record holds gravity along the axis, which is no bias).
+calibration::ChannelCalibration fit_channel(const ChannelRecords& ch, const std::vector<calibration::Record>& records,
+                                            const calibration::FitOptions& f) {
+  calibration::ChannelCalibration c;
+  c.id = ch.id;
+  c.role = ch.role;
+  c.column = ch.column;
+  c.read_unit = ch.read_unit;
+  c.temperature_column = ch.temperature_column;
+  c.device_id = ch.device_id;
+  c.offset_observable = ch.id.sensor == imu::Sensor::Gyro || ch.has_truth;
+  c.model = calibration::fit_calibration(records, f);
+  if (!c.offset_observable) {
+    c.model.bias_rad_s[0] = 0.0;
+    if (!c.model.bias_sigma_rad_s.empty()) c.model.bias_sigma_rad_s[0] = 0.0;
   }
-  auto records = load_calibration_records(o.data);
-  std::vector<calibration::Record> held_out;
-  if (o.train_until_s > 0) {
-    const auto whole = records.front();
-    records = {calibration::slice(whole, -INFINITY, o.train_until_s)};
-    held_out.push_back(calibration::slice(whole, o.train_until_s, INFINITY));
-    held_out.back().name += " (t >= " + std::to_string(o.train_until_s) + " s)";
-    records.front().name += " (t < " + std::to_string(o.train_until_s) + " s)";
-    if (held_out.back().time_s.size() < 2) throw DataError({whole.name, 0, "t_s"}, "nothing left after --train-until");
-  }
-  for (const auto& p : o.evaluate) held_out.push_back(load_calibration_record(p, o.data));
+  return c;
+}
 
-  const calibration::FitOptions base = fit_options(o, env);
-  const auto model = calibration::fit_calibration(records, base);
-  model.validate();
-  files.write(o.out, calibration::to_json_text(model));
-  if (!report_files) {
-    files.commit();
-    print_model_summary(std::cout, model);
-    std::cout << "wrote " << o.out << "\n";
-    if (!held_out.empty()) std::cout << "note: held-out records are scored only with --report DIR\n";
-    return;
-  }
+// The records of `channels` that match `ch` (by role), for held-out scoring.
+std::vector<calibration::Record> matching(const std::vector<ChannelRecords>& channels, const ChannelRecords& ch) {
+  for (const auto& c : channels)
+    if (c.role == ch.role) return c.records;
+  throw DataError({channels.empty() || channels.front().records.empty() ? "" : channels.front().records.front().name, 1,
+                   ch.role},
+                  "the held-out record has no '" + ch.role + "' channel (column " + ch.column + ")");
+}
 
+void report_channel(const CalibrateOptions& o, CommandEnv& env, const ChannelRecords& ch,
+                    const std::vector<calibration::Record>& records, const std::vector<calibration::Record>& held_out,
+                    const calibration::ChannelCalibration& chosen, const ReportFiles& report_files, OutputSet& files) {
+  const calibration::FitOptions base = fit_options(o, env, ch.role);
   ReportInput in;
   in.command = o.command_line;
   for (const auto& r : records) in.calibration_records.push_back(r.name);
@@ -97,7 +97,7 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
       in.models.push_back({"PX4-style poly", "order 3, heating samples only, clamped outside the range", std::move(px4)});
     } else {
       in.notes.push_back("PX4-style baseline fitted on all samples: too few heating bins (dT/dt > 0)");
-      std::cerr << "note: " << in.notes.back() << "\n";
+      std::cerr << "note: " << ch.role << ": " << in.notes.back() << "\n";
       in.models.push_back({"PX4-style poly", "order 3, all samples (no heating leg), clamped outside the range",
                            std::move(px4)});
     }
@@ -108,7 +108,8 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
     f.kind = kind;
     const std::string name = calibration::to_string(kind);
     in.models.push_back({name, "ours: heating and cooling, causal, " + o.extrapolation + " outside the range",
-                         kind == model.kind && !o.fit.heating_only ? model : calibration::fit_calibration(records, f)});
+                         kind == chosen.model.kind && !o.fit.heating_only ? chosen.model
+                                                                           : calibration::fit_calibration(records, f)});
   }
   if (!o.paper_pipeline.empty()) {
     const auto& registry = env.registry();
@@ -130,12 +131,9 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
                              outputs.at(stages.back()).sum()});
     }
   }
-  const auto j = write_calibration_report(in, *report_files, files);
-  files.commit();
-  print_model_summary(std::cout, model);
-  std::cout << "wrote " << o.out << "\n";
+  const auto j = write_calibration_report(in, report_files, files);
   for (const auto& ev : j["evaluations"]) {
-    std::cout << "held-out " << ev["record"].get<std::string>() << ":\n";
+    std::cout << ch.role << ": held-out " << ev["record"].get<std::string>() << ":\n";
     for (const auto& m : ev["methods"]) {
       char line[200];
       std::snprintf(line, sizeof line, "  %-26s residual drift %9.3f deg/h   B %s deg/h   extrapolated %5.1f %%\n",
@@ -149,7 +147,72 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
                 << " deg/h\n";
     }
   }
-  std::cout << "wrote " << report_files->json.string() << " and " << report_files->html.string() << "\n";
+}
+
+void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
+  std::vector<std::string> inputs = o.data.paths;
+  inputs.insert(inputs.end(), o.evaluate.begin(), o.evaluate.end());
+  if (!o.paper_pipeline.empty()) inputs.push_back(o.paper_pipeline);
+  OutputSet files({inputs.begin(), inputs.end()});  // the model and the reports appear together
+  files.plan(o.out, "--out");
+  if (o.train_until_s > 0 && o.data.paths.size() != 1) {
+    throw ConfigError({"", 0, "--train-until"}, "--train-until splits a single --data record");
+  }
+  auto channels = load_channel_records(o.data.paths, o.data);
+  // --report scores the gyro channels (its figures are in deg/h): one gyro channel writes
+  // DIR/report.{json,html}, several write DIR/<channel>/report.{json,html}.
+  std::vector<std::optional<ReportFiles>> report_files(channels.size());
+  std::size_t gyros = 0;
+  for (const auto& ch : channels) gyros += ch.id.sensor == imu::Sensor::Gyro ? 1 : 0;
+  if (!o.report.empty()) {
+    if (gyros == 0) throw ConfigError({"", 0, "--report"}, "--report scores gyro channels, and none is selected");
+    for (std::size_t c = 0; c < channels.size(); ++c) {
+      if (channels[c].id.sensor != imu::Sensor::Gyro) continue;
+      const std::filesystem::path dir = gyros == 1 ? std::filesystem::path(o.report) : std::filesystem::path(o.report) / channels[c].role;
+      report_files[c] = plan_report_files(files, dir, "--report");
+    }
+  }
+  std::vector<ChannelRecords> evaluate;
+  if (!o.evaluate.empty()) {
+    CalibrationDataOptions same = o.data;
+    same.same_device = true;  // held-out records are scored, not fitted together
+    evaluate = load_channel_records(o.evaluate, same);
+  }
+
+  calibration::ImuCalibration model;
+  model.device = o.device;
+  std::vector<std::vector<calibration::Record>> fitted(channels.size()), held_out(channels.size());
+  for (std::size_t c = 0; c < channels.size(); ++c) {
+    auto& ch = channels[c];
+    fitted[c] = ch.records;
+    if (o.train_until_s > 0) {
+      const auto whole = ch.records.front();
+      fitted[c] = {calibration::slice(whole, -INFINITY, o.train_until_s)};
+      held_out[c].push_back(calibration::slice(whole, o.train_until_s, INFINITY));
+      held_out[c].back().name += " (t >= " + std::to_string(o.train_until_s) + " s)";
+      fitted[c].front().name += " (t < " + std::to_string(o.train_until_s) + " s)";
+      if (held_out[c].back().time_s.size() < 2) throw DataError({whole.name, 0, "t_s"}, "nothing left after --train-until");
+    }
+    if (!evaluate.empty()) {
+      const auto more = matching(evaluate, ch);
+      held_out[c].insert(held_out[c].end(), more.begin(), more.end());
+    }
+    model.channels.push_back(fit_channel(ch, fitted[c], fit_options(o, env, ch.role)));
+  }
+  model.validate();
+  files.write(o.out, calibration::to_json_text(model));
+  for (std::size_t c = 0; c < channels.size(); ++c)
+    if (report_files[c]) report_channel(o, env, channels[c], fitted[c], held_out[c], model.channels[c], *report_files[c], files);
+  files.commit();
+  for (const auto& ch : model.channels) print_model_summary(std::cout, ch);
+  std::cout << "wrote " << o.out << " (" << model.channels.size() << " channel" << (model.channels.size() == 1 ? "" : "s")
+            << ")\n";
+  if (o.report.empty() && (!o.evaluate.empty() || o.train_until_s > 0))
+    std::cout << "note: held-out records are scored only with --report DIR\n";
+  for (const auto& r : report_files)
+    if (r) std::cout << "wrote " << r->json.string() << " and " << r->html.string() << "\n";
+  if (!o.report.empty() && gyros < channels.size())
+    std::cout << "note: --report scores the gyro channels; the accelerometer channels' held-out figures are in the model\n";
 }
 
 }  // namespace
@@ -158,8 +221,8 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
   auto o = std::make_shared<CalibrateOptions>();
   auto* cmd = app.add_subcommand(
       "calibrate",
-      "fit a causal temperature-calibration model (bias, and scale factor when a varying true rate exists) "
-      "on oven records; write driftlab-calibration/1 JSON");
+      "fit a causal temperature-calibration model for every gyro and accelerometer channel of an IMU's oven "
+      "records (bias, and scale factor when a varying true rate exists); write driftlab-calibration/2 JSON");
   add_calibration_data_options(cmd, o->data, true);
   cmd->add_option("--model", o->model, "poly: polynomial (order by held-out blocks); physical: + lag, dT/dt, "
                                        "hysteresis; rbf: physical + GA-tuned RBF network")
@@ -186,10 +249,7 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
       ->check(finite_number(0.0, 1e12, true))
       ->capture_default_str();
   cmd->add_flag("--heating-only", o->fit.heating_only, "fit on heating samples only (PX4 practice; for comparison)");
-  cmd->add_option("--device", o->fit.device, "device name stored in the model");
-  cmd->add_option("--axis", o->fit.axis, "gyro axis the model applies to (for PX4 / ArduPilot exports)")
-      ->check(CLI::IsMember({"x", "y", "z"}))
-      ->capture_default_str();
+  cmd->add_option("--device", o->device, "device name stored in the model");
   cmd->add_option("--ga-population", o->fit.ga_population, "RBF tuning: GA population")->check(CLI::Range(2, 1000))->capture_default_str();
   cmd->add_option("--ga-generations", o->fit.ga_generations, "RBF tuning: GA generations")->check(CLI::Range(1, 1000))->capture_default_str();
   cmd->add_option("--seed", o->fit.seed, "seed of the RBF tuning (k-means, holdout, GA)")->capture_default_str();

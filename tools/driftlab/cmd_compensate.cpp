@@ -1,12 +1,14 @@
-// `driftlab compensate`: applies a driftlab-calibration/1 model sample by sample (CausalCompensator),
-// to a file (--data in.csv --out out.csv) or as a pipe (--stream: CSV rows on standard input,
-// compensated rows on standard output, one by one, constant memory). Optional causal Kalman stage
-// (plugins/kalman scalar random-walk filter). Both modes format rows identically, so streaming
-// output equals batch output byte for byte.
+// `driftlab compensate`: applies a calibration model (driftlab-calibration/2, or /1) sample by
+// sample (CausalCompensator per channel), to a file (--data in.csv --out out.csv) or as a pipe
+// (--stream: CSV rows on standard input, compensated rows on standard output, one by one, constant
+// memory). Optional causal Kalman stage on the gyro channels (plugins/kalman scalar random-walk
+// filter). Both modes run one row engine, so streaming output equals batch output byte for byte.
 //
-// Output columns: t_s, rate_dps (the final output), bias_dps (the correction subtracted), temp_c,
-// extrapolated (1 when the model temperature was outside the calibrated range), and with --kalman
-// also compensated_dps (before the Kalman stage).
+// Output: every input column in its own name, unit and order; the columns of the channels the model
+// covers hold the compensated values (in the column's own unit), every other cell is passed through
+// as it was. Appended: bias_<column> (the correction subtracted, same unit) per corrected column,
+// with --kalman compensated_<column> (before the Kalman stage) per gyro column, and extrapolated
+// (1 when some channel's model temperature was outside its calibrated range).
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -18,9 +20,10 @@
 #include <string_view>
 #include <vector>
 
-#include "framework/output_set.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
+#include "framework/imu.hpp"
+#include "framework/output_set.hpp"
 #include "framework/units.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "plugins/kalman/kalman.hpp"
@@ -40,106 +43,31 @@ struct CompensateOptions {
   double kalman_fs = 0.0;                 // Hz, for the noise-term conversion; 0: the model's
 };
 
-const Unit& unit_of(const char* spelling) {
-  static const Unit deg_s = *find_unit("deg/s"), deg_c = *find_unit("degC"), s = *find_unit("s"), one = *find_unit("1");
-  const std::string_view u(spelling);
-  return u == "deg/s" ? deg_s : u == "degC" ? deg_c : u == "s" ? s : one;
+std::optional<kalman::ScalarModel> kalman_model(const calibration::ChannelCalibration& c, const CompensateOptions& o) {
+  if (!o.kalman || c.id.sensor != imu::Sensor::Gyro) return std::nullopt;
+  const auto& model = c.model;
+  double q = o.kalman_q, r = o.kalman_r;
+  const double fs = o.kalman_fs > 0 ? o.kalman_fs : model.noise.sample_rate_hz;
+  if (r <= 0) {
+    if (!(model.noise.arw_rad_sqrt_s > 0 && fs > 0)) {
+      throw ConfigError({o.model, 0, c.role + ".noise.arw_rad_sqrt_s"},
+                        "--kalman needs --kalman-r, or a model with an ARW noise term and a sample rate");
+    }
+    r = kalman::measurement_variance_from_arw(model.noise.arw_rad_sqrt_s, fs);
+  }
+  if (q <= 0) {
+    if (!(model.noise.rate_random_walk_rad_s_sqrt_s > 0 && fs > 0)) {
+      throw ConfigError({o.model, 0, c.role + ".noise.rate_random_walk_rad_s_sqrt_s"},
+                        "--kalman needs --kalman-q, or a model with a rate-random-walk term and a sample rate");
+    }
+    q = kalman::process_variance_from_rrw(model.noise.rate_random_walk_rad_s_sqrt_s, fs);
+  }
+  return kalman::ScalarModel{q, r};
 }
 
-// The per-sample engine shared by batch and stream: compensator + optional Kalman + row formatting.
-class Engine {
- public:
-  Engine(const calibration::CalibrationModel& model, const CompensateOptions& o) : comp_(model) {
-    if (o.kalman) {
-      double q = o.kalman_q, r = o.kalman_r;
-      const double fs = o.kalman_fs > 0 ? o.kalman_fs : model.noise.sample_rate_hz;
-      if (r <= 0) {
-        if (!(model.noise.arw_rad_sqrt_s > 0 && fs > 0)) {
-          throw ConfigError({o.model, 0, "noise.arw_rad_sqrt_s"},
-                            "--kalman needs --kalman-r, or a model with an ARW noise term and a sample rate");
-        }
-        r = model.noise.arw_rad_sqrt_s * model.noise.arw_rad_sqrt_s * fs;  // R = N^2 fs
-      }
-      if (q <= 0) {
-        if (!(model.noise.rate_random_walk_rad_s_sqrt_s > 0 && fs > 0)) {
-          throw ConfigError({o.model, 0, "noise.rate_random_walk_rad_s_sqrt_s"},
-                            "--kalman needs --kalman-q, or a model with a rate-random-walk term and a sample rate");
-        }
-        q = model.noise.rate_random_walk_rad_s_sqrt_s * model.noise.rate_random_walk_rad_s_sqrt_s / fs;  // Q = K^2/fs
-      }
-      kalman_model_ = kalman::ScalarModel{q, r};
-    }
-  }
-
-  std::string header() const {
-    return kalman_model_ ? "t_s,rate_dps,bias_dps,temp_c,extrapolated,compensated_dps\n"
-                         : "t_s,rate_dps,bias_dps,temp_c,extrapolated\n";
-  }
-
-  // Appends one output row for one input sample (internal units).
-  void row(double t_s, double rate_rad_s, double temp_c, std::string& out) {
-    const double w = comp_.step(t_s, rate_rad_s, temp_c);
-    double y = w;
-    if (kalman_model_) {
-      if (!filter_) filter_.emplace(*kalman_model_, w, kalman_model_->r);
-      y = filter_->step(w);
-    }
-    number(t_s, unit_of("s"), out);
-    out += ',';
-    number(y, unit_of("deg/s"), out);
-    out += ',';
-    number(comp_.last_bias_rad_s(), unit_of("deg/s"), out);
-    out += ',';
-    number(temp_c, unit_of("degC"), out);
-    out += comp_.last_extrapolated() ? ",1" : ",0";
-    if (kalman_model_) {
-      out += ',';
-      number(w, unit_of("deg/s"), out);
-    }
-    out += '\n';
-  }
-
- private:
-  static void number(double v, const Unit& u, std::string& out) {
-    char buf[32];
-    const auto res = std::to_chars(buf, buf + sizeof buf, from_internal(v, u));
-    out.append(buf, res.ptr);
-  }
-
-  calibration::CausalCompensator comp_;
-  std::optional<kalman::ScalarModel> kalman_model_;
-  std::optional<kalman::ScalarFilter> filter_;
-};
-
-void batch(const calibration::CalibrationModel& model, const CompensateOptions& o) {
-  if (o.out.empty()) throw ConfigError({"", 0, "--out"}, "--out is required without --stream");
-  OutputSet outputs({o.data.paths.front(), o.model});
-  outputs.plan(o.out, "--out");
-  const auto record = load_calibration_record(o.data.paths.front(), o.data);
-  Engine engine(model, o);
-  std::string text = engine.header();
-  text.reserve(static_cast<std::size_t>(record.time_s.size()) * 64 + 64);
-  for (Eigen::Index i = 0; i < record.time_s.size(); ++i) {
-    try {
-      engine.row(record.time_s[i], record.rate_rad_s[i], record.temp_c[i], text);
-    } catch (const DataError& e) {
-      throw DataError({record.name, static_cast<int>(i) + 2, e.where().field}, e.what());
-    }
-  }
-  outputs.write(o.out, text);
-  outputs.commit();
-}
-
-// ---- streaming ------------------------------------------------------------------------------
-
-struct StreamColumns {
-  int time = -1, rate = -1, temp = -1;
-  Unit time_unit, rate_unit, temp_unit;
-  std::size_t count = 0;
-};
-
-std::vector<std::string_view> split(std::string_view line) {
-  std::vector<std::string_view> cells;
+// The cells of one row as they are, untrimmed (passed through byte for byte).
+void raw_cells(std::string_view line, std::vector<std::string_view>& cells) {
+  cells.clear();
   std::size_t start = 0;
   while (true) {
     const std::size_t comma = line.find(',', start);
@@ -147,71 +75,195 @@ std::vector<std::string_view> split(std::string_view line) {
     if (comma == std::string_view::npos) break;
     start = comma + 1;
   }
-  return cells;
 }
 
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-  return s;
+void number(double v, const Unit& u, std::string& out) {
+  char buf[32];
+  const auto res = std::to_chars(buf, buf + sizeof buf, from_internal(v, u));
+  out.append(buf, res.ptr);
 }
 
-StreamColumns stream_columns(std::string_view header, const CompensateOptions& o) {
-  const auto names = split(header);
-  StreamColumns c;
-  c.count = names.size();
-  std::vector<ColumnMapping> maps{{"time", "t_s", "s"}, {role::kRate, "rate_dps", "deg/s"},
-                                  {role::kTemperature, "temp_c", "degC"}};
-  for (const auto& text : o.data.columns) {
-    const auto m = parse_column_mapping(text);
-    for (auto& d : maps) {
-      if (d.role == m.role) d = m;
+// The per-row engine shared by batch and stream: from the header row, which column each model
+// channel corrects; then row by row, the compensated row.
+class Engine {
+ public:
+  Engine(const calibration::ImuCalibration& model, const CompensateOptions& o, std::string file)
+      : model_(model), options_(o), file_(std::move(file)) {}
+
+  // Plans the columns from the header line and returns the output header line.
+  std::string header(std::string_view line, int line_number) {
+    CsvReadOptions read;
+    for (const auto& c : options_.data.columns) read.columns.push_back(parse_column_mapping(c));
+    read.required_roles = {};
+    read.sample_rate_hz = options_.data.sample_rate_hz;
+    const auto names = split_csv_row(line);
+    const auto planned = plan_columns(names, read, file_, line_number);
+    const auto find = [&](const std::string& role) -> const PlannedColumn* {
+      for (const auto& p : planned)
+        if (p.mapping.role == role) return &p;
+      return nullptr;
+    };
+    if (const auto* t = find("time")) time_ = {t->index, t->unit};
+    columns_ = names.size();
+    std::string out(line);
+    std::vector<std::string> appended;
+    for (const auto& c : model_.channels) {
+      const auto* value = find(c.role);
+      if (!value) {
+        std::string have;
+        for (const auto& p : planned)
+          if (p.mapping.role != "time") have += (have.empty() ? "" : ", ") + p.mapping.role + " (" + p.mapping.column + ")";
+        throw ConfigError({file_, line_number, c.role},
+                          "the model's channel " + c.role + " (fitted on column '" + c.column +
+                              "') is not in this record, which has: " + (have.empty() ? "no channel" : have) +
+                              "; a model applies only to the channels it was fitted on");
+      }
+      const auto* temp = find(imu::temperature_role(c.id.instance));
+      if (!temp) temp = find(role::kTemperature);
+      if (!temp)
+        throw DataError({file_, line_number, imu::temperature_role(c.id.instance)},
+                        "no temperature column for " + c.role + " (the model's is '" + c.temperature_column + "')");
+      const auto* device = find(c.id.instance ? "device_id" + std::to_string(c.id.instance) : std::string("device_id"));
+      Corrected k{&c, value->index, value->unit, temp->index, temp->unit, device ? std::optional(device->index) : std::nullopt,
+                  calibration::CausalCompensator(c.model), kalman_model(c, options_), std::nullopt};
+      appended.push_back("bias_" + std::string(names[value->index]));
+      if (k.kalman) appended.push_back("compensated_" + std::string(names[value->index]));
+      corrected_.push_back(std::move(k));
     }
-  }
-  for (const auto& m : maps) {
-    if (m.role == "time" && o.data.sample_rate_hz > 0) continue;
-    int index = -1;
-    for (std::size_t i = 0; i < names.size(); ++i) {
-      if (trim(names[i]) == m.column) index = static_cast<int>(i);
+    appended.push_back("extrapolated");
+    for (const auto& a : appended) {
+      for (const auto& n : names)
+        if (n == a)
+          throw ConfigError({file_, line_number, a}, "the record already has a column '" + a +
+                                                         "', which the compensated output appends; rename it");
+      out += "," + a;
     }
-    if (index < 0) throw DataError({"<stdin>", 1, m.column}, "missing column '" + m.column + "' in the header");
-    const auto unit = find_unit(m.unit);
-    if (!unit) throw ConfigError({"", 0, "--column"}, "unknown unit '" + m.unit + "'");
-    if (m.role == "time") {
-      c.time = index;
-      c.time_unit = *unit;
-    } else if (m.role == role::kRate) {
-      c.rate = index;
-      c.rate_unit = *unit;
-    } else {
-      c.temp = index;
-      c.temp_unit = *unit;
-    }
+    return out + "\n";
   }
-  return c;
+
+  // Appends the output row for one input row (`line` without its line end).
+  void row(std::string_view line, int line_number, std::string& out) {
+    raw_cells(line, cells_);
+    if (cells_.size() != columns_)
+      throw DataError({file_, line_number, ""}, "row has " + std::to_string(cells_.size()) + " cells, the header has " +
+                                                    std::to_string(columns_));
+    const double t = time_ ? value(time_->first, time_->second, line_number, "time")
+                           : static_cast<double>(sample_) / options_.data.sample_rate_hz;
+    ++sample_;
+    replaced_.assign(cells_.size(), std::string());
+    std::string tail;
+    bool extrapolated = false;
+    for (auto& k : corrected_) {
+      const double measured = value(k.value_index, k.value_unit, line_number, k.channel->role);
+      const double temp = value(k.temp_index, k.temp_unit, line_number, k.channel->temperature_column);
+      if (k.device_index && !k.channel->device_id.empty()) {
+        const double id = value(*k.device_index, *find_unit("1"), line_number, "device_id");
+        char text[32];
+        const auto res = std::to_chars(text, text + sizeof text, id);
+        if (std::string_view(text, static_cast<std::size_t>(res.ptr - text)) != k.channel->device_id)
+          throw ConfigError({file_, line_number, "device_id"},
+                            "this record is device " + std::string(text, res.ptr) + ", the model's " + k.channel->role +
+                                " was fitted on device " + k.channel->device_id);
+      }
+      double w;
+      try {
+        w = k.compensator.step(t, measured, temp);
+      } catch (const DataError& e) {
+        throw DataError({file_, line_number, e.where().field}, e.what());
+      }
+      double y = w;
+      if (k.kalman) {
+        if (!k.filter) k.filter.emplace(*k.kalman, w, k.kalman->r);
+        y = k.filter->step(w);
+      }
+      extrapolated = extrapolated || k.compensator.last_extrapolated();
+      number(y, k.value_unit, replaced_[k.value_index]);
+      tail += ',';
+      number(k.compensator.last_bias_rad_s() / k.value_unit.scale, *find_unit("1"), tail);
+      if (k.kalman) {
+        tail += ',';
+        number(w, k.value_unit, tail);
+      }
+    }
+    for (std::size_t i = 0; i < cells_.size(); ++i) {
+      if (i) out += ',';
+      if (replaced_[i].empty())
+        out.append(cells_[i]);
+      else
+        out += replaced_[i];
+    }
+    out += tail;
+    out += extrapolated ? ",1\n" : ",0\n";
+  }
+
+ private:
+  struct Corrected {
+    const calibration::ChannelCalibration* channel;
+    std::size_t value_index;
+    Unit value_unit;
+    std::size_t temp_index;
+    Unit temp_unit;
+    std::optional<std::size_t> device_index;
+    calibration::CausalCompensator compensator;
+    std::optional<kalman::ScalarModel> kalman;
+    std::optional<kalman::ScalarFilter> filter;
+  };
+
+  double value(std::size_t index, const Unit& unit, int line_number, const std::string& field) const {
+    std::string_view text = cells_[index];
+    while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
+    while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
+    double v = 0.0;
+    if (text.empty() || !parse_csv_number(text, v))
+      throw DataError({file_, line_number, field}, "expected a number, got " + quoted_excerpt(text));
+    if (!std::isfinite(v)) throw DataError({file_, line_number, field}, "NaN or Inf");
+    return to_internal(v, unit);
+  }
+
+  const calibration::ImuCalibration& model_;
+  const CompensateOptions& options_;
+  std::string file_;
+  std::optional<std::pair<std::size_t, Unit>> time_;
+  std::size_t columns_ = 0;
+  std::vector<Corrected> corrected_;
+  std::vector<std::string_view> cells_;
+  std::vector<std::string> replaced_;
+  long sample_ = 0;
+};
+
+void batch(const calibration::ImuCalibration& model, const CompensateOptions& o) {
+  if (o.out.empty()) throw ConfigError({"", 0, "--out"}, "--out is required without --stream");
+  const std::string& path = o.data.paths.front();
+  OutputSet outputs({path, o.model});
+  outputs.plan(o.out, "--out");
+  // The reader's checks first (cells, time order, gaps: errors naming line and column) ...
+  CsvReadOptions read;
+  for (const auto& c : o.data.columns) read.columns.push_back(parse_column_mapping(c));
+  read.required_roles = {};
+  read.sample_rate_hz = o.data.sample_rate_hz;
+  read.max_gap_factor = o.data.max_gap_factor;
+  const std::string text = read_text_file(path);
+  parse_csv(text, path, read);
+  // ... then every row through the engine.
+  Engine engine(model, o, path);
+  CsvLineCursor cursor(text);
+  std::string_view line;
+  cursor.next(line);
+  std::string out = engine.header(line, cursor.line_number());
+  out.reserve(text.size() * 2 + 64);
+  while (cursor.next(line)) engine.row(line, cursor.line_number(), out);
+  outputs.write(o.out, out);
+  outputs.commit();
 }
 
-double cell(const std::vector<std::string_view>& cells, int index, long line, const char* name) {
-  const std::string_view text = trim(cells[static_cast<std::size_t>(index)]);
-  double v = 0.0;
-  const auto res = std::from_chars(text.data(), text.data() + text.size(), v);
-  if (text.empty() || res.ec != std::errc() || res.ptr != text.data() + text.size()) {
-    throw DataError({"<stdin>", static_cast<int>(line), name}, "not a number: " + quoted_excerpt(text));
-  }
-  if (!std::isfinite(v)) throw DataError({"<stdin>", static_cast<int>(line), name}, "NaN or Inf");
-  return v;
-}
-
-void stream(const calibration::CalibrationModel& model, const CompensateOptions& o) {
-  Engine engine(model, o);
+void stream(const calibration::ImuCalibration& model, const CompensateOptions& o) {
+  Engine engine(model, o, "<stdin>");
   std::string out;
   out.reserve(1 << 17);
   std::vector<char> buffer(1 << 20);
   std::string carry;
-  long line = 0;
-  std::optional<StreamColumns> cols;
-  std::vector<std::string_view> cells;
-  long sample = 0;
+  int line = 0;
+  bool have_header = false;
   const auto flush = [&] {
     if (!out.empty() && std::fwrite(out.data(), 1, out.size(), stdout) != out.size()) {
       throw Error("write to standard output failed");
@@ -220,28 +272,17 @@ void stream(const calibration::CalibrationModel& model, const CompensateOptions&
   };
   const auto handle = [&](std::string_view text) {
     ++line;
+    if (line == 1 && text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);
     if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
-    if (trim(text).empty() || text.front() == '#') return;
-    if (!cols) {
-      cols = stream_columns(text, o);
-      out += engine.header();
+    std::string_view blank = text;
+    while (!blank.empty() && (blank.front() == ' ' || blank.front() == '\t')) blank.remove_prefix(1);
+    if (blank.empty() || text.front() == '#') return;
+    if (!have_header) {
+      out += engine.header(text, line);
+      have_header = true;
       return;
     }
-    cells = split(text);
-    if (cells.size() != cols->count) {
-      throw DataError({"<stdin>", static_cast<int>(line), ""},
-                      "expected " + std::to_string(cols->count) + " cells, got " + std::to_string(cells.size()));
-    }
-    const double t = cols->time >= 0 ? to_internal(cell(cells, cols->time, line, "time"), cols->time_unit)
-                                     : static_cast<double>(sample) / o.data.sample_rate_hz;
-    ++sample;
-    const double rate = to_internal(cell(cells, cols->rate, line, "rate"), cols->rate_unit);
-    const double temp = to_internal(cell(cells, cols->temp, line, "temperature"), cols->temp_unit);
-    try {
-      engine.row(t, rate, temp, out);
-    } catch (const DataError& e) {
-      throw DataError({"<stdin>", static_cast<int>(line), e.where().field}, e.what());
-    }
+    engine.row(text, line, out);
     if (out.size() > (1 << 16)) flush();
   };
   while (true) {
@@ -269,7 +310,7 @@ void stream(const calibration::CalibrationModel& model, const CompensateOptions&
     std::fflush(stdout);
   }
   if (!carry.empty()) handle(carry);
-  if (!cols) throw DataError({"<stdin>", 1, ""}, "empty input: no header row");
+  if (!have_header) throw DataError({"<stdin>", 1, ""}, "empty input: no header row");
   flush();
   std::fflush(stdout);
 }
@@ -280,16 +321,19 @@ void add_compensate_command(CLI::App& app, CommandEnv&) {
   auto o = std::make_shared<CompensateOptions>();
   auto* cmd = app.add_subcommand(
       "compensate", "apply a calibration model sample by sample (causal), to a file or as a stdin -> stdout pipe");
-  cmd->add_option("--model", o->model, "driftlab-calibration/1 model JSON (from driftlab calibrate)")->required();
-  cmd->add_option("--data", o->data.paths, "input CSV (default columns t_s, rate_dps, temp_c)")->expected(1);
-  cmd->add_option("--column", o->data.columns, "column mapping role=column:unit for rate, temperature, time");
+  cmd->add_option("--model", o->model, "calibration model JSON (from driftlab calibrate)")->required();
+  cmd->add_option("--data", o->data.paths, "input CSV (the columns the model was fitted on; every other column is "
+                                           "passed through)")->expected(1);
+  cmd->add_option("--column", o->data.columns,
+                  "column mapping role=column:unit, as for driftlab calibrate (gyro_x=gx:deg/s, temperature=T:degC, ...)");
   add_sampling_options(cmd, o->data.sample_rate_hz, o->data.max_gap_factor,
                        "sample rate in Hz, for input without a time column",
                        "batch: largest allowed time step, as a multiple of the median step (0 allows gaps)");
   cmd->add_option("--out", o->out, "output CSV (written atomically)");
   cmd->add_flag("--stream", o->stream,
                 "read CSV rows from standard input and write compensated rows to standard output, one by one");
-  cmd->add_flag("--kalman", o->kalman, "add a causal Kalman stage (random walk + white noise, plugins/kalman)");
+  cmd->add_flag("--kalman", o->kalman,
+                "add a causal Kalman stage to each gyro channel (random walk + white noise, plugins/kalman)");
   cmd->add_option("--kalman-q", o->kalman_q, "Kalman random-walk variance per sample, (rad/s)^2 (default: K^2/fs "
                                              "from the model's noise terms)")
       ->check(finite_number(0.0, 1e12));
@@ -302,7 +346,9 @@ void add_compensate_command(CLI::App& app, CommandEnv&) {
       throw ConfigError({"", 0, "--data"}, "give either --data (with --out) or --stream");
     }
     if (o->stream && !o->out.empty()) throw ConfigError({"", 0, "--out"}, "--stream writes to standard output; drop --out");
-    const auto model = calibration::read_calibration_model(o->model);
+    if (!o->kalman && (o->kalman_q > 0 || o->kalman_r > 0 || o->kalman_fs > 0))
+      throw ConfigError({"", 0, "--kalman-q"}, "--kalman-q, --kalman-r and --kalman-fs need --kalman");
+    const auto model = calibration::read_calibration(o->model);
     if (o->stream) {
       stream(model, *o);
     } else {

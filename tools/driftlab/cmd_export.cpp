@@ -18,7 +18,11 @@ struct ExportOptions {
 
 void export_command(const ExportOptions& o) {
   check_output(o.out, {o.model});
-  const auto model = calibration::read_calibration_model(o.model);
+  const auto imu_model = calibration::read_calibration(o.model);
+  if (o.format != "json" && imu_model.channels.size() != 1)
+    throw ConfigError({o.model, 0, "channels"}, "the " + o.format + " export takes a one-channel model; this one has " +
+                                                    std::to_string(imu_model.channels.size()));
+  const auto& model = imu_model.channels.front();
   calibration::ExportResult r;
   if (o.format == "c-header") {
     r = calibration::export_c_header(model, o.e);
@@ -29,7 +33,7 @@ void export_command(const ExportOptions& o) {
   } else if (o.format == "kalibr") {
     r = calibration::export_kalibr_imu_yaml(model, o.e);
   } else {
-    r.text = calibration::to_json_text(model);
+    r.text = calibration::to_json_text(imu_model);
   }
   write_file_atomically(o.out, r.text);
   for (const auto& n : r.notes) std::cerr << "note: " << n << "\n";

@@ -53,8 +53,10 @@ void export_command(const MrptOptions& o, CommandEnv& env) {
 
 void compensate_command(const MrptOptions& o, CommandEnv& env) {
   check_output(o.out, {o.input, o.model});
-  const auto model = calibration::read_calibration_model(o.model);
-  calibration::CausalCompensator compensator(model);
+  const auto imu_model = calibration::read_calibration(o.model);
+  const auto* yaw = imu_model.find({imu::Sensor::Gyro, 'z', 0});
+  if (!yaw) throw ConfigError({o.model, 0, "channels"}, "the model has no gyro_z channel, the rate this command corrects");
+  calibration::CausalCompensator compensator(yaw->model);
   std::size_t extrapolated = 0;
   env.progress("mrpt compensate", 0.0);
   const auto stats = mrpt_bridge::compensate_rawlog(

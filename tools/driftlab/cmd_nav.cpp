@@ -83,7 +83,10 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
   std::string model_source;
   calibration::CalibrationModel model;
   if (!o.model.empty()) {
-    model = calibration::read_calibration_model(o.model);
+    const auto imu_model = calibration::read_calibration(o.model);
+    const auto* yaw = imu_model.find({imu::Sensor::Gyro, 'z', 0});
+    if (!yaw) throw ConfigError({o.model, 0, "channels"}, "nav needs the model of the yaw gyro (gyro_z), which this model lacks");
+    model = yaw->model;
     model_source = o.model;
   } else {
     mrpt_bridge::OvenCalibration oven;
@@ -96,7 +99,7 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
               << "; the drive uses seed " << scenario.seed << ")\n";
     model = mrpt_bridge::calibrate_on_oven_run(device, oven);
     model.validate();
-    outputs.write(out / "model.json", calibration::to_json_text(model));
+    outputs.write(out / "model.json", calibration::to_json_text(calibration::single_axis(model, 'z', device.name)));
     model_source = (out / "model.json").string() + " (" + o.calibration_kind + ", calibrated by nav on a " +
                    (model.fit.records.empty() ? std::string("simulated oven run") : model.fit.records.front()) + ")";
   }

@@ -25,7 +25,6 @@ calibration::CalibrationModel calibrate_on_oven_run(const devices::DeviceDefinit
   record.true_rate_rad_s = run.true_rate_rad_s;
   calibration::FitOptions fit;
   fit.kind = options.kind;
-  fit.device = device.name;
   fit.reference_temp_c = device.error_model.reference_temp_c;
   fit.seed = options.seed;
   if (options.progress) fit.progress = options.progress;
