@@ -2,6 +2,7 @@
 
 #include "plugins/common/ridge.hpp"
 
+#include "framework/parallel.hpp"
 #include "framework/seeded_random.hpp"
 
 #include <Eigen/Cholesky>
@@ -12,7 +13,6 @@
 #include <random>
 #include <stdexcept>
 #include <string>
-#include <thread>
 
 namespace driftlab::rbf {
 namespace {
@@ -202,8 +202,10 @@ Eigen::VectorXd Network::predict(const Eigen::MatrixXd& X, unsigned threads) con
          std::to_string(mean_.size()));
   }
   Eigen::VectorXd out(X.rows());
-  ridge::for_blocks((X.rows() + ridge::kBlockRows - 1) / ridge::kBlockRows, threads, [&](Eigen::Index b) {
-    const Eigen::Index start = b * ridge::kBlockRows, len = std::min(ridge::kBlockRows, X.rows() - start);
+  const auto blocks = static_cast<std::size_t>((X.rows() + ridge::kBlockRows - 1) / ridge::kBlockRows);
+  parallel_for(blocks, threads, [&](std::size_t block) {
+    const Eigen::Index start = static_cast<Eigen::Index>(block) * ridge::kBlockRows;
+    const Eigen::Index len = std::min(ridge::kBlockRows, X.rows() - start);
     const Eigen::MatrixXd U =
         (X.middleRows(start, len).rowwise() - mean_).array().rowwise() / scale_.array();
     out.segment(start, len) = (activations(U, centres_, sigma_) * weights_).array() + bias_;
