@@ -1,26 +1,22 @@
 #include "plugins/emd/emd.hpp"
 
+#include "framework/parallel.hpp"
 #include "framework/seeded_random.hpp"
 #include "framework/simd.hpp"
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <bit>
 #include <cmath>
-#include <condition_variable>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
-#include <exception>
 #include <initializer_list>
 #include <memory>
-#include <mutex>
 #include <numbers>
 #include <random>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <type_traits>
 #include <vector>
 
@@ -1139,47 +1135,20 @@ void fill_gaussian(std::uint64_t seed, int member, double* out, Index n) {
   }
 }
 
-// Runs work(member, worker) for every member on `threads` workers and calls
-// reduce(member, worker) in member order 0, 1, ..., members - 1.
+// Runs work(member, slot) for every member and reduce(member, slot) in member order 0, 1, ...,
+// members - 1. Members go in batches of `threads` (at most `members`) through parallel_for, member
+// first + k of a batch in slot k < threads, and a batch is reduced before the next one starts, so
+// a slot's buffers serve one member at a time.
 template <class Work, class Reduce>
 void for_members_in_order(int members, unsigned threads, Work work, Reduce reduce) {
-  const unsigned workers = std::min<unsigned>(threads, static_cast<unsigned>(members));
-  if (workers <= 1) {
-    for (int i = 0; i < members; ++i) {
-      work(i, 0u);
-      reduce(i, 0u);
-    }
-    return;
+  const int batch = static_cast<int>(std::min<unsigned>(std::max(threads, 1u), static_cast<unsigned>(members)));
+  for (int first = 0; first < members; first += batch) {
+    const int size = std::min(batch, members - first);
+    parallel_for(static_cast<std::size_t>(size), threads, [&](std::size_t k) {
+      work(first + static_cast<int>(k), static_cast<unsigned>(k));
+    });
+    for (int k = 0; k < size; ++k) reduce(first + k, static_cast<unsigned>(k));
   }
-  std::atomic<int> next{0};
-  int turn = 0;
-  bool failed = false;
-  std::exception_ptr error;
-  std::mutex mutex;
-  std::condition_variable turn_changed;
-  auto run = [&](unsigned worker) {
-    try {
-      for (int i = next.fetch_add(1); i < members; i = next.fetch_add(1)) {
-        work(i, worker);
-        std::unique_lock lock(mutex);
-        turn_changed.wait(lock, [&] { return turn == i || failed; });
-        if (failed) return;
-        reduce(i, worker);
-        ++turn;
-        turn_changed.notify_all();
-      }
-    } catch (...) {
-      std::lock_guard lock(mutex);
-      if (!error) error = std::current_exception();
-      failed = true;
-      turn_changed.notify_all();
-    }
-  };
-  std::vector<std::thread> pool;
-  for (unsigned w = 1; w < workers; ++w) pool.emplace_back(run, w);
-  run(0);
-  for (std::thread& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
 }
 
 Eigen::MatrixXd stack(const std::vector<Eigen::VectorXd>& columns, int count, Index n) {
