@@ -1,5 +1,5 @@
 // regressor/rbf: adapter of plugins/rbf/rbf.hpp. With tune = true, fit() splits the samples by
-// rbf::blocked_holdout, lets the nested optimizer minimize the held-out RMSE over sigma,
+// holdout::blocked_holdout, lets the nested optimizer minimize the held-out RMSE over sigma,
 // log10(regularization), (k-means only) the integer number of centres and (tune_linear_tail) the
 // linear tail on or off, then refits on all
 // samples with the best values; ctx.diagnostics["tuning"] logs the start, the best and the
@@ -12,6 +12,7 @@
 
 #include "framework/error.hpp"
 #include "framework/registry.hpp"
+#include "plugins/common/holdout.hpp"
 #include "plugins/rbf/rbf.hpp"
 #include "plugins/tuning/tuning.hpp"
 
@@ -113,14 +114,14 @@ class RbfPlugin final : public Regressor {
       X.row(r) = X_all.middleRows(r * stride, stride).colwise().mean();
       y[r] = y_all.segment(r * stride, stride).mean();
     }
-    const auto split = rbf::blocked_holdout(X.rows(), holdout_fraction_, holdout_blocks_, config_.seed);
+    const auto split = holdout::blocked_holdout(X.rows(), holdout_fraction_, holdout_blocks_, config_.seed);
     const Eigen::MatrixXd X_train = X(split.train, Eigen::all);
     const Eigen::VectorXd y_train = y(split.train);
     const Eigen::MatrixXd X_holdout = X(split.holdout, Eigen::all);
     const Eigen::VectorXd y_holdout = y(split.holdout);
     const auto holdout_rmse = [&](const rbf::Config& c) {
       try {
-        return rbf::rmse(rbf::fit(X_train, y_train, c).network.predict(X_holdout), y_holdout);
+        return holdout::rmse(rbf::fit(X_train, y_train, c).network.predict(X_holdout), y_holdout);
       } catch (const std::invalid_argument&) {
         return std::numeric_limits<double>::infinity();
       }

@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "framework/error.hpp"
-#include "plugins/rbf/rbf.hpp"
+#include "plugins/common/holdout.hpp"
 
 namespace driftlab::tuning {
 
@@ -63,7 +63,7 @@ Split split(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Settings& 
   for (std::size_t i = 0; i < keep; ++i) rows.push_back(static_cast<Eigen::Index>(i * n / keep));
   const Eigen::MatrixXd Xs = X(rows, Eigen::all);
   const Eigen::VectorXd ys = y(rows);
-  const auto h = rbf::blocked_holdout(Xs.rows(), s.holdout_fraction, s.holdout_blocks, s.seed);
+  const auto h = holdout::blocked_holdout(Xs.rows(), s.holdout_fraction, s.holdout_blocks, s.seed);
   return {Xs(h.train, Eigen::all), Xs(h.holdout, Eigen::all), ys(h.train), ys(h.holdout)};
 }
 
@@ -74,7 +74,7 @@ Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, cons
   const auto criteria = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
     try {
       const Score score = fit_and_score(data, v);
-      return Eigen::Vector2d(rbf::rmse(score.holdout_prediction, data.y_holdout), score.complexity);
+      return Eigen::Vector2d(holdout::rmse(score.holdout_prediction, data.y_holdout), score.complexity);
     } catch (const std::invalid_argument&) {
       return Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
     }

@@ -1,5 +1,5 @@
 // Hyperparameter tuning shared by the regressor adapters (regressor/elm, regressor/svr): a blocked
-// holdout (rbf::blocked_holdout), the nested optimizer plugin minimizing one criterion (held-out
+// holdout (holdout::blocked_holdout), the nested optimizer plugin minimizing one criterion (held-out
 // RMSE) or two (held-out RMSE and a complexity measure the regressor names), and the common
 // parameters. Adapter-level code: it knows the plugin interfaces, not files.
 #pragma once
@@ -40,7 +40,7 @@ struct Split {
   Eigen::VectorXd y_train, y_holdout;
 };
 // Rows: an evenly spaced subsample of at most max_samples rows (first row kept; all when 0 or
-// enough), then the blocked holdout of rbf::blocked_holdout.
+// enough), then the blocked holdout of holdout::blocked_holdout.
 Split split(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Settings& s);
 
 // One candidate's fit: its predictions on the held-out rows and its complexity measure.
