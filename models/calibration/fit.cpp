@@ -8,6 +8,7 @@
 #include "framework/error.hpp"
 #include "framework/golden_section.hpp"
 #include "models/calibration/evidence.hpp"
+#include "plugins/common/holdout.hpp"
 #include "plugins/ga/ga.hpp"
 #include "plugins/polynomial/polynomial.hpp"
 #include "plugins/rbf/rbf.hpp"
@@ -376,7 +377,7 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
     X.col(0) = stacked(fs, &Features::tm)(st.rows).cwiseMax(m.valid_min_c).cwiseMin(m.valid_max_c);
     X.col(1) = stacked(fs, &Features::d)(st.rows);
     X.col(2) = stacked(fs, &Features::s)(st.rows);
-    const auto split = rbf::blocked_holdout(X.rows(), 0.2, 10, o.seed);
+    const auto split = holdout::blocked_holdout(X.rows(), 0.2, 10, o.seed);
     const Eigen::MatrixXd Xt = X(split.train, Eigen::all), Xh = X(split.holdout, Eigen::all);
     const Eigen::VectorXd rt = residual(split.train), rh = residual(split.holdout);
     rbf::Config base;
@@ -394,7 +395,7 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
     const auto objective = [&](const Eigen::VectorXd& v) {
       double e = std::numeric_limits<double>::infinity();
       try {
-        e = rbf::rmse(rbf::fit(Xt, rt, decode(v)).network.predict(Xh), rh);
+        e = holdout::rmse(rbf::fit(Xt, rt, decode(v)).network.predict(Xh), rh);
       } catch (const std::invalid_argument&) {
       }
       o.progress("calibrate: RBF tuning (GA)", std::min(1.0, double(++evals) / expected));
@@ -407,7 +408,7 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
     gc.threads = 1;  // one thread: the progress counter is not thread safe, and fits are seconds
     const double max_centres = std::min<double>(40.0, static_cast<double>(split.train.size()) / 4.0);
     const auto result = ga::minimize(objective, {{0.1, 3.0, false}, {-8.0, -1.0, false}, {3.0, std::max(3.0, max_centres), true}}, gc);
-    const double no_rbf = rbf::rmse(Eigen::VectorXd::Zero(rh.size()), rh);
+    const double no_rbf = holdout::rmse(Eigen::VectorXd::Zero(rh.size()), rh);
     if (std::isfinite(result.best_value) && result.best_value < no_rbf) {
       const auto net = rbf::fit(X, residual, decode(result.best)).network;
       RbfTerm t;

@@ -3,6 +3,9 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <stdexcept>
+#include <vector>
+
+#include "framework/parallel.hpp"
 
 namespace driftlab::ridge {
 
@@ -23,14 +26,15 @@ Eigen::VectorXd solve(Eigen::Index rows, Eigen::Index columns,
   const Eigen::Index blocks = (rows + kBlockRows - 1) / kBlockRows;
   std::vector<Eigen::MatrixXd> grams(static_cast<std::size_t>(blocks));
   std::vector<Eigen::VectorXd> rhss(static_cast<std::size_t>(blocks));
-  for_blocks(blocks, threads, [&](Eigen::Index b) {
+  parallel_for(static_cast<std::size_t>(blocks), threads, [&](std::size_t block) {
+    const auto b = static_cast<Eigen::Index>(block);
     const Eigen::Index start = b * kBlockRows, len = std::min(kBlockRows, rows - start);
     Eigen::MatrixXd B(len, k);
     B.leftCols(columns) = design(start, len);
     B.col(columns).setOnes();
-    auto& g = grams[static_cast<std::size_t>(b)] = Eigen::MatrixXd::Zero(k, k);
+    auto& g = grams[block] = Eigen::MatrixXd::Zero(k, k);
     g.selfadjointView<Eigen::Lower>().rankUpdate(B.transpose());
-    rhss[static_cast<std::size_t>(b)] = B.transpose() * y.segment(start, len);
+    rhss[block] = B.transpose() * y.segment(start, len);
   });
   Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(k, k);
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(k);

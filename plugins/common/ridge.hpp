@@ -3,10 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <algorithm>
 #include <functional>
-#include <thread>
-#include <vector>
 
 namespace driftlab::ridge {
 
@@ -22,26 +19,14 @@ struct Standardizer {
   }
 };
 
-// Runs body(b) for the blocks b = 0..blocks-1, block b on thread b % threads (at most `threads`).
-template <class Body>
-void for_blocks(Eigen::Index blocks, unsigned threads, const Body& body) {
-  const Eigen::Index workers = std::clamp<Eigen::Index>(threads, 1, std::max<Eigen::Index>(blocks, 1));
-  const auto work = [&](Eigen::Index first) {
-    for (Eigen::Index b = first; b < blocks; b += workers) body(b);
-  };
-  std::vector<std::thread> pool;
-  for (Eigen::Index w = 1; w < workers; ++w) pool.emplace_back(work, w);
-  work(0);
-  for (auto& t : pool) t.join();
-}
-
 // Solves (A^T A / N + lambda I') w = A^T y / N by LDLT, where A = [design | 1] (a constant column
 // appended last) and design(start, len) returns rows start..start+len-1 of the design (len x
 // columns). I' is the identity on the first `penalized` columns (all columns when negative): the
 // constant and any later columns are not penalized. Blocks of kBlockRows rows are formed on
-// `threads` threads and their Gram matrices summed in block order, so the result does not depend
-// on the thread count. Returns w (columns + 1 values, the constant's weight last). Throws
-// std::invalid_argument when the system cannot be factorized or the weights are not finite.
+// `threads` threads (framework/parallel.hpp) and their Gram matrices summed in block order, so the
+// result does not depend on the thread count; an exception thrown by `design` reaches the caller.
+// Returns w (columns + 1 values, the constant's weight last). Throws std::invalid_argument when the
+// system cannot be factorized or the weights are not finite.
 Eigen::VectorXd solve(Eigen::Index rows, Eigen::Index columns,
                       const std::function<Eigen::MatrixXd(Eigen::Index start, Eigen::Index len)>& design,
                       const Eigen::VectorXd& y, double lambda, Eigen::Index penalized = -1, unsigned threads = 1);

@@ -65,8 +65,9 @@
 // Ensembles (EEMD, CEEMDAN):
 //   - Member i adds Gaussian white noise drawn from its own generator, seeded from (seed, i)
 //     (splitmix64 of both into std::mt19937_64, Box-Muller normals), so members do not depend on
-//     which thread runs them. Members run on `threads` std::threads; their contributions are summed
-//     in member order 0, 1, ..., I-1, so the output is bit-identical for any thread count.
+//     which thread runs them. Members run in batches of `threads` on as many threads
+//     (framework/parallel.hpp); their contributions are summed in member order 0, 1, ..., I-1, so
+//     the output is bit-identical for any thread count.
 //   - noise_strength is relative to the population standard deviation of x (EEMD: the added noise
 //     has std noise_strength * std(x); Wu & Huang 2009 recommend 0.2 with I = 100).
 //   - EEMD IMF alignment: member k-th IMFs are averaged slot by slot; K = max_imfs when given,

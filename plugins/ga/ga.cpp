@@ -1,16 +1,15 @@
 #include "plugins/ga/ga.hpp"
 
+#include "framework/parallel.hpp"
 #include "framework/seeded_random.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <exception>
 #include <limits>
 #include <numeric>
 #include <random>
 #include <stdexcept>
 #include <string>
-#include <thread>
 
 namespace driftlab::ga {
 namespace {
@@ -116,29 +115,13 @@ Eigen::VectorXd random_individual(const std::vector<Gene>& genes, SeededRandom& 
   return x;
 }
 
-// Evaluates individuals [first, population.size()) into values; workers take interleaved indices.
+// Evaluates individuals [first, population.size()) into values on `threads` threads.
 void evaluate(const Objective& objective, const std::vector<Eigen::VectorXd>& population,
               std::size_t first, std::vector<double>& values, unsigned threads) {
-  const std::size_t count = population.size() - first;
-  std::vector<std::exception_ptr> errors(count);
-  auto work = [&](std::size_t worker, std::size_t workers) {
-    for (std::size_t j = worker; j < count; j += workers) {
-      try {
-        const double v = objective(population[first + j]);
-        values[first + j] = std::isfinite(v) ? v : std::numeric_limits<double>::infinity();
-      } catch (...) {
-        errors[j] = std::current_exception();
-      }
-    }
-  };
-  const std::size_t workers = std::clamp<std::size_t>(threads, 1, std::max<std::size_t>(count, 1));
-  std::vector<std::thread> pool;
-  for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(work, w, workers);
-  work(0, workers);
-  for (auto& t : pool) t.join();
-  for (const auto& e : errors) {
-    if (e) std::rethrow_exception(e);
-  }
+  parallel_for(population.size() - first, threads, [&](std::size_t j) {
+    const double v = objective(population[first + j]);
+    values[first + j] = std::isfinite(v) ? v : std::numeric_limits<double>::infinity();
+  });
 }
 
 std::vector<std::size_t> ranking(const std::vector<double>& values) {

@@ -23,14 +23,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <exception>
 #include <limits>
 #include <memory>
 #include <mutex>
 #include <numeric>
 #include <stdexcept>
-#include <thread>
 
+#include "framework/parallel.hpp"
 #include "framework/seeded_random.hpp"
 
 namespace driftlab::pagmo_optimizer {
@@ -335,8 +334,8 @@ struct Problem {
   std::string get_name() const { return "driftlab objective"; }
 };
 
-// Batch evaluator: `threads` workers take fixed interleaved slots, values are recorded afterwards
-// in index order, so the result does not depend on the thread count.
+// Batch evaluator: the points are evaluated by parallel_for on `threads` threads, each into its own
+// slot, and recorded afterwards in index order, so the result does not depend on the thread count.
 struct BatchEvaluator {
   unsigned threads = 1;
 
@@ -347,25 +346,11 @@ struct BatchEvaluator {
     const std::size_t count = batch.size() / dim;
     std::vector<Eigen::VectorXd> xs(count);
     std::vector<pagmo::vector_double> fs(count);
-    std::vector<std::exception_ptr> errors(count);
-    const auto work = [&](std::size_t first) {
-      for (std::size_t i = first; i < count; i += threads) {
-        try {
-          xs[i] = e.admissible(pagmo::vector_double(batch.begin() + static_cast<std::ptrdiff_t>(i * dim),
-                                                    batch.begin() + static_cast<std::ptrdiff_t>((i + 1) * dim)));
-          fs[i] = e.evaluate(xs[i]);
-        } catch (...) {
-          errors[i] = std::current_exception();
-        }
-      }
-    };
-    std::vector<std::thread> pool;
-    for (unsigned t = 1; t < threads && t < count; ++t) pool.emplace_back(work, t);
-    work(0);
-    for (auto& th : pool) th.join();
-    for (const auto& error : errors) {
-      if (error) std::rethrow_exception(error);
-    }
+    parallel_for(count, threads, [&](std::size_t i) {
+      xs[i] = e.admissible(pagmo::vector_double(batch.begin() + static_cast<std::ptrdiff_t>(i * dim),
+                                                batch.begin() + static_cast<std::ptrdiff_t>((i + 1) * dim)));
+      fs[i] = e.evaluate(xs[i]);
+    });
     pagmo::vector_double out;
     out.reserve(count * nf);
     for (std::size_t i = 0; i < count; ++i) {

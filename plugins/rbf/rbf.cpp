@@ -1,7 +1,9 @@
 #include "plugins/rbf/rbf.hpp"
 
+#include "plugins/common/holdout.hpp"
 #include "plugins/common/ridge.hpp"
 
+#include "framework/parallel.hpp"
 #include "framework/seeded_random.hpp"
 
 #include <Eigen/Cholesky>
@@ -12,7 +14,6 @@
 #include <random>
 #include <stdexcept>
 #include <string>
-#include <thread>
 
 namespace driftlab::rbf {
 namespace {
@@ -179,7 +180,7 @@ Eigen::VectorXd lms(const Eigen::MatrixXd& U, const Eigen::VectorXd& y, const Ei
     for (Eigen::Index i = 0; i < rows_as_columns.cols(); ++i) {
       lms_step(w, rows_as_columns.col(i), y[i], c.lms_rate);
     }
-    epoch_rmse.push_back(rmse(rows_as_columns.transpose() * w, y));
+    epoch_rmse.push_back(holdout::rmse(rows_as_columns.transpose() * w, y));
   }
   return w;
 }
@@ -202,8 +203,10 @@ Eigen::VectorXd Network::predict(const Eigen::MatrixXd& X, unsigned threads) con
          std::to_string(mean_.size()));
   }
   Eigen::VectorXd out(X.rows());
-  ridge::for_blocks((X.rows() + ridge::kBlockRows - 1) / ridge::kBlockRows, threads, [&](Eigen::Index b) {
-    const Eigen::Index start = b * ridge::kBlockRows, len = std::min(ridge::kBlockRows, X.rows() - start);
+  const auto blocks = static_cast<std::size_t>((X.rows() + ridge::kBlockRows - 1) / ridge::kBlockRows);
+  parallel_for(blocks, threads, [&](std::size_t block) {
+    const Eigen::Index start = static_cast<Eigen::Index>(block) * ridge::kBlockRows;
+    const Eigen::Index len = std::min(ridge::kBlockRows, X.rows() - start);
     const Eigen::MatrixXd U =
         (X.middleRows(start, len).rowwise() - mean_).array().rowwise() / scale_.array();
     out.segment(start, len) = (activations(U, centres_, sigma_) * weights_).array() + bias_;
@@ -240,32 +243,6 @@ FitResult fit(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Config& 
   // w = (Gaussian weights, linear tail if any, constant last)
   return {Network(mean, scale, std::move(C), config.sigma, w.head(k), w[w.size() - 1], w.segment(k, w.size() - k - 1)),
           std::move(epoch_rmse)};
-}
-
-Split blocked_holdout(Eigen::Index n, double fraction, std::size_t blocks, std::uint64_t seed) {
-  if (!(fraction > 0 && fraction < 1)) fail("holdout fraction must lie in (0, 1)");
-  if (blocks < 1) fail("holdout needs at least one block");
-  SeededRandom rng(seed);
-  std::vector<bool> held(static_cast<std::size_t>(n), false);
-  const auto b = static_cast<Eigen::Index>(blocks);
-  for (Eigen::Index s = 0; s < b; ++s) {
-    const Eigen::Index begin = s * n / b;
-    const Eigen::Index length = (s + 1) * n / b - begin;
-    const auto run = static_cast<Eigen::Index>(std::llround(fraction * static_cast<double>(length)));
-    if (run == 0) continue;
-    const auto start = begin + static_cast<Eigen::Index>(rng.index(static_cast<std::size_t>(length - run + 1)));
-    for (Eigen::Index i = start; i < start + run; ++i) held[static_cast<std::size_t>(i)] = true;
-  }
-  Split split;
-  for (Eigen::Index i = 0; i < n; ++i) (held[static_cast<std::size_t>(i)] ? split.holdout : split.train).push_back(i);
-  if (split.train.empty() || split.holdout.empty()) {
-    fail("holdout of " + std::to_string(n) + " samples leaves an empty training or holdout set");
-  }
-  return split;
-}
-
-double rmse(const Eigen::VectorXd& predicted, const Eigen::VectorXd& actual) {
-  return std::sqrt((predicted - actual).squaredNorm() / static_cast<double>(actual.size()));
 }
 
 }  // namespace driftlab::rbf

@@ -102,15 +102,4 @@ void lms_step(Eigen::VectorXd& w, const Eigen::Ref<const Eigen::VectorXd>& a, do
 // Activations a_j(u) of standardized rows U against centres C (N x K, no bias column).
 Eigen::MatrixXd activations(const Eigen::MatrixXd& U, const Eigen::MatrixXd& C, double sigma);
 
-// Rows of a blocked holdout: the samples are cut into `blocks` equal segments and in each a
-// contiguous run of round(fraction * segment length) samples, at a seeded position, is held out
-// (contiguous runs limit the leakage of autocorrelated noise; spreading them over the record
-// keeps the held-out inputs inside the training range). Returns sorted indices.
-struct Split {
-  std::vector<Eigen::Index> train, holdout;
-};
-Split blocked_holdout(Eigen::Index n, double fraction, std::size_t blocks, std::uint64_t seed);
-
-double rmse(const Eigen::VectorXd& predicted, const Eigen::VectorXd& actual);
-
 }  // namespace driftlab::rbf

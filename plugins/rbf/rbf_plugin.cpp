@@ -1,10 +1,10 @@
-// regressor/rbf: adapter of plugins/rbf/rbf.hpp. With tune = true, fit() splits the samples by
-// rbf::blocked_holdout, lets the nested optimizer minimize the held-out RMSE over sigma,
-// log10(regularization), (k-means only) the integer number of centres and (tune_linear_tail) the
-// linear tail on or off, then refits on all
-// samples with the best values; ctx.diagnostics["tuning"] logs the start, the best and the
-// per-generation history. Tuning sees at most tune_rows means of consecutive rows (see tuned()).
-// Hyperparameters that make the kernel reject the fit score +infinity.
+// regressor/rbf: adapter of plugins/rbf/rbf.hpp. With tune = true, fit() runs the shared tuning
+// loop (plugins/tuning): the samples split by holdout::blocked_holdout, the nested optimizer
+// minimizing the held-out RMSE over sigma, log10(regularization), (k-means only) the integer number
+// of centres and (tune_linear_tail) the linear tail on or off; then it refits on all samples with
+// the best values; ctx.diagnostics["tuning"] logs the start, the best and the per-generation
+// history. Tuning sees at most tune_rows means of consecutive rows (see tuned()). Hyperparameters
+// that make the kernel reject the fit score +infinity.
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -12,6 +12,7 @@
 
 #include "framework/error.hpp"
 #include "framework/registry.hpp"
+#include "plugins/common/holdout.hpp"
 #include "plugins/rbf/rbf.hpp"
 #include "plugins/tuning/tuning.hpp"
 
@@ -46,9 +47,12 @@ class RbfPlugin final : public Regressor {
         sigma_range_(range_of(p, "tune_sigma")),
         centres_range_(range_of(p, "tune_centres")),
         log10_regularization_range_(range_of(p, "tune_log10_regularization")),
-        holdout_fraction_(p.real("holdout_fraction")),
-        holdout_blocks_(static_cast<std::size_t>(p.integer("holdout_blocks"))),
-        tune_rows_(static_cast<std::size_t>(p.integer("tune_rows"))),
+        tuning_{.plugin = "regressor/rbf",
+                .holdout_fraction = p.real("holdout_fraction"),
+                .holdout_blocks = static_cast<std::size_t>(p.integer("holdout_blocks")),
+                .max_samples = static_cast<std::size_t>(p.integer("tune_rows")),
+                .rows = tuning::Rows::RunMeans,
+                .seed = static_cast<std::uint64_t>(p.integer("seed"))},
         tune_linear_tail_(p.boolean("tune_linear_tail")) {
     if (p.boolean("tune")) optimizer_ = registry.create_as<Optimizer>(p.plugin("optimizer"));
   }
@@ -99,28 +103,13 @@ class RbfPlugin final : public Regressor {
     return out;
   }
 
-  // Tuning sees the means of consecutive runs of `stride` rows (stride = ceil(rows / tune_rows)):
-  // its cost does not grow with the record, and a smooth target's held-out error is not drowned in
-  // sample noise. The final fit uses every row.
-  rbf::Config tuned(const Eigen::MatrixXd& X_all, const Eigen::VectorXd& y_all, RunContext& ctx) const {
-    const Eigen::Index stride =
-        std::max<Eigen::Index>(1, (X_all.rows() + static_cast<Eigen::Index>(tune_rows_) - 1) /
-                                      static_cast<Eigen::Index>(tune_rows_));
-    const Eigen::Index runs = X_all.rows() / stride;
-    Eigen::MatrixXd X(runs, X_all.cols());
-    Eigen::VectorXd y(runs);
-    for (Eigen::Index r = 0; r < runs; ++r) {
-      X.row(r) = X_all.middleRows(r * stride, stride).colwise().mean();
-      y[r] = y_all.segment(r * stride, stride).mean();
-    }
-    const auto split = rbf::blocked_holdout(X.rows(), holdout_fraction_, holdout_blocks_, config_.seed);
-    const Eigen::MatrixXd X_train = X(split.train, Eigen::all);
-    const Eigen::VectorXd y_train = y(split.train);
-    const Eigen::MatrixXd X_holdout = X(split.holdout, Eigen::all);
-    const Eigen::VectorXd y_holdout = y(split.holdout);
+  // Tuning sees the means of consecutive runs of rows (tuning::Rows::RunMeans, at most tune_rows of
+  // them); the final fit uses every row.
+  rbf::Config tuned(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, RunContext& ctx) const {
+    const tuning::Split data = tuning::split(X, y, tuning_);
     const auto holdout_rmse = [&](const rbf::Config& c) {
       try {
-        return rbf::rmse(rbf::fit(X_train, y_train, c).network.predict(X_holdout), y_holdout);
+        return holdout::rmse(rbf::fit(data.X_train, data.y_train, c).network.predict(data.X_holdout), data.y_holdout);
       } catch (const std::invalid_argument&) {
         return std::numeric_limits<double>::infinity();
       }
@@ -130,37 +119,33 @@ class RbfPlugin final : public Regressor {
                               {"log10_regularization", log10_regularization_range_.low,
                                log10_regularization_range_.high, false}};
     if (tunes_centres()) {
-      const double usable = static_cast<double>(std::min<std::size_t>(split.train.size(), config_.kmeans_sample));
+      const double usable = static_cast<double>(
+          std::min<std::size_t>(static_cast<std::size_t>(data.X_train.rows()), config_.kmeans_sample));
       bounds.push_back({"centres", centres_range_.low, std::min(centres_range_.high, usable), true});
     }
     if (tune_linear_tail_) bounds.push_back({"linear_tail", 0.0, 1.0, true});
-    RunContext inner;
-    inner.seed = ctx.seed;
-    inner.threads = ctx.threads;
-    const OptimizationResult result =
-        optimizer_->minimize([&](const Eigen::VectorXd& v) { return holdout_rmse(decode(v)); }, bounds, inner);
-    if (!std::isfinite(result.best_value)) {
-      throw DataError({"", 0, "features"},
-                      "regressor/rbf: no hyperparameters in the search ranges gave a usable fit");
-    }
+    const auto fit_and_score = [&](const tuning::Split& d, const Eigen::VectorXd& v) {
+      return tuning::Score{rbf::fit(d.X_train, d.y_train, decode(v)).network.predict(d.X_holdout)};
+    };
+    const tuning::Search found = tuning::search(*optimizer_, bounds, tuning_, data, fit_and_score, ctx);
+    const OptimizationResult& result = found.result;
     const rbf::Config best = decode(result.best);
     ctx.diagnostics["tuning"] = {
         {"objective", "RMSE on a blocked holdout (unit of the target)"},
-        {"holdout", {{"fraction", holdout_fraction_}, {"blocks", holdout_blocks_}, {"row_stride", stride},
-                     {"train_samples", split.train.size()}, {"holdout_samples", split.holdout.size()}}},
+        {"holdout", {{"fraction", tuning_.holdout_fraction}, {"blocks", tuning_.holdout_blocks},
+                     {"row_stride", data.row_stride}, {"train_samples", data.X_train.rows()},
+                     {"holdout_samples", data.X_holdout.rows()}}},
         {"start", describe(config_, holdout_rmse(config_))},
         {"best", describe(best, result.best_value)},
         {"history", result.history},
         {"evaluations", result.evaluations},
-        {"optimizer", inner.diagnostics}};
+        {"optimizer", found.optimizer_diagnostics}};
     return best;
   }
 
   rbf::Config config_;
   SearchRange sigma_range_, centres_range_, log10_regularization_range_;
-  double holdout_fraction_;
-  std::size_t holdout_blocks_;
-  std::size_t tune_rows_;
+  tuning::Settings tuning_;  // one objective, the held-out RMSE
   bool tune_linear_tail_;
   std::unique_ptr<Optimizer> optimizer_;
   std::optional<rbf::Network> network_;

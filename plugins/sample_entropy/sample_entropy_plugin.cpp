@@ -6,14 +6,14 @@
 // are summed over the windows (pairs within a window), r is relative to the whole IMF's population
 // SD, so the cost no longer grows with the record while every part of it is seen.
 #include <cmath>
-#include <exception>
 #include <limits>
 #include <memory>
 #include <span>
 #include <stdexcept>
-#include <thread>
+#include <string>
 
 #include "framework/error.hpp"
+#include "framework/parallel.hpp"
 #include "framework/registry.hpp"
 #include "plugins/sample_entropy/sample_entropy.hpp"
 
@@ -96,32 +96,15 @@ class SampleEntropyClassifier final : public Classifier {
   }
 
   std::vector<sampen::Result> entropies(const Eigen::MatrixXd& imfs, unsigned threads) const {
-    const auto count = static_cast<std::size_t>(imfs.cols());
-    std::vector<sampen::Result> results(count);
-    std::vector<std::exception_ptr> errors(count);
-    auto work = [&](std::size_t first, std::size_t stride) {
-      for (std::size_t k = first; k < count; k += stride) {
-        try {
-          const auto column = imfs.col(static_cast<Eigen::Index>(k));
-          results[k] = windowed_entropy(std::span<const double>(column.data(), static_cast<std::size_t>(column.size())));
-        } catch (...) {
-          errors[k] = std::current_exception();
-        }
-      }
-    };
-    const std::size_t workers = std::min<std::size_t>(std::max(1u, threads), std::max<std::size_t>(count, 1));
-    std::vector<std::thread> pool;
-    for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(work, w, workers);
-    work(0, workers);
-    for (auto& t : pool) t.join();
-    for (std::size_t k = 0; k < count; ++k) {
-      if (!errors[k]) continue;
+    std::vector<sampen::Result> results(static_cast<std::size_t>(imfs.cols()));
+    parallel_for(results.size(), threads, [&](std::size_t k) {
+      const auto column = imfs.col(static_cast<Eigen::Index>(k));
       try {
-        std::rethrow_exception(errors[k]);
+        results[k] = windowed_entropy(std::span<const double>(column.data(), static_cast<std::size_t>(column.size())));
       } catch (const std::invalid_argument& e) {
         throw DataError({"", 0, "imf" + std::to_string(k + 1)}, e.what());
       }
-    }
+    });
     return results;
   }
 

@@ -1,11 +1,12 @@
 #include "plugins/tuning/tuning.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
 #include "framework/error.hpp"
-#include "plugins/rbf/rbf.hpp"
+#include "plugins/common/holdout.hpp"
 
 namespace driftlab::tuning {
 
@@ -56,25 +57,49 @@ Settings settings(const ParamValues& p, const Optimizer& optimizer, std::string 
   return s;
 }
 
-Split split(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Settings& s) {
+namespace {
+
+// The rows the tuning sees (Settings::rows).
+struct Thinned {
+  Eigen::MatrixXd X;
+  Eigen::VectorXd y;
+  Eigen::Index stride = 1;
+};
+
+Thinned even_subsample(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, std::size_t max_samples) {
   std::vector<Eigen::Index> rows;
   const auto n = static_cast<std::size_t>(X.rows());
-  const std::size_t keep = s.max_samples == 0 ? n : std::min(n, s.max_samples);
+  const std::size_t keep = max_samples == 0 ? n : std::min(n, max_samples);
   for (std::size_t i = 0; i < keep; ++i) rows.push_back(static_cast<Eigen::Index>(i * n / keep));
-  const Eigen::MatrixXd Xs = X(rows, Eigen::all);
-  const Eigen::VectorXd ys = y(rows);
-  const auto h = rbf::blocked_holdout(Xs.rows(), s.holdout_fraction, s.holdout_blocks, s.seed);
-  return {Xs(h.train, Eigen::all), Xs(h.holdout, Eigen::all), ys(h.train), ys(h.holdout)};
+  return {X(rows, Eigen::all), y(rows)};
 }
 
-Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s,
-                    const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const FitAndScore& fit_and_score,
-                    RunContext& ctx) {
-  const Split data = split(X, y, s);
+Thinned run_means(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, std::size_t max_samples) {
+  const auto cap = static_cast<Eigen::Index>(max_samples);
+  const Eigen::Index stride = cap == 0 ? 1 : std::max<Eigen::Index>(1, (X.rows() + cap - 1) / cap);
+  const Eigen::Index runs = X.rows() / stride;
+  Thinned out{Eigen::MatrixXd(runs, X.cols()), Eigen::VectorXd(runs), stride};
+  for (Eigen::Index r = 0; r < runs; ++r) {
+    out.X.row(r) = X.middleRows(r * stride, stride).colwise().mean();
+    out.y[r] = y.segment(r * stride, stride).mean();
+  }
+  return out;
+}
+
+}  // namespace
+
+Split split(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Settings& s) {
+  const Thinned r = s.rows == Rows::RunMeans ? run_means(X, y, s.max_samples) : even_subsample(X, y, s.max_samples);
+  const auto h = holdout::blocked_holdout(r.X.rows(), s.holdout_fraction, s.holdout_blocks, s.seed);
+  return {r.X(h.train, Eigen::all), r.X(h.holdout, Eigen::all), r.y(h.train), r.y(h.holdout), r.stride};
+}
+
+Search search(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s, const Split& data,
+              const FitAndScore& fit_and_score, RunContext& ctx) {
   const auto criteria = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
     try {
       const Score score = fit_and_score(data, v);
-      return Eigen::Vector2d(rbf::rmse(score.holdout_prediction, data.y_holdout), score.complexity);
+      return Eigen::Vector2d(holdout::rmse(score.holdout_prediction, data.y_holdout), score.complexity);
     } catch (const std::invalid_argument&) {
       return Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
     }
@@ -86,10 +111,19 @@ Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, cons
     const Eigen::VectorXd c = criteria(v);
     return s.objectives == 1 ? Eigen::VectorXd(c.head(1)) : c;
   };
-  const OptimizationResult r = optimizer.minimize_objectives(objective, s.objectives, bounds, inner);
+  OptimizationResult r = optimizer.minimize_objectives(objective, s.objectives, bounds, inner);
   if (!std::isfinite(r.best_value) || r.best_value >= std::numeric_limits<double>::max()) {
     throw DataError({"", 0, "features"}, s.plugin + ": no hyperparameters in the search ranges gave a usable fit");
   }
+  return {std::move(r), std::move(inner.diagnostics)};
+}
+
+Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s,
+                    const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const FitAndScore& fit_and_score,
+                    RunContext& ctx) {
+  const Split data = split(X, y, s);
+  const Search found = search(optimizer, bounds, s, data, fit_and_score, ctx);
+  const OptimizationResult& r = found.result;
   const auto named = [&](const Eigen::VectorXd& v) {
     nlohmann::json j = nlohmann::json::object();
     for (std::size_t i = 0; i < bounds.size(); ++i) j[bounds[i].name] = v[static_cast<Eigen::Index>(i)];
@@ -107,7 +141,7 @@ Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, cons
       {"best", best},
       {"history", r.history},
       {"evaluations", r.evaluations},
-      {"optimizer", inner.diagnostics}};
+      {"optimizer", found.optimizer_diagnostics}};
   return r.best;
 }
 

@@ -1,10 +1,12 @@
-// Hyperparameter tuning shared by the regressor adapters (regressor/elm, regressor/svr): a blocked
-// holdout (rbf::blocked_holdout), the nested optimizer plugin minimizing one criterion (held-out
-// RMSE) or two (held-out RMSE and a complexity measure the regressor names), and the common
-// parameters. Adapter-level code: it knows the plugin interfaces, not files.
+// Hyperparameter tuning shared by the regressor adapters (regressor/elm, regressor/svr,
+// regressor/rbf): the rows the tuning sees, a blocked holdout (holdout::blocked_holdout), the one
+// tuning loop (search(): the nested optimizer plugin minimizing one criterion, the held-out RMSE, or
+// two, the held-out RMSE and a complexity measure the regressor names), and the common parameters.
+// Adapter-level code: it knows the plugin interfaces, not files.
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -21,26 +23,35 @@ std::vector<ParamSpec> params(const std::string& complexity_key, const std::stri
 // A `[low, high]` search range parameter.
 ParamSpec search_range(std::string key, std::vector<double> def, std::string unit, std::string doc);
 
+// How the rows are thinned before the split (see split()).
+enum class Rows { EvenSubsample, RunMeans };
+
 struct Settings {
   std::string plugin;            // e.g. "regressor/elm", for messages
   std::string complexity_name;   // e.g. "output_weight_norm"
   std::size_t objectives = 1;    // 1 or 2, resolved from tune_objectives and the optimizer
   double holdout_fraction = 0.2;
   std::size_t holdout_blocks = 10;
-  std::size_t max_samples = 0;   // 0: all rows
+  std::size_t max_samples = 0;   // rows the tuning sees at most; 0: all rows
+  Rows rows = Rows::EvenSubsample;
   std::uint64_t seed = 1;
 };
 
-// Reads the shared parameters; resolves tune_objectives "auto" to 2 when the optimizer takes two
-// or more objectives, else 1. Throws ConfigError when two are asked of a one-objective optimizer.
+// Reads the shared parameters (rows: EvenSubsample, max_samples: tune_max_samples); resolves
+// tune_objectives "auto" to 2 when the optimizer takes two or more objectives, else 1. Throws
+// ConfigError when two are asked of a one-objective optimizer.
 Settings settings(const ParamValues& p, const Optimizer& optimizer, std::string plugin, std::string complexity_name);
 
 struct Split {
   Eigen::MatrixXd X_train, X_holdout;
   Eigen::VectorXd y_train, y_holdout;
+  Eigen::Index row_stride = 1;  // RunMeans: rows averaged into one
 };
-// Rows: an evenly spaced subsample of at most max_samples rows (first row kept; all when 0 or
-// enough), then the blocked holdout of rbf::blocked_holdout.
+// Rows: EvenSubsample takes an evenly spaced subsample of at most max_samples rows (first row kept;
+// all when 0 or enough); RunMeans takes the means of consecutive runs of
+// row_stride = ceil(rows / max_samples) rows (a trailing partial run dropped), so the cost does not
+// grow with the record and a smooth target's held-out error is not drowned in sample noise. Then
+// the blocked holdout of holdout::blocked_holdout (holdout_fraction, holdout_blocks, seed).
 Split split(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Settings& s);
 
 // One candidate's fit: its predictions on the held-out rows and its complexity measure.
@@ -52,10 +63,22 @@ struct Score {
 // std::invalid_argument (a hyperparameter the kernel refuses), which scores +infinity.
 using FitAndScore = std::function<Score(const Split&, const Eigen::VectorXd&)>;
 
-// Splits (split()), minimizes the held-out RMSE (and, with two objectives, the complexity) over
-// `bounds` with the optimizer and returns the chosen decision vector. Writes
-// ctx.diagnostics["tuning"] (objectives, holdout sizes, best, history, optimizer diagnostics).
-// Throws DataError when no point gave a finite RMSE.
+// What the tuning loop found: the optimizer's result and its diagnostics.
+struct Search {
+  OptimizationResult result;
+  nlohmann::json optimizer_diagnostics;
+};
+
+// The tuning loop: minimizes the held-out RMSE of fit_and_score on `data` (and, with two
+// objectives, its complexity) over `bounds` with the optimizer, on a context with ctx's seed and
+// threads (the optimizer's diagnostics are returned, ctx's are left alone). A candidate
+// fit_and_score refuses (std::invalid_argument) scores +infinity. Throws DataError when no point
+// gave a finite RMSE.
+Search search(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s, const Split& data,
+              const FitAndScore& fit_and_score, RunContext& ctx);
+
+// split(), then search(); returns the chosen decision vector. Writes ctx.diagnostics["tuning"]
+// (objectives, holdout sizes, best, history, optimizer diagnostics).
 Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s,
                     const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const FitAndScore& fit_and_score,
                     RunContext& ctx);

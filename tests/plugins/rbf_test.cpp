@@ -9,6 +9,7 @@
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
+#include "plugins/common/holdout.hpp"
 
 namespace driftlab {
 namespace {
@@ -50,7 +51,7 @@ TEST(Rbf, FitsSinXCosYOfTwoInputsWithKMeansCentres) {
   c.centres = 60;
   c.sigma = 0.8;
   const auto fitted = rbf::fit(X, sin_cos(X), c);
-  EXPECT_LT(rbf::rmse(fitted.network.predict(X_test), sin_cos(X_test)), kRmseTolerance);
+  EXPECT_LT(holdout::rmse(fitted.network.predict(X_test), sin_cos(X_test)), kRmseTolerance);
   EXPECT_TRUE(fitted.lms_rmse.empty());
 }
 
@@ -65,7 +66,7 @@ TEST(Rbf, FitsSinXCosYOfTwoInputsWithGridCentres) {
   c.sigma = 0.3;
   const auto fitted = rbf::fit(X, sin_cos(X), c);
   EXPECT_EQ(fitted.network.centres().rows(), 64);
-  EXPECT_LT(rbf::rmse(fitted.network.predict(X_test), sin_cos(X_test)), kRmseTolerance);
+  EXPECT_LT(holdout::rmse(fitted.network.predict(X_test), sin_cos(X_test)), kRmseTolerance);
 }
 
 TEST(Rbf, LmsStepMatchesEquation9OnAHandExample) {
@@ -169,7 +170,7 @@ TEST(Rbf, PredictionsDoNotDependOnTheUnitsOfTheInputs) {
 }
 
 TEST(Rbf, BlockedHoldoutPartitionsTheSamplesIntoSpreadRuns) {
-  const auto split = rbf::blocked_holdout(1000, 0.2, 10, 3);
+  const auto split = holdout::blocked_holdout(1000, 0.2, 10, 3);
   EXPECT_EQ(split.holdout.size(), 200u);
   std::set<Eigen::Index> all(split.train.begin(), split.train.end());
   all.insert(split.holdout.begin(), split.holdout.end());
