@@ -158,6 +158,7 @@ TimeSeries SimulationRecord::to_time_series() const {
 
 SimulationRecord simulate(const DeviceDefinition& device, const SimulationProfile& profile,
                           const SimulationOptions& options) {
+  require_single_axis(device);
   const double fs = options.sample_rate_hz;
   if (!(fs > 0.0) || !std::isfinite(fs))
     throw ConfigError({"", 0, "fs"}, "sample rate must be positive, got " + std::to_string(fs));

@@ -111,7 +111,8 @@ struct SimulationRecord {
   TimeSeries to_time_series() const;
 };
 
-// Throws ConfigError when fs or the duration is not positive, or the run has fewer than 2 samples.
+// Throws ConfigError when fs or the duration is not positive, the run has fewer than 2 samples, or
+// the device is a whole IMU.
 SimulationRecord simulate(const DeviceDefinition& device, const SimulationProfile& profile,
                           const SimulationOptions& options);
 
