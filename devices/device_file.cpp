@@ -29,6 +29,24 @@ std::string quantity_name(Quantity q) {
   }
 }
 
+// The keys of the three noise terms (N, B, K) of one sensor kind and their scales to SI; the
+// flicker keys are common to both kinds.
+struct NoiseKeys {
+  const char* white;
+  const char* instability;
+  const char* random_walk;
+  double white_scale, instability_scale, random_walk_scale;
+};
+const NoiseKeys kGyroNoise{"arw_dph_rthz", "bias_instability_dph", "rate_random_walk_dph_rth",
+                           kRadPerSecPerDph, kRadPerSecPerDph, kRadPerSecPerDph / 60.0};
+constexpr double kMicroG = 1e-6 * kStandardGravity;  // m/s^2
+const NoiseKeys kAccelNoise{"vrw_ug_rthz", "bias_instability_ug", "acceleration_random_walk_ug_rth",
+                            kMicroG, kMicroG, kMicroG / 60.0};
+
+// The single-axis sections a whole-IMU file leaves out (its instances describe themselves).
+const std::vector<std::string> kSingleAxisSections{"structure", "modes",    "electronics", "thermal",
+                                                   "channels",  "error_model", "effects"};
+
 class DeviceReader {
  public:
   DeviceReader(const std::string& file, std::vector<Diagnostic>& problems) : y_(file, problems), problems_(problems) {}
@@ -37,7 +55,7 @@ class DeviceReader {
     DeviceDefinition d;
     d.source = y_.file();
     if (!y_.map(root, "", {"format", "identity", "reference_temp_c", "structure", "modes", "electronics",
-                           "thermal", "channels", "error_model", "effects"}))
+                           "thermal", "channels", "error_model", "effects", "imu"}))
       return d;
     if (auto format = y_.text(root, "", "format", true); format && *format != kDeviceFormat)
       y_.problem(y_.child(root, "", "format", false), "format",
@@ -46,10 +64,19 @@ class DeviceReader {
     // Above absolute zero: Q(T) scales with the absolute temperature ratio.
     d.physics.reference_temp_c = y_.number_or(root, "", "reference_temp_c", 25.0, Bounds{-273.15, 500.0, true});
     d.error_model.reference_temp_c = d.physics.reference_temp_c;
+    if (const YAML::Node imu = y_.child(root, "", "imu", false); imu.IsDefined()) {
+      for (const auto& kv : root)
+        if (const std::string key = kv.first.Scalar();
+            std::find(kSingleAxisSections.begin(), kSingleAxisSections.end(), key) != kSingleAxisSections.end())
+          y_.problem(kv.first, key,
+                     "not used by a whole-IMU device (imu:): each instance declares its thermal, gyro and accel");
+      d.imu = read_imu(imu, d.physics.reference_temp_c);
+      return d;
+    }
     read_structure(y_.child(root, "", "structure", true), d.physics.structure);
     read_modes(y_.child(root, "", "modes", true), d.physics);
     read_electronics(y_.child(root, "", "electronics", true), d.physics.electronics);
-    read_thermal(y_.child(root, "", "thermal", false), d.thermal);
+    read_thermal(y_.child(root, "", "thermal", false), "thermal", d.thermal);
     read_channels(y_.child(root, "", "channels", true), d.channels);
     read_error_model(y_.child(root, "", "error_model", false), d.error_model);
     if (const auto effects = y_.child(root, "", "effects", false); effects.IsDefined() && !effects.IsNull())
@@ -133,10 +160,10 @@ class DeviceReader {
         y_.number_or(node, p, "demodulation_phase_error_mrad", 0.0, Bounds::between(-1500, 1500)) * 1e-3;
   }
 
-  void read_thermal(const YAML::Node& node, Thermal& t) {
-    if (!node.IsDefined() || !y_.map(node, "thermal", {"die_time_constant_s", "sensor_time_constant_s"})) return;
-    t.die_time_constant_s = y_.number_or(node, "thermal", "die_time_constant_s", 0.0, Bounds::non_negative());
-    t.sensor_time_constant_s = y_.number_or(node, "thermal", "sensor_time_constant_s", 0.0, Bounds::non_negative());
+  void read_thermal(const YAML::Node& node, const std::string& p, Thermal& t) {
+    if (!node.IsDefined() || !y_.map(node, p, {"die_time_constant_s", "sensor_time_constant_s"})) return;
+    t.die_time_constant_s = y_.number_or(node, p, "die_time_constant_s", 0.0, Bounds::non_negative());
+    t.sensor_time_constant_s = y_.number_or(node, p, "sensor_time_constant_s", 0.0, Bounds::non_negative());
   }
 
   void read_channels(const YAML::Node& node, std::vector<ChannelSpec>& channels) {
@@ -210,18 +237,20 @@ class DeviceReader {
     }
     if (auto sf = y_.numbers(node, p, "scale_factor_polynomial_ppm", false))
       for (double c : *sf) config.scale_factor_polynomial.push_back(c * kPpm);
-    const YAML::Node noise = y_.child(node, p, "noise", false);
-    const std::string np = p + ".noise";
-    if (!noise.IsDefined() ||
-        !y_.map(noise, np, {"arw_dph_rthz", "bias_instability_dph", "rate_random_walk_dph_rth",
-                            "flicker_correlation_times_s", "flicker_poles_per_decade"}))
+    if (const YAML::Node noise = y_.child(node, p, "noise", false); noise.IsDefined())
+      read_noise(noise, p + ".noise", kGyroNoise, config.noise);
+  }
+
+  void read_noise(const YAML::Node& noise, const std::string& np, const NoiseKeys& keys,
+                  error_model::NoiseTerms& n) {
+    if (!y_.map(noise, np, {keys.white, keys.instability, keys.random_walk, "flicker_correlation_times_s",
+                            "flicker_poles_per_decade"}))
       return;
-    auto& n = config.noise;
-    n.arw_rad_sqrt_s = y_.number_or(noise, np, "arw_dph_rthz", 0.0, Bounds::non_negative()) * kRadPerSecPerDph;
+    n.arw_rad_sqrt_s = y_.number_or(noise, np, keys.white, 0.0, Bounds::non_negative()) * keys.white_scale;
     n.bias_instability_rad_s =
-        y_.number_or(noise, np, "bias_instability_dph", 0.0, Bounds::non_negative()) * kRadPerSecPerDph;
+        y_.number_or(noise, np, keys.instability, 0.0, Bounds::non_negative()) * keys.instability_scale;
     n.rate_random_walk_rad_s_sqrt_s =
-        y_.number_or(noise, np, "rate_random_walk_dph_rth", 0.0, Bounds::non_negative()) * kRadPerSecPerDph / 60.0;
+        y_.number_or(noise, np, keys.random_walk, 0.0, Bounds::non_negative()) * keys.random_walk_scale;
     n.flicker_poles_per_decade =
         y_.number_or(noise, np, "flicker_poles_per_decade", n.flicker_poles_per_decade, Bounds::between(0.5, 20));
     if (auto taus = y_.numbers(noise, np, "flicker_correlation_times_s", false)) {
@@ -230,6 +259,83 @@ class DeviceReader {
                    "expected [min, max] with 0 < min < max");
       else
         n.flicker_tau_min_s = (*taus)[0], n.flicker_tau_max_s = (*taus)[1];
+    }
+  }
+
+  ImuDefinition read_imu(const YAML::Node& node, double reference_temp_c) {
+    const std::string p = "imu";
+    ImuDefinition imu;
+    imu.reference_temp_c = reference_temp_c;
+    if (!y_.map(node, p, {"up_direction", "gravity_mps2", "instances"})) return imu;
+    if (const auto up = y_.numbers(node, p, "up_direction", false)) {
+      if (up->size() != 3 || Eigen::Vector3d((*up)[0], (*up)[1], (*up)[2]).norm() == 0.0)
+        y_.problem(y_.child(node, p, "up_direction", false), p + ".up_direction",
+                   "expected [x, y, z], the 'up' direction in the IMU's axes (not all zero)");
+      else
+        imu.up = Eigen::Vector3d((*up)[0], (*up)[1], (*up)[2]).normalized();
+    }
+    imu.gravity_mps2 = y_.number_or(node, p, "gravity_mps2", kStandardGravity, Bounds::positive());
+    const YAML::Node instances = y_.child(node, p, "instances", true);
+    if (!instances.IsDefined()) return imu;
+    if (!instances.IsSequence() || instances.size() == 0 || instances.size() > kMaxImuInstances) {
+      y_.problem(instances, p + ".instances",
+                 "expected a list of 1 to " + std::to_string(kMaxImuInstances) +
+                     " IMU instances ({device_id, thermal, temperature_sensor, gyro, accel})");
+      return imu;
+    }
+    for (std::size_t i = 0; i < instances.size(); ++i)
+      imu.instances.push_back(read_imu_instance(instances[i], p + ".instances[" + std::to_string(i) + "]"));
+    return imu;
+  }
+
+  ImuInstance read_imu_instance(const YAML::Node& node, const std::string& p) {
+    ImuInstance instance;
+    if (!y_.map(node, p, {"device_id", "thermal", "temperature_sensor", "gyro", "accel"})) return instance;
+    if (const auto id = y_.number(node, p, "device_id", false, Bounds::between(0.0, 4294967295.0))) {
+      if (*id != std::floor(*id))
+        y_.problem(y_.child(node, p, "device_id", false), p + ".device_id", "expected a whole number");
+      else
+        instance.device_id = *id;
+    }
+    Thermal thermal;
+    read_thermal(y_.child(node, p, "thermal", false), p + ".thermal", thermal);
+    instance.die_time_constant_s = thermal.die_time_constant_s;
+    instance.sensor_time_constant_s = thermal.sensor_time_constant_s;
+    const std::string tp = p + ".temperature_sensor";
+    if (const YAML::Node t = y_.child(node, p, "temperature_sensor", false);
+        t.IsDefined() && y_.map(t, tp, {"noise_c", "resolution_c"})) {
+      instance.temperature_noise_c = y_.number_or(t, tp, "noise_c", 0.0, Bounds::non_negative());
+      instance.temperature_resolution_c = y_.number_or(t, tp, "resolution_c", 0.0, Bounds::non_negative());
+    }
+    read_imu_sensor(y_.child(node, p, "gyro", true), p + ".gyro", kGyroNoise, "bias_polynomial_dps", kRadPerDeg,
+                    instance.gyro);
+    read_imu_sensor(y_.child(node, p, "accel", true), p + ".accel", kAccelNoise, "bias_polynomial_mg",
+                    1e-3 * kStandardGravity, instance.accel);
+    return instance;
+  }
+
+  // A sensor block {noise, x, y, z}: an axis's own noise replaces the sensor's.
+  void read_imu_sensor(const YAML::Node& node, const std::string& p, const NoiseKeys& noise_keys,
+                       const std::string& bias_key, double bias_scale, ImuSensor& sensor) {
+    if (!node.IsDefined() || !y_.map(node, p, {"noise", "x", "y", "z"})) return;
+    error_model::NoiseTerms shared;
+    if (const YAML::Node noise = y_.child(node, p, "noise", false); noise.IsDefined())
+      read_noise(noise, p + ".noise", noise_keys, shared);
+    for (std::size_t a = 0; a < 3; ++a) {
+      const std::string name(1, "xyz"[a]), ap = p + "." + name;
+      ImuAxis& axis = sensor.axes[a];
+      axis.noise = shared;
+      const YAML::Node n = y_.child(node, p, name, true);
+      if (!n.IsDefined() || !y_.map(n, ap, {bias_key, "scale_factor_polynomial_ppm", "lag_s", "noise"})) continue;
+      if (const auto bias = y_.numbers(n, ap, bias_key, true))
+        for (double c : *bias) axis.bias_polynomial.push_back(c * bias_scale);
+      if (const auto sf = y_.numbers(n, ap, "scale_factor_polynomial_ppm", false))
+        for (double c : *sf) axis.scale_factor_polynomial.push_back(c * kPpm);
+      axis.lag_s = y_.number_or(n, ap, "lag_s", 0.0, Bounds::non_negative());
+      if (const YAML::Node own = y_.child(n, ap, "noise", false); own.IsDefined()) {
+        axis.noise = error_model::NoiseTerms{};
+        read_noise(own, ap + ".noise", noise_keys, axis.noise);
+      }
     }
   }
 
@@ -323,6 +429,13 @@ const ChannelSpec* DeviceDefinition::find_channel(const std::string& role) const
   for (const auto& c : channels)
     if (c.role == role) return &c;
   return nullptr;
+}
+
+void require_single_axis(const DeviceDefinition& d) {
+  if (d.imu)
+    throw ConfigError({d.source, 0, "imu"}, "device '" + d.name +
+                                                "' describes a whole IMU (imu:); this needs a single-axis gyro "
+                                                "(structure, modes, channels, error_model)");
 }
 
 DeviceDefinition parse_device(const std::string& yaml_text, const std::string& file) {

@@ -29,16 +29,40 @@
 //
 // Cross-checks: the implied suspension-beam length (device_model.hpp) must fit within the die; the
 // rate range must contain 0; channel roles unique.
+//
+// A whole IMU (imu_definition.hpp for the model) has, besides format, identity and
+// reference_temp_c, only an `imu:` section instead of structure ... effects:
+//   imu:
+//     up_direction: [0, 0, 1]       'up' in the IMU's axes on the rate table (normalized; default z up)
+//     gravity_mps2: 9.80665         local gravity (default standard gravity)
+//     instances:                    1 to 10 IMUs on one board
+//       - device_id: 2490378        optional whole number in [0, 2^32): written as column device_id{i}
+//         thermal: {die_time_constant_s, sensor_time_constant_s}          (default 0)
+//         temperature_sensor: {noise_c, resolution_c}                     (default 0)
+//         gyro:
+//           noise: {arw_dph_rthz, bias_instability_dph, rate_random_walk_dph_rth,
+//                   flicker_correlation_times_s, flicker_poles_per_decade}   the axes' default
+//           x: {bias_polynomial_dps: [c0, c1, ...] (required, deg/s per K^i around T0),
+//               scale_factor_polynomial_ppm: [ppm/K, ...], lag_s, noise: {...} (replaces the default)}
+//           y: ..., z: ...          all three required
+//         accel:
+//           noise: {vrw_ug_rthz (N, ug/sqrt(Hz)), bias_instability_ug (B, ug),
+//                   acceleration_random_walk_ug_rth (K, ug/sqrt(h)), flicker_...}
+//           x: {bias_polynomial_mg: [c0, c1, ...] (required, mg per K^i), scale_factor_polynomial_ppm,
+//               lag_s, noise}
+//           y: ..., z: ...
 #pragma once
 
 #include <yaml-cpp/yaml.h>
 
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "devices/device_model.hpp"
+#include "devices/imu_definition.hpp"
 #include "framework/error.hpp"
 #include "models/error_model/error_model.hpp"
 
@@ -69,9 +93,16 @@ struct DeviceDefinition {
   Thermal thermal;
   std::vector<ChannelSpec> channels;
   error_model::Config error_model;  // reference temperature, polynomials, noise, effects
+  // A whole IMU: set when the file has an `imu:` section; physics, thermal, channels and the
+  // error model's polynomials, noise and effects are then unused (the single-axis simulator refuses it).
+  std::optional<ImuDefinition> imu;
 
   const ChannelSpec* find_channel(const std::string& role) const;  // nullptr when absent
 };
+
+// Throws ConfigError (the file, key "imu") when `d` is a whole IMU: for the users of the
+// single-axis physics, channels and error model (the single-axis simulator, the discrepancy prior).
+void require_single_axis(const DeviceDefinition& d);
 
 DeviceDefinition load_device_file(const std::filesystem::path& path);
 // `file` names the source in messages.

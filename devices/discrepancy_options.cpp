@@ -8,6 +8,7 @@
 namespace driftlab::devices {
 
 discrepancy::Options discrepancy_options(const DeviceDefinition& device) {
+  require_single_axis(device);
   discrepancy::Options o;
   o.reference_temp_c = device.error_model.reference_temp_c;
   auto model = std::make_shared<const DeviceModel>(device.physics);

@@ -13,6 +13,7 @@
 
 namespace driftlab::devices {
 
+// Throws ConfigError for a whole-IMU device (require_single_axis).
 discrepancy::Options discrepancy_options(const DeviceDefinition& device);
 
 }  // namespace driftlab::devices

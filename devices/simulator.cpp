@@ -156,8 +156,7 @@ TimeSeries SimulationRecord::to_time_series() const {
   return series;
 }
 
-SimulationRecord simulate(const DeviceDefinition& device, const SimulationProfile& profile,
-                          const SimulationOptions& options) {
+Eigen::VectorXd sample_times(const SimulationProfile& profile, const SimulationOptions& options) {
   const double fs = options.sample_rate_hz;
   if (!(fs > 0.0) || !std::isfinite(fs))
     throw ConfigError({"", 0, "fs"}, "sample rate must be positive, got " + std::to_string(fs));
@@ -167,12 +166,20 @@ SimulationRecord simulate(const DeviceDefinition& device, const SimulationProfil
                       "duration must be positive (the profile is static; give a duration)");
   const auto n = static_cast<Eigen::Index>(std::floor(duration * fs + 1e-9));
   if (n < 2) throw ConfigError({"", 0, "duration"}, "the run has fewer than 2 samples; raise fs or the duration");
+  Eigen::VectorXd time_s(n);
+  for (Eigen::Index k = 0; k < n; ++k) time_s[k] = static_cast<double>(k) / fs;
+  return time_s;
+}
 
+SimulationRecord simulate(const DeviceDefinition& device, const SimulationProfile& profile,
+                          const SimulationOptions& options) {
+  require_single_axis(device);
+  const double fs = options.sample_rate_hz;
   const error_model::Config& config = device.error_model;
 
   SimulationRecord r;
-  r.time_s.resize(n);
-  for (Eigen::Index k = 0; k < n; ++k) r.time_s[k] = static_cast<double>(k) / fs;
+  r.time_s = sample_times(profile, options);
+  const Eigen::Index n = r.time_s.size();
   r.chamber_temp_c = profile.chamber_c.sample(r.time_s);
   r.true_rate_rad_s = profile.true_rate.sample(r.time_s);
   const Eigen::VectorXd die = signal::first_order_lag(r.time_s, r.chamber_temp_c, device.thermal.die_time_constant_s);

@@ -111,7 +111,12 @@ struct SimulationRecord {
   TimeSeries to_time_series() const;
 };
 
-// Throws ConfigError when fs or the duration is not positive, or the run has fewer than 2 samples.
+// The run's sample times t_k = k / fs, k = 0 .. n-1, n = floor(duration fs) (duration: the
+// options', else the profile's). Throws ConfigError when fs or the duration is not positive, or the
+// run has fewer than 2 samples.
+Eigen::VectorXd sample_times(const SimulationProfile& profile, const SimulationOptions& options);
+
+// Throws ConfigError as sample_times does, and when the device is a whole IMU (imu_simulator.hpp).
 SimulationRecord simulate(const DeviceDefinition& device, const SimulationProfile& profile,
                           const SimulationOptions& options);
 

@@ -26,7 +26,7 @@ struct Suffix {
   std::string_view unit;
 };
 constexpr Suffix kSuffixes[] = {{"_dps", "deg/s"}, {"_rps", "rad/s"}, {"_dph", "deg/h"}, {"_c", "degC"},
-                                {"_k", "K"},       {"_hz", "Hz"},     {"_s", "s"}};
+                                {"_k", "K"},       {"_hz", "Hz"},     {"_s", "s"},     {"_mps2", "m/s^2"}};
 
 std::string role_of_stem(const std::string& stem) {
   if (stem == "temp") return role::kTemperature;

@@ -45,6 +45,51 @@ TEST(DeviceFile, LoadsEveryShippedDevice) {
   for (const auto& f : files) EXPECT_NO_THROW(load_device_file(f)) << f;
 }
 
+TEST(DeviceFile, LoadsTheWholeImuWithBothInstancesInInternalUnits) {
+  constexpr double kMilliG = 1e-3 * kStandardGravity, kMicroG = 1e-6 * kStandardGravity;
+  const DeviceDefinition d = load_device_file(kDevices + "imu3.yaml");
+  ASSERT_TRUE(d.imu.has_value());
+  EXPECT_TRUE(d.channels.empty());
+  const ImuDefinition& imu = *d.imu;
+  EXPECT_EQ(imu.reference_temp_c, 25.0);
+  EXPECT_EQ(imu.up, Eigen::Vector3d(0.0, 0.0, 1.0));
+  ASSERT_EQ(imu.instances.size(), 2u);
+  const ImuInstance& first = imu.instances[0];
+  EXPECT_FALSE(first.device_id.has_value());
+  EXPECT_EQ(first.die_time_constant_s, 240.0);
+  EXPECT_NEAR(first.gyro.axes[0].bias_polynomial.at(1), 0.021 * kRadPerDeg, 1e-15);
+  EXPECT_NEAR(first.gyro.axes[1].noise.arw_rad_sqrt_s, 14.4 * kDph, 1e-15);  // the sensor's noise
+  EXPECT_EQ(first.gyro.axes[2].lag_s, 20.0);
+  EXPECT_NEAR(first.accel.axes[2].bias_polynomial.at(1), 0.8 * kMilliG, 1e-15);
+  EXPECT_NEAR(first.accel.axes[0].noise.arw_rad_sqrt_s, 100 * kMicroG, 1e-15);
+  EXPECT_NEAR(first.accel.axes[0].noise.rate_random_walk_rad_s_sqrt_s, 100 * kMicroG / 60.0, 1e-15);
+  EXPECT_NEAR(first.accel.axes[0].scale_factor_polynomial.at(0), 150e-6, 1e-18);
+  EXPECT_EQ(imu.instances[1].temperature_resolution_c, 0.125);
+}
+
+TEST(DeviceFile, AnImuAxisMayReplaceItsSensorsNoiseAndAnInstanceMayNameItsDevice) {
+  const std::string text = R"(format: driftlab-device/1
+identity: {name: tilted}
+imu:
+  up_direction: [0, 3, 4]
+  instances:
+    - device_id: 2490378
+      gyro:
+        noise: {arw_dph_rthz: 10}
+        x: {bias_polynomial_dps: [0]}
+        y: {bias_polynomial_dps: [0], noise: {arw_dph_rthz: 2}}
+        z: {bias_polynomial_dps: [0]}
+      accel: {x: {bias_polynomial_mg: [0]}, y: {bias_polynomial_mg: [0]}, z: {bias_polynomial_mg: [0]}}
+)";
+  const DeviceDefinition d = parse_device(text, "inline.yaml");
+  const ImuInstance& instance = d.imu->instances.at(0);
+  EXPECT_EQ(instance.device_id, 2490378.0);
+  EXPECT_NEAR(instance.gyro.axes[0].noise.arw_rad_sqrt_s, 10 * kDph, 1e-15);
+  EXPECT_NEAR(instance.gyro.axes[1].noise.arw_rad_sqrt_s, 2 * kDph, 1e-15);
+  EXPECT_NEAR(d.imu->up[1], 0.6, 1e-15);  // normalized
+  EXPECT_NEAR(d.imu->up[2], 0.8, 1e-15);
+}
+
 TEST(DeviceFile, ConvertsChannelUnitsToInternalUnits) {
   const DeviceDefinition d = load_device_file(kDevices + "lsm6dsm.yaml");
   const ChannelSpec* rate = d.find_channel("rate");
@@ -213,7 +258,12 @@ INSTANTIATE_TEST_SUITE_P(
         MalformedCase{"beams_longer_than_die.yaml", 13, "structure.suspension", "longer than the die"},
         MalformedCase{"equal_mode_frequencies.yaml", 18, "modes.sense.frequency_hz", "equals the drive frequency"},
         MalformedCase{"inverted_rate_range.yaml", 23, "channels[0].range", "min < max"},
-        MalformedCase{"poisson_out_of_range.yaml", 7, "structure.poisson_ratio", "must be in [0, 0.5]"}),
+        MalformedCase{"poisson_out_of_range.yaml", 7, "structure.poisson_ratio", "must be in [0, 0.5]"},
+        MalformedCase{"imu_malformed.yaml", 6, "imu.up_direction", "expected [x, y, z]"},
+        MalformedCase{"imu_malformed.yaml", 9, "imu.instances[0].gyro.noise.arw_dps_rthz", "unknown key"},
+        MalformedCase{"imu_malformed.yaml", 15, "imu.instances[0].accel.y.bias_polynomial_mg", "missing required key"},
+        MalformedCase{"imu_malformed.yaml", 16, "imu.instances[0].accel.z.lag_s", "must be >= 0"},
+        MalformedCase{"imu_with_channels.yaml", 15, "channels", "not used by a whole-IMU device"}),
     [](const ::testing::TestParamInfo<MalformedCase>& param_info) {
       const std::string& file = param_info.param.file;
       std::string name = file.substr(0, file.find('.')) + "_" + std::to_string(param_info.index);

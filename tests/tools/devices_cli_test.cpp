@@ -65,6 +65,48 @@ TEST(DevicesCli, SimulatesTheContractColumnsReproduciblyWithEffects) {
   EXPECT_THAT(bad.err, HasSubstr("tau_s"));
 }
 
+TEST(DevicesCli, SimulatesAWholeImuWithEveryChannelInTheImuNames) {
+  const auto dir = scratch_dir("simulate_imu");
+  const auto r = run_driftlab("simulate --device " + kSource + "/devices/imu3.yaml --profile oven --fs 10 --duration 600 "
+                              "--seed 1 --out " + (dir / "x.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::string instance[2];
+  for (const std::string i : {"", "1"}) {
+    std::string& h = instance[i.empty() ? 0 : 1];
+    for (const std::string prefix : {"", "true_", "systematic_"}) {
+      for (const char* axis : {"x", "y", "z"}) h += "," + prefix + "gyro" + i + "_" + axis + "_dps";
+      for (const char* axis : {"x", "y", "z"}) h += "," + prefix + "accel" + i + "_" + axis + "_mps2";
+      if (prefix.empty()) h += ",temp" + i + "_c";
+    }
+  }
+  const std::string text = read_text(dir / "x.csv");
+  EXPECT_EQ(text.substr(0, text.find('\n')), "t_s" + instance[0] + instance[1]);
+  EXPECT_TRUE(text.starts_with("t_s,gyro_x_dps,gyro_y_dps,gyro_z_dps,accel_x_mps2,accel_y_mps2,accel_z_mps2,temp_c,"
+                               "true_gyro_x_dps,"));
+
+  // The CSV reader knows every column by its default names.
+  const TimeSeries record = read_csv(dir / "x.csv", {.required_roles = {}});
+  EXPECT_EQ(record.size(), 6000);
+  for (const char* role : {"gyro_x", "accel_z", "temperature", "true_gyro_x", "true_accel_z", "systematic_gyro_y",
+                           "systematic_accel_z", "gyro1_z", "accel1_x", "temperature1", "true_accel1_z",
+                           "systematic_accel1_y"})
+    EXPECT_TRUE(record.has(role)) << role;
+  EXPECT_DOUBLE_EQ(record.channel("true_accel_z").values[0], 9.80665);
+  EXPECT_EQ(record.channel("true_accel_x").values[0], 0.0);
+
+  const auto described = run_driftlab("devices describe imu3");
+  ASSERT_EQ(described.exit_code, 0) << described.err;
+  EXPECT_THAT(described.out, HasSubstr("whole IMU: 2 instance(s)"));
+  EXPECT_THAT(described.out, HasSubstr("accel1_z"));
+  const auto listed = run_driftlab("devices list");
+  EXPECT_THAT(listed.out, HasSubstr("imu3.yaml"));
+  EXPECT_THAT(listed.out, ::testing::Not(HasSubstr("INVALID")));
+  const auto with_effect = run_driftlab("simulate --device imu3 --duration 60 --effect thermal_lag:tau_s=400 --out " +
+                                        (dir / "y.csv").string());
+  EXPECT_EQ(with_effect.exit_code, 2);
+  EXPECT_THAT(with_effect.err, HasSubstr("whole IMU"));
+}
+
 TEST(DevicesCli, SimulatesAProfileFile) {
   const auto dir = scratch_dir("simulate_profile");
   {

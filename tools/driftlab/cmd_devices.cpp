@@ -6,6 +6,7 @@
 
 #include "devices/device_file.hpp"
 #include "devices/device_model.hpp"
+#include "framework/imu.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
 #include "tools/driftlab/devices_dir.hpp"
@@ -35,14 +36,73 @@ void describe_channels(const devices::DeviceDefinition& d, std::ostream& out) {
   }
 }
 
-void describe(const devices::DeviceDefinition& d, std::ostream& out) {
-  const devices::DeviceModel model(d.physics);
-  const auto& p = d.physics;
-  const auto& s = p.structure;
+void describe_identity(const devices::DeviceDefinition& d, std::ostream& out) {
   out << d.name << " - " << d.title << "\n  file: " << d.source << "\n";
   if (!d.manufacturer.empty()) out << "  manufacturer: " << d.manufacturer << "\n";
   if (!d.reference.empty()) out << "  reference: " << d.reference << "\n";
   if (!d.notes.empty()) out << "  notes: " << d.notes << "\n";
+}
+
+// One IMU axis in the device file's units: gyro deg/s and deg/h, accelerometer mg and ug.
+void describe_imu_axis(const imu::ChannelId& id, const devices::ImuAxis& axis, std::ostream& out) {
+  const bool gyro = id.sensor == imu::Sensor::Gyro;
+  const double bias_unit = gyro ? kRadPerDeg : 1e-3 * kStandardGravity;
+  const double noise_unit = gyro ? kRadPerSecPerDph : 1e-6 * kStandardGravity;
+  out << "  " << std::left << std::setw(9) << id.role() << std::right << "bias (" << (gyro ? "deg/s" : "mg")
+      << " per K^i):";
+  for (double c : axis.bias_polynomial) out << " " << c / bias_unit;
+  out << "  scale factor (ppm per K^i, i >= 1):";
+  for (double c : axis.scale_factor_polynomial) out << " " << c * 1e6;
+  if (axis.scale_factor_polynomial.empty()) out << " none";
+  out << "  lag " << axis.lag_s << " s\n           N " << axis.noise.arw_rad_sqrt_s / noise_unit
+      << (gyro ? " deg/h/sqrt(Hz)  B " : " ug/sqrt(Hz)  B ") << axis.noise.bias_instability_rad_s / noise_unit
+      << (gyro ? " deg/h  K " : " ug  K ") << axis.noise.rate_random_walk_rad_s_sqrt_s / noise_unit * 60.0
+      << (gyro ? " deg/h/sqrt(h)\n" : " ug/sqrt(h)\n");
+}
+
+void describe_imu(const devices::DeviceDefinition& d, std::ostream& out) {
+  const devices::ImuDefinition& imu = *d.imu;
+  describe_identity(d, out);
+  out << std::setprecision(6) << "whole IMU: " << imu.instances.size() << " instance(s), T0 = " << imu.reference_temp_c
+      << " degC, up [" << imu.up[0] << ", " << imu.up[1] << ", " << imu.up[2] << "] in the IMU's axes, gravity "
+      << imu.gravity_mps2 << " m/s^2\n";
+  for (std::size_t i = 0; i < imu.instances.size(); ++i) {
+    const auto& instance = imu.instances[i];
+    out << "instance " << i;
+    if (instance.device_id) out << " (device id " << static_cast<std::uint64_t>(*instance.device_id) << ")";
+    out << ": die lags chamber " << instance.die_time_constant_s << " s, sensor lags die "
+        << instance.sensor_time_constant_s << " s, temperature noise " << instance.temperature_noise_c
+        << " degC, resolution " << instance.temperature_resolution_c << " degC\n";
+    for (const auto sensor : {imu::Sensor::Gyro, imu::Sensor::Accel})
+      for (std::size_t a = 0; a < 3; ++a)
+        describe_imu_axis({sensor, "xyz"[a], static_cast<int>(i)},
+                          (sensor == imu::Sensor::Gyro ? instance.gyro : instance.accel).axes[a], out);
+    out << "  bias versus axis temperature:\n   T_degC   gyro_x_dps  gyro_y_dps  gyro_z_dps   accel_x_mg  "
+           "accel_y_mg  accel_z_mg\n"
+        << std::fixed << std::right;
+    for (double t : {-40.0, -30.0, -15.0, 0.0, 25.0, 45.0, 60.0, 85.0}) {
+      const double x = t - imu.reference_temp_c;
+      out << std::setprecision(2) << std::setw(9) << t << std::setprecision(4);
+      for (const auto& axis : instance.gyro.axes)
+        out << std::setw(12) << error_model::polynomial(axis.bias_polynomial, x) / kRadPerDeg;
+      out << " ";
+      for (const auto& axis : instance.accel.axes)
+        out << std::setw(12) << error_model::polynomial(axis.bias_polynomial, x) / (1e-3 * kStandardGravity);
+      out << "\n";
+    }
+    out << std::defaultfloat << std::setprecision(6);
+  }
+}
+
+void describe(const devices::DeviceDefinition& d, std::ostream& out) {
+  if (d.imu) {
+    describe_imu(d, out);
+    return;
+  }
+  const devices::DeviceModel model(d.physics);
+  const auto& p = d.physics;
+  const auto& s = p.structure;
+  describe_identity(d, out);
   out << std::setprecision(6);
   out << "structure: E " << s.youngs_modulus_pa / 1e9 << " GPa (TCE " << s.youngs_modulus_tc_per_k * 1e6
       << " ppm/K), nu " << s.poisson_ratio << ", rho " << s.density_kg_m3 << " kg/m^3, " << s.length_m * 1e6

@@ -1,11 +1,13 @@
-// `driftlab simulate`: run a device file through the oven simulator and write a CSV record
-// (t_s, rate_dps, temp_c, true_rate_dps, systematic_dps, die_temp_c, drive_freq_hz).
+// `driftlab simulate`: run a device file through the oven simulator and write a CSV record:
+// a single-axis gyro as t_s, rate_dps, temp_c, true_rate_dps, systematic_dps, die_temp_c,
+// drive_freq_hz; a whole IMU (an `imu:` device file) as the columns of imu_columns below.
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 
 #include "devices/device_file.hpp"
+#include "devices/imu_simulator.hpp"
 #include "devices/simulator.hpp"
 #include "framework/csv.hpp"
 #include "framework/effect_catalogue.hpp"
@@ -26,15 +28,16 @@ struct SimulateOptions {
   std::uint64_t seed = 1;
 };
 
-// A column in `unit`, snapped to the channel's resolution as k / steps (steps = 1 / resolution in
-// that unit, when it is a whole number) so that the shortest round-trip text is the clean decimal
-// the device would print; values are already converted, so they are written with unit "1".
+// A column in `unit`, snapped to the output's resolution (internal units; 0 = none) as k / steps
+// (steps = 1 / resolution in that unit, when it is a whole number) so that the shortest round-trip
+// text is the clean decimal the device would print; values are already converted, so they are
+// written with unit "1".
 CsvColumn output_column(const std::string& name, const Eigen::VectorXd& internal, const std::string& unit,
-                        const devices::ChannelSpec* channel) {
+                        double resolution = 0.0) {
   const auto u = find_unit(unit);
   Eigen::VectorXd values = internal.unaryExpr([&](double v) { return from_internal(v, *u); });
-  if (channel && channel->resolution > 0.0) {
-    const double steps = u->scale / channel->resolution;
+  if (resolution > 0.0) {
+    const double steps = u->scale / resolution;
     if (std::abs(steps - std::round(steps)) < 1e-6 * steps) {
       const double whole = std::round(steps);
       for (double& v : values) v = std::round(v * whole) / whole;
@@ -43,9 +46,61 @@ CsvColumn output_column(const std::string& name, const Eigen::VectorXd& internal
   return {name, std::move(values), "1"};
 }
 
+double resolution_of(const devices::ChannelSpec* channel) { return channel ? channel->resolution : 0.0; }
+
+std::vector<CsvColumn> single_axis_columns(const devices::DeviceDefinition& device,
+                                           const devices::SimulationRecord& record) {
+  std::vector<CsvColumn> columns{
+      {"t_s", record.time_s, "s"},
+      output_column("rate_dps", record.rate_rad_s, "deg/s", resolution_of(device.find_channel(role::kRate))),
+      output_column("temp_c", record.temp_c, "degC", resolution_of(device.find_channel(role::kTemperature))),
+      output_column("true_rate_dps", record.true_rate_rad_s, "deg/s"),
+      output_column("systematic_dps", record.systematic_rate_rad_s, "deg/s"),
+      output_column("die_temp_c", record.die_temp_c, "degC")};
+  if (record.drive_frequency_hz.size() == record.time_s.size())
+    columns.push_back(output_column("drive_freq_hz", record.drive_frequency_hz, "Hz",
+                                    resolution_of(device.find_channel(role::kDriveFrequency))));
+  return columns;
+}
+
+// The whole-IMU record (issue 20), in the names framework/imu.hpp and the CSV reader know: t_s,
+// then per instance i (the digit omitted for i = 0) the measured gyro{i}_{x,y,z}_dps,
+// accel{i}_{x,y,z}_mps2 and temp{i}_c, device_id{i} when the file gives one, the reference input
+// true_gyro{i}_{x,y,z}_dps and true_accel{i}_{x,y,z}_mps2, and the noise-free
+// systematic_gyro{i}_{x,y,z}_dps and systematic_accel{i}_{x,y,z}_mps2.
+std::vector<CsvColumn> imu_columns(const devices::ImuDefinition& imu, const devices::ImuSimulationRecord& record) {
+  std::vector<CsvColumn> columns{{"t_s", record.time_s, "s"}};
+  for (std::size_t i = 0; i < record.instances.size(); ++i) {
+    const auto& instance = record.instances[i];
+    const std::string digit = i == 0 ? "" : std::to_string(i);
+    auto add = [&](const std::string& prefix, auto member) {
+      for (int a = 0; a < 3; ++a) {
+        const std::string axis(1, "xyz"[a]);
+        columns.push_back(output_column(prefix + "gyro" + digit + "_" + axis + "_dps", instance.gyro[a].*member, "deg/s"));
+      }
+      for (int a = 0; a < 3; ++a) {
+        const std::string axis(1, "xyz"[a]);
+        columns.push_back(
+            output_column(prefix + "accel" + digit + "_" + axis + "_mps2", instance.accel[a].*member, "m/s^2"));
+      }
+    };
+    add("", &devices::ImuAxisRecord::measured);
+    columns.push_back(
+        output_column("temp" + digit + "_c", instance.temp_c, "degC", imu.instances[i].temperature_resolution_c));
+    if (instance.device_id)
+      columns.push_back({"device_id" + digit, Eigen::VectorXd::Constant(record.time_s.size(), *instance.device_id)});
+    add("true_", &devices::ImuAxisRecord::truth);
+    add("systematic_", &devices::ImuAxisRecord::systematic);
+  }
+  return columns;
+}
+
 void simulate_command(const SimulateOptions& o, CommandEnv& env) {
   const auto device_path = resolve_device_file(o.device, o.devices_dir);
   auto device = devices::load_device_file(device_path);
+  if (device.imu && !o.effects.empty())
+    throw ConfigError({"", 0, "--effect"}, "effects apply to single-axis devices; " + device.name +
+                                               " (" + device_path.string() + ") is a whole IMU");
   for (const auto& effect : o.effects) devices::apply_effect_option(effect, device.error_model.effects);
   const auto profile = o.profile == "oven" ? devices::default_oven_profile() : devices::load_profile_file(o.profile);
   OutputSet outputs({device_path, o.profile == "oven" ? std::filesystem::path() : std::filesystem::path(o.profile)});
@@ -55,33 +110,30 @@ void simulate_command(const SimulateOptions& o, CommandEnv& env) {
   options.sample_rate_hz = o.fs;
   options.seed = o.seed;
   if (o.duration > 0.0) options.duration_s = o.duration;
-  // The record (6 channels) and its CSV text: about 250 bytes per sample.
+  // The record and its CSV text: about 250 bytes per sample for a single axis (6 channels), 800
+  // per IMU instance (20 series, 19 columns).
   const double samples = std::floor(options.duration_s.value_or(profile.duration_s()) * o.fs) + 1.0;
+  const double bytes = device.imu ? 800.0 * static_cast<double>(device.imu->instances.size()) : 250.0;
   char what[96];
-  std::snprintf(what, sizeof what, "%.3g samples (--fs x --duration) at 250 bytes each", samples);
-  check_memory_estimate(samples * 250.0, {"", 0, "--fs, --duration"}, what);
+  std::snprintf(what, sizeof what, "%.3g samples (--fs x --duration) at %.0f bytes each", samples, bytes);
+  check_memory_estimate(samples * bytes, {"", 0, "--fs, --duration"}, what);
   env.progress("simulate " + device.name, 0.0);
-  const auto record = devices::simulate(device, profile, options);
+  const std::vector<CsvColumn> columns =
+      device.imu ? imu_columns(*device.imu, devices::simulate_imu(*device.imu, profile, options))
+                 : single_axis_columns(device, devices::simulate(device, profile, options));
   env.progress("simulate " + device.name, 0.5);
-
-  std::vector<CsvColumn> columns{
-      {"t_s", record.time_s, "s"},
-      output_column("rate_dps", record.rate_rad_s, "deg/s", device.find_channel(role::kRate)),
-      output_column("temp_c", record.temp_c, "degC", device.find_channel(role::kTemperature)),
-      output_column("true_rate_dps", record.true_rate_rad_s, "deg/s", nullptr),
-      output_column("systematic_dps", record.systematic_rate_rad_s, "deg/s", nullptr),
-      output_column("die_temp_c", record.die_temp_c, "degC", nullptr)};
-  if (record.drive_frequency_hz.size() == record.time_s.size())
-    columns.push_back(output_column("drive_freq_hz", record.drive_frequency_hz, "Hz",
-                                    device.find_channel(role::kDriveFrequency)));
   outputs.write_csv(o.out, columns);
   outputs.commit();
   env.progress("simulate " + device.name, 1.0);
 
   const auto effects = devices::describe_effects(device.error_model.effects);
-  std::cout << o.out << ": " << record.time_s.size() << " samples, " << record.time_s[record.time_s.size() - 1]
-            << " s at " << o.fs << " Hz, device " << device.name << ", profile " << profile.source << ", seed "
-            << o.seed << ", effects:";
+  const Eigen::VectorXd& time_s = columns.front().values;
+  std::cout << o.out << ": " << time_s.size() << " samples, " << time_s[time_s.size() - 1] << " s at " << o.fs
+            << " Hz, device " << device.name;
+  if (device.imu)
+    std::cout << " (whole IMU, " << device.imu->instances.size() << " instance"
+              << (device.imu->instances.size() == 1 ? "" : "s") << ")";
+  std::cout << ", profile " << profile.source << ", seed " << o.seed << ", effects:";
   if (effects.empty()) std::cout << " none";
   for (const auto& e : effects) std::cout << " " << e;
   std::cout << "\n";
