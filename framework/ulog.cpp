@@ -233,7 +233,7 @@ class Parser {
       if (remain < kMessageHeaderSize) {
         if (!before_appended)
           fail(at, "truncated: expected a 3-byte message header, " + std::to_string(remain) + " bytes remain");
-        skip_to(end);
+        skip_to(at, end);
         continue;
       }
       const unsigned char* h = in_.take(kMessageHeaderSize);
@@ -243,7 +243,7 @@ class Parser {
         if (!before_appended)
           fail(at, "truncated: message " + type_text(type) + " declares " + std::to_string(msg_size) +
                        " bytes, " + std::to_string(remain - kMessageHeaderSize) + " remain in the file");
-        skip_to(end);
+        skip_to(at, end);
         continue;
       }
       const unsigned char* p = in_.take(msg_size);
@@ -268,8 +268,9 @@ class Parser {
                    std::to_string(n));
   }
 
-  void skip_to(std::uint64_t end) {
-    log_.bytes_skipped_at_appended += end - in_.offset();
+  // Skips the cut-off message at `at` up to the appended-data boundary `end`.
+  void skip_to(std::uint64_t at, std::uint64_t end) {
+    log_.bytes_skipped_at_appended += end - at;
     in_.seek(end);
   }
 
@@ -509,6 +510,7 @@ class Parser {
     if (t.count == 0) t.first_timestamp_us = timestamp;
     t.last_timestamp_us = timestamp;
     ++t.count;
+    t.data_bytes += payload;
     last_timestamp_ = timestamp;
     if (!t.kept) return;
     t.timestamp_us.push_back(timestamp);

@@ -85,6 +85,7 @@ struct Topic {
   std::vector<Column> columns;   // flattened scalars, padding left out
   std::size_t message_size = 0;  // bytes of one message by its format (trailing padding included)
   std::uint64_t count = 0;       // data messages
+  std::uint64_t data_bytes = 0;  // their payload bytes as logged (msg_id excluded, trailing padding as written)
   std::uint64_t first_timestamp_us = 0, last_timestamp_us = 0;  // of the first / last message in the file
   bool kept = false;             // values stored (ReadOptions)
   std::vector<std::uint64_t> timestamp_us;  // per message in file order, when kept
