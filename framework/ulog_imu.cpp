@@ -12,7 +12,7 @@
 namespace driftlab::ulog {
 namespace {
 
-constexpr double kSecondsPerMicrosecond = 1e-6;
+constexpr double kMicrosecondsPerSecond = 1e6;  // divided by: 22311243 us -> 22.311243 s exactly rounded
 constexpr std::int32_t kRelativeTimestampInvalid = 0x7fffffff;  // PX4's RELATIVE_TIMESTAMP_INVALID
 constexpr int kMaxInstance = 99;                                  // imu role names: gyro1_x .. gyro99_x
 constexpr char kAxes[3] = {'x', 'y', 'z'};
@@ -296,7 +296,7 @@ TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector
 
   Eigen::VectorXd time(static_cast<Eigen::Index>(base_time.size()));
   for (std::size_t i = 0; i < base_time.size(); ++i)
-    time[static_cast<Eigen::Index>(i)] = static_cast<double>(base_time[i]) * kSecondsPerMicrosecond;
+    time[static_cast<Eigen::Index>(i)] = static_cast<double>(base_time[i]) / kMicrosecondsPerSecond;
   TimeSeries record(std::move(time));
   std::vector<bool> has_temperature(kMaxInstance + 1, false), has_device(kMaxInstance + 1, false);
   for (const auto& s : streams) {

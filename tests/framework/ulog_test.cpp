@@ -214,7 +214,7 @@ TEST(UlogPyulogSamples, MultiInstanceSensorGyroIsReadPerInstanceWithTemperature)
     EXPECT_EQ(temp.unit, "degC");
     for (Eigen::Index i = 0; i < record.size(); ++i) {
       const auto k = static_cast<std::size_t>(i);
-      EXPECT_DOUBLE_EQ(record.time()[i], topic.column("timestamp_sample")[k] * 1e-6);
+      EXPECT_EQ(record.time()[i], topic.column("timestamp_sample")[k] / 1e6);
       EXPECT_DOUBLE_EQ(record.channel("gyro" + suffix + "_x").values[i], topic.column("x")[k]);
       EXPECT_DOUBLE_EQ(temp.values[i], topic.column("temperature")[k]);
       EXPECT_GT(temp.values[i], 0.0);  // a board on a bench: plausible die temperatures
@@ -366,7 +366,7 @@ TEST(UlogStructure, OutOfOrderAndRepeatedTimeStampsAreSortedAndDroppedWithNotes)
   std::vector<std::string> notes;
   const auto record = ulog::read_imu(path, {}, &notes);
   ASSERT_EQ(record.size(), 5);
-  for (Eigen::Index i = 0; i < record.size(); ++i) EXPECT_NEAR(record.time()[i], (i + 1) * 1e-3, 1e-15);
+  for (Eigen::Index i = 0; i < record.size(); ++i) EXPECT_EQ(record.time()[i], static_cast<double>(i + 1) / 1e3);
   EXPECT_NEAR(record.channel("gyro_x").values[1], 0.002, kFloatTolerance);  // the sample at 2000 us was logged third
   EXPECT_NEAR(record.channel("gyro_x").values[3], 0.003, kFloatTolerance);  // the first of the two at 4000 us
   EXPECT_THAT(notes, ::testing::Contains(HasSubstr("1 samples earlier than the one before; sorted")));
