@@ -6,6 +6,7 @@
 #include <numeric>
 #include <optional>
 
+#include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
 
@@ -92,9 +93,10 @@ std::vector<double> pick(const Log& log, const Stream& s, const std::vector<doub
   std::vector<double> out(raw.message.size());
   for (std::size_t i = 0; i < out.size(); ++i) {
     out[i] = values[raw.message[i]];
-    if (!std::isfinite(out[i]))
+    if (!std::isfinite(out[i]) || std::abs(out[i]) > kMaxMagnitude)
       fail(log, s.source + "." + field,
-           "non-finite value at time stamp " + std::to_string(raw.time_us[i]) + " us (" + s.label + ")");
+           (std::isfinite(out[i]) ? "value beyond 1e100" : "non-finite value") + std::string(" at time stamp ") +
+               std::to_string(raw.time_us[i]) + " us (" + s.label + ")");
   }
   return out;
 }
@@ -108,7 +110,7 @@ std::vector<double> temperature(const Log& log, const Stream& s, const std::vect
   std::size_t missing = 0;
   for (std::size_t i = 0; i < out.size(); ++i) {
     out[i] = values[raw.message[i]];
-    missing += !std::isfinite(out[i]);
+    missing += !std::isfinite(out[i]) || std::abs(out[i]) > kMaxMagnitude;
   }
   if (missing == out.size()) {
     if (notes) notes->push_back(s.label + ": temperature is NaN throughout; no temperature channel for it");

@@ -28,8 +28,9 @@
 // Repairs, each with a note: samples out of time order are sorted (stable); repeated time stamps
 // keep the first sample; a temperature that is NaN throughout leaves the channel out. Errors
 // (DataError naming the file and topic): a requested topic or instance not in the log, a stream
-// with fewer than 2 samples, streams that do not overlap in time, a non-finite value, a
-// temperature NaN only in part, an instance above 99 (the role names stop there).
+// with fewer than 2 samples, streams that do not overlap in time, a non-finite value or one beyond
+// kMaxMagnitude (csv.hpp), a temperature NaN only in part, an instance above 99 (the role names
+// stop there), a time stamp beyond 2^53 us.
 #pragma once
 
 #include <filesystem>
