@@ -7,10 +7,12 @@
 #include <cstdio>
 #include <sstream>
 #include <cstdlib>
+#include <iostream>
 
 #include "framework/output_set.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
+#include "framework/record_reader.hpp"
 
 namespace driftlab::cli {
 
@@ -66,9 +68,25 @@ CLI::Validator whole_number(double lo, double hi) {
 }
 
 void add_data_options(CLI::App* command, DataOptions& data, const std::string& column_help) {
-  command->add_option("--data", data.path, "input CSV (header row; default columns t_s, rate_dps, temp_c)");
+  command->add_option("--data", data.path,
+                      "input record: CSV (header row; default columns t_s, rate_dps, temp_c) or a PX4 ULog (.ulg, "
+                      "recognised by content; name the channel to analyse, e.g. --column rate=gyro_z for the z gyro "
+                      "in rad/s)");
   command->add_option("--column", data.columns, column_help);
   add_sampling_options(command, data.sample_rate_hz, data.max_gap_factor);
+  add_log_selection_options(command, data.log);
+}
+
+void add_log_selection_options(CLI::App* command, LogSelection& selection) {
+  command->add_option("--topic", selection.topic,
+                      "log topic to read the IMU from: sensor_gyro, sensor_accel or sensor_combined (default: "
+                      "sensor_gyro + sensor_accel when the log has them, else sensor_combined)");
+  command->add_option("--instance", selection.instance,
+                      "log IMU instance (PX4 multi_id) to read; its gyro is the time base (default: every instance, "
+                      "on the time base of the first gyro)")
+      ->check(CLI::Range(0, 255));
+  command->add_option("--sensor", selection.sensor,
+                      "log channels to read: gyro, accel, gyro1, gyro_z, ... comma-separated (default: all)");
 }
 
 void add_sampling_options(CLI::App* command, double& sample_rate_hz, double& max_gap_factor,
@@ -91,7 +109,10 @@ TimeSeries load_record(const DataOptions& data, std::vector<std::string> require
   options.required_roles = std::move(required_roles);
   options.sample_rate_hz = data.sample_rate_hz;
   options.max_gap_factor = data.max_gap_factor;
-  return read_csv(data.path, options);
+  std::vector<std::string> notes;
+  TimeSeries record = read_record(data.path, options, data.log, &notes);
+  for (const auto& n : notes) std::cerr << "note: " << n << "\n";
+  return record;
 }
 
 std::string display_unit(const TimeSeries& record, const std::string& role, const DataOptions& data) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "framework/output_set.hpp"
+#include "framework/record_reader.hpp"
 #include "framework/registry.hpp"
 #include "framework/time_series.hpp"
 
@@ -36,9 +37,10 @@ struct CommandEnv {
 
 struct DataOptions {
   std::string path;
-  std::vector<std::string> columns;  // --column mappings (see csv.hpp)
+  std::vector<std::string> columns;  // --column mappings (see csv.hpp; for a log, record_reader.hpp)
   double sample_rate_hz = 0.0;       // --fs
   double max_gap_factor = 3.0;       // --max-gap
+  LogSelection log;                  // --topic, --instance, --sensor (logs only)
 };
 
 // Validators for number options (CLI11's Range and PositiveNumber let NaN through): the text must be
@@ -54,10 +56,15 @@ void add_sampling_options(CLI::App* command, double& sample_rate_hz, double& max
                           const std::string& fs_help = "sample rate in Hz, for files without a time column",
                           const std::string& gap_help = "largest allowed time step, as a multiple of the median "
                                                         "step (0 allows gaps)");
-// Adds --data, --column, --fs and --max-gap to a subcommand.
+// Adds --data, --column, --fs and --max-gap, and the log options --topic, --instance and --sensor,
+// to a subcommand.
 void add_data_options(CLI::App* command, DataOptions& data, const std::string& column_help);
-// Reads the record; `required_roles` must be present (the role of the first --column that is not
-// the time column replaces "rate").
+// Adds --topic, --instance and --sensor (framework/record_reader.hpp LogSelection).
+void add_log_selection_options(CLI::App* command, LogSelection& selection);
+// Reads the record, CSV or a log by its content (framework/record_reader.hpp); `required_roles`
+// must be present (the role of the first --column that is not the time column replaces "rate").
+// A log has no "rate" channel: single-signal commands name one, `--column rate=gyro_z` (the z gyro
+// of instance 0, rad/s) or `--column gyro1_x`. What a log reader repaired goes to stderr as notes.
 TimeSeries load_record(const DataOptions& data, std::vector<std::string> required_roles = {"rate"});
 // Role analysed by single-signal commands: the role of the first --column that is not `time`
 // (so --column time=t:s --column rate=r:deg/s analyses rate), else "rate".

@@ -20,6 +20,7 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env);
 void add_compensate_command(CLI::App& app, CommandEnv& env);
 void add_export_command(CLI::App& app, CommandEnv& env);
 void add_compare_command(CLI::App& app, CommandEnv& env);
+void add_log_command(CLI::App& app, CommandEnv& env);
 }  // namespace driftlab::cli
 
 int main(int argc, char** argv) {
@@ -50,6 +51,7 @@ int main(int argc, char** argv) {
   add_compensate_command(app, env);
   add_export_command(app, env);
   add_compare_command(app, env);
+  add_log_command(app, env);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,59 @@
+// From a PX4 ULog (framework/ulog.hpp) to the IMU record (framework/imu.hpp): the thin adapter
+// between the pure parser and the record every command reads.
+//
+// Topics (PX4 uORB definitions; units as PX4 logs them, which are the record's internal units):
+//   sensor_gyro   x, y, z (rad/s), temperature (degC), device_id, timestamp_sample (us; else
+//                 timestamp): one gyro per multi_id -> instance (gyro_x, gyro1_x, ...).
+//   sensor_accel  the same for the accelerometer (m/s^2): accel_x, accel1_x, ...
+//   sensor_combined  the fallback when the log has neither: gyro_rad[3] at `timestamp`,
+//                 accelerometer_m_s2[3] at timestamp + accelerometer_timestamp_relative (samples
+//                 whose relative stamp is PX4's "invalid" 0x7fffffff are left out); instance 0 only;
+//                 it carries no IMU temperature (baro_temp_celcius is the barometer's), so the
+//                 record has none, and a note says so.
+// vehicle_imu (integrated delta angles) and sensor_gyro_fifo (packed int16 samples with a scale)
+// are not read: they need integration / unpacking that these topics do not.
+//
+// Time base. One record has one time vector, but every sensor and instance samples at its own
+// instants. Policy: the first selected stream -- gyro of the lowest selected instance (accel when
+// no gyro is selected) -- is the time base; every other stream (other instances, the accelerometers,
+// temperatures) is linearly interpolated onto it. Time stamps of the base outside the span that
+// every selected stream covers are dropped (no extrapolation), and a note gives the count. Why: the
+// gyro is what drift calibration models, so its samples stay exactly as logged; interpolating the
+// slower-varying accelerometer and temperature costs least; one record keeps all instances side by
+// side for a whole-IMU calibration. Pick one instance (LogSelection::instance) to make that
+// instance's gyro the base.
+// A temperature channel per instance comes from its gyro (the accel's when no gyro is selected);
+// the device id likewise (decimal, as PX4's CAL_GYROn_ID parameters show it).
+//
+// Repairs, each with a note: samples out of time order are sorted (stable); repeated time stamps
+// keep the first sample; a temperature that is NaN throughout leaves the channel out. Errors
+// (DataError naming the file and topic): a requested topic or instance not in the log, a stream
+// with fewer than 2 samples, streams that do not overlap in time, a non-finite value or one beyond
+// kMaxMagnitude (csv.hpp), a temperature NaN only in part, an instance above 99 (the role names
+// stop there), a time stamp beyond 2^53 us.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "framework/record_reader.hpp"
+#include "framework/time_series.hpp"
+#include "framework/ulog.hpp"
+
+namespace driftlab::ulog {
+
+// The topics imu_record reads: pass them as ReadOptions::keep_topics.
+const std::vector<std::string>& imu_topics();
+
+// The IMU record of a parsed log (its imu_topics kept). `selection.topic` is "" (sensor_gyro /
+// sensor_accel when the log has them, else sensor_combined), "sensor_gyro" (gyros only),
+// "sensor_accel" or "sensor_combined"; any other name is a ConfigError naming --topic.
+// `selection.sensor` is parsed by imu::parse_selection (ConfigError naming --sensor).
+TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector<std::string>* notes = nullptr);
+
+// read() with imu_topics kept, then imu_record.
+TimeSeries read_imu(const std::filesystem::path& path, const LogSelection& selection,
+                    std::vector<std::string>* notes = nullptr);
+
+}  // namespace driftlab::ulog

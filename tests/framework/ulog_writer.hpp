@@ -1,0 +1,84 @@
+// A minimal ULog writer for tests: byte-exact messages as PX4's format documentation lays them
+// out, so the reader's features and bad-input handling can be tried on files small enough to read
+// in a test. The counts and values the reader is checked against come from pyulog's outputs on
+// real logs (ulog_test.cpp); these files only exercise structure.
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace driftlab::testing_ulog {
+
+class Writer {
+ public:
+  explicit Writer(std::uint64_t start_us = 1000, std::uint8_t version = 1) {
+    bytes_ = std::string("ULog\x01\x12\x35", 7);
+    bytes_ += static_cast<char>(version);
+    put(start_us, 8);
+  }
+  // 'B' with the given incompatible byte 0 and appended offsets.
+  Writer& flag_bits(std::uint8_t incompat0 = 0, std::vector<std::uint64_t> appended = {}) {
+    std::string p(16, '\0');
+    p[8] = static_cast<char>(incompat0);
+    appended.resize(3, 0);
+    for (const auto o : appended) p += le(o, 8);
+    return message('B', p);
+  }
+  Writer& format(const std::string& text) { return message('F', text); }
+  Writer& info(const std::string& key, const std::string& value) {
+    return message('I', std::string(1, static_cast<char>(key.size())) + key + value);
+  }
+  Writer& parameter_float(const std::string& name, float v) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &v, 4);
+    const std::string key = "float " + name;
+    return message('P', std::string(1, static_cast<char>(key.size())) + key + le(bits, 4));
+  }
+  Writer& add(std::uint8_t multi_id, std::uint16_t msg_id, const std::string& name) {
+    return message('A', std::string(1, static_cast<char>(multi_id)) + le(msg_id, 2) + name);
+  }
+  Writer& data(std::uint16_t msg_id, const std::string& payload) { return message('D', le(msg_id, 2) + payload); }
+  Writer& dropout(std::uint16_t ms) { return message('O', le(ms, 2)); }
+  Writer& logged(char level, std::uint64_t t_us, const std::string& text) {
+    return message('L', std::string(1, level) + le(t_us, 8) + text);
+  }
+  Writer& message(char type, const std::string& payload) {
+    put(payload.size(), 2);
+    bytes_ += type;
+    bytes_ += payload;
+    return *this;
+  }
+  Writer& raw(const std::string& bytes) {
+    bytes_ += bytes;
+    return *this;
+  }
+  const std::string& bytes() const { return bytes_; }
+
+  static std::string le(std::uint64_t v, int n) {
+    std::string out;
+    for (int i = 0; i < n; ++i) out += static_cast<char>((v >> (8 * i)) & 0xff);
+    return out;
+  }
+  static std::string f32(float v) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &v, 4);
+    return le(bits, 4);
+  }
+
+ private:
+  void put(std::uint64_t v, int n) { bytes_ += le(v, n); }
+  std::string bytes_;
+};
+
+// The sensor_gyro format of PX4 v1.11 (as in pyulog's sample_log_small.ulg) and one message of it.
+inline const char* kSensorGyroFormat =
+    "sensor_gyro:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float x;float y;float z;"
+    "float temperature;uint32_t error_count;";
+inline std::string sensor_gyro(std::uint64_t t_us, std::uint32_t device, float x, float y, float z, float temp) {
+  return Writer::le(t_us, 8) + Writer::le(t_us, 8) + Writer::le(device, 4) + Writer::f32(x) + Writer::f32(y) +
+         Writer::f32(z) + Writer::f32(temp) + Writer::le(0, 4);
+}
+
+}  // namespace driftlab::testing_ulog

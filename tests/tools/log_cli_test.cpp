@@ -1,0 +1,119 @@
+// `driftlab log info / export` and the record-reading commands on PX4 ULogs, end to end: exit
+// codes (3 for a bad log), messages naming file and byte offset, the export read back by the CSV
+// reader.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "framework/csv.hpp"
+#include "tests/framework/ulog_writer.hpp"
+#include "tests/tools/cli_harness.hpp"
+
+namespace driftlab {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+using ::testing::Not;
+using namespace testing_cli;
+using testing_ulog::Writer;
+
+fs::path pyulog_dir() { return fs::path(DRIFTLAB_SHARED_DATA) / "logs" / "px4-pyulog"; }
+
+void write(const fs::path& path, const std::string& bytes) { std::ofstream(path, std::ios::binary) << bytes; }
+
+// Two gyro instances at 100 Hz, instance 1 offset by 3 ms, temperatures 30 and 31 degC rising.
+std::string two_gyros(int samples) {
+  Writer w;
+  w.flag_bits().format(testing_ulog::kSensorGyroFormat).add(0, 1, "sensor_gyro").add(1, 2, "sensor_gyro");
+  for (int i = 0; i < samples; ++i) {
+    const auto t = static_cast<std::uint64_t>(1000000 + 10000 * i);
+    const float s = 0.01f * static_cast<float>(i % 7);
+    w.data(1, testing_ulog::sensor_gyro(t, 11, s, -s, 0.5f * s, 30.f + 0.01f * static_cast<float>(i)));
+    w.data(2, testing_ulog::sensor_gyro(t + 3000, 22, -s, s, s, 31.f + 0.01f * static_cast<float>(i)));
+  }
+  return w.bytes();
+}
+
+class LogCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = scratch_dir(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    write(dir_ / "gyros.ulg", two_gyros(400));
+  }
+  std::string p(const std::string& name) const { return (dir_ / name).string(); }
+  fs::path dir_;
+};
+
+TEST_F(LogCli, InfoListsTopicsInstancesTemperaturesAndDeviceIds) {
+  const auto r = run_driftlab("log info " + p("gyros.ulg"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, AllOf(HasSubstr("PX4 ULog version 1"), HasSubstr("sensor_gyro"), HasSubstr("instance 1:"),
+                           HasSubstr("device_id 22 (0x16), 400 messages at 100.0 Hz, 31.00 to 34.99 degC")));
+}
+
+TEST_F(LogCli, ExportWritesTheImuRecordTheCsvReaderReadsBack) {
+  const auto r = run_driftlab("log export " + p("gyros.ulg") + " --out " + p("imu.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("time base: sensor_gyro multi_id 0"));
+  CsvReadOptions options;
+  options.required_roles = {"gyro_z", "gyro1_z", "temperature", "temperature1"};
+  const auto record = read_csv(p("imu.csv"), options);
+  EXPECT_EQ(record.size(), 400 - 1);  // the first base sample (1.000 s) lies before instance 1's first (1.003 s)
+  EXPECT_EQ(record.time()[0], 1.01);
+  EXPECT_EQ(record.device_id(0), "11");
+  EXPECT_EQ(record.device_id(1), "22");
+  EXPECT_EQ(record.channel("gyro_z").unit, "rad/s");
+  EXPECT_NEAR(record.channel("temperature").values[0], 30.01, 1e-6);
+  EXPECT_NEAR(record.channel("temperature1").values[0], 31.007, 1e-5);  // 31.00 at 1.003 s, 31.01 at 1.013 s
+
+  const auto one = run_driftlab("log export " + p("gyros.ulg") + " --instance 1 --out " + p("one.csv"));
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  EXPECT_THAT(read_text(p("one.csv")).substr(0, 60), HasSubstr("t_s,gyro1_x_rad_s,gyro1_y_rad_s,gyro1_z_rad_s,temp1_c"));
+}
+
+TEST_F(LogCli, RecordCommandsReadALogWithAColumnMapping) {
+  const auto r = run_driftlab("allan --data " + p("gyros.ulg") + " --column rate=gyro1_z --out " + p("a.csv"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  const auto no_rate = run_driftlab("allan --data " + p("gyros.ulg") + " --out " + p("b.csv"));
+  EXPECT_EQ(no_rate.exit_code, 3);
+  EXPECT_THAT(no_rate.err, HasSubstr("--column rate=gyro_z"));
+  EXPECT_FALSE(fs::exists(p("b.csv")));
+}
+
+TEST_F(LogCli, BadLogsExitWithThreeNamingFileAndOffset) {
+  const std::string good = two_gyros(50);
+  write(dir_ / "cut.ulg", good.substr(0, good.size() - 5));
+  write(dir_ / "unknown.ulg", Writer().flag_bits().message('Z', "??").bytes());
+  for (const auto& args : {"log info " + p("cut.ulg"), "log export " + p("cut.ulg") + " --out " + p("x.csv"),
+                           "allan --data " + p("cut.ulg") + " --column rate=gyro_z --out " + p("x.csv"),
+                           "log info " + p("unknown.ulg")}) {
+    SCOPED_TRACE(args);
+    const auto r = run_driftlab(args);
+    EXPECT_EQ(r.exit_code, 3);
+    EXPECT_THAT(r.err, AllOf(HasSubstr(".ulg: byte "), Not(HasSubstr("failed"))));
+    EXPECT_FALSE(fs::exists(p("x.csv")));
+  }
+  const auto missing_topic = run_driftlab("log export " + p("gyros.ulg") + " --topic sensor_accel --out " + p("x.csv"));
+  EXPECT_EQ(missing_topic.exit_code, 3);
+  EXPECT_THAT(missing_topic.err, HasSubstr("'sensor_accel' is not in the log"));
+  write(dir_ / "record.csv", "t_s,rate_dps\n0,1\n0.1,1\n");
+  const auto csv = run_driftlab("log info " + p("record.csv"));
+  EXPECT_EQ(csv.exit_code, 3);
+  EXPECT_THAT(csv.err, HasSubstr("not a PX4 ULog"));
+}
+
+TEST(LogCliPyulog, InfoOnEachFixture) {
+  if (!fs::exists(pyulog_dir() / "sample.ulg")) GTEST_SKIP() << "no shared data: " << pyulog_dir();
+  for (const char* name : {"sample.ulg", "sample_log_small.ulg", "sample_appended_multiple.ulg"}) {
+    SCOPED_TRACE(name);
+    const auto r = run_driftlab("log info " + (pyulog_dir() / name).string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_THAT(r.out, AllOf(HasSubstr("sys_name: PX4"), HasSubstr("sensor_combined")));
+  }
+  const auto small = run_driftlab("log info " + (pyulog_dir() / "sample_log_small.ulg").string());
+  EXPECT_THAT(small.out, AllOf(HasSubstr("ver_hw: CUBEPILOT_CUBEORANGE"), HasSubstr("instance 2:"), HasSubstr("degC")));
+}
+
+}  // namespace
+}  // namespace driftlab
