@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <map>
 #include <optional>
 
@@ -15,9 +16,9 @@ namespace driftlab::cli {
 
 void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, bool repeatable) {
   auto* opt = cmd->add_option("--data", data.paths,
-                              repeatable ? "input CSV record(s); repeat to combine several runs of one IMU "
-                                           "(columns: see --column)"
-                                         : "input CSV");
+                              repeatable ? "input record(s): CSV or PX4 ULog (.ulg); repeat to combine several "
+                                           "runs of one IMU (CSV columns: see --column)"
+                                         : "input record: CSV or PX4 ULog (.ulg)");
   opt->required();
   if (!repeatable) opt->expected(1);
   cmd->add_option("--column", data.columns,
@@ -35,6 +36,7 @@ void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, b
     cmd->add_flag("--same-device", data.same_device,
                   "the --data records are one device even though their device ids or bias levels differ");
   add_sampling_options(cmd, data.sample_rate_hz, data.max_gap_factor);
+  add_log_selection_options(cmd, data.log);
 }
 
 namespace {
@@ -62,7 +64,11 @@ std::vector<ChannelRecords> load_channel_records(const std::vector<std::string>&
   const imu::Selection selection = data.channels.empty() ? imu::Selection{} : imu::parse_selection(data.channels, "--channels");
 
   std::vector<FileChannels> files;
-  for (const auto& p : paths) files.push_back({read_csv(p, options), p});
+  for (const auto& p : paths) {
+    std::vector<std::string> notes;
+    files.push_back({read_record(p, options, data.log, &notes), p});
+    for (const auto& n : notes) std::cerr << "note: " << p << ": " << n << "\n";
+  }
   if (files.empty()) throw ConfigError({"", 0, "--data"}, "no record given");
 
   // The channels of the first file, in model order: gyro before accel, then instance, then axis.

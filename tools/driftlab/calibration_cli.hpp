@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "framework/imu.hpp"
+#include "framework/record_reader.hpp"
 #include "framework/time_series.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "models/calibration/fit.hpp"
@@ -23,6 +24,7 @@ struct CalibrationDataOptions {
   std::string channels;               // --channels (empty: every channel)
   std::string axis = "z";             // --axis: the axis of a single-axis "rate" column
   bool same_device = false;           // --same-device: records of several devices are not refused
+  LogSelection log;                   // --topic, --instance, --sensor (logs only)
 };
 
 void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, bool repeatable);
@@ -39,7 +41,7 @@ struct ChannelRecords {
   std::vector<calibration::Record> records;
 };
 
-// Reads every file and collects the selected channels (--channels; every gyro/accel channel, or the
+// Reads every file (CSV or a log, by content: framework/record_reader.hpp) and collects the selected channels (--channels; every gyro/accel channel, or the
 // "rate" column, by default). Throws DataError when a file lacks a channel the first one has or an
 // instance has no temperature, and ConfigError when the files come from different devices (their
 // device ids differ, or a channel's bias disagrees beyond what one device's noise explains; see

@@ -9,6 +9,7 @@
 
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
+#include "framework/parallel.hpp"
 #include "models/calibration/fit.hpp"
 #include "framework/pipeline.hpp"
 #include "tools/driftlab/calibration_cli.hpp"
@@ -197,8 +198,12 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
       const auto more = matching(evaluate, ch);
       held_out[c].insert(held_out[c].end(), more.begin(), more.end());
     }
-    model.channels.push_back(fit_channel(ch, fitted[c], fit_options(o, env, ch.role)));
   }
+  // The channels are independent fits, one per item (results in channel order, whatever --threads).
+  model.channels.resize(channels.size());
+  parallel_for(channels.size(), env.threads, [&](std::size_t c) {
+    model.channels[c] = fit_channel(channels[c], fitted[c], fit_options(o, env, channels[c].role));
+  });
   model.validate();
   files.write(o.out, calibration::to_json_text(model));
   for (std::size_t c = 0; c < channels.size(); ++c)
