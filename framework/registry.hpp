@@ -75,7 +75,4 @@ class Registry {
   std::unique_ptr<Impl> impl_;
 };
 
-// Registers every built-in plugin (defined in plugins/builtins.cpp).
-void register_builtin_plugins(Registry& registry);
-
 }  // namespace driftlab

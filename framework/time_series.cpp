@@ -1,13 +1,11 @@
 #include "framework/time_series.hpp"
 
 #include "framework/error.hpp"
+#include "framework/sampling.hpp"
 
 namespace driftlab {
 
-double TimeSeries::sample_rate_hz() const {
-  if (time_.size() < 2) return 0.0;
-  return static_cast<double>(time_.size() - 1) / (time_[time_.size() - 1] - time_[0]);
-}
+double TimeSeries::sample_rate_hz() const { return sampling::mean_rate_hz(time_); }
 
 void TimeSeries::set_channel(Channel channel) {
   if (channel.values.size() != time_.size())

@@ -34,7 +34,7 @@ class TimeSeries {
 
   const Eigen::VectorXd& time() const { return time_; }
   Eigen::Index size() const { return time_.size(); }
-  // Mean sample rate in Hz from the first and last time stamps (0 when fewer than two samples).
+  // Mean sample rate in Hz (sampling::mean_rate_hz: 0 for fewer than two samples or a zero span).
   double sample_rate_hz() const;
 
   // Adds or replaces the channel with this role. Throws DataError when the length differs.

@@ -1,3 +1,5 @@
+#include "plugins/builtins.hpp"
+
 #include "framework/registry.hpp"
 
 namespace driftlab {

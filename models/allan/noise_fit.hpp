@@ -33,6 +33,7 @@
 // Cost: 32 weighted least-squares solves of at most 5 unknowns over the curve's points, O(points).
 #pragma once
 
+#include "framework/units.hpp"
 #include "models/allan/confidence.hpp"
 
 #include <array>
@@ -79,21 +80,19 @@ struct UnitConversion {
   double factor;  // reported = SI value * factor
 };
 
-constexpr double kDegreesPerRadian = 180.0 / std::numbers::pi;
-constexpr double kSecondsPerHour = 3600.0;
 
 // The usual gyro units for a rate input: Q deg, N deg/sqrt(h), B deg/h, K deg/h/sqrt(h), R deg/h/h.
 constexpr std::array<UnitConversion, kTermCount> kIeee952Units{{
-    {Term::Q, "Q", "deg", kDegreesPerRadian},
-    {Term::N, "N", "deg/sqrt(h)", kDegreesPerRadian * 60.0},
-    {Term::B, "B", "deg/h", kDegreesPerRadian * kSecondsPerHour},
-    {Term::K, "K", "deg/h/sqrt(h)", kDegreesPerRadian * kSecondsPerHour * 60.0},
-    {Term::R, "R", "deg/h/h", kDegreesPerRadian * kSecondsPerHour * kSecondsPerHour},
+    {Term::Q, "Q", "deg", kDegPerRad},
+    {Term::N, "N", "deg/sqrt(h)", kDegPerRad * 60.0},
+    {Term::B, "B", "deg/h", kDegPerRad * kSecondsPerHour},
+    {Term::K, "K", "deg/h/sqrt(h)", kDegPerRad * kSecondsPerHour * 60.0},
+    {Term::R, "R", "deg/h/h", kDegPerRad * kSecondsPerHour * kSecondsPerHour},
 }};
 
 // N as a noise density in deg/h/sqrt(Hz) (the paper's Table 2 unit).
 constexpr UnitConversion kNoiseDensityDegPerHour{Term::N, "N_density", "deg/h/sqrt(Hz)",
-                                                 kDegreesPerRadian * kSecondsPerHour};
+                                                 kDegPerRad * kSecondsPerHour};
 
 // Kalibr's names, SI.
 constexpr std::array<UnitConversion, 2> kKalibrUnits{{

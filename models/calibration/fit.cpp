@@ -7,6 +7,7 @@
 
 #include "framework/error.hpp"
 #include "framework/golden_section.hpp"
+#include "framework/sampling.hpp"
 #include "models/calibration/evidence.hpp"
 #include "plugins/common/holdout.hpp"
 #include "plugins/ga/ga.hpp"
@@ -441,7 +442,7 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
     const auto out = compensate(m, r.time_s, r.rate_rad_s, r.temp_c);
     const Eigen::VectorXd err =
         r.true_rate_rad_s.size() ? Eigen::VectorXd(out.rate_rad_s - r.true_rate_rad_s) : out.rate_rad_s;
-    const double rate_hz = static_cast<double>(r.time_s.size() - 1) / (r.time_s[r.time_s.size() - 1] - r.time_s[0]);
+    const double rate_hz = sampling::mean_rate_hz(r.time_s);
     o.progress("calibrate: Allan noise terms", 0.0);
     if (const auto n = fit_noise(err, rate_hz)) {
       m.noise = {n->arw_rad_sqrt_s, n->bias_instability_rad_s, n->rate_random_walk_rad_s_sqrt_s, rate_hz};

@@ -24,24 +24,6 @@ double gauss_markov_covariance(double sigma, double tau, double length_i, double
 
 }  // namespace
 
-GapPattern gap_pattern(const Eigen::VectorXd& time_s, double gap_factor) {
-  GapPattern g;
-  if (time_s.size() < 3) return g;
-  const double limit = gap_factor * signal::median_step(time_s);
-  std::vector<double> starts{time_s[0]};
-  for (Eigen::Index k = 0; k + 1 < time_s.size(); ++k) {
-    if (time_s[k + 1] - time_s[k] <= limit) continue;
-    if (g.gaps++ == 0) g.first_gap_time_s = time_s[k];
-    starts.push_back(time_s[k + 1]);
-  }
-  for (std::size_t i = 1; i < starts.size(); ++i) {
-    const double period = starts[i] - starts[i - 1];
-    g.shortest_period_s = i == 1 ? period : std::min(g.shortest_period_s, period);
-    g.longest_period_s = std::max(g.longest_period_s, period);
-  }
-  return g;
-}
-
 Blocks make_blocks(const Eigen::VectorXd& time_s, double block_s) {
   const Eigen::Index n = time_s.size();
   if (!(block_s > 0.0)) throw std::invalid_argument("block length must be positive");

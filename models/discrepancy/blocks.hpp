@@ -43,18 +43,8 @@ struct Blocks {
   double median_spacing_s() const;
 };
 
-// Gaps of a record: time steps longer than gap_factor x the median step. Bursts (a gap after every
-// burst, like a logger that wakes every 5 min) are regular when the times from one burst's start
-// to the next vary by at most kRegularBurstSpread; block averaging then handles them like evenly
-// spaced data with fewer samples (blocks of at least one burst period). One gap alone is not a pattern.
-inline constexpr double kRegularBurstSpread = 1.5;  // longest / shortest burst period
-struct GapPattern {
-  int gaps = 0;
-  double shortest_period_s = 0.0, longest_period_s = 0.0;  // burst start to burst start
-  double first_gap_time_s = 0.0;                           // time stamp before the first gap
-  bool regular() const { return gaps >= 2 && longest_period_s <= kRegularBurstSpread * shortest_period_s; }
-};
-GapPattern gap_pattern(const Eigen::VectorXd& time_s, double gap_factor);
+// Gaps and regular bursts of a record: framework/sampling.hpp (block averaging handles regular
+// bursts like evenly spaced data with fewer samples: blocks of at least one burst period).
 
 // Throws std::invalid_argument when block_s <= 0 or the record has fewer than 2 samples.
 Blocks make_blocks(const Eigen::VectorXd& time_s, double block_s);

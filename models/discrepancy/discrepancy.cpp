@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "framework/error.hpp"
+#include "framework/sampling.hpp"
 #include "framework/golden_section.hpp"
 #include "framework/signal.hpp"
 #include "framework/units.hpp"
@@ -20,7 +21,6 @@ constexpr double kTargetBlocks = 400.0;
 constexpr double kRankThreshold = 1e-10;  // relative column norm below which a direction is dropped
 constexpr double kDifferenceStep = 1e-4;  // relative step of the finite differences
 constexpr int kMaxPeriodGrid = 4000;
-constexpr double kGapFactor = 1.5;  // a step above 1.5 x the median step is a gap
 
 struct Term {
   std::size_t candidate;
@@ -94,9 +94,7 @@ class Workflow {
     const double duration = t[t.size() - 1] - t[0];
     block_s_ = options.block_s > 0.0 ? options.block_s : std::max(signal::median_step(t), duration / kTargetBlocks);
     blocks_ = make_blocks(t, block_s_);
-    evenly_sampled_ = true;
-    for (Eigen::Index k = 0; k + 1 < t.size(); ++k)
-      evenly_sampled_ = evenly_sampled_ && t[k + 1] - t[k] <= kGapFactor * blocks_.sample_interval_s;
+    evenly_sampled_ = sampling::facts_of(t).evenly_sampled();
     free_scale_factor_ = !options.prior && record.has(role::kTrueRate) &&
                          record.channel(role::kTrueRate).values.cwiseAbs().maxCoeff() > 0.0;
     const Eigen::Index parameters = model_columns();

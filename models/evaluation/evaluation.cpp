@@ -1,5 +1,7 @@
 #include "models/evaluation/evaluation.hpp"
 
+#include "framework/sampling.hpp"
+
 #include <Eigen/Dense>
 
 #include <algorithm>
@@ -14,11 +16,7 @@ namespace {
 
 constexpr double kBoundaryTolerance = 1e-9;  // of a block: time stamps like k * 0.1 s
 
-bool has_gaps(const Eigen::VectorXd& time_s) {
-  if (time_s.size() < 3) return false;
-  const Eigen::VectorXd steps = time_s.tail(time_s.size() - 1) - time_s.head(time_s.size() - 1);
-  return steps.maxCoeff() > kGapFactor * signal::median_step(time_s);
-}
+bool has_gaps(const Eigen::VectorXd& time_s) { return !sampling::facts_of(time_s).evenly_sampled(); }
 
 }  // namespace
 

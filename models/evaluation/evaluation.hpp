@@ -27,7 +27,6 @@
 namespace driftlab::evaluation {
 
 inline constexpr double kResidualBlockS = 60.0;  // block length of the residual-drift metric
-inline constexpr double kGapFactor = 3.0;        // a step > 3 x the median step is a gap (as the CSV reader's default)
 
 struct Truth {
   Eigen::VectorXd true_rate_rad_s;                 // the table's rate
@@ -50,7 +49,7 @@ struct StageScore {
 //   - A block without samples gives no mean (a gap, or the time between bursts).
 //   - An evenly sampled record is scored on whole blocks: its last block is left out when the record
 //     ends inside it (last time stamp + the record's last step < the block's end). A record with
-//     gaps (a step longer than kGapFactor x the median step) keeps every non-empty block, the last
+//     gaps (a step longer than sampling::kGapFactor x the median step) keeps every non-empty block, the last
 //     one too: its blocks are partial anyway (a burst record's last burst counts like the others).
 // On an evenly sampled record with block_s x rate a whole number of samples this is exactly the
 // sample-count blocking (whole blocks of block_s x rate samples, the remainder left out).

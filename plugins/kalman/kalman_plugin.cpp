@@ -5,6 +5,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "framework/sampling.hpp"
 #include "framework/error.hpp"
 #include "framework/registry.hpp"
 #include "plugins/kalman/kalman.hpp"
@@ -117,11 +118,7 @@ class KalmanFilter final : public Filter {
   }
 
   double sample_rate(const RunContext& ctx) const {
-    if (sample_rate_hz_ > 0.0) return sample_rate_hz_;
-    const Eigen::Index n = ctx.time_s.size();
-    if (n < 2) return 0.0;
-    const double span = ctx.time_s[n - 1] - ctx.time_s[0];
-    return span > 0.0 ? static_cast<double>(n - 1) / span : 0.0;
+    return sample_rate_hz_ > 0.0 ? sample_rate_hz_ : sampling::mean_rate_hz(ctx.time_s);
   }
 
   std::string model_;

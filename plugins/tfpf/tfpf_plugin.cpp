@@ -6,6 +6,7 @@
 #include <string>
 #include <variant>
 
+#include "framework/sampling.hpp"
 #include "framework/error.hpp"
 #include "framework/registry.hpp"
 #include "plugins/tfpf/tfpf.hpp"
@@ -47,11 +48,7 @@ class TfpfFilter final : public Filter {
     ctx.diagnostics["window_samples"] = r.window;
     ctx.diagnostics["noise_sigma"] = r.noise_sigma;
     ctx.diagnostics["noise_share"] = r.noise_share;
-    const Eigen::Index n = ctx.time_s.size();
-    if (n >= 2 && ctx.time_s[n - 1] > ctx.time_s[0]) {
-      const double dt = (ctx.time_s[n - 1] - ctx.time_s[0]) / static_cast<double>(n - 1);
-      ctx.diagnostics["window_s"] = r.window * dt;
-    }
+    if (const double fs = sampling::mean_rate_hz(ctx.time_s); fs > 0.0) ctx.diagnostics["window_s"] = r.window / fs;
     return std::move(r.filtered);
   }
 

@@ -7,19 +7,13 @@
 #include <string>
 #include <vector>
 
+#include "framework/sampling.hpp"
 #include "framework/error.hpp"
 #include "framework/registry.hpp"
 #include "plugins/vmd/vmd.hpp"
 
 namespace driftlab {
 namespace {
-
-double sample_rate_of(const RunContext& ctx) {
-  const Eigen::Index n = ctx.time_s.size();
-  if (n < 2) return 0.0;
-  const double span = ctx.time_s[n - 1] - ctx.time_s[0];
-  return span > 0.0 ? static_cast<double>(n - 1) / span : 0.0;
-}
 
 class VmdDecomposer final : public Decomposer {
  public:
@@ -50,7 +44,7 @@ class VmdDecomposer final : public Decomposer {
     const std::vector<double> cycles(result.centre_frequencies.data(),
                                      result.centre_frequencies.data() + result.centre_frequencies.size());
     ctx.diagnostics["centre_frequencies_cycles_per_sample"] = cycles;
-    if (const double fs = sample_rate_of(ctx); fs > 0.0) {
+    if (const double fs = sampling::mean_rate_hz(ctx.time_s); fs > 0.0) {
       std::vector<double> hz = cycles;
       for (double& f : hz) f *= fs;
       ctx.diagnostics["centre_frequencies_hz"] = hz;

@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 
+#include "plugins/builtins.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"

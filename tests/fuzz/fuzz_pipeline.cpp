@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <string>
 
+#include "plugins/builtins.hpp"
 #include "framework/error.hpp"
 #include "framework/pipeline.hpp"
 #include "framework/registry.hpp"

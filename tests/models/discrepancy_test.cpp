@@ -20,6 +20,7 @@
 #include <map>
 #include <set>
 
+#include "plugins/builtins.hpp"
 #include "framework/effect_catalogue.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"

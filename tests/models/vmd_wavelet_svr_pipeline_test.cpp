@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 
+#include "plugins/builtins.hpp"
 #include "devices/device_file.hpp"
 #include "devices/simulator.hpp"
 #include "framework/pipeline.hpp"

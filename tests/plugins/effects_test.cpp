@@ -10,6 +10,7 @@
 #include <numbers>
 #include <set>
 
+#include "plugins/builtins.hpp"
 #include "devices/device_file.hpp"
 #include "framework/effect_catalogue.hpp"
 #include "framework/params_io.hpp"

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "plugins/builtins.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
 

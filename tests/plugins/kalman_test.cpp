@@ -7,6 +7,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "plugins/builtins.hpp"
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <set>
 
+#include "plugins/builtins.hpp"
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"

@@ -6,6 +6,7 @@
 #include <random>
 #include <set>
 
+#include "plugins/builtins.hpp"
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"

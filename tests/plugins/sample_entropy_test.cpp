@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "plugins/builtins.hpp"
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"

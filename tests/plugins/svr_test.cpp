@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "plugins/builtins.hpp"
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"

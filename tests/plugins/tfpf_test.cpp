@@ -6,6 +6,7 @@
 #include <functional>
 #include <stdexcept>
 
+#include "plugins/builtins.hpp"
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "plugins/builtins.hpp"
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"

@@ -10,6 +10,7 @@
 
 #include <string>
 
+#include "plugins/builtins.hpp"
 #include "devices/simulator.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "plugins/builtins.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
 

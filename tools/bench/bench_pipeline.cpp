@@ -6,6 +6,7 @@
 //   BM_Li2023Pipeline/N
 #include <benchmark/benchmark.h>
 
+#include "plugins/builtins.hpp"
 #include "framework/pipeline.hpp"
 #include "framework/registry.hpp"
 #include "models/calibration/fit.hpp"

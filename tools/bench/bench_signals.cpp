@@ -9,6 +9,7 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "plugins/builtins.hpp"
 #include "framework/csv.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"

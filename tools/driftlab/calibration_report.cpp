@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "framework/sampling.hpp"
+#include "framework/units.hpp"
 #include "framework/error.hpp"
 #include "models/calibration/evidence.hpp"
 #include "models/evaluation/evaluation.hpp"
@@ -12,7 +14,6 @@
 namespace driftlab::cli {
 namespace {
 
-constexpr double kDph = 180.0 / std::numbers::pi * 3600.0;  // rad/s -> deg/h
 
 struct Scored {
   std::string name, description, bandwidth;
@@ -25,18 +26,14 @@ Scored score(const std::string& name, const std::string& description, const cali
   Scored s{name, description, ""};
   const Eigen::VectorXd truth = r.true_rate_rad_s.size() ? r.true_rate_rad_s : Eigen::VectorXd::Zero(r.time_s.size());
   const Eigen::VectorXd error = out - truth;
-  s.drift_dph = evaluation::block_mean_rms(r.time_s, error) * kDph;
-  const double fs = static_cast<double>(r.time_s.size() - 1) / (r.time_s[r.time_s.size() - 1] - r.time_s[0]);
+  s.drift_dph = evaluation::block_mean_rms(r.time_s, error) * kDphPerRadPerSec;
+  const auto facts = sampling::facts_of(r.time_s);
+  const double fs = facts.mean_rate_hz;
   // Allan figures need an evenly sampled record: none for records with gaps (bursts).
-  std::vector<double> steps(static_cast<std::size_t>(r.time_s.size() - 1));
-  for (Eigen::Index i = 1; i < r.time_s.size(); ++i) steps[static_cast<std::size_t>(i - 1)] = r.time_s[i] - r.time_s[i - 1];
-  std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
-  const double median_step = steps[steps.size() / 2];
-  const double max_step = (r.time_s.tail(r.time_s.size() - 1) - r.time_s.head(r.time_s.size() - 1)).maxCoeff();
-  const bool even = max_step <= 3.0 * median_step;
+  const bool even = facts.evenly_sampled();
   if (const auto a = even ? calibration::allan_figures(error, fs) : std::nullopt) {
-    s.b_dph = a->bias_instability_rad_s * kDph;
-    s.n_dph_rthz = a->arw_rad_sqrt_s * kDph;
+    s.b_dph = a->bias_instability_rad_s * kDphPerRadPerSec;
+    s.n_dph_rthz = a->arw_rad_sqrt_s * kDphPerRadPerSec;
   }
   if (extrapolated) {
     double n = 0;
@@ -47,7 +44,7 @@ Scored score(const std::string& name, const std::string& description, const cali
   for (Eigen::Index b = 0; b < blocks.means.size(); ++b) {
     const auto k = static_cast<std::size_t>(b);
     s.block_t.push_back(r.time_s.segment(blocks.first[k], blocks.samples[k]).mean());
-    s.block_mean_dph.push_back(blocks.means[b] * kDph);
+    s.block_mean_dph.push_back(blocks.means[b] * kDphPerRadPerSec);
   }
   return s;
 }
@@ -82,7 +79,7 @@ nlohmann::json model_json(const CompetingModel& m) {
     j["hysteresis_rad_s"] = m.model->hysteresis_rad_s;
     j["hysteresis_width_k"] = m.model->hysteresis_width_k;
     j["rbf_centres"] = m.model->rbf ? m.model->rbf->centres.rows() : 0;
-    j["calibration_holdout_rms_dph"] = m.model->fit.holdout_rms_rad_s * kDph;
+    j["calibration_holdout_rms_dph"] = m.model->fit.holdout_rms_rad_s * kDphPerRadPerSec;
     j["selection"] = m.model->fit.selection;
   }
   return j;
@@ -127,7 +124,7 @@ nlohmann::json write_calibration_report(const ReportInput& in, const ReportFiles
       t.rows.push_back({m.name, calibration::to_string(m.model->kind), static_cast<double>(m.model->order()),
                         terms_text(*m.model), std::string(range), calibration::to_string(m.model->extrapolation),
                         std::string(m.model->fit.heating_only ? "heating only" : "heating and cooling"),
-                        m.model->fit.holdout_rms_rad_s * kDph});
+                        m.model->fit.holdout_rms_rad_s * kDphPerRadPerSec});
     }
     t.note = "Held-out CV residual: pooled RMS of fitting-bin residuals on contiguous time blocks left out in turn.";
     html.table(t);
@@ -159,7 +156,7 @@ nlohmann::json write_calibration_report(const ReportInput& in, const ReportFiles
     if (r.systematic_rad_s.size()) {
       const Eigen::VectorXd floor_err = r.rate_rad_s - r.systematic_rad_s;
       ej["intrinsic_floor_drift_dph"] =
-          evaluation::block_mean_rms(r.time_s, floor_err) * kDph;
+          evaluation::block_mean_rms(r.time_s, floor_err) * kDphPerRadPerSec;
     }
     ej["methods"] = nlohmann::json::array();
     HtmlTable t{"Held-out record " + r.name, {"method", "residual drift (deg/h)", "B (deg/h)", "N (deg/h/sqrt(Hz))", "output bandwidth", "extrapolated (%)"}};

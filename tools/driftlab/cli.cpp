@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "plugins/builtins.hpp"
 #include "framework/output_set.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"

@@ -29,7 +29,6 @@
 namespace driftlab::cli {
 namespace {
 
-constexpr double kDegPerHour = kDegPerRad * 3600.0;  // rad/s -> deg/h; rad/sqrt(s) -> deg/h/sqrt(Hz)
 
 struct CompareOptions {
   std::vector<std::string> pipelines;
@@ -69,11 +68,11 @@ std::vector<HtmlCell> row(const std::string& pipeline, const evaluation::StageSc
   const auto& b = s.analysis.bias_instability;
   return {pipeline,
           s.stage,
-          b.value * kDegPerHour,
-          "[" + format_number(b.low * kDegPerHour) + ", " + format_number(b.high * kDegPerHour) + "]",
-          s.analysis.arw_rad_sqrt_s * kDegPerHour,
+          b.value * kDphPerRadPerSec,
+          "[" + format_number(b.low * kDphPerRadPerSec) + ", " + format_number(b.high * kDphPerRadPerSec) + "]",
+          s.analysis.arw_rad_sqrt_s * kDphPerRadPerSec,
           s.bandwidth_hz,
-          s.residual_drift_rad_s ? HtmlCell(*s.residual_drift_rad_s * kDegPerHour) : HtmlCell(std::string("–")),
+          s.residual_drift_rad_s ? HtmlCell(*s.residual_drift_rad_s * kDphPerRadPerSec) : HtmlCell(std::string("–")),
           seconds ? HtmlCell(*seconds) : HtmlCell(std::string("–"))};
 }
 
@@ -83,7 +82,7 @@ PlotSeries curve_series(const std::string& label, const allan::Analysis& a, Plot
   s.style = style;
   for (const auto& e : a.curve) {
     s.x.push_back(e.tau);
-    s.y.push_back(e.dev * kDegPerHour);
+    s.y.push_back(e.dev * kDphPerRadPerSec);
   }
   return s;
 }

@@ -16,6 +16,7 @@
 #include "framework/effect_catalogue.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
+#include "framework/sampling.hpp"
 #include "framework/output_set.hpp"
 #include "framework/params_io.hpp"
 #include "framework/units.hpp"
@@ -101,8 +102,8 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
   if (!o.max_gap_given) data.max_gap_factor = 0.0;
   const TimeSeries record = load_record(data, {role::kRate, role::kTemperature});
   if (!o.max_gap_given) {
-    const auto gaps = discrepancy::gap_pattern(record.time(), o.data.max_gap_factor);
-    if (gaps.gaps > 0 && !gaps.regular())
+    const auto gaps = sampling::facts_of(record.time(), o.data.max_gap_factor);
+    if (gaps.gaps > 0 && !gaps.regular_bursts())
       throw DataError({o.data.path, 0, "time"},
                       std::to_string(gaps.gaps) + " gap(s) longer than " + std::to_string(o.data.max_gap_factor) +
                           " x the median step, the first after t = " + std::to_string(gaps.first_gap_time_s) +
