@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -188,6 +189,119 @@ TEST_F(CalibrateCli, EveryCommandHasHelp) {
   EXPECT_EQ(run_driftlab("calibrate --help").exit_code, 0);
   EXPECT_EQ(run_driftlab("compensate --help").exit_code, 0);
   EXPECT_EQ(run_driftlab("export --help").exit_code, 0);
+}
+
+TEST_F(CalibrateCli, AModelOfASingleAxisRecordExportsToItsAxisOfInstanceZero) {
+  const auto r = run_driftlab("export --model " + dir_ + "/poly.json --format px4 --out " + dir_ + "/single.params");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string text = read_text(dir_ + "/single.params");
+  EXPECT_NE(text.find("\tTC_G0_X0_2\t"), std::string::npos) << text;
+  EXPECT_NE(text.find("\tTC_G0_X1_0\t0\t9"), std::string::npos) << "the axes the model lacks: no correction";
+  EXPECT_EQ(text.find("TC_A_ENABLE"), std::string::npos) << "no accelerometer in the model";
+  EXPECT_EQ(text.find("TC_G1_"), std::string::npos);
+}
+
+// A simulated 2-instance IMU (imu3: gyro + accelerometer, 3 axes each), calibrated in one call and
+// exported in every format.
+class ExportCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = scratch_dir("export").string();
+    const auto s = run_driftlab("simulate --device " + std::string(DRIFTLAB_SOURCE_DIR) +
+                                "/devices/imu3.yaml --fs 2 --seed 1 --out " + dir_ + "/imu.csv");
+    ASSERT_EQ(s.exit_code, 0) << s.err;
+    const auto c = run_driftlab("-q calibrate --data " + dir_ + "/imu.csv --channels gyro,accel --out " + dir_ + "/m.json");
+    ASSERT_EQ(c.exit_code, 0) << c.err;
+    model_ = nlohmann::json::parse(read_text(dir_ + "/m.json"));
+    ASSERT_EQ(model_["channels"].size(), 12u);
+  }
+  static std::string exported(const std::string& format, const std::string& extra = "") {
+    const std::string out = dir_ + "/out." + format;
+    const auto r = run_driftlab("export --model " + dir_ + "/m.json --format " + format + " --out " + out + extra);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return read_text(out);
+  }
+  // The model's channel of this role.
+  static const nlohmann::json& channel(const std::string& role) {
+    for (const auto& c : model_["channels"]) {
+      if (c["role"] == role) return c;
+    }
+    throw std::runtime_error("no channel " + role);
+  }
+  // Value of a parameter line "<prefix><name><separator><value>".
+  static double value(const std::string& text, const std::string& prefix, const std::string& name, char separator) {
+    const auto at = text.find(prefix + name + separator);
+    if (at == std::string::npos) throw std::runtime_error(name + " missing");
+    return std::stod(text.substr(at + prefix.size() + name.size() + 1));
+  }
+  static std::string dir_;
+  static nlohmann::json model_;
+};
+std::string ExportCli::dir_;
+nlohmann::json ExportCli::model_;
+
+constexpr double kText = 1e-8;  // relative: parameters are written with 9 significant digits
+
+TEST_F(ExportCli, Px4ParamsCarryEveryAxisOfBothGyrosAndAccelerometers) {
+  const std::string text = exported("px4");
+  EXPECT_NE(text.find("\tTC_G_ENABLE\t1\t6"), std::string::npos);
+  EXPECT_NE(text.find("\tTC_A_ENABLE\t1\t6"), std::string::npos);
+  for (const std::string role : {"gyro_x", "gyro1_y", "accel_z", "accel1_x"}) {
+    const auto& c = channel(role);
+    const std::string block = std::string("TC_") + (c["sensor"] == "gyro" ? "G" : "A") +
+                              std::to_string(c["instance"].get<int>()) + "_";
+    const int axis = c["axis"].get<std::string>()[0] - 'x';
+    const auto& bias = c["model"]["bias"].begin().value();  // polynomial_rad_s_per_k_i / _m_s2_per_k_i
+    EXPECT_EQ(value(text, "1\t1\t", block + "TREF", '\t'), c["model"]["reference_temp_c"].get<double>());
+    // TREF = T0: X0 and X1 are the model's own a0 and a1.
+    for (int k = 0; k < 2; ++k) {
+      const double expected = bias[static_cast<std::size_t>(k)].get<double>();
+      EXPECT_NEAR(value(text, "1\t1\t", block + "X" + std::to_string(k) + "_" + std::to_string(axis), '\t'), expected,
+                  std::abs(expected) * kText)
+          << role;
+    }
+  }
+}
+
+TEST_F(ExportCli, ArduPilotParmCarriesBothImusAtThe35DegreeReference) {
+  const std::string text = exported("ardupilot");
+  for (const std::string role : {"gyro_x", "gyro1_z", "accel_y", "accel1_z"}) {
+    const auto& c = channel(role);
+    const int n = c["instance"].get<int>() + 1;
+    const auto& a = c["model"]["bias"].begin().value();
+    const double d = 35.0 - c["model"]["reference_temp_c"].get<double>();
+    double slope = 0.0;  // the coefficient of (T - 35)^1: the derivative at 35 degC
+    for (std::size_t i = 1; i < a.size(); ++i) slope += static_cast<double>(i) * a[i].get<double>() * std::pow(d, i - 1.0);
+    const std::string name = "INS_TCAL" + std::to_string(n) + "_" + (c["sensor"] == "gyro" ? "GYR" : "ACC") + "1_" +
+                             static_cast<char>(std::toupper(c["axis"].get<std::string>()[0]));
+    if (a.size() <= 4) {  // order <= 3 is exact (a higher order is a least-squares cubic: calibration_exports_test)
+      EXPECT_NEAR(value(text, "", name, ','), 1e6 * slope, std::abs(1e6 * slope) * kText) << role;
+    }
+  }
+  EXPECT_NE(text.find("INS_TCAL2_ENABLE,1"), std::string::npos);
+  EXPECT_NE(text.find("INS_GYR2OFFS_X,"), std::string::npos);
+  EXPECT_NE(text.find("INS_GYR2_CALTEMP,35"), std::string::npos);
+}
+
+TEST_F(ExportCli, KalibrYamlHoldsTheMeasuredAccelerometerNoiseOfTheChosenInstance) {
+  const std::string text = exported("kalibr", " --instance 0");
+  double vrw = 0.0;
+  for (const std::string role : {"accel_x", "accel_y", "accel_z"}) {
+    vrw = std::max(vrw, channel(role)["model"]["noise"]["vrw_m_s_sqrt_s"].get<double>());
+  }
+  ASSERT_GT(vrw, 0.0);
+  EXPECT_NEAR(value(text, "", "accelerometer_noise_density", ':'), vrw, vrw * kText) << text;
+  EXPECT_NE(text.find("accelerometer_random_walk: "), std::string::npos);
+  EXPECT_NE(text.find("gyroscope_random_walk: "), std::string::npos);
+}
+
+TEST_F(ExportCli, TheCHeaderAndTheJsonCoverEveryChannel) {
+  const std::string header = exported("c-header", " --prefix imu");
+  for (const auto& c : model_["channels"]) {
+    EXPECT_NE(header.find("static const imu_model imu_" + c["role"].get<std::string>() + " = {"), std::string::npos);
+  }
+  EXPECT_NE(header.find("imu_CHANNELS = 12, imu_TEMPERATURES = 2"), std::string::npos);
+  EXPECT_EQ(exported("json"), read_text(dir_ + "/m.json")) << "the model file itself";
 }
 
 }  // namespace

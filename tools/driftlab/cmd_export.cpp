@@ -1,5 +1,6 @@
-// `driftlab export`: writes a calibration model in a firmware / navigation format
-// (models/calibration/exports.hpp): c-header, px4, ardupilot, kalibr, json.
+// `driftlab export`: writes a whole-IMU calibration model (or a single-axis /1 file, one gyro
+// channel) in a firmware / navigation format (models/calibration/exports.hpp): c-header, px4,
+// ardupilot, kalibr, json. Instances and axes come from the model.
 #include <iostream>
 #include <memory>
 
@@ -18,11 +19,7 @@ struct ExportOptions {
 
 void export_command(const ExportOptions& o) {
   check_output(o.out, {o.model});
-  const auto imu_model = calibration::read_calibration(o.model);
-  if (o.format != "json" && imu_model.channels.size() != 1)
-    throw ConfigError({o.model, 0, "channels"}, "the " + o.format + " export takes a one-channel model; this one has " +
-                                                    std::to_string(imu_model.channels.size()));
-  const auto& model = imu_model.channels.front();
+  const auto model = calibration::read_calibration(o.model);
   calibration::ExportResult r;
   if (o.format == "c-header") {
     r = calibration::export_c_header(model, o.e);
@@ -33,11 +30,12 @@ void export_command(const ExportOptions& o) {
   } else if (o.format == "kalibr") {
     r = calibration::export_kalibr_imu_yaml(model, o.e);
   } else {
-    r.text = calibration::to_json_text(imu_model);
+    r.text = calibration::to_json_text(model);
   }
   write_file_atomically(o.out, r.text);
   for (const auto& n : r.notes) std::cerr << "note: " << n << "\n";
-  std::cout << "wrote " << o.out << " (" << o.format << ")\n";
+  std::cout << "wrote " << o.out << " (" << o.format << ", " << model.channels.size() << " channel"
+            << (model.channels.size() == 1 ? "" : "s") << ")\n";
 }
 
 }  // namespace
@@ -45,11 +43,12 @@ void export_command(const ExportOptions& o) {
 void add_export_command(CLI::App& app, CommandEnv&) {
   auto o = std::make_shared<ExportOptions>();
   auto* cmd = app.add_subcommand(
-      "export", "export a calibration model: C99 header, PX4 TC_G* .params, ArduPilot INS_TCAL*, Kalibr imu.yaml, JSON");
-  cmd->add_option("--model", o->model, "driftlab-calibration/1 model JSON")->required();
+      "export", "export a calibration model, every channel: C99 header, PX4 TC_G*/TC_A* .params, ArduPilot INS_TCAL*, Kalibr "
+      "imu.yaml, JSON");
+  cmd->add_option("--model", o->model, "driftlab-calibration/2 model JSON (or /1)")->required();
   cmd->add_option("--format", o->format,
-                  "c-header (exact C99 evaluator), px4 (QGC .params), ardupilot (35 degC reference, 1e6 scaling), "
-                  "kalibr (imu.yaml noise terms), json")
+                  "c-header (exact C99 evaluator), px4 (QGC .params, TC_G{i}/TC_A{i} per instance), ardupilot "
+                  "(INS_TCAL{n}, 35 degC reference, 1e6 scaling), kalibr (imu.yaml noise terms of one instance), json")
       ->required()
       ->check(CLI::IsMember({"c-header", "px4", "ardupilot", "kalibr", "json"}));
   cmd->add_option("--out", o->out, "output file (written atomically)")->required();
@@ -57,11 +56,8 @@ void add_export_command(CLI::App& app, CommandEnv&) {
                 "refuse (exit 2) when PX4/ArduPilot cannot represent the model exactly, instead of exporting the best "
                 "cubic with its stated error");
   cmd->add_option("--prefix", o->e.symbol_prefix, "C identifier prefix of the header")->capture_default_str();
-  cmd->add_option("--px4-index", o->e.px4_sensor_index, "PX4 gyro index i of TC_G<i>_*")
-      ->check(CLI::Range(0, 3))
-      ->capture_default_str();
-  cmd->add_option("--ardupilot-imu", o->e.ardupilot_imu, "ArduPilot IMU number n of INS_TCAL<n>_*")
-      ->check(CLI::Range(1, 3))
+  cmd->add_option("--instance", o->e.kalibr_instance, "Kalibr: the IMU instance of the imu.yaml (one per file)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--update-rate", o->e.kalibr_update_rate_hz, "Kalibr update_rate, Hz (default: the model's)")
       ->check(CLI::NonNegativeNumber);
