@@ -2,6 +2,7 @@
 // rawlog, the navigation EKF and bad rawlogs. Built always; without MRPT every test is skipped.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -227,12 +228,18 @@ TEST(MrptBridge, CompensationChangesOnlyTheImuRateByExactlyTheCorrection) {
   export_test_rawlog(dir, 300, true);
   // A stateful corrector (like a causal model): the k-th call subtracts a known amount.
   std::vector<double> corrections;
-  const auto stats = compensate_rawlog(dir / "in.rawlog", dir / "out.rawlog", [&](double t, double rate, double temp) {
-    const double c = 1e-4 * (1.0 + t) + 1e-6 * temp + 1e-9 * static_cast<double>(corrections.size());
-    corrections.push_back(c);
-    return rate - c;
-  });
+  const auto stats = compensate_rawlog(dir / "in.rawlog", dir / "out.rawlog",
+                                       {{mrpt::obs::IMU_WZ, "test", [&](double t, double rate, double temp) {
+                                           const double c = 1e-4 * (1.0 + t) + 1e-6 * temp +
+                                                            1e-9 * static_cast<double>(corrections.size());
+                                           corrections.push_back(c);
+                                           return rate - c;
+                                         }}});
   EXPECT_EQ(stats.compensated, 300u);
+  ASSERT_EQ(stats.fields.size(), 1u);
+  EXPECT_EQ(stats.fields[0].max_abs_correction, *std::max_element(corrections.begin(), corrections.end()));
+  // the fields written by write_test_csv other than IMU_WZ are passed through
+  EXPECT_EQ(stats.passed_through, (std::vector<int>{mrpt::obs::IMU_TEMPERATURE, mrpt::obs::IMU_WX, mrpt::obs::IMU_Z_ACC}));
   std::size_t objects_in = 0, objects_out = 0;
   const auto before = read_imu(dir / "in.rawlog", &objects_in);
   const auto after = read_imu(dir / "out.rawlog", &objects_out);
@@ -253,8 +260,12 @@ TEST(MrptBridge, CompensationChangesOnlyTheImuRateByExactlyTheCorrection) {
   for (auto* t : {&a, &b}) t->columns.erase(t->columns.begin());  // drop rate_rps
   expect_tables_equal(a, b);
   // the input is never the output
-  EXPECT_THROW(compensate_rawlog(dir / "in.rawlog", dir / "in.rawlog", [](double, double r, double) { return r; }),
-               driftlab::ConfigError);
+  const FieldCorrection identity{mrpt::obs::IMU_WZ, "test", [](double, double r, double) { return r; }};
+  EXPECT_THROW(compensate_rawlog(dir / "in.rawlog", dir / "in.rawlog", {identity}), driftlab::ConfigError);
+  // nothing to do, or a field corrected twice: configuration errors
+  EXPECT_THROW(compensate_rawlog(dir / "in.rawlog", dir / "x.rawlog", {}), driftlab::ConfigError);
+  EXPECT_THROW(compensate_rawlog(dir / "in.rawlog", dir / "x.rawlog", {identity, identity}), driftlab::ConfigError);
+  EXPECT_FALSE(fs::exists(dir / "x.rawlog"));
   fs::remove_all(dir);
 #endif
 }
@@ -298,6 +309,141 @@ TEST(MrptBridge, CompensateCommandAppliesTheCalibrationModelsCorrectionExactly) 
                                 (dir / "in.rawlog").string() + " --out " + (dir / "x.rawlog").string());
   EXPECT_EQ(bad.exit_code, 2) << bad.err;
   EXPECT_NE(bad.err.find("bad.json"), std::string::npos) << bad.err;
+  fs::remove_all(dir);
+#endif
+}
+
+#if DRIFTLAB_HAVE_MRPT
+namespace {
+
+// A 6-axis IMU record exported as observations: t_s, temp_c, the three rates, the three
+// accelerations and a magnetometer field the model does not cover. `skip` leaves one column out.
+void export_six_axis_rawlog(const fs::path& dir, int n, const std::string& skip = "") {
+  const std::vector<std::string> columns{"rate_rps",   "temp_c",     "wx_rps",     "wy_rps",
+                                         "acc_x_mps2", "acc_y_mps2", "acc_z_mps2", "mag_x_gauss"};
+  std::ofstream out(dir / "six.csv");
+  out << "t_s";
+  for (const auto& c : columns)
+    if (c != skip) out << "," << c;
+  out << "\n";
+  std::mt19937_64 random(11);
+  std::normal_distribution<double> normal;
+  char cell[64];
+  for (int i = 0; i < n; ++i) {
+    std::snprintf(cell, sizeof cell, "%.7f", 0.01 * i);
+    out << cell;
+    for (const auto& c : columns) {
+      const double v = c == "temp_c" ? -20.0 + 0.05 * i
+                       : c.rfind("acc_", 0) == 0 ? (c == "acc_z_mps2" ? 9.80665 : 0.0) + 0.01 * normal(random)
+                       : c == "mag_x_gauss" ? 0.3
+                                            : 1e-3 * normal(random);
+      std::snprintf(cell, sizeof cell, ",%.17g", v);
+      if (c != skip) out << cell;
+    }
+    out << "\n";
+  }
+  out.close();
+  export_rawlog(read_imu_csv(dir / "six.csv"), dir / "six.rawlog");
+}
+
+// A whole-IMU model: gyro and accel x, y, z of instances 0 and 1, every channel its own
+// polynomial, the gyros with a 20-s temperature lag (stateful: one compensator per channel).
+driftlab::calibration::ImuCalibration six_axis_model() {
+  using namespace driftlab::calibration;
+  using driftlab::imu::Sensor;
+  ImuCalibration imu_model;
+  imu_model.device = "test";
+  int k = 0;
+  for (const int instance : {0, 1})
+    for (const Sensor sensor : {Sensor::Gyro, Sensor::Accel})
+      for (const char axis : {'x', 'y', 'z'}) {
+        ++k;
+        CalibrationModel m;
+        m.kind = sensor == Sensor::Gyro ? ModelKind::Physical : ModelKind::Polynomial;
+        m.reference_temp_c = 25.0;
+        m.valid_min_c = -40.0;
+        m.valid_max_c = 85.0;
+        const double scale = sensor == Sensor::Gyro ? 1e-3 : 1e-2;  // rad/s or m/s^2
+        m.bias_rad_s = {scale * k, scale * 0.01 * k, -scale * 1e-4};
+        m.bias_sigma_rad_s = {0.0, 0.0, 0.0};
+        if (sensor == Sensor::Gyro) m.lag_tau_s = 20.0;
+        const driftlab::imu::ChannelId id{sensor, axis, instance};
+        imu_model.channels.push_back({id, id.role(), id.role(), driftlab::imu::internal_unit(sensor),
+                                      driftlab::imu::temperature_role(instance), "", true, m});
+      }
+  return imu_model;
+}
+
+}  // namespace
+#endif
+
+TEST(MrptBridge, CompensateCorrectsAllSixFieldsOfAThreeAxisImuExactlyAsTheCausalCompensator) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  using driftlab::imu::Sensor;
+  const auto dir = scratch_dir("mrpt_compensate_six");
+  export_six_axis_rawlog(dir, 500);  // temperatures -20 .. +5 degC
+  const auto imu_model = six_axis_model();
+  std::ofstream(dir / "model.json") << driftlab::calibration::to_json_text(imu_model);
+  for (const int instance : {0, 1}) {
+    const auto out = dir / ("out" + std::to_string(instance) + ".rawlog");
+    const auto r = run_driftlab("mrpt compensate --model " + (dir / "model.json").string() + " " +
+                                (dir / "six.rawlog").string() + " --out " + out.string() +
+                                (instance ? " --instance 1" : ""));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    // the summary names each corrected field in its unit and what passed through
+    for (const auto* field : {"IMU_WX by gyro", "IMU_WY by gyro", "IMU_WZ by gyro", "IMU_X_ACC by accel",
+                              "IMU_Y_ACC by accel", "IMU_Z_ACC by accel"})
+      EXPECT_NE(r.out.find(field), std::string::npos) << field << "\n" << r.out;
+    EXPECT_NE(r.out.find(" deg/h"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(" mg"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("unchanged (not in the model): IMU_TEMPERATURE IMU_MAG_X"), std::string::npos) << r.out;
+
+    const auto before = read_imu(dir / "six.rawlog"), after = read_imu(out);
+    ASSERT_EQ(before.size(), 500u);
+    ASSERT_EQ(after.size(), before.size());
+    std::vector<std::pair<mrpt::obs::TIMUDataIndex, driftlab::calibration::CausalCompensator>> reference;
+    for (const auto& channel : imu_model.channels)
+      if (channel.id.instance == instance)
+        reference.emplace_back(static_cast<mrpt::obs::TIMUDataIndex>(imu_field(channel.id.sensor, channel.id.axis)),
+                               driftlab::calibration::CausalCompensator(channel.model));
+    ASSERT_EQ(reference.size(), 6u);
+    for (std::size_t i = 0; i < before.size(); ++i) {
+      const double t = static_cast<double>((before[i]->timestamp - before[0]->timestamp).count()) / 1e7;
+      const double temp = before[i]->get(mrpt::obs::IMU_TEMPERATURE);
+      for (auto& [field, compensator] : reference) {
+        ASSERT_EQ(after[i]->get(field), compensator.step(t, before[i]->get(field), temp))
+            << imu_field_name(field) << " sample " << i;
+        after[i]->set(field, before[i]->get(field));
+      }
+      // with the six fields restored, the observation is the original one
+      ASSERT_EQ(after[i]->rawMeasurements, before[i]->rawMeasurements) << i;
+      ASSERT_EQ(after[i]->dataIsPresent, before[i]->dataIsPresent) << i;
+      ASSERT_EQ(after[i]->timestamp, before[i]->timestamp) << i;
+    }
+  }
+  // an instance the model does not have: a configuration error naming the option
+  const auto none = run_driftlab("mrpt compensate --model " + (dir / "model.json").string() + " " +
+                                 (dir / "six.rawlog").string() + " --out " + (dir / "x.rawlog").string() +
+                                 " --instance 2");
+  EXPECT_EQ(none.exit_code, 2) << none.err;
+  EXPECT_NE(none.err.find("instance 2"), std::string::npos) << none.err;
+  fs::remove_all(dir);
+#endif
+}
+
+TEST(MrptBridge, AModelChannelWhoseFieldTheRawlogLacksIsAnErrorNamingIt) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  const auto dir = scratch_dir("mrpt_compensate_missing");
+  export_six_axis_rawlog(dir, 20, "acc_y_mps2");
+  std::ofstream(dir / "model.json") << driftlab::calibration::to_json_text(six_axis_model());
+  const auto r = run_driftlab("mrpt compensate --model " + (dir / "model.json").string() + " " +
+                              (dir / "six.rawlog").string() + " --out " + (dir / "out.rawlog").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("object 0"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("has no IMU_Y_ACC, which accel_y of"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out.rawlog"));
   fs::remove_all(dir);
 #endif
 }
