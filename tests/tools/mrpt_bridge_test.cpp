@@ -1,6 +1,7 @@
 // The MRPT bridge (issue 14): rawlog round trips, rawlog-edit reading our exports, compensation of a
 // rawlog, the navigation EKF and bad rawlogs. Built always; without MRPT every test is skipped.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -25,9 +26,11 @@
 
 #include "devices/device_file.hpp"
 #include "framework/error.hpp"
+#include "framework/units.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "tools/mrpt/nav_calibration.hpp"
 #include "tools/mrpt/nav_ekf.hpp"
+#include "tools/mrpt/nav_record.hpp"
 #include "tools/mrpt/nav_scenario.hpp"
 #include "tools/mrpt/rawlog_io.hpp"
 #endif
@@ -526,13 +529,13 @@ TEST(MrptNavEkf, EstimatesAKnownConstantGyroBiasWithinTwoSigma) {
 #if DRIFTLAB_HAVE_MRPT
   // 20 min at 20 Hz, 10 m/s, weaving turns; the gyro reads true rate + 200 deg/h + white noise;
   // a position fix (sigma 2 m) every 2 s. The bias is observable through the position track.
-  const double fs = 20.0, dt = 1.0 / fs, bias = 200.0 * M_PI / 180.0 / 3600.0;
+  const double fs = 20.0, dt = 1.0 / fs, bias = 200.0 * driftlab::kRadPerSecPerDph;
   NavNoise noise;
   noise.arw_rad_sqrt_s = 0.1 * M_PI / 180.0 / 60.0;  // 0.1 deg/sqrt(h)
   noise.speed_sigma_mps = 0.02;
   noise.fix_sigma_m = 2.0;
   NavState start;
-  start.covariance(3, 3) = std::pow(1000.0 * M_PI / 180.0 / 3600.0, 2);  // prior: 1000 deg/h
+  start.covariance(3, 3) = std::pow(1000.0 * driftlab::kRadPerSecPerDph, 2);  // prior: 1000 deg/h
   NavEkf ekf(noise, start);
   std::mt19937_64 random(3);
   std::normal_distribution<double> normal;
@@ -555,8 +558,8 @@ TEST(MrptNavEkf, EstimatesAKnownConstantGyroBiasWithinTwoSigma) {
   const auto s = ekf.state();
   const double sigma = std::sqrt(s.covariance(3, 3));
   EXPECT_LT(sigma, 0.25 * bias) << "the bias must be well observed for the test to mean something";
-  EXPECT_NEAR(s.bias_rad_s, bias, 2.0 * sigma) << "estimate " << s.bias_rad_s * 180 / M_PI * 3600 << " deg/h, sigma "
-                                               << sigma * 180 / M_PI * 3600 << " deg/h";
+  EXPECT_NEAR(s.bias_rad_s, bias, 2.0 * sigma) << "estimate " << s.bias_rad_s * driftlab::kDphPerRadPerSec
+                                               << " deg/h, sigma " << sigma * driftlab::kDphPerRadPerSec << " deg/h";
 #endif
 }
 
@@ -591,9 +594,10 @@ TEST(MrptNav, CalibrationModelCutsTheOneHourHeadingErrorAtLeastTenfold) {
   const auto model = calibrate_on_oven_run(device, oven);
   const auto compensated = compensate_drive(model, drive);
   const auto noise = nav_noise(device, scenario);
-  const double prior = 100.0 * M_PI / 180.0 / 3600.0;
-  const auto raw = run_nav(drive, drive.gyro.rate_rad_s, noise, false, prior);
-  const auto comp = run_nav(drive, compensated, noise, false, prior);
+  const double prior = 100.0 * driftlab::kRadPerSecPerDph;
+  const auto input = nav_input(drive);
+  const auto raw = run_nav(input, drive.gyro.rate_rad_s, noise, false, prior);
+  const auto comp = run_nav(input, compensated, noise, false, prior);
   const Eigen::Index last = drive.gyro.time_s.size() - 1;
   const double raw_deg = std::abs(raw.heading_error_rad[last]) * 180.0 / M_PI;
   const double comp_deg = std::abs(comp.heading_error_rad[last]) * 180.0 / M_PI;
@@ -636,3 +640,141 @@ TEST(MrptNav, AnOutputDirectoryThatCannotBeMadeIsAUsageErrorBeforeTheDrive) {
   EXPECT_NE(r.err.find("cannot create the directory"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("simulate drive"), std::string::npos) << "refused before the drive is simulated";
 }
+
+// A ten-minute drive (10 Hz; cabin -10 -> +30 degC; 10 m/s with two turns) for the nav tests.
+[[maybe_unused]] void write_short_scenario(const fs::path& path) {
+  std::ofstream(path) << R"(format: driftlab-nav-scenario/1
+sample_rate_hz: 10
+seed: 5
+calibration_seed: 1001
+cabin: {start_c: -10, segments: [{to_c: 30, duration_s: 600}]}
+speed: {start_mps: 0, segments: [{to_mps: 10, duration_s: 10}, {hold_s: 590}]}
+yaw_rate:
+  start_dps: 0
+  segments:
+    - {hold_s: 100}
+    - {to_dps: 9, duration_s: 2}
+    - {hold_s: 8}
+    - {to_dps: 0, duration_s: 2}
+    - {hold_s: 200}
+    - {to_dps: -9, duration_s: 2}
+    - {hold_s: 8}
+    - {to_dps: 0, duration_s: 2}
+)";
+}
+
+[[maybe_unused]] nlohmann::json read_json(const fs::path& path) {
+  return nlohmann::json::parse(driftlab::testing_cli::read_text(path));
+}
+
+TEST(MrptNav, NavigatesAUserRawlogWithOdometryAndReproducesTheSimulatedDrive) {
+  SKIP_WITHOUT_MRPT();
+  // The simulated drive's rawlog (raw IMU_WZ, IMU_TEMPERATURE, odometry whose increments are the
+  // true motion and whose velocity is the noisy odometry speed) navigated as a user record: the
+  // odometry reference is then the truth and the EKF gets the same inputs, so the report equals
+  // the simulated run's to the rounding of the 100-ns time stamps.
+  constexpr double kHeadingTolerance = 1e-6;   // deg
+  constexpr double kPositionTolerance = 1e-4;  // m
+  const auto dir = driftlab::testing_cli::scratch_dir("nav_record");
+  write_short_scenario(dir / "short.yaml");
+  const auto sim = run_driftlab("nav --device fmvmg --scenario " + (dir / "short.yaml").string() + " --out " +
+                                (dir / "sim").string());
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const auto simulated = read_json(dir / "sim" / "summary.json");
+
+  const auto rec = run_driftlab("nav --rawlog " + (dir / "sim" / "drive.rawlog").string() + " --model " +
+                                (dir / "sim" / "model.json").string() + " --out " + (dir / "rec").string());
+  ASSERT_EQ(rec.exit_code, 0) << rec.err;
+  EXPECT_NE(rec.out.find("errors against the odometry pose"), std::string::npos) << rec.out;
+  const auto recorded = read_json(dir / "rec" / "summary.json");
+  for (const auto* run : {"raw", "compensated"}) {
+    EXPECT_NEAR(recorded["heading_error_final_deg"][run].get<double>(),
+                simulated["heading_error_final_deg"][run].get<double>(), kHeadingTolerance) << run;
+    EXPECT_NEAR(recorded["heading_error_rms_deg"][run].get<double>(),
+                simulated["heading_error_rms_deg"][run].get<double>(), kHeadingTolerance) << run;
+    EXPECT_NEAR(recorded["position_error_final_m"][run].get<double>(),
+                simulated["position_error_final_m"][run].get<double>(), kPositionTolerance) << run;
+  }
+  EXPECT_FALSE(recorded["heading_error_final_deg"].contains("perfect")) << "a record has no true rate";
+  EXPECT_GT(recorded["heading_error_rms_deg"]["raw"].get<double>(),
+            10.0 * recorded["heading_error_rms_deg"]["compensated"].get<double>());
+  const auto info = read_json(dir / "rec" / "nav_info.json");
+  EXPECT_NE(info["reference"].get<std::string>().find("odometry pose"), std::string::npos);
+  EXPECT_EQ(info["odometry_speed"], "odom_speed_mps");
+  const std::string trajectory = driftlab::testing_cli::read_text(dir / "rec" / "trajectory.csv");
+  EXPECT_EQ(trajectory.rfind("t_s,odometry_x_m,odometry_y_m,odometry_heading_deg,raw_x_m", 0), 0u) << trajectory.substr(0, 200);
+  EXPECT_TRUE(fs::exists(dir / "rec" / "nav.svg") || rec.err.find("nav.svg not written") != std::string::npos);
+
+  // the same record as the bridge's CSV (mrpt import) through --data: the same report
+  const auto imp = run_driftlab("mrpt import " + (dir / "sim" / "drive.rawlog").string() + " --out " +
+                                (dir / "drive.csv").string());
+  ASSERT_EQ(imp.exit_code, 0) << imp.err;
+  const auto csv = run_driftlab("nav --data " + (dir / "drive.csv").string() + " --model " +
+                                (dir / "sim" / "model.json").string() + " --out " + (dir / "csv").string());
+  ASSERT_EQ(csv.exit_code, 0) << csv.err;
+  EXPECT_EQ(read_json(dir / "csv" / "summary.json"), recorded);
+  fs::remove_all(dir);
+}
+
+TEST(MrptNav, ARecordNeedsOdometryATemperatureAndAModel) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  const auto dir = driftlab::testing_cli::scratch_dir("nav_record_bad");
+  export_test_rawlog(dir, 50, false);  // no odometry
+  driftlab::calibration::CalibrationModel model;
+  model.valid_min_c = -40.0;
+  model.valid_max_c = 85.0;
+  model.bias_rad_s = {1e-3};
+  model.bias_sigma_rad_s = {0.0};
+  std::ofstream(dir / "model.json") << driftlab::calibration::to_json_text(driftlab::calibration::single_axis(model));
+  const auto r = run_driftlab("nav --rawlog " + (dir / "in.rawlog").string() + " --model " +
+                              (dir / "model.json").string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("nav needs odometry"), std::string::npos) << r.err;
+  const auto no_model = run_driftlab("nav --rawlog " + (dir / "in.rawlog").string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(no_model.exit_code, 2) << no_model.err;
+  EXPECT_NE(no_model.err.find("--model"), std::string::npos) << no_model.err;
+  const auto mixed = run_driftlab("nav --rawlog " + (dir / "in.rawlog").string() + " --device fmvmg --model " +
+                                  (dir / "model.json").string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(mixed.exit_code, 2) << mixed.err;
+  {  // odometry but no temperature
+    std::ofstream(dir / "notemp.csv") << "t_s,rate_rps,odom_dx_m,odom_dy_m,odom_dphi_rad\n0,0,0,0,0\n0.1,0,1,0,0\n";
+  }
+  const auto notemp = run_driftlab("nav --data " + (dir / "notemp.csv").string() + " --model " +
+                                   (dir / "model.json").string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(notemp.exit_code, 3) << notemp.err;
+  EXPECT_NE(notemp.err.find("no temperature"), std::string::npos) << notemp.err;
+  fs::remove_all(dir);
+#endif
+}
+
+#if DRIFTLAB_HAVE_MRPT
+TEST(MrptNavRecord, TheReferenceComposesTheOdometryAndTheSpeedIsTheChordWithoutVelocities) {
+  // A quarter circle of radius 10 m in 90 steps of 1 s: each increment is the chord of 1 degree.
+  ImuTable table;
+  const int n = 91;
+  const double step = M_PI / 2 / 90, chord = 2 * 10.0 * std::sin(step / 2);
+  table.time_s = Eigen::VectorXd::LinSpaced(n, 0.0, 90.0);
+  Eigen::VectorXd dx = Eigen::VectorXd::Constant(n, chord * std::cos(step / 2));
+  Eigen::VectorXd dy = Eigen::VectorXd::Constant(n, chord * std::sin(step / 2));
+  Eigen::VectorXd dphi = Eigen::VectorXd::Constant(n, step);
+  table.columns = {{"rate_rps", Eigen::VectorXd::Constant(n, step), "1"},
+                   {"odom_dx_m", dx, "1"},
+                   {"odom_dy_m", dy, "1"},
+                   {"odom_dphi_rad", dphi, "1"}};
+  const auto record = record_nav_input(table, "test");
+  EXPECT_EQ(record.speed_source, "odometry increments");
+  constexpr double kRounding = 1e-12;  // m, rad: 90 compositions of doubles
+  EXPECT_NEAR(record.input.x_m[n - 1], 10.0, kRounding);
+  EXPECT_NEAR(record.input.y_m[n - 1], 10.0, kRounding);
+  EXPECT_NEAR(record.input.heading_rad[n - 1], M_PI / 2, kRounding);
+  EXPECT_NEAR(record.input.step_speed_mps[1], chord, kRounding);
+  // the EKF on the exact rate follows the reference (midpoint rule = chord along the mid heading)
+  const auto track = run_nav(record.input, table.values("rate_rps"), NavNoise{}, false, 0.0);
+  EXPECT_NEAR(track.position_error_m[n - 1], 0.0, 1e-9);
+  EXPECT_NEAR(track.heading_error_rad[n - 1], 0.0, 1e-12);
+  // no odometry: an error naming the columns
+  table.columns.resize(1);
+  EXPECT_THROW(record_nav_input(table, "test"), driftlab::DataError);
+}
+#endif
