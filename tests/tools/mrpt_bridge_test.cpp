@@ -531,7 +531,7 @@ TEST(MrptNavEkf, EstimatesAKnownConstantGyroBiasWithinTwoSigma) {
   // a position fix (sigma 2 m) every 2 s. The bias is observable through the position track.
   const double fs = 20.0, dt = 1.0 / fs, bias = 200.0 * driftlab::kRadPerSecPerDph;
   NavNoise noise;
-  noise.arw_rad_sqrt_s = 0.1 * M_PI / 180.0 / 60.0;  // 0.1 deg/sqrt(h)
+  noise.arw_rad_sqrt_s = 0.1 * driftlab::kRadPerDeg / 60.0;  // 0.1 deg/sqrt(h) (sqrt(3600 s) = 60)
   noise.speed_sigma_mps = 0.02;
   noise.fix_sigma_m = 2.0;
   NavState start;
@@ -599,8 +599,8 @@ TEST(MrptNav, CalibrationModelCutsTheOneHourHeadingErrorAtLeastTenfold) {
   const auto raw = run_nav(input, drive.gyro.rate_rad_s, noise, false, prior);
   const auto comp = run_nav(input, compensated, noise, false, prior);
   const Eigen::Index last = drive.gyro.time_s.size() - 1;
-  const double raw_deg = std::abs(raw.heading_error_rad[last]) * 180.0 / M_PI;
-  const double comp_deg = std::abs(comp.heading_error_rad[last]) * 180.0 / M_PI;
+  const double raw_deg = std::abs(raw.heading_error_rad[last]) * driftlab::kDegPerRad;
+  const double comp_deg = std::abs(comp.heading_error_rad[last]) * driftlab::kDegPerRad;
   std::cout << "final heading error: raw " << raw_deg << " deg, compensated " << comp_deg << " deg, factor "
             << raw_deg / comp_deg << "; final position error: raw " << raw.position_error_m[last] << " m, compensated "
             << comp.position_error_m[last] << " m\n";
