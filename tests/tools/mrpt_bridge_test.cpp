@@ -1,7 +1,9 @@
 // The MRPT bridge (issue 14): rawlog round trips, rawlog-edit reading our exports, compensation of a
 // rawlog, the navigation EKF and bad rawlogs. Built always; without MRPT every test is skipped.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -24,9 +26,11 @@
 
 #include "devices/device_file.hpp"
 #include "framework/error.hpp"
+#include "framework/units.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "tools/mrpt/nav_calibration.hpp"
 #include "tools/mrpt/nav_ekf.hpp"
+#include "tools/mrpt/nav_record.hpp"
 #include "tools/mrpt/nav_scenario.hpp"
 #include "tools/mrpt/rawlog_io.hpp"
 #endif
@@ -227,12 +231,18 @@ TEST(MrptBridge, CompensationChangesOnlyTheImuRateByExactlyTheCorrection) {
   export_test_rawlog(dir, 300, true);
   // A stateful corrector (like a causal model): the k-th call subtracts a known amount.
   std::vector<double> corrections;
-  const auto stats = compensate_rawlog(dir / "in.rawlog", dir / "out.rawlog", [&](double t, double rate, double temp) {
-    const double c = 1e-4 * (1.0 + t) + 1e-6 * temp + 1e-9 * static_cast<double>(corrections.size());
-    corrections.push_back(c);
-    return rate - c;
-  });
+  const auto stats = compensate_rawlog(dir / "in.rawlog", dir / "out.rawlog",
+                                       {{mrpt::obs::IMU_WZ, "test", [&](double t, double rate, double temp) {
+                                           const double c = 1e-4 * (1.0 + t) + 1e-6 * temp +
+                                                            1e-9 * static_cast<double>(corrections.size());
+                                           corrections.push_back(c);
+                                           return rate - c;
+                                         }}});
   EXPECT_EQ(stats.compensated, 300u);
+  ASSERT_EQ(stats.fields.size(), 1u);
+  EXPECT_EQ(stats.fields[0].max_abs_correction, *std::max_element(corrections.begin(), corrections.end()));
+  // the fields written by write_test_csv other than IMU_WZ are passed through
+  EXPECT_EQ(stats.passed_through, (std::vector<int>{mrpt::obs::IMU_TEMPERATURE, mrpt::obs::IMU_WX, mrpt::obs::IMU_Z_ACC}));
   std::size_t objects_in = 0, objects_out = 0;
   const auto before = read_imu(dir / "in.rawlog", &objects_in);
   const auto after = read_imu(dir / "out.rawlog", &objects_out);
@@ -253,8 +263,12 @@ TEST(MrptBridge, CompensationChangesOnlyTheImuRateByExactlyTheCorrection) {
   for (auto* t : {&a, &b}) t->columns.erase(t->columns.begin());  // drop rate_rps
   expect_tables_equal(a, b);
   // the input is never the output
-  EXPECT_THROW(compensate_rawlog(dir / "in.rawlog", dir / "in.rawlog", [](double, double r, double) { return r; }),
-               driftlab::ConfigError);
+  const FieldCorrection identity{mrpt::obs::IMU_WZ, "test", [](double, double r, double) { return r; }};
+  EXPECT_THROW(compensate_rawlog(dir / "in.rawlog", dir / "in.rawlog", {identity}), driftlab::ConfigError);
+  // nothing to do, or a field corrected twice: configuration errors
+  EXPECT_THROW(compensate_rawlog(dir / "in.rawlog", dir / "x.rawlog", {}), driftlab::ConfigError);
+  EXPECT_THROW(compensate_rawlog(dir / "in.rawlog", dir / "x.rawlog", {identity, identity}), driftlab::ConfigError);
+  EXPECT_FALSE(fs::exists(dir / "x.rawlog"));
   fs::remove_all(dir);
 #endif
 }
@@ -298,6 +312,141 @@ TEST(MrptBridge, CompensateCommandAppliesTheCalibrationModelsCorrectionExactly) 
                                 (dir / "in.rawlog").string() + " --out " + (dir / "x.rawlog").string());
   EXPECT_EQ(bad.exit_code, 2) << bad.err;
   EXPECT_NE(bad.err.find("bad.json"), std::string::npos) << bad.err;
+  fs::remove_all(dir);
+#endif
+}
+
+#if DRIFTLAB_HAVE_MRPT
+namespace {
+
+// A 6-axis IMU record exported as observations: t_s, temp_c, the three rates, the three
+// accelerations and a magnetometer field the model does not cover. `skip` leaves one column out.
+void export_six_axis_rawlog(const fs::path& dir, int n, const std::string& skip = "") {
+  const std::vector<std::string> columns{"rate_rps",   "temp_c",     "wx_rps",     "wy_rps",
+                                         "acc_x_mps2", "acc_y_mps2", "acc_z_mps2", "mag_x_gauss"};
+  std::ofstream out(dir / "six.csv");
+  out << "t_s";
+  for (const auto& c : columns)
+    if (c != skip) out << "," << c;
+  out << "\n";
+  std::mt19937_64 random(11);
+  std::normal_distribution<double> normal;
+  char cell[64];
+  for (int i = 0; i < n; ++i) {
+    std::snprintf(cell, sizeof cell, "%.7f", 0.01 * i);
+    out << cell;
+    for (const auto& c : columns) {
+      const double v = c == "temp_c" ? -20.0 + 0.05 * i
+                       : c.rfind("acc_", 0) == 0 ? (c == "acc_z_mps2" ? 9.80665 : 0.0) + 0.01 * normal(random)
+                       : c == "mag_x_gauss" ? 0.3
+                                            : 1e-3 * normal(random);
+      std::snprintf(cell, sizeof cell, ",%.17g", v);
+      if (c != skip) out << cell;
+    }
+    out << "\n";
+  }
+  out.close();
+  export_rawlog(read_imu_csv(dir / "six.csv"), dir / "six.rawlog");
+}
+
+// A whole-IMU model: gyro and accel x, y, z of instances 0 and 1, every channel its own
+// polynomial, the gyros with a 20-s temperature lag (stateful: one compensator per channel).
+driftlab::calibration::ImuCalibration six_axis_model() {
+  using namespace driftlab::calibration;
+  using driftlab::imu::Sensor;
+  ImuCalibration imu_model;
+  imu_model.device = "test";
+  int k = 0;
+  for (const int instance : {0, 1})
+    for (const Sensor sensor : {Sensor::Gyro, Sensor::Accel})
+      for (const char axis : {'x', 'y', 'z'}) {
+        ++k;
+        CalibrationModel m;
+        m.kind = sensor == Sensor::Gyro ? ModelKind::Physical : ModelKind::Polynomial;
+        m.reference_temp_c = 25.0;
+        m.valid_min_c = -40.0;
+        m.valid_max_c = 85.0;
+        const double scale = sensor == Sensor::Gyro ? 1e-3 : 1e-2;  // rad/s or m/s^2
+        m.bias_rad_s = {scale * k, scale * 0.01 * k, -scale * 1e-4};
+        m.bias_sigma_rad_s = {0.0, 0.0, 0.0};
+        if (sensor == Sensor::Gyro) m.lag_tau_s = 20.0;
+        const driftlab::imu::ChannelId id{sensor, axis, instance};
+        imu_model.channels.push_back({id, id.role(), id.role(), driftlab::imu::internal_unit(sensor),
+                                      driftlab::imu::temperature_role(instance), "", true, m});
+      }
+  return imu_model;
+}
+
+}  // namespace
+#endif
+
+TEST(MrptBridge, CompensateCorrectsAllSixFieldsOfAThreeAxisImuExactlyAsTheCausalCompensator) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  using driftlab::imu::Sensor;
+  const auto dir = scratch_dir("mrpt_compensate_six");
+  export_six_axis_rawlog(dir, 500);  // temperatures -20 .. +5 degC
+  const auto imu_model = six_axis_model();
+  std::ofstream(dir / "model.json") << driftlab::calibration::to_json_text(imu_model);
+  for (const int instance : {0, 1}) {
+    const auto out = dir / ("out" + std::to_string(instance) + ".rawlog");
+    const auto r = run_driftlab("mrpt compensate --model " + (dir / "model.json").string() + " " +
+                                (dir / "six.rawlog").string() + " --out " + out.string() +
+                                (instance ? " --instance 1" : ""));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    // the summary names each corrected field in its unit and what passed through
+    for (const auto* field : {"IMU_WX by gyro", "IMU_WY by gyro", "IMU_WZ by gyro", "IMU_X_ACC by accel",
+                              "IMU_Y_ACC by accel", "IMU_Z_ACC by accel"})
+      EXPECT_NE(r.out.find(field), std::string::npos) << field << "\n" << r.out;
+    EXPECT_NE(r.out.find(" deg/h"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(" mg"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("unchanged (not in the model): IMU_TEMPERATURE IMU_MAG_X"), std::string::npos) << r.out;
+
+    const auto before = read_imu(dir / "six.rawlog"), after = read_imu(out);
+    ASSERT_EQ(before.size(), 500u);
+    ASSERT_EQ(after.size(), before.size());
+    std::vector<std::pair<mrpt::obs::TIMUDataIndex, driftlab::calibration::CausalCompensator>> reference;
+    for (const auto& channel : imu_model.channels)
+      if (channel.id.instance == instance)
+        reference.emplace_back(static_cast<mrpt::obs::TIMUDataIndex>(imu_field(channel.id.sensor, channel.id.axis)),
+                               driftlab::calibration::CausalCompensator(channel.model));
+    ASSERT_EQ(reference.size(), 6u);
+    for (std::size_t i = 0; i < before.size(); ++i) {
+      const double t = static_cast<double>((before[i]->timestamp - before[0]->timestamp).count()) / 1e7;
+      const double temp = before[i]->get(mrpt::obs::IMU_TEMPERATURE);
+      for (auto& [field, compensator] : reference) {
+        ASSERT_EQ(after[i]->get(field), compensator.step(t, before[i]->get(field), temp))
+            << imu_field_name(field) << " sample " << i;
+        after[i]->set(field, before[i]->get(field));
+      }
+      // with the six fields restored, the observation is the original one
+      ASSERT_EQ(after[i]->rawMeasurements, before[i]->rawMeasurements) << i;
+      ASSERT_EQ(after[i]->dataIsPresent, before[i]->dataIsPresent) << i;
+      ASSERT_EQ(after[i]->timestamp, before[i]->timestamp) << i;
+    }
+  }
+  // an instance the model does not have: a configuration error naming the option
+  const auto none = run_driftlab("mrpt compensate --model " + (dir / "model.json").string() + " " +
+                                 (dir / "six.rawlog").string() + " --out " + (dir / "x.rawlog").string() +
+                                 " --instance 2");
+  EXPECT_EQ(none.exit_code, 2) << none.err;
+  EXPECT_NE(none.err.find("instance 2"), std::string::npos) << none.err;
+  fs::remove_all(dir);
+#endif
+}
+
+TEST(MrptBridge, AModelChannelWhoseFieldTheRawlogLacksIsAnErrorNamingIt) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  const auto dir = scratch_dir("mrpt_compensate_missing");
+  export_six_axis_rawlog(dir, 20, "acc_y_mps2");
+  std::ofstream(dir / "model.json") << driftlab::calibration::to_json_text(six_axis_model());
+  const auto r = run_driftlab("mrpt compensate --model " + (dir / "model.json").string() + " " +
+                              (dir / "six.rawlog").string() + " --out " + (dir / "out.rawlog").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("object 0"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("has no IMU_Y_ACC, which accel_y of"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out.rawlog"));
   fs::remove_all(dir);
 #endif
 }
@@ -380,13 +529,13 @@ TEST(MrptNavEkf, EstimatesAKnownConstantGyroBiasWithinTwoSigma) {
 #if DRIFTLAB_HAVE_MRPT
   // 20 min at 20 Hz, 10 m/s, weaving turns; the gyro reads true rate + 200 deg/h + white noise;
   // a position fix (sigma 2 m) every 2 s. The bias is observable through the position track.
-  const double fs = 20.0, dt = 1.0 / fs, bias = 200.0 * M_PI / 180.0 / 3600.0;
+  const double fs = 20.0, dt = 1.0 / fs, bias = 200.0 * driftlab::kRadPerSecPerDph;
   NavNoise noise;
-  noise.arw_rad_sqrt_s = 0.1 * M_PI / 180.0 / 60.0;  // 0.1 deg/sqrt(h)
+  noise.arw_rad_sqrt_s = 0.1 * driftlab::kRadPerDeg / 60.0;  // 0.1 deg/sqrt(h) (sqrt(3600 s) = 60)
   noise.speed_sigma_mps = 0.02;
   noise.fix_sigma_m = 2.0;
   NavState start;
-  start.covariance(3, 3) = std::pow(1000.0 * M_PI / 180.0 / 3600.0, 2);  // prior: 1000 deg/h
+  start.covariance(3, 3) = std::pow(1000.0 * driftlab::kRadPerSecPerDph, 2);  // prior: 1000 deg/h
   NavEkf ekf(noise, start);
   std::mt19937_64 random(3);
   std::normal_distribution<double> normal;
@@ -409,8 +558,8 @@ TEST(MrptNavEkf, EstimatesAKnownConstantGyroBiasWithinTwoSigma) {
   const auto s = ekf.state();
   const double sigma = std::sqrt(s.covariance(3, 3));
   EXPECT_LT(sigma, 0.25 * bias) << "the bias must be well observed for the test to mean something";
-  EXPECT_NEAR(s.bias_rad_s, bias, 2.0 * sigma) << "estimate " << s.bias_rad_s * 180 / M_PI * 3600 << " deg/h, sigma "
-                                               << sigma * 180 / M_PI * 3600 << " deg/h";
+  EXPECT_NEAR(s.bias_rad_s, bias, 2.0 * sigma) << "estimate " << s.bias_rad_s * driftlab::kDphPerRadPerSec
+                                               << " deg/h, sigma " << sigma * driftlab::kDphPerRadPerSec << " deg/h";
 #endif
 }
 
@@ -445,12 +594,13 @@ TEST(MrptNav, CalibrationModelCutsTheOneHourHeadingErrorAtLeastTenfold) {
   const auto model = calibrate_on_oven_run(device, oven);
   const auto compensated = compensate_drive(model, drive);
   const auto noise = nav_noise(device, scenario);
-  const double prior = 100.0 * M_PI / 180.0 / 3600.0;
-  const auto raw = run_nav(drive, drive.gyro.rate_rad_s, noise, false, prior);
-  const auto comp = run_nav(drive, compensated, noise, false, prior);
+  const double prior = 100.0 * driftlab::kRadPerSecPerDph;
+  const auto input = nav_input(drive);
+  const auto raw = run_nav(input, drive.gyro.rate_rad_s, noise, false, prior);
+  const auto comp = run_nav(input, compensated, noise, false, prior);
   const Eigen::Index last = drive.gyro.time_s.size() - 1;
-  const double raw_deg = std::abs(raw.heading_error_rad[last]) * 180.0 / M_PI;
-  const double comp_deg = std::abs(comp.heading_error_rad[last]) * 180.0 / M_PI;
+  const double raw_deg = std::abs(raw.heading_error_rad[last]) * driftlab::kDegPerRad;
+  const double comp_deg = std::abs(comp.heading_error_rad[last]) * driftlab::kDegPerRad;
   std::cout << "final heading error: raw " << raw_deg << " deg, compensated " << comp_deg << " deg, factor "
             << raw_deg / comp_deg << "; final position error: raw " << raw.position_error_m[last] << " m, compensated "
             << comp.position_error_m[last] << " m\n";
@@ -490,3 +640,141 @@ TEST(MrptNav, AnOutputDirectoryThatCannotBeMadeIsAUsageErrorBeforeTheDrive) {
   EXPECT_NE(r.err.find("cannot create the directory"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("simulate drive"), std::string::npos) << "refused before the drive is simulated";
 }
+
+// A ten-minute drive (10 Hz; cabin -10 -> +30 degC; 10 m/s with two turns) for the nav tests.
+[[maybe_unused]] void write_short_scenario(const fs::path& path) {
+  std::ofstream(path) << R"(format: driftlab-nav-scenario/1
+sample_rate_hz: 10
+seed: 5
+calibration_seed: 1001
+cabin: {start_c: -10, segments: [{to_c: 30, duration_s: 600}]}
+speed: {start_mps: 0, segments: [{to_mps: 10, duration_s: 10}, {hold_s: 590}]}
+yaw_rate:
+  start_dps: 0
+  segments:
+    - {hold_s: 100}
+    - {to_dps: 9, duration_s: 2}
+    - {hold_s: 8}
+    - {to_dps: 0, duration_s: 2}
+    - {hold_s: 200}
+    - {to_dps: -9, duration_s: 2}
+    - {hold_s: 8}
+    - {to_dps: 0, duration_s: 2}
+)";
+}
+
+[[maybe_unused]] nlohmann::json read_json(const fs::path& path) {
+  return nlohmann::json::parse(driftlab::testing_cli::read_text(path));
+}
+
+TEST(MrptNav, NavigatesAUserRawlogWithOdometryAndReproducesTheSimulatedDrive) {
+  SKIP_WITHOUT_MRPT();
+  // The simulated drive's rawlog (raw IMU_WZ, IMU_TEMPERATURE, odometry whose increments are the
+  // true motion and whose velocity is the noisy odometry speed) navigated as a user record: the
+  // odometry reference is then the truth and the EKF gets the same inputs, so the report equals
+  // the simulated run's to the rounding of the 100-ns time stamps.
+  constexpr double kHeadingTolerance = 1e-6;   // deg
+  constexpr double kPositionTolerance = 1e-4;  // m
+  const auto dir = driftlab::testing_cli::scratch_dir("nav_record");
+  write_short_scenario(dir / "short.yaml");
+  const auto sim = run_driftlab("nav --device fmvmg --scenario " + (dir / "short.yaml").string() + " --out " +
+                                (dir / "sim").string());
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const auto simulated = read_json(dir / "sim" / "summary.json");
+
+  const auto rec = run_driftlab("nav --rawlog " + (dir / "sim" / "drive.rawlog").string() + " --model " +
+                                (dir / "sim" / "model.json").string() + " --out " + (dir / "rec").string());
+  ASSERT_EQ(rec.exit_code, 0) << rec.err;
+  EXPECT_NE(rec.out.find("errors against the odometry pose"), std::string::npos) << rec.out;
+  const auto recorded = read_json(dir / "rec" / "summary.json");
+  for (const auto* run : {"raw", "compensated"}) {
+    EXPECT_NEAR(recorded["heading_error_final_deg"][run].get<double>(),
+                simulated["heading_error_final_deg"][run].get<double>(), kHeadingTolerance) << run;
+    EXPECT_NEAR(recorded["heading_error_rms_deg"][run].get<double>(),
+                simulated["heading_error_rms_deg"][run].get<double>(), kHeadingTolerance) << run;
+    EXPECT_NEAR(recorded["position_error_final_m"][run].get<double>(),
+                simulated["position_error_final_m"][run].get<double>(), kPositionTolerance) << run;
+  }
+  EXPECT_FALSE(recorded["heading_error_final_deg"].contains("perfect")) << "a record has no true rate";
+  EXPECT_GT(recorded["heading_error_rms_deg"]["raw"].get<double>(),
+            10.0 * recorded["heading_error_rms_deg"]["compensated"].get<double>());
+  const auto info = read_json(dir / "rec" / "nav_info.json");
+  EXPECT_NE(info["reference"].get<std::string>().find("odometry pose"), std::string::npos);
+  EXPECT_EQ(info["odometry_speed"], "odom_speed_mps");
+  const std::string trajectory = driftlab::testing_cli::read_text(dir / "rec" / "trajectory.csv");
+  EXPECT_EQ(trajectory.rfind("t_s,odometry_x_m,odometry_y_m,odometry_heading_deg,raw_x_m", 0), 0u) << trajectory.substr(0, 200);
+  EXPECT_TRUE(fs::exists(dir / "rec" / "nav.svg") || rec.err.find("nav.svg not written") != std::string::npos);
+
+  // the same record as the bridge's CSV (mrpt import) through --data: the same report
+  const auto imp = run_driftlab("mrpt import " + (dir / "sim" / "drive.rawlog").string() + " --out " +
+                                (dir / "drive.csv").string());
+  ASSERT_EQ(imp.exit_code, 0) << imp.err;
+  const auto csv = run_driftlab("nav --data " + (dir / "drive.csv").string() + " --model " +
+                                (dir / "sim" / "model.json").string() + " --out " + (dir / "csv").string());
+  ASSERT_EQ(csv.exit_code, 0) << csv.err;
+  EXPECT_EQ(read_json(dir / "csv" / "summary.json"), recorded);
+  fs::remove_all(dir);
+}
+
+TEST(MrptNav, ARecordNeedsOdometryATemperatureAndAModel) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  const auto dir = driftlab::testing_cli::scratch_dir("nav_record_bad");
+  export_test_rawlog(dir, 50, false);  // no odometry
+  driftlab::calibration::CalibrationModel model;
+  model.valid_min_c = -40.0;
+  model.valid_max_c = 85.0;
+  model.bias_rad_s = {1e-3};
+  model.bias_sigma_rad_s = {0.0};
+  std::ofstream(dir / "model.json") << driftlab::calibration::to_json_text(driftlab::calibration::single_axis(model));
+  const auto r = run_driftlab("nav --rawlog " + (dir / "in.rawlog").string() + " --model " +
+                              (dir / "model.json").string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("nav needs odometry"), std::string::npos) << r.err;
+  const auto no_model = run_driftlab("nav --rawlog " + (dir / "in.rawlog").string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(no_model.exit_code, 2) << no_model.err;
+  EXPECT_NE(no_model.err.find("--model"), std::string::npos) << no_model.err;
+  const auto mixed = run_driftlab("nav --rawlog " + (dir / "in.rawlog").string() + " --device fmvmg --model " +
+                                  (dir / "model.json").string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(mixed.exit_code, 2) << mixed.err;
+  {  // odometry but no temperature
+    std::ofstream(dir / "notemp.csv") << "t_s,rate_rps,odom_dx_m,odom_dy_m,odom_dphi_rad\n0,0,0,0,0\n0.1,0,1,0,0\n";
+  }
+  const auto notemp = run_driftlab("nav --data " + (dir / "notemp.csv").string() + " --model " +
+                                   (dir / "model.json").string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(notemp.exit_code, 3) << notemp.err;
+  EXPECT_NE(notemp.err.find("no temperature"), std::string::npos) << notemp.err;
+  fs::remove_all(dir);
+#endif
+}
+
+#if DRIFTLAB_HAVE_MRPT
+TEST(MrptNavRecord, TheReferenceComposesTheOdometryAndTheSpeedIsTheChordWithoutVelocities) {
+  // A quarter circle of radius 10 m in 90 steps of 1 s: each increment is the chord of 1 degree.
+  ImuTable table;
+  const int n = 91;
+  const double step = M_PI / 2 / 90, chord = 2 * 10.0 * std::sin(step / 2);
+  table.time_s = Eigen::VectorXd::LinSpaced(n, 0.0, 90.0);
+  Eigen::VectorXd dx = Eigen::VectorXd::Constant(n, chord * std::cos(step / 2));
+  Eigen::VectorXd dy = Eigen::VectorXd::Constant(n, chord * std::sin(step / 2));
+  Eigen::VectorXd dphi = Eigen::VectorXd::Constant(n, step);
+  table.columns = {{"rate_rps", Eigen::VectorXd::Constant(n, step), "1"},
+                   {"odom_dx_m", dx, "1"},
+                   {"odom_dy_m", dy, "1"},
+                   {"odom_dphi_rad", dphi, "1"}};
+  const auto record = record_nav_input(table, "test");
+  EXPECT_EQ(record.speed_source, "odometry increments");
+  constexpr double kRounding = 1e-12;  // m, rad: 90 compositions of doubles
+  EXPECT_NEAR(record.input.x_m[n - 1], 10.0, kRounding);
+  EXPECT_NEAR(record.input.y_m[n - 1], 10.0, kRounding);
+  EXPECT_NEAR(record.input.heading_rad[n - 1], M_PI / 2, kRounding);
+  EXPECT_NEAR(record.input.step_speed_mps[1], chord, kRounding);
+  // the EKF on the exact rate follows the reference (midpoint rule = chord along the mid heading)
+  const auto track = run_nav(record.input, table.values("rate_rps"), NavNoise{}, false, 0.0);
+  EXPECT_NEAR(track.position_error_m[n - 1], 0.0, 1e-9);
+  EXPECT_NEAR(track.heading_error_rad[n - 1], 0.0, 1e-12);
+  // no odometry: an error naming the columns
+  table.columns.resize(1);
+  EXPECT_THROW(record_nav_input(table, "test"), driftlab::DataError);
+}
+#endif

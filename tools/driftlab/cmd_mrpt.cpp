@@ -2,6 +2,8 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <sstream>
+#include <vector>
 
 #include "framework/error.hpp"
 #include "framework/units.hpp"
@@ -15,6 +17,7 @@ namespace {
 struct MrptOptions {
   std::string input, out, model, sensor_label = "";
   std::string label = "GYRO";
+  int instance = 0;
   double start_unix_s = mrpt_bridge::kDefaultStartUnixS;
 };
 
@@ -51,30 +54,74 @@ void export_command(const MrptOptions& o, CommandEnv& env) {
   }
 }
 
+// The largest correction of a field in the unit people read it in: deg/h for a rate, mg for an
+// acceleration.
+std::string correction_text(imu::Sensor sensor, double si) {
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(3);
+  if (sensor == imu::Sensor::Accel)
+    text << difference_from_internal(si, *find_unit("mg")) << " mg";
+  else
+    text << si * kDphPerRadPerSec << " deg/h";
+  return text.str();
+}
+
+// Every channel of the model's instance `o.instance` corrects its CObservationIMU field, each with
+// its own causal compensator, on IMU_TEMPERATURE.
 void compensate_command(const MrptOptions& o, CommandEnv& env) {
   check_output(o.out, {o.input, o.model});
   const auto imu_model = calibration::read_calibration(o.model);
-  const auto* yaw = imu_model.find({imu::Sensor::Gyro, 'z', 0});
-  if (!yaw) throw ConfigError({o.model, 0, "channels"}, "the model has no gyro_z channel, the rate this command corrects");
-  calibration::CausalCompensator compensator(yaw->model);
-  std::size_t extrapolated = 0;
+  std::vector<const calibration::ChannelCalibration*> applied;
+  std::vector<std::string> other_instances;
+  for (const auto& channel : imu_model.channels) {
+    if (channel.id.instance == o.instance)
+      applied.push_back(&channel);
+    else
+      other_instances.push_back(channel.id.role());
+  }
+  if (applied.empty()) {
+    std::string roles;
+    for (const auto& r : other_instances) roles += (roles.empty() ? "" : ", ") + r;
+    throw ConfigError({o.model, 0, "channels"}, "the model has no channel of instance " + std::to_string(o.instance) +
+                                                    " (--instance); its channels: " + roles);
+  }
+  std::vector<calibration::CausalCompensator> compensators;
+  for (const auto* channel : applied) compensators.emplace_back(channel->model);
+  std::vector<std::size_t> extrapolated(applied.size(), 0);
+  std::vector<mrpt_bridge::FieldCorrection> corrections;
+  for (std::size_t i = 0; i < applied.size(); ++i)
+    corrections.push_back({mrpt_bridge::imu_field(applied[i]->id.sensor, applied[i]->id.axis),
+                           applied[i]->id.role() + " of " + o.model,
+                           [&compensators, &extrapolated, i](double t, double value, double temp) {
+                             const double out = compensators[i].step(t, value, temp);
+                             if (compensators[i].last_extrapolated()) ++extrapolated[i];
+                             return out;
+                           }});
   env.progress("mrpt compensate", 0.0);
-  const auto stats = mrpt_bridge::compensate_rawlog(
-      o.input, o.out,
-      [&](double t, double rate, double temp) {
-        const double out = compensator.step(t, rate, temp);
-        if (compensator.last_extrapolated()) ++extrapolated;
-        return out;
-      },
-      o.sensor_label);
+  const auto stats = mrpt_bridge::compensate_rawlog(o.input, o.out, corrections, o.sensor_label);
   env.progress("mrpt compensate", 1.0);
-  std::cout << o.out << ": " << stats.compensated << " of " << stats.imu_observations
-            << " IMU observations compensated (IMU_WZ only) with " << o.model << "; " << stats.objects
-            << " objects copied in order; largest correction " << stats.max_abs_correction_rad_s * kDegPerRad * 3600.0
-            << " deg/h\n";
-  if (extrapolated > 0)
-    std::cerr << "driftlab: warning: " << extrapolated
-              << " observations had a temperature outside the model's calibrated range (extrapolated)\n";
+  std::cout << o.out << ": " << stats.compensated << " of " << stats.imu_observations << " IMU observations ('"
+            << stats.sensor_label << "') compensated with instance " << o.instance << " of " << o.model << "; "
+            << stats.objects << " objects copied in order\n";
+  std::cout << "  corrected (largest correction):";
+  for (std::size_t i = 0; i < stats.fields.size(); ++i)
+    std::cout << (i ? "," : "") << " " << mrpt_bridge::imu_field_name(stats.fields[i].field) << " by "
+              << applied[i]->id.role() << " " << correction_text(applied[i]->id.sensor, stats.fields[i].max_abs_correction);
+  std::cout << "\n";
+  if (!stats.passed_through.empty()) {
+    std::cout << "  unchanged (not in the model):";
+    for (const int field : stats.passed_through) std::cout << " " << mrpt_bridge::imu_field_name(field);
+    std::cout << "\n";
+  }
+  if (!other_instances.empty()) {
+    std::cout << "  model channels of other instances, not applied (--instance):";
+    for (const auto& r : other_instances) std::cout << " " << r;
+    std::cout << "\n";
+  }
+  for (std::size_t i = 0; i < applied.size(); ++i)
+    if (extrapolated[i] > 0)
+      std::cerr << "driftlab: warning: " << applied[i]->id.role() << ": " << extrapolated[i]
+                << " observations had a temperature outside the model's calibrated range (extrapolated)\n";
 }
 
 void info_command(const MrptOptions& o) {
@@ -114,11 +161,19 @@ void add_mrpt_command(CLI::App& app, CommandEnv& env) {
   exp->callback([o, &env] { export_command(*o, env); });
 
   auto* comp = mrpt->add_subcommand(
-      "compensate", "apply a calibration model (driftlab calibrate) to IMU_WZ of every IMU observation; all else is kept");
+      "compensate",
+      "apply a calibration model (driftlab calibrate) to the rates and accelerations of every IMU observation of one "
+      "sensor label: IMU_WX/WY/WZ by gyro_x/y/z, IMU_X/Y/Z_ACC by accel_x/y/z, on IMU_TEMPERATURE; all else is kept");
   comp->add_option("rawlog", o->input, "input rawlog")->required()->check(CLI::ExistingFile);
-  comp->add_option("--model", o->model, "calibration model JSON (driftlab-calibration/1)")->required()->check(CLI::ExistingFile);
+  comp->add_option("--model", o->model, "calibration model JSON (driftlab-calibration/2, or /1: gyro_z only)")
+      ->required()
+      ->check(CLI::ExistingFile);
   comp->add_option("--out", o->out, "output rawlog (gzip'ed, written atomically; never the input)")->required();
   comp->add_option("--sensor-label", o->sensor_label, "IMU sensor label to compensate (needed when there are several)");
+  comp->add_option("--instance", o->instance,
+                   "model instance applied to that label's observations (one label is one IMU; gyro1_x is instance 1)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   comp->callback([o, &env] { compensate_command(*o, env); });
 
   auto* info = mrpt->add_subcommand("info", "counts of a rawlog: format, objects, IMU observations and labels");

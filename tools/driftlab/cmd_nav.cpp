@@ -1,6 +1,8 @@
-// `driftlab nav`: a simulated vehicle drive navigated by the MRPT-based EKF (tools/mrpt) on raw,
-// compensated and perfect yaw rates; writes trajectories, errors over time, a rawlog, a plot and
-// summary.json.
+// `driftlab nav`: the MRPT-based EKF (tools/mrpt) navigating on raw and compensated yaw rates,
+// either a simulated vehicle drive (the default; plus perfect and noise-only rates, against the
+// truth) or the user's own record with odometry (--rawlog / --data, against the odometry pose);
+// writes trajectories, errors over time, a plot and summary.json.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -18,18 +20,22 @@
 #include "tools/driftlab/cli.hpp"
 #include "tools/driftlab/devices_dir.hpp"
 #include "tools/driftlab/plot.hpp"
+#include "tools/mrpt/nav_calibration.hpp"
+#include "tools/mrpt/nav_record.hpp"
 #include "tools/mrpt/nav_scenario.hpp"
 #include "tools/mrpt/rawlog_io.hpp"
-#include "tools/mrpt/nav_calibration.hpp"
 
 namespace driftlab::cli {
 namespace {
 
 namespace fs = std::filesystem;
+using mrpt_bridge::NavInput;
 using mrpt_bridge::NavTrack;
 
 struct NavOptions {
   std::string device, model, scenario, out, devices_dir;
+  std::string rawlog, data, sensor_label;
+  int instance = 0;
   double every_s = 1.0;
   double bias_prior_dph = 100.0;
   std::string calibration_kind = "poly";
@@ -37,13 +43,36 @@ struct NavOptions {
   bool no_rawlog = false;
 };
 
+struct Run {
+  std::string name;
+  Eigen::VectorXd rate_rad_s;
+  NavTrack track;
+};
+
+// What the report shows, the same for the simulated drive and a user's record.
+struct NavReport {
+  NavInput input;
+  Eigen::VectorXd temp_c;
+  std::string reference;  // prefix of the reference columns: "true" or "odometry"
+  std::string title;      // of the plot
+  std::vector<Run> runs;  // a run named "noise_only" is left out of summary.json
+};
+
 double rms(const Eigen::VectorXd& v) { return std::sqrt(v.squaredNorm() / static_cast<double>(v.size())); }
 
-// Every `step`-th sample (and the last).
-std::vector<Eigen::Index> decimation(Eigen::Index n, Eigen::Index step) {
-  std::vector<Eigen::Index> idx;
-  for (Eigen::Index k = 0; k < n; k += step) idx.push_back(k);
-  if (idx.back() != n - 1) idx.push_back(n - 1);
+// The first sample, the first sample of every later `every_s` interval, and the last.
+std::vector<Eigen::Index> decimation(const Eigen::VectorXd& t, double every_s) {
+  constexpr double kSlack = 1e-9;  // of an interval: t = k / fs may land a rounding error short
+  std::vector<Eigen::Index> idx{0};
+  double taken = 0.0;
+  for (Eigen::Index k = 1; k < t.size(); ++k) {
+    const double bucket = std::floor((t[k] - t[0]) / every_s + kSlack);
+    if (bucket > taken) {
+      idx.push_back(k);
+      taken = bucket;
+    }
+  }
+  if (idx.back() != t.size() - 1) idx.push_back(t.size() - 1);
   return idx;
 }
 
@@ -55,7 +84,114 @@ Eigen::VectorXd pick(const Eigen::VectorXd& v, const std::vector<Eigen::Index>& 
 
 std::vector<double> as_std(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
 
-void nav_command(const NavOptions& o, CommandEnv& env) {
+double bias_prior_rad_s(const NavOptions& o) { return o.bias_prior_dph * kRadPerSecPerDph; }
+
+void run_filters(NavReport& report, const mrpt_bridge::NavNoise& noise, const NavOptions& o, CommandEnv& env) {
+  for (auto& run : report.runs) {
+    const std::string label = "nav: EKF on " + run.name + " rates";
+    run.track = mrpt_bridge::run_nav(report.input, run.rate_rad_s, noise, o.fixes, bias_prior_rad_s(o),
+                                     [&](double f) { env.progress(label, f); });
+  }
+}
+
+nlohmann::ordered_json process_noise_json(const mrpt_bridge::NavNoise& noise) {
+  return {{"arw_rad_sqrt_s", noise.arw_rad_sqrt_s},
+          {"bias_instability_rad_s", noise.bias_instability_rad_s},
+          {"rate_random_walk_rad_s_sqrt_s", noise.rate_random_walk_rad_s_sqrt_s},
+          {"bias_correlation_time_s", noise.bias_correlation_time_s},
+          {"odometry_speed_sigma_mps", noise.speed_sigma_mps},
+          {"fix_sigma_m", noise.fix_sigma_m}};
+}
+
+// summary.json, nav_info.json (`info` plus the errors), trajectory.csv, errors.csv and nav.svg.
+void write_report(const NavReport& report, nlohmann::ordered_json info, OutputSet& outputs, const fs::path& out,
+                  double every_s) {
+  const Eigen::Index n = report.input.time_s.size();
+  // summary.json: the keys (degrees and metres; magnitudes).
+  nlohmann::ordered_json summary, heading_final, position_final, heading_rms;
+  for (const auto& run : report.runs) {
+    if (run.name == "noise_only") continue;  // reported in nav_info.json and on stdout
+    heading_final[run.name] = std::abs(run.track.heading_error_rad[n - 1]) * kDegPerRad;
+    position_final[run.name] = run.track.position_error_m[n - 1];
+    heading_rms[run.name] = rms(run.track.heading_error_rad) * kDegPerRad;
+  }
+  summary["heading_error_final_deg"] = heading_final;
+  summary["position_error_final_m"] = position_final;
+  summary["heading_error_rms_deg"] = heading_rms;
+  outputs.write(out / "summary.json", summary.dump(2) + "\n");
+
+  for (const auto& run : report.runs)
+    info["heading_error_max_abs_deg"][run.name] = run.track.heading_error_rad.cwiseAbs().maxCoeff() * kDegPerRad;
+  if (heading_final.contains("compensated") && heading_final["compensated"].get<double>() > 0)
+    info["heading_error_final_raw_over_compensated"] =
+        heading_final["raw"].get<double>() / heading_final["compensated"].get<double>();
+  const std::string ref = report.reference;
+  info["outputs"]["summary.json"] = "final heading error (deg), final position error (m), heading error RMS (deg)";
+  info["outputs"]["trajectory.csv"] = "t_s, " + ref + "_x_m, " + ref + "_y_m, " + ref +
+                                      "_heading_deg and each run's x_m, y_m, heading_deg, every --every s";
+  info["outputs"]["errors.csv"] =
+      "t_s, temp_c, per run: heading error (deg, estimate - " + ref +
+      ", accumulated: not wrapped), its EKF sigma (deg), position error (m), bias estimate (deg/h)";
+  info["outputs"]["nav.svg"] = "heading and position error over time";
+  outputs.write(out / "nav_info.json", info.dump(2) + "\n");
+
+  const auto idx = decimation(report.input.time_s, every_s);
+  const auto& in = report.input;
+  std::vector<CsvColumn> traj{{"t_s", pick(in.time_s, idx), "s"},
+                              {ref + "_x_m", pick(in.x_m, idx), "1"},
+                              {ref + "_y_m", pick(in.y_m, idx), "1"},
+                              {ref + "_heading_deg", pick(in.heading_rad, idx, kDegPerRad), "1"}};
+  std::vector<CsvColumn> errs{{"t_s", pick(in.time_s, idx), "s"}, {"temp_c", pick(report.temp_c, idx), "1"}};
+  for (const auto& run : report.runs) {
+    traj.push_back({run.name + "_x_m", pick(run.track.x_m, idx), "1"});
+    traj.push_back({run.name + "_y_m", pick(run.track.y_m, idx), "1"});
+    traj.push_back({run.name + "_heading_deg", pick(run.track.heading_rad, idx, kDegPerRad), "1"});
+    errs.push_back({run.name + "_heading_error_deg", pick(run.track.heading_error_rad, idx, kDegPerRad), "1"});
+    errs.push_back({run.name + "_heading_sigma_deg", pick(run.track.heading_sigma_rad, idx, kDegPerRad), "1"});
+    errs.push_back({run.name + "_position_error_m", pick(run.track.position_error_m, idx), "1"});
+    errs.push_back({run.name + "_bias_dph", pick(run.track.bias_rad_s, idx, kDphPerRadPerSec), "1"});
+  }
+  outputs.write_csv(out / "trajectory.csv", traj);
+  outputs.write_csv(out / "errors.csv", errs);
+
+  Figure figure;
+  PlotPanel heading{report.title, "time (min)", "heading error (deg)"};
+  PlotPanel position{"Position error", "time (min)", "position error (m)"};
+  const auto minutes = as_std(pick(in.time_s, idx, 1.0 / 60.0));
+  for (const auto& run : report.runs) {
+    heading.series.push_back({run.name, minutes, as_std(pick(run.track.heading_error_rad, idx, kDegPerRad))});
+    position.series.push_back({run.name, minutes, as_std(pick(run.track.position_error_m, idx))});
+  }
+  figure.panels = {heading, position};
+  try {
+    outputs.write(out / "nav.svg", render_svg(figure));
+  } catch (const PlotError& e) {  // the numbers stand without the figure
+    outputs.drop(out / "nav.svg");
+    std::cerr << "driftlab nav: warning: nav.svg not written: " << e.what() << "\n";
+  }
+}
+
+// The table of final and RMS errors on stdout.
+void print_runs(const NavReport& report) {
+  const Eigen::Index n = report.input.time_s.size();
+  std::cout << "  run           heading final (deg)  heading RMS (deg)  position final (m)\n";
+  for (const auto& run : report.runs)
+    std::cout << "  " << std::left << std::setw(13) << run.name << std::right << std::setw(20)
+              << std::abs(run.track.heading_error_rad[n - 1]) * kDegPerRad << std::setw(19)
+              << rms(run.track.heading_error_rad) * kDegPerRad << std::setw(20) << run.track.position_error_m[n - 1]
+              << "\n";
+  const auto& raw = report.runs.front().track.heading_error_rad;
+  const auto& comp = report.runs[1].track.heading_error_rad;
+  if (std::abs(comp[n - 1]) > 0)
+    std::cout << "  final heading error raw / compensated: " << std::setprecision(1)
+              << std::abs(raw[n - 1]) / std::abs(comp[n - 1]) << "x\n";
+}
+
+// The simulated drive of a device in a scenario, against the truth.
+void simulated_nav(const NavOptions& o, CommandEnv& env) {
+  if (o.device.empty())
+    throw ConfigError(Location{"", 0, "--device"},
+                      "the simulated drive needs --device (or navigate a record with --rawlog / --data)");
   const auto device_path = resolve_device_file(o.device, o.devices_dir);
   const auto device = devices::load_device_file(device_path);
   const fs::path scenario_path = o.scenario.empty() ? mrpt_bridge::default_scenario_path() : fs::path(o.scenario);
@@ -79,13 +215,15 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
   const Eigen::Index n = drive.gyro.time_s.size();
 
   // The compensated rate: the given model, or one calibrated on a simulated oven run.
-  Eigen::VectorXd compensated;
   std::string model_source;
   calibration::CalibrationModel model;
   if (!o.model.empty()) {
     const auto imu_model = calibration::read_calibration(o.model);
-    const auto* yaw = imu_model.find({imu::Sensor::Gyro, 'z', 0});
-    if (!yaw) throw ConfigError({o.model, 0, "channels"}, "nav needs the model of the yaw gyro (gyro_z), which this model lacks");
+    const auto* yaw = imu_model.find({imu::Sensor::Gyro, 'z', o.instance});
+    if (!yaw)
+      throw ConfigError({o.model, 0, "channels"}, "nav needs the model of the yaw gyro (" +
+                                                      imu::ChannelId{imu::Sensor::Gyro, 'z', o.instance}.role() +
+                                                      "), which this model lacks");
     model = yaw->model;
     model_source = o.model;
   } else {
@@ -104,133 +242,70 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
                    (model.fit.records.empty() ? std::string("simulated oven run") : model.fit.records.front()) + ")";
   }
   std::size_t extrapolated = 0;
-  compensated = mrpt_bridge::compensate_drive(model, drive, &extrapolated);
+  const Eigen::VectorXd compensated = mrpt_bridge::compensate_drive(model, drive, &extrapolated);
   if (extrapolated > 0)
     std::cerr << "driftlab nav: warning: " << extrapolated
               << " drive samples had a temperature outside the model's calibrated range (extrapolated)\n";
 
-  const auto noise = mrpt_bridge::nav_noise(device, scenario);
-  const double bias_prior = o.bias_prior_dph * kRadPerDeg / 3600.0;
-  struct Run {
-    std::string name;
-    const Eigen::VectorXd* rate;
-    NavTrack track;
-  };
-  std::vector<Run> runs{{"raw", &drive.gyro.rate_rad_s, {}}};
-  if (compensated.size() == n) runs.push_back({"compensated", &compensated, {}});
-  runs.push_back({"perfect", &drive.gyro.true_rate_rad_s, {}});
+  NavReport report;
+  report.input = mrpt_bridge::nav_input(drive);
+  report.temp_c = drive.gyro.temp_c;
+  report.reference = "true";
+  report.title = "Heading error, " + device.name + " on " + scenario_path.filename().string();
   // The intrinsic floor (DESIGN.md §1): the true rate plus only the gyro's noise (measured minus
   // the simulator's systematic rate), i.e. what a perfect temperature model would leave.
-  const Eigen::VectorXd floor_rate =
-      drive.gyro.true_rate_rad_s + (drive.gyro.rate_rad_s - drive.gyro.systematic_rate_rad_s);
-  runs.push_back({"noise_only", &floor_rate, {}});
-  for (std::size_t r = 0; r < runs.size(); ++r) {
-    const std::string label = "nav: EKF on " + runs[r].name + " rates";
-    runs[r].track = mrpt_bridge::run_nav(drive, *runs[r].rate, noise, o.fixes, bias_prior,
-                                         [&](double f) { env.progress(label, f); });
-  }
-
-  // summary.json: exactly the keys (degrees and metres; magnitudes).
-  nlohmann::ordered_json summary, heading_final, position_final, heading_rms;
-  for (const auto& run : runs) {
-    if (run.name == "noise_only") continue;  // reported in nav_info.json and on stdout
-    heading_final[run.name] = std::abs(run.track.heading_error_rad[n - 1]) * kDegPerRad;
-    position_final[run.name] = run.track.position_error_m[n - 1];
-    heading_rms[run.name] = rms(run.track.heading_error_rad) * kDegPerRad;
-  }
-  summary["heading_error_final_deg"] = heading_final;
-  summary["position_error_final_m"] = position_final;
-  summary["heading_error_rms_deg"] = heading_rms;
-  outputs.write(out / "summary.json", summary.dump(2) + "\n");
+  report.runs = {{"raw", drive.gyro.rate_rad_s, {}},
+                 {"compensated", compensated, {}},
+                 {"perfect", drive.gyro.true_rate_rad_s, {}},
+                 {"noise_only", drive.gyro.true_rate_rad_s + (drive.gyro.rate_rad_s - drive.gyro.systematic_rate_rad_s), {}}};
+  const auto noise = mrpt_bridge::nav_noise(device, scenario);
+  run_filters(report, noise, o, env);
 
   nlohmann::ordered_json info;
   info["device"] = device_path.string();
   info["scenario"] = scenario_path.string();
+  info["reference"] = "the simulated truth";
   info["duration_s"] = drive.gyro.time_s[n - 1];
   info["sample_rate_hz"] = scenario.sample_rate_hz;
   info["drive_seed"] = scenario.seed;
-  info["model"] = model_source.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(model_source);
+  info["model"] = model_source;
   info["position_fixes"] = o.fixes ? nlohmann::ordered_json(drive.fix_index.size()) : nlohmann::ordered_json(0);
   info["filter"] = "mrpt::bayes::CKalmanFilterCapable<4,2,0,3> EKF (kfEKFNaive): x, y, heading, gyro bias";
-  info["process_noise"] = {{"arw_rad_sqrt_s", noise.arw_rad_sqrt_s},
-                           {"bias_instability_rad_s", noise.bias_instability_rad_s},
-                           {"rate_random_walk_rad_s_sqrt_s", noise.rate_random_walk_rad_s_sqrt_s},
-                           {"bias_correlation_time_s", noise.bias_correlation_time_s},
-                           {"odometry_speed_sigma_mps", noise.speed_sigma_mps},
-                           {"fix_sigma_m", noise.fix_sigma_m}};
+  info["process_noise"] = process_noise_json(noise);
   info["bias_prior_sigma_dph"] = o.bias_prior_dph;
-  for (const auto& run : runs)
-    info["heading_error_max_abs_deg"][run.name] = run.track.heading_error_rad.cwiseAbs().maxCoeff() * kDegPerRad;
-  const auto& floor_track = runs.back().track;
+  const auto& floor_track = report.runs.back().track;
   info["noise_only"] = {
       {"what", "true rate + the gyro's noise only (measured - simulated systematic rate): the intrinsic floor"},
       {"heading_error_final_deg", std::abs(floor_track.heading_error_rad[n - 1]) * kDegPerRad},
       {"position_error_final_m", floor_track.position_error_m[n - 1]},
       {"heading_error_rms_deg", rms(floor_track.heading_error_rad) * kDegPerRad}};
-  if (heading_final.contains("compensated") && heading_final["compensated"].get<double>() > 0)
-    info["heading_error_final_raw_over_compensated"] =
-        heading_final["raw"].get<double>() / heading_final["compensated"].get<double>();
-  info["outputs"] = {{"summary.json", "final heading error (deg), final position error (m), heading error RMS (deg)"},
-                     {"trajectory.csv", "t_s, truth and each run's x_m, y_m, heading_deg, every --every s"},
-                     {"errors.csv", "t_s, temp_c, per run: heading error (deg, estimate - truth, accumulated: not wrapped), its EKF sigma (deg), position error (m), bias estimate (deg/h)"},
-                     {"drive.rawlog", "the drive: CObservationIMU (raw IMU_WZ rad/s, IMU_TEMPERATURE degC) with odometry actions"},
-                     {"nav.svg", "heading and position error over time"}};
-  outputs.write(out / "nav_info.json", info.dump(2) + "\n");
+  if (!o.no_rawlog)
+    info["outputs"]["drive.rawlog"] =
+        "the drive for `nav --rawlog`: CObservationIMU (raw IMU_WZ rad/s, IMU_TEMPERATURE degC) with "
+        "CActionRobotMovement2D odometry whose pose increments are the true motion (the reference) and whose "
+        "velocity is the noisy odometry speed the EKF uses";
+  write_report(report, info, outputs, out, o.every_s);
 
-  // trajectory.csv and errors.csv, decimated to --every seconds.
-  const auto step = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::llround(o.every_s * scenario.sample_rate_hz)));
-  const auto idx = decimation(n, step);
-  std::vector<CsvColumn> traj{{"t_s", pick(drive.gyro.time_s, idx), "s"},
-                              {"true_x_m", pick(drive.x_m, idx), "1"},
-                              {"true_y_m", pick(drive.y_m, idx), "1"},
-                              {"true_heading_deg", pick(drive.heading_rad, idx, kDegPerRad), "1"}};
-  std::vector<CsvColumn> errs{{"t_s", pick(drive.gyro.time_s, idx), "s"},
-                              {"temp_c", pick(drive.gyro.temp_c, idx), "1"}};
-  for (const auto& run : runs) {
-    traj.push_back({run.name + "_x_m", pick(run.track.x_m, idx), "1"});
-    traj.push_back({run.name + "_y_m", pick(run.track.y_m, idx), "1"});
-    traj.push_back({run.name + "_heading_deg", pick(run.track.heading_rad, idx, kDegPerRad), "1"});
-    errs.push_back({run.name + "_heading_error_deg", pick(run.track.heading_error_rad, idx, kDegPerRad), "1"});
-    errs.push_back({run.name + "_heading_sigma_deg", pick(run.track.heading_sigma_rad, idx, kDegPerRad), "1"});
-    errs.push_back({run.name + "_position_error_m", pick(run.track.position_error_m, idx), "1"});
-    errs.push_back({run.name + "_bias_dph", pick(run.track.bias_rad_s, idx, kDegPerRad * 3600.0), "1"});
-  }
-  outputs.write_csv(out / "trajectory.csv", traj);
-  outputs.write_csv(out / "errors.csv", errs);
-
-  // The plot.
-  Figure figure;
-  PlotPanel heading{"Heading error, " + device.name + " on " + scenario_path.filename().string(), "time (min)",
-                    "heading error (deg)"};
-  PlotPanel position{"Position error", "time (min)", "position error (m)"};
-  const auto minutes = as_std(pick(drive.gyro.time_s, idx, 1.0 / 60.0));
-  for (const auto& run : runs) {
-    heading.series.push_back({run.name, minutes, as_std(pick(run.track.heading_error_rad, idx, kDegPerRad))});
-    position.series.push_back({run.name, minutes, as_std(pick(run.track.position_error_m, idx))});
-  }
-  figure.panels = {heading, position};
-  try {
-    outputs.write(out / "nav.svg", render_svg(figure));
-  } catch (const PlotError& e) {  // the numbers stand without the figure
-    outputs.drop(out / "nav.svg");
-    std::cerr << "driftlab nav: warning: nav.svg not written: " << e.what() << "\n";
-  }
-
-  // The rawlog of the drive (raw rates), with odometry as action/observation pairs.
+  // The rawlog of the drive (raw rates): odometry increments in the robot frame of the previous
+  // true pose, so that composing them gives the true track back.
   if (!o.no_rawlog) {
     env.progress("nav: write drive.rawlog", 0.0);
     mrpt_bridge::ImuTable table;
     table.time_s = drive.gyro.time_s;
     table.sensor_label = "GYRO";
-    Eigen::VectorXd dx = Eigen::VectorXd::Zero(n);
-    for (Eigen::Index k = 1; k < n; ++k)
-      dx[k] = 0.5 * (drive.odometry_speed_mps[k - 1] + drive.odometry_speed_mps[k]) *
-              (drive.gyro.time_s[k] - drive.gyro.time_s[k - 1]);
+    Eigen::VectorXd dx = Eigen::VectorXd::Zero(n), dy = Eigen::VectorXd::Zero(n), dphi = Eigen::VectorXd::Zero(n);
+    for (Eigen::Index k = 1; k < n; ++k) {
+      const double ex = drive.x_m[k] - drive.x_m[k - 1], ey = drive.y_m[k] - drive.y_m[k - 1];
+      const double c = std::cos(drive.heading_rad[k - 1]), s = std::sin(drive.heading_rad[k - 1]);
+      dx[k] = c * ex + s * ey;
+      dy[k] = -s * ex + c * ey;
+      dphi[k] = mrpt_bridge::wrap_angle(drive.heading_rad[k] - drive.heading_rad[k - 1]);
+    }
     table.columns = {{"rate_rps", drive.gyro.rate_rad_s, "1"},
                      {"temp_c", drive.gyro.temp_c, "1"},
                      {"odom_dx_m", dx, "1"},
-                     {"odom_dy_m", Eigen::VectorXd::Zero(n), "1"},
-                     {"odom_dphi_rad", Eigen::VectorXd::Zero(n), "1"},
+                     {"odom_dy_m", dy, "1"},
+                     {"odom_dphi_rad", dphi, "1"},
                      {"odom_speed_mps", drive.odometry_speed_mps, "1"}};
     mrpt_bridge::export_rawlog(table, outputs.stage_path(out / "drive.rawlog"));
   }
@@ -240,19 +315,96 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
   std::cout << std::fixed << std::setprecision(3);
   std::cout << "driftlab nav: " << n << " samples, " << drive.gyro.time_s[n - 1] / 60.0 << " min, "
             << (o.fixes ? std::to_string(drive.fix_index.size()) + " position fixes" : std::string("no position fixes"))
-            << (model_source.empty() ? "" : ", model " + model_source) << "\n";
-  std::cout << "  run           heading final (deg)  heading RMS (deg)  position final (m)\n";
-  for (const auto& run : runs)
-    std::cout << "  " << std::left << std::setw(13) << run.name << std::right << std::setw(20)
-              << std::abs(run.track.heading_error_rad[n - 1]) * kDegPerRad << std::setw(19)
-              << rms(run.track.heading_error_rad) * kDegPerRad << std::setw(20) << run.track.position_error_m[n - 1]
-              << "\n";
-  if (info.contains("heading_error_final_raw_over_compensated"))
-    std::cout << "  final heading error raw / compensated: " << std::setprecision(1)
-              << info["heading_error_final_raw_over_compensated"].get<double>() << "x\n";
+            << ", model " << model_source << "; errors against the simulated truth\n";
+  print_runs(report);
   std::cout << "  written to " << out.string() << ": summary.json, nav_info.json, trajectory.csv, errors.csv, nav.svg"
-            << (o.no_rawlog ? "" : ", drive.rawlog") << (o.model.empty() && !model_source.empty() ? ", model.json" : "")
-            << "\n";
+            << (o.no_rawlog ? "" : ", drive.rawlog") << (o.model.empty() ? ", model.json" : "") << "\n";
+}
+
+// The user's record (--rawlog or --data) with odometry, against the odometry pose.
+void record_nav(const NavOptions& o, CommandEnv& env) {
+  const std::string source = o.rawlog.empty() ? o.data : o.rawlog;
+  if (o.model.empty())
+    throw ConfigError(Location{"", 0, "--model"},
+                      "nav on a record needs --model (the comparison is the raw against the compensated yaw rate)");
+  const auto imu_model = calibration::read_calibration(o.model);
+  const imu::ChannelId yaw_id{imu::Sensor::Gyro, 'z', o.instance};
+  const auto* yaw = imu_model.find(yaw_id);
+  if (!yaw)
+    throw ConfigError({o.model, 0, "channels"},
+                      "nav needs the model of the yaw gyro (" + yaw_id.role() + "), which this model lacks");
+  const fs::path out(o.out);
+  make_output_directory(out, "--out");
+  OutputSet outputs({source, o.model});
+  for (const auto* name : {"summary.json", "trajectory.csv", "errors.csv", "nav.svg", "nav_info.json"})
+    outputs.plan(out / name, name);
+
+  env.progress("nav: read record", 0.0);
+  mrpt_bridge::RawlogStats stats;
+  const auto table = o.rawlog.empty() ? mrpt_bridge::read_imu_csv(o.data)
+                                      : mrpt_bridge::import_rawlog(o.rawlog, o.sensor_label, &stats);
+  if (!table.has("temp_c"))
+    throw DataError(Location{source, 0, "temp_c"},
+                    "the record has no temperature (temp_c; in a rawlog IMU_TEMPERATURE), which the model needs");
+  auto record = mrpt_bridge::record_nav_input(table, source);
+  const Eigen::Index n = table.time_s.size();
+  const auto compensated =
+      calibration::compensate(yaw->model, table.time_s, table.values("rate_rps"), table.values("temp_c"));
+  const auto extrapolated = std::count(compensated.extrapolated.begin(), compensated.extrapolated.end(), 1);
+  if (extrapolated > 0)
+    std::cerr << "driftlab nav: warning: " << extrapolated
+              << " samples had a temperature outside the model's calibrated range (extrapolated)\n";
+
+  NavReport report;
+  report.input = std::move(record.input);
+  report.temp_c = table.values("temp_c");
+  report.reference = "odometry";
+  report.title = "Heading error against odometry, " + fs::path(source).filename().string();
+  report.runs = {{"raw", table.values("rate_rps"), {}}, {"compensated", compensated.rate_rad_s, {}}};
+  // Process noise: the yaw channel's Allan terms (0 where the model has none). Without fixes the
+  // EKF dead-reckons: the noise changes only the reported sigmas, not the track.
+  mrpt_bridge::NavNoise noise;
+  noise.arw_rad_sqrt_s = yaw->model.noise.arw_rad_sqrt_s;
+  noise.bias_instability_rad_s = yaw->model.noise.bias_instability_rad_s;
+  noise.rate_random_walk_rad_s_sqrt_s = yaw->model.noise.rate_random_walk_rad_s_sqrt_s;
+  run_filters(report, noise, o, env);
+
+  nlohmann::ordered_json info;
+  info["record"] = source;
+  if (!o.rawlog.empty()) {
+    info["sensor_label"] = table.sensor_label;
+    info["rawlog_format"] = stats.format;
+  }
+  info["reference"] =
+      "the odometry pose, composed from the record's increments (odom_dx_m, odom_dy_m, odom_dphi_rad) from (0, 0, 0) "
+      "at the first IMU sample: wheel odometry, not ground truth";
+  info["odometry_speed"] = record.speed_source;
+  info["samples"] = n;
+  info["duration_s"] = table.time_s[n - 1];
+  info["model"] = o.model;
+  info["model_channel"] = yaw_id.role();
+  info["extrapolated_samples"] = extrapolated;
+  info["position_fixes"] = 0;
+  info["filter"] = "mrpt::bayes::CKalmanFilterCapable<4,2,0,3> EKF (kfEKFNaive): x, y, heading, gyro bias";
+  info["process_noise"] = process_noise_json(noise);
+  info["bias_prior_sigma_dph"] = o.bias_prior_dph;
+  write_report(report, info, outputs, out, o.every_s);
+  outputs.commit();
+  env.progress("nav", 1.0);
+
+  std::cout << std::fixed << std::setprecision(3);
+  std::cout << "driftlab nav: " << n << " samples, " << table.time_s[n - 1] / 60.0 << " min of " << source
+            << (o.rawlog.empty() ? "" : " (sensor '" + table.sensor_label + "')") << ", model " << o.model << " ("
+            << yaw_id.role() << "); errors against the odometry pose, speed from " << record.speed_source << "\n";
+  print_runs(report);
+  std::cout << "  written to " << out.string() << ": summary.json, nav_info.json, trajectory.csv, errors.csv, nav.svg\n";
+}
+
+void nav_command(const NavOptions& o, CommandEnv& env) {
+  if (o.rawlog.empty() && o.data.empty())
+    simulated_nav(o, env);
+  else
+    record_nav(o, env);
 }
 
 }  // namespace
@@ -260,29 +412,51 @@ void nav_command(const NavOptions& o, CommandEnv& env) {
 void add_nav_command(CLI::App& app, CommandEnv& env) {
   auto o = std::make_shared<NavOptions>();
   auto* cmd = app.add_subcommand(
-      "nav", "simulate a vehicle drive and navigate it with an MRPT EKF on raw, compensated and perfect yaw rates");
-  cmd->add_option("--device", o->device, "device file, or the name of one in the devices directory")->required();
+      "nav",
+      "navigate with an MRPT EKF on raw and compensated yaw rates: a simulated vehicle drive (default; against the "
+      "truth) or your record with odometry (--rawlog / --data; against the odometry pose)");
+  auto* rawlog = cmd->add_option("--rawlog", o->rawlog,
+                                 "navigate this rawlog: CObservationIMU (IMU_WZ, IMU_TEMPERATURE) with "
+                                 "CActionRobotMovement2D odometry (actions/sensory-frame format)")
+                     ->check(CLI::ExistingFile);
+  auto* data = cmd->add_option("--data", o->data,
+                               "navigate this CSV: t_s, rate_rps or rate_dps, temp_c, odom_dx_m, odom_dy_m, "
+                               "odom_dphi_rad (increment since the previous row, robot frame) [, odom_speed_mps] "
+                               "(what `driftlab mrpt import` writes)")
+                   ->check(CLI::ExistingFile);
+  rawlog->excludes(data);
+  auto* device = cmd->add_option("--device", o->device,
+                                 "simulated drive: device file, or the name of one in the devices directory");
   cmd->add_option("--model", o->model,
-                  "calibration model JSON (driftlab calibrate); default: calibrate one on a simulated oven run of "
-                  "the device (scenario calibration_seed) and write it to DIR/model.json")
+                  "calibration model JSON (driftlab calibrate); its gyro_z of --instance compensates the yaw rate. "
+                  "Required with --rawlog/--data; for the simulated drive the default is to calibrate one on a "
+                  "simulated oven run of the device (scenario calibration_seed) and write it to DIR/model.json")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--scenario", o->scenario,
-                  "driftlab-nav-scenario/1 YAML (default: the bundled one-hour cold-start drive, cabin -10 -> +35 degC)")
-      ->check(CLI::ExistingFile);
+  cmd->add_option("--instance", o->instance, "IMU instance of the model's yaw gyro (gyro_z is 0, gyro1_z is 1)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--sensor-label", o->sensor_label, "--rawlog: IMU sensor label (needed when there are several)")
+      ->needs(rawlog);
+  auto* scenario = cmd->add_option(
+      "--scenario", o->scenario,
+      "simulated drive: driftlab-nav-scenario/1 YAML (default: the bundled one-hour cold-start drive, cabin -10 -> "
+      "+35 degC)")->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "output directory (created; files written atomically)")->required();
-  cmd->add_flag("--fixes", o->fixes, "use the scenario's absolute position fixes as EKF observations");
+  auto* fixes = cmd->add_flag("--fixes", o->fixes, "simulated drive: use the scenario's position fixes as EKF observations");
   cmd->add_option("--every", o->every_s, "spacing of trajectory.csv / errors.csv rows, s")
       ->check(finite_number(0.0, 1e12, true))
       ->capture_default_str();
   cmd->add_option("--bias-prior", o->bias_prior_dph, "prior standard deviation of the gyro bias state, deg/h")
       ->check(finite_number(0.0, 1e12, true))
       ->capture_default_str();
-  cmd->add_option("--calibration-kind", o->calibration_kind,
-                  "model nav calibrates when given no --model: poly or physical (see driftlab calibrate)")
-      ->check(CLI::IsMember({"poly", "physical"}))
-      ->capture_default_str();
-  cmd->add_flag("--no-rawlog", o->no_rawlog, "do not write DIR/drive.rawlog");
-  cmd->add_option("--devices-dir", o->devices_dir, "directory of device files");
+  auto* kind = cmd->add_option("--calibration-kind", o->calibration_kind,
+                               "simulated drive: model nav calibrates when given no --model: poly or physical")
+                   ->check(CLI::IsMember({"poly", "physical"}))
+                   ->capture_default_str();
+  auto* no_rawlog = cmd->add_flag("--no-rawlog", o->no_rawlog, "simulated drive: do not write DIR/drive.rawlog");
+  auto* devices_dir = cmd->add_option("--devices-dir", o->devices_dir, "directory of device files");
+  for (auto* record : {rawlog, data})
+    for (auto* simulated_only : {device, scenario, fixes, kind, no_rawlog, devices_dir}) record->excludes(simulated_only);
   cmd->callback([o, &env] { nav_command(*o, env); });
 }
 

@@ -4,12 +4,14 @@
 
 #include <cmath>
 
+#include "framework/units.hpp"
+
 namespace driftlab::mrpt_bridge {
 
 double wrap_angle(double rad) {
-  constexpr double two_pi = 2.0 * 3.14159265358979323846;
+  constexpr double two_pi = 2.0 * kPi;
   double r = std::remainder(rad, two_pi);  // [-pi, pi]
-  if (r <= -3.14159265358979323846) r += two_pi;
+  if (r <= -kPi) r += two_pi;
   return r;
 }
 

@@ -127,17 +127,32 @@ NavNoise nav_noise(const devices::DeviceDefinition& device, const NavScenario& s
   return noise;
 }
 
-NavTrack run_nav(const DriveRecord& drive, const Eigen::VectorXd& rate, const NavNoise& noise, bool use_fixes,
+NavInput nav_input(const DriveRecord& drive) {
+  NavInput input;
+  input.time_s = drive.gyro.time_s;
+  const Eigen::Index n = input.time_s.size();
+  input.step_speed_mps = Eigen::VectorXd::Zero(n);
+  for (Eigen::Index k = 1; k < n; ++k)
+    input.step_speed_mps[k] = 0.5 * (drive.odometry_speed_mps[k - 1] + drive.odometry_speed_mps[k]);
+  input.x_m = drive.x_m;
+  input.y_m = drive.y_m;
+  input.heading_rad = drive.heading_rad;
+  input.fix_index = drive.fix_index;
+  input.fix_m = drive.fix_m;
+  return input;
+}
+
+NavTrack run_nav(const NavInput& input, const Eigen::VectorXd& rate, const NavNoise& noise, bool use_fixes,
                  double bias_prior_sigma_rad_s, const std::function<void(double)>& progress) {
-  const auto& t = drive.gyro.time_s;
+  const auto& t = input.time_s;
   const Eigen::Index n = t.size();
   if (rate.size() != n)
     throw DataError(Location{"", 0, "rate"}, "the yaw rate has " + std::to_string(rate.size()) +
-                                                 " samples, the drive " + std::to_string(n));
+                                                 " samples, the record " + std::to_string(n));
   NavState start;
-  start.heading_rad = drive.heading_rad[0];
-  start.x_m = drive.x_m[0];
-  start.y_m = drive.y_m[0];
+  start.heading_rad = input.heading_rad[0];
+  start.x_m = input.x_m[0];
+  start.y_m = input.y_m[0];
   start.covariance(3, 3) = bias_prior_sigma_rad_s * bias_prior_sigma_rad_s;
   NavEkf ekf(noise, start);
 
@@ -155,10 +170,10 @@ NavTrack run_nav(const DriveRecord& drive, const Eigen::VectorXd& rate, const Na
     track.bias_sigma_rad_s[k] = std::sqrt(s.covariance(3, 3));
     // Accumulated (unwrapped) error: each step adds the wrapped change, so an error that grows past
     // 180 degrees keeps growing instead of folding back.
-    const double wrapped = wrap_angle(s.heading_rad - drive.heading_rad[k]);
+    const double wrapped = wrap_angle(s.heading_rad - input.heading_rad[k]);
     track.heading_error_rad[k] =
         k == 0 ? wrapped : track.heading_error_rad[k - 1] + wrap_angle(wrapped - track.heading_error_rad[k - 1]);
-    track.position_error_m[k] = std::hypot(s.x_m - drive.x_m[k], s.y_m - drive.y_m[k]);
+    track.position_error_m[k] = std::hypot(s.x_m - input.x_m[k], s.y_m - input.y_m[k]);
   };
   record(0);
   std::size_t next_fix = 0;
@@ -166,9 +181,8 @@ NavTrack run_nav(const DriveRecord& drive, const Eigen::VectorXd& rate, const Na
   for (Eigen::Index k = 1; k < n; ++k) {
     const double dt = t[k] - t[k - 1];
     std::optional<Eigen::Vector2d> fix;
-    if (use_fixes && next_fix < drive.fix_index.size() && drive.fix_index[next_fix] == k) fix = drive.fix_m[next_fix++];
-    ekf.step(dt, 0.5 * (rate[k - 1] + rate[k]), 0.5 * (drive.odometry_speed_mps[k - 1] + drive.odometry_speed_mps[k]),
-             fix);
+    if (use_fixes && next_fix < input.fix_index.size() && input.fix_index[next_fix] == k) fix = input.fix_m[next_fix++];
+    ekf.step(dt, 0.5 * (rate[k - 1] + rate[k]), input.step_speed_mps[k], fix);
     record(k);
     if (progress && k % report_every == 0) progress(static_cast<double>(k) / static_cast<double>(n));
   }

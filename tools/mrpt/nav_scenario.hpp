@@ -65,17 +65,29 @@ DriveRecord simulate_drive(const devices::DeviceDefinition& device, const NavSce
 // Process noise from the device's noise terms and the scenario's odometry and fix noise.
 NavNoise nav_noise(const devices::DeviceDefinition& device, const NavScenario& scenario);
 
+// What the EKF runs over and what its errors are measured against: the simulated drive
+// (nav_input below) or a user's record (nav_record.hpp).
+struct NavInput {
+  Eigen::VectorXd time_s;                 // s, increasing
+  Eigen::VectorXd step_speed_mps;         // [k]: forward speed over (t[k-1], t[k]], m/s ([0] unused)
+  Eigen::VectorXd x_m, y_m, heading_rad;  // the reference pose per sample (m, m, rad)
+  std::vector<Eigen::Index> fix_index;    // samples with a position fix
+  std::vector<Eigen::Vector2d> fix_m;     // the fixes, m
+};
+// The simulated drive: the truth as reference, the mean of consecutive odometry speeds per step.
+NavInput nav_input(const DriveRecord& drive);
+
 struct NavTrack {
   Eigen::VectorXd x_m, y_m, heading_rad, bias_rad_s, heading_sigma_rad, bias_sigma_rad_s;
-  // estimate - truth; the heading error accumulated (unwrapped: a drift past 180 degrees keeps
+  // estimate - reference; the heading error accumulated (unwrapped: a drift past 180 degrees keeps
   // counting), the position error as a distance
   Eigen::VectorXd heading_error_rad, position_error_m;
 };
-// Runs the EKF over the drive with the given yaw rate (rad/s, one per sample); each step uses the
-// mean of two consecutive samples (rate and odometry speed). Starts at the true pose with bias 0
-// and prior bias standard deviation `bias_prior_sigma_rad_s`. `progress(fraction)` is optional.
-NavTrack run_nav(const DriveRecord& drive, const Eigen::VectorXd& rate_rad_s, const NavNoise& noise,
-                 bool use_fixes, double bias_prior_sigma_rad_s,
-                 const std::function<void(double)>& progress = {});
+// Runs the EKF over the input with the given yaw rate (rad/s, one per sample); step k uses the
+// mean of samples k-1 and k of the rate and step_speed_mps[k]. Starts at the reference pose with
+// bias 0 and prior bias standard deviation `bias_prior_sigma_rad_s`. `progress(fraction)` is
+// optional. DataError when the rate's length differs from the input's.
+NavTrack run_nav(const NavInput& input, const Eigen::VectorXd& rate_rad_s, const NavNoise& noise, bool use_fixes,
+                 double bias_prior_sigma_rad_s, const std::function<void(double)>& progress = {});
 
 }  // namespace driftlab::mrpt_bridge

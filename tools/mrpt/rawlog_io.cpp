@@ -251,47 +251,47 @@ std::string choose_label(const fs::path& path, const std::vector<std::string>& l
 const std::vector<ImuColumn>& imu_columns() {
   using namespace mrpt::obs;
   static const std::vector<ImuColumn> columns{
-      {IMU_WZ, "rate_rps", "rad/s", "yaw rate about the sensor z axis (IMU_WZ), rad/s"},
-      {IMU_TEMPERATURE, "temp_c", "degC", "sensor temperature (IMU_TEMPERATURE), degC"},
-      {IMU_WX, "wx_rps", "rad/s", "roll rate (IMU_WX), rad/s"},
-      {IMU_WY, "wy_rps", "rad/s", "pitch rate (IMU_WY), rad/s"},
-      {IMU_X_ACC, "acc_x_mps2", "1", "acceleration x (IMU_X_ACC), m/s^2"},
-      {IMU_Y_ACC, "acc_y_mps2", "1", "acceleration y (IMU_Y_ACC), m/s^2"},
-      {IMU_Z_ACC, "acc_z_mps2", "1", "acceleration z (IMU_Z_ACC), m/s^2"},
-      {IMU_X_VEL, "vel_x_mps", "1", "velocity x (IMU_X_VEL), m/s"},
-      {IMU_Y_VEL, "vel_y_mps", "1", "velocity y (IMU_Y_VEL), m/s"},
-      {IMU_Z_VEL, "vel_z_mps", "1", "velocity z (IMU_Z_VEL), m/s"},
-      {IMU_YAW, "yaw_rad", "1", "yaw (IMU_YAW), rad"},
-      {IMU_PITCH, "pitch_rad", "1", "pitch (IMU_PITCH), rad"},
-      {IMU_ROLL, "roll_rad", "1", "roll (IMU_ROLL), rad"},
-      {IMU_X, "pos_x_m", "1", "position x (IMU_X), m"},
-      {IMU_Y, "pos_y_m", "1", "position y (IMU_Y), m"},
-      {IMU_Z, "pos_z_m", "1", "position z (IMU_Z), m"},
-      {IMU_MAG_X, "mag_x_gauss", "1", "magnetic field x (IMU_MAG_X), gauss"},
-      {IMU_MAG_Y, "mag_y_gauss", "1", "magnetic field y (IMU_MAG_Y), gauss"},
-      {IMU_MAG_Z, "mag_z_gauss", "1", "magnetic field z (IMU_MAG_Z), gauss"},
-      {IMU_PRESSURE, "pressure_pa", "1", "air pressure (IMU_PRESSURE), Pa"},
-      {IMU_ALTITUDE, "altitude_m", "1", "altitude (IMU_ALTITUDE), m"},
-      {IMU_ORI_QUAT_X, "quat_x", "1", "orientation quaternion x (IMU_ORI_QUAT_X)"},
-      {IMU_ORI_QUAT_Y, "quat_y", "1", "orientation quaternion y (IMU_ORI_QUAT_Y)"},
-      {IMU_ORI_QUAT_Z, "quat_z", "1", "orientation quaternion z (IMU_ORI_QUAT_Z)"},
-      {IMU_ORI_QUAT_W, "quat_w", "1", "orientation quaternion w (IMU_ORI_QUAT_W)"},
-      {IMU_YAW_VEL_GLOBAL, "wz_global_rps", "rad/s", "global yaw rate (IMU_YAW_VEL_GLOBAL), rad/s"},
-      {IMU_PITCH_VEL_GLOBAL, "wy_global_rps", "rad/s", "global pitch rate (IMU_PITCH_VEL_GLOBAL), rad/s"},
-      {IMU_ROLL_VEL_GLOBAL, "wx_global_rps", "rad/s", "global roll rate (IMU_ROLL_VEL_GLOBAL), rad/s"},
-      {IMU_X_ACC_GLOBAL, "acc_x_global_mps2", "1", "global acceleration x (IMU_X_ACC_GLOBAL), m/s^2"},
-      {IMU_Y_ACC_GLOBAL, "acc_y_global_mps2", "1", "global acceleration y (IMU_Y_ACC_GLOBAL), m/s^2"},
-      {IMU_Z_ACC_GLOBAL, "acc_z_global_mps2", "1", "global acceleration z (IMU_Z_ACC_GLOBAL), m/s^2"},
+      {IMU_WZ, "IMU_WZ", "rate_rps", "rad/s", "yaw rate about the sensor z axis (IMU_WZ), rad/s"},
+      {IMU_TEMPERATURE, "IMU_TEMPERATURE", "temp_c", "degC", "sensor temperature (IMU_TEMPERATURE), degC"},
+      {IMU_WX, "IMU_WX", "wx_rps", "rad/s", "roll rate (IMU_WX), rad/s"},
+      {IMU_WY, "IMU_WY", "wy_rps", "rad/s", "pitch rate (IMU_WY), rad/s"},
+      {IMU_X_ACC, "IMU_X_ACC", "acc_x_mps2", "1", "acceleration x (IMU_X_ACC), m/s^2"},
+      {IMU_Y_ACC, "IMU_Y_ACC", "acc_y_mps2", "1", "acceleration y (IMU_Y_ACC), m/s^2"},
+      {IMU_Z_ACC, "IMU_Z_ACC", "acc_z_mps2", "1", "acceleration z (IMU_Z_ACC), m/s^2"},
+      {IMU_X_VEL, "IMU_X_VEL", "vel_x_mps", "1", "velocity x (IMU_X_VEL), m/s"},
+      {IMU_Y_VEL, "IMU_Y_VEL", "vel_y_mps", "1", "velocity y (IMU_Y_VEL), m/s"},
+      {IMU_Z_VEL, "IMU_Z_VEL", "vel_z_mps", "1", "velocity z (IMU_Z_VEL), m/s"},
+      {IMU_YAW, "IMU_YAW", "yaw_rad", "1", "yaw (IMU_YAW), rad"},
+      {IMU_PITCH, "IMU_PITCH", "pitch_rad", "1", "pitch (IMU_PITCH), rad"},
+      {IMU_ROLL, "IMU_ROLL", "roll_rad", "1", "roll (IMU_ROLL), rad"},
+      {IMU_X, "IMU_X", "pos_x_m", "1", "position x (IMU_X), m"},
+      {IMU_Y, "IMU_Y", "pos_y_m", "1", "position y (IMU_Y), m"},
+      {IMU_Z, "IMU_Z", "pos_z_m", "1", "position z (IMU_Z), m"},
+      {IMU_MAG_X, "IMU_MAG_X", "mag_x_gauss", "1", "magnetic field x (IMU_MAG_X), gauss"},
+      {IMU_MAG_Y, "IMU_MAG_Y", "mag_y_gauss", "1", "magnetic field y (IMU_MAG_Y), gauss"},
+      {IMU_MAG_Z, "IMU_MAG_Z", "mag_z_gauss", "1", "magnetic field z (IMU_MAG_Z), gauss"},
+      {IMU_PRESSURE, "IMU_PRESSURE", "pressure_pa", "1", "air pressure (IMU_PRESSURE), Pa"},
+      {IMU_ALTITUDE, "IMU_ALTITUDE", "altitude_m", "1", "altitude (IMU_ALTITUDE), m"},
+      {IMU_ORI_QUAT_X, "IMU_ORI_QUAT_X", "quat_x", "1", "orientation quaternion x (IMU_ORI_QUAT_X)"},
+      {IMU_ORI_QUAT_Y, "IMU_ORI_QUAT_Y", "quat_y", "1", "orientation quaternion y (IMU_ORI_QUAT_Y)"},
+      {IMU_ORI_QUAT_Z, "IMU_ORI_QUAT_Z", "quat_z", "1", "orientation quaternion z (IMU_ORI_QUAT_Z)"},
+      {IMU_ORI_QUAT_W, "IMU_ORI_QUAT_W", "quat_w", "1", "orientation quaternion w (IMU_ORI_QUAT_W)"},
+      {IMU_YAW_VEL_GLOBAL, "IMU_YAW_VEL_GLOBAL", "wz_global_rps", "rad/s", "global yaw rate (IMU_YAW_VEL_GLOBAL), rad/s"},
+      {IMU_PITCH_VEL_GLOBAL, "IMU_PITCH_VEL_GLOBAL", "wy_global_rps", "rad/s", "global pitch rate (IMU_PITCH_VEL_GLOBAL), rad/s"},
+      {IMU_ROLL_VEL_GLOBAL, "IMU_ROLL_VEL_GLOBAL", "wx_global_rps", "rad/s", "global roll rate (IMU_ROLL_VEL_GLOBAL), rad/s"},
+      {IMU_X_ACC_GLOBAL, "IMU_X_ACC_GLOBAL", "acc_x_global_mps2", "1", "global acceleration x (IMU_X_ACC_GLOBAL), m/s^2"},
+      {IMU_Y_ACC_GLOBAL, "IMU_Y_ACC_GLOBAL", "acc_y_global_mps2", "1", "global acceleration y (IMU_Y_ACC_GLOBAL), m/s^2"},
+      {IMU_Z_ACC_GLOBAL, "IMU_Z_ACC_GLOBAL", "acc_z_global_mps2", "1", "global acceleration z (IMU_Z_ACC_GLOBAL), m/s^2"},
   };
   return columns;
 }
 
 const std::vector<ImuColumn>& odometry_columns() {
   static const std::vector<ImuColumn> columns{
-      {-1, "odom_dx_m", "1", "odometry increment since the previous IMU sample, robot frame x, m"},
-      {-1, "odom_dy_m", "1", "odometry increment, robot frame y, m"},
-      {-1, "odom_dphi_rad", "1", "odometry heading increment, rad"},
-      {-1, "odom_speed_mps", "1", "odometry forward speed (velocityLocal.vx), m/s"},
+      {-1, "", "odom_dx_m", "1", "odometry increment since the previous IMU sample, robot frame x, m"},
+      {-1, "", "odom_dy_m", "1", "odometry increment, robot frame y, m"},
+      {-1, "", "odom_dphi_rad", "1", "odometry heading increment, rad"},
+      {-1, "", "odom_speed_mps", "1", "odometry forward speed (velocityLocal.vx), m/s"},
   };
   return columns;
 }
@@ -505,31 +505,66 @@ RawlogStats rawlog_stats(const fs::path& path) {
   return walker.stats;
 }
 
-CompensateStats compensate_rawlog(const fs::path& in, const fs::path& out, const RateCorrector& corrector,
-                                  const std::string& sensor_label) {
+int imu_field(imu::Sensor sensor, char axis) {
+  using namespace mrpt::obs;
+  const bool gyro = sensor == imu::Sensor::Gyro;
+  switch (axis) {
+    case 'x': return gyro ? IMU_WX : IMU_X_ACC;
+    case 'y': return gyro ? IMU_WY : IMU_Y_ACC;
+    case 'z': return gyro ? IMU_WZ : IMU_Z_ACC;
+    default: throw ConfigError(Location{"", 0, "axis"}, std::string("no CObservationIMU field for axis '") + axis + "'");
+  }
+}
+
+std::string imu_field_name(int field) {
+  for (const auto& c : imu_columns())
+    if (c.field == field) return c.field_name;
+  return std::to_string(field);
+}
+
+CompensateStats compensate_rawlog(const fs::path& in, const fs::path& out,
+                                  const std::vector<FieldCorrection>& corrections, const std::string& sensor_label) {
   ensure_not_an_input(out, {in});
+  if (corrections.empty()) throw ConfigError(Location{in.string(), 0, ""}, "nothing to compensate: no field correction given");
+  std::set<int> corrected;
+  for (const auto& c : corrections)
+    if (!corrected.insert(c.field).second)
+      throw ConfigError(Location{in.string(), 0, ""}, imu_field_name(c.field) + " is corrected twice");
   const RawlogStats stats = rawlog_stats(in);
   const std::string label = choose_label(in, stats.imu_labels, sensor_label);
 
   CompensateStats result;
+  result.sensor_label = label;
+  for (const auto& c : corrections) result.fields.push_back({c.field, c.source, 0.0});
+  std::set<int> passed;
   std::optional<std::int64_t> t0;
   auto fix = [&](const mrpt::obs::CObservation::Ptr& obs, std::size_t k, int j) {
     auto imu = std::dynamic_pointer_cast<CObservationIMU>(obs);
     if (!imu) return;
     ++result.imu_observations;
     if (imu->sensorLabel != label) return;
-    if (!imu->has(mrpt::obs::IMU_WZ))
-      throw data_error(in, index_text(k, j) + "IMU observation '" + label + "' has no yaw rate (IMU_WZ)");
+    for (const auto& c : corrections)
+      if (!imu->has(static_cast<mrpt::obs::TIMUDataIndex>(c.field)))
+        throw data_error(in, index_text(k, j) + "IMU observation '" + label + "' has no " + imu_field_name(c.field) +
+                                 ", which " + c.source + " corrects");
     if (!imu->has(mrpt::obs::IMU_TEMPERATURE))
       throw data_error(in, index_text(k, j) + "IMU observation '" + label +
                                "' has no temperature (IMU_TEMPERATURE), which the calibration model needs");
     const auto ticks = ticks_of(imu->timestamp);
     if (!t0) t0 = ticks;
     const double t = static_cast<double>(ticks - *t0) / kTicksPerSecond;
-    const double measured = imu->get(mrpt::obs::IMU_WZ);
-    const double compensated = corrector(t, measured, imu->get(mrpt::obs::IMU_TEMPERATURE));
-    imu->set(mrpt::obs::IMU_WZ, compensated);
-    result.max_abs_correction_rad_s = std::max(result.max_abs_correction_rad_s, std::abs(measured - compensated));
+    const double temp = imu->get(mrpt::obs::IMU_TEMPERATURE);
+    for (std::size_t i = 0; i < corrections.size(); ++i) {
+      const auto field = static_cast<mrpt::obs::TIMUDataIndex>(corrections[i].field);
+      const double measured = imu->get(field);
+      const double value = corrections[i].correct(t, measured, temp);
+      imu->set(field, value);
+      auto& worst = result.fields[i].max_abs_correction;
+      worst = std::max(worst, std::abs(measured - value));
+    }
+    for (const auto& col : imu_columns())
+      if (!corrected.count(col.field) && imu->has(static_cast<mrpt::obs::TIMUDataIndex>(col.field)))
+        passed.insert(col.field);
     ++result.compensated;
   };
 
@@ -546,6 +581,8 @@ CompensateStats compensate_rawlog(const fs::path& in, const fs::path& out, const
     writer.write(*object);
   }
   result.objects = reader.count();
+  for (const auto& col : imu_columns())
+    if (passed.count(col.field)) result.passed_through.push_back(col.field);
   writer.commit();
   return result;
 }

@@ -1,5 +1,5 @@
 // MRPT rawlog I/O for the MRPT bridge (issue 14): IMU observations <-> the CSV contract, and the
-// compensation of the IMU rate of an existing rawlog. MRPT is used only here (tools/mrpt).
+// compensation of the IMU rates and accelerations of an existing rawlog (issue 20). MRPT is used only here (tools/mrpt).
 //
 // Rawlog formats (both read; https://docs.mrpt.org/reference/latest/rawlog_format.html):
 //   - actions/sensory-frame: CActionCollection, CSensoryFrame, CActionCollection, ...
@@ -27,13 +27,15 @@
 #include <vector>
 
 #include "framework/csv.hpp"
+#include "framework/imu.hpp"
 
 namespace driftlab::mrpt_bridge {
 
 // One CSV column of an IMU record and the CObservationIMU field (TIMUDataIndex) it carries;
-// field < 0 for the odometry columns.
+// field < 0 (and an empty field_name) for the odometry columns.
 struct ImuColumn {
   int field;
+  std::string field_name;  // MRPT's name of the field ("IMU_WX")
   std::string column;  // CSV name, unit suffix included
   std::string unit;    // unit the CSV value is in ("rad/s", "degC", or "1" for SI values)
   std::string doc;
@@ -90,18 +92,44 @@ void export_rawlog(const ImuTable& table, const std::filesystem::path& path);
 // Counts of a rawlog (reads the whole file; DataError as import_rawlog).
 RawlogStats rawlog_stats(const std::filesystem::path& path);
 
-// Rate correction applied by compensate_rawlog: (t since the first selected IMU observation, s;
-// measured IMU_WZ, rad/s; IMU_TEMPERATURE, degC) -> compensated IMU_WZ, rad/s.
-using RateCorrector = std::function<double(double t_s, double rate_rad_s, double temp_c)>;
+// The CObservationIMU field (TIMUDataIndex) holding a sensor-frame gyro or accelerometer axis:
+// gyro x, y, z -> IMU_WX, IMU_WY, IMU_WZ (rad/s); accel x, y, z -> IMU_X_ACC, IMU_Y_ACC, IMU_Z_ACC
+// (m/s^2). Instances are not a field: one CObservationIMU sensor label is one IMU instance.
+int imu_field(imu::Sensor sensor, char axis);
+// MRPT's name of a field ("IMU_WX"), or its number for a field imu_columns() does not list.
+std::string imu_field_name(int field);
 
+// One field's correction, applied by compensate_rawlog sample by sample in file order:
+// (t since the first selected IMU observation, s; the measured field in its SI unit, rad/s for a
+// rate, m/s^2 for an acceleration; IMU_TEMPERATURE, degC) -> the corrected field, same unit.
+// Each correction is called once per observation, so it may keep state (a causal model).
+using FieldCorrector = std::function<double(double t_s, double value, double temp_c)>;
+struct FieldCorrection {
+  int field;           // TIMUDataIndex (imu_field())
+  std::string source;  // what corrects it, named in errors and stats ("gyro_x")
+  FieldCorrector correct;
+};
+
+struct FieldStats {
+  int field = 0;
+  std::string source;
+  double max_abs_correction = 0.0;  // largest |measured - corrected|, the field's SI unit
+};
 struct CompensateStats {
   std::size_t objects = 0, imu_observations = 0, compensated = 0;
-  double max_abs_correction_rad_s = 0.0;
+  std::string sensor_label;          // of the compensated observations
+  std::vector<FieldStats> fields;    // one per correction, in the order given
+  std::vector<int> passed_through;   // fields the compensated observations carry that no correction
+                                     // touches (copied unchanged), imu_columns() order
 };
-// Copies `in` to `out` object by object, in order, replacing IMU_WZ of every IMU observation of
-// `sensor_label` (or the only IMU label) by corrector(...); nothing else changes. Observations need
-// IMU_TEMPERATURE (DataError naming the object otherwise). `out` is written atomically.
+// Copies `in` to `out` object by object, in order, replacing in every IMU observation of
+// `sensor_label` (or of the only IMU label) each corrected field by its correction; nothing else
+// changes. Errors (nothing is written): ConfigError for no correction, a field corrected twice, or
+// `out` naming `in`; DataError naming the file, the object index and the field for an observation
+// lacking a corrected field or IMU_TEMPERATURE (has() is checked before every get()). `out` is
+// written atomically.
 CompensateStats compensate_rawlog(const std::filesystem::path& in, const std::filesystem::path& out,
-                                  const RateCorrector& corrector, const std::string& sensor_label = "");
+                                  const std::vector<FieldCorrection>& corrections,
+                                  const std::string& sensor_label = "");
 
 }  // namespace driftlab::mrpt_bridge
