@@ -8,6 +8,7 @@
 #include "devices/device_file.hpp"
 #include "framework/units.hpp"
 #include "models/allan/confidence.hpp"
+#include "tests/devices/simulation_fixtures.hpp"
 
 namespace driftlab::devices {
 namespace {
@@ -16,19 +17,8 @@ const std::string kImu3 = std::string(DRIFTLAB_SOURCE_DIR) + "/devices/imu3.yaml
 
 ImuDefinition imu3() { return *load_device_file(kImu3).imu; }
 
-SimulationProfile static_at(double temp_c) {
-  SimulationProfile p;
-  p.chamber_c = Profile(temp_c);
-  return p;
-}
-
-SimulationOptions options(double fs, double duration, std::uint64_t seed) {
-  SimulationOptions o;
-  o.sample_rate_hz = fs;
-  o.duration_s = duration;
-  o.seed = seed;
-  return o;
-}
+using testing::options;
+using testing::static_at;
 
 const ImuAxisRecord& axis_of(const ImuInstanceRecord& r, bool gyro, std::size_t a) {
   return gyro ? r.gyro[a] : r.accel[a];

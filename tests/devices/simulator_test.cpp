@@ -9,6 +9,7 @@
 
 #include "framework/units.hpp"
 #include "models/allan/deviation.hpp"
+#include "tests/devices/simulation_fixtures.hpp"
 
 namespace driftlab::devices {
 namespace {
@@ -17,19 +18,8 @@ constexpr double kDph = kRadPerSecPerDph;  // rad/s per deg/h
 
 DeviceDefinition fmvmg() { return load_device_file(std::string(DRIFTLAB_SOURCE_DIR) + "/devices/fmvmg.yaml"); }
 
-SimulationProfile static_at(double temp_c) {
-  SimulationProfile p;
-  p.chamber_c = Profile(temp_c);
-  return p;
-}
-
-SimulationOptions options(double fs, double duration, std::uint64_t seed) {
-  SimulationOptions o;
-  o.sample_rate_hz = fs;
-  if (duration > 0.0) o.duration_s = duration;
-  o.seed = seed;
-  return o;
-}
+using testing::options;
+using testing::static_at;
 
 std::vector<allan::Deviation> oadev(const Eigen::VectorXd& rate, double fs, std::vector<std::size_t> factors = {}) {
   const Eigen::VectorXd angle = allan::angle_from_rate(rate, 1.0 / fs);

@@ -77,9 +77,9 @@ void raw_cells(std::string_view line, std::vector<std::string_view>& cells) {
   }
 }
 
-void number(double v, const Unit& u, std::string& out) {
+void append_number(double v, std::string& out) {
   char buf[32];
-  const auto res = std::to_chars(buf, buf + sizeof buf, from_internal(v, u));
+  const auto res = std::to_chars(buf, buf + sizeof buf, v);
   out.append(buf, res.ptr);
 }
 
@@ -147,23 +147,22 @@ class Engine {
     if (cells_.size() != columns_)
       throw DataError({file_, line_number, ""}, "row has " + std::to_string(cells_.size()) + " cells, the header has " +
                                                     std::to_string(columns_));
-    const double t = time_ ? value(time_->first, time_->second, line_number, "time")
+    const double t = time_ ? value(time_->first, &time_->second, line_number, "time")
                            : static_cast<double>(sample_) / options_.data.sample_rate_hz;
     ++sample_;
     replaced_.assign(cells_.size(), std::string());
     std::string tail;
     bool extrapolated = false;
     for (auto& k : corrected_) {
-      const double measured = value(k.value_index, k.value_unit, line_number, k.channel->role);
-      const double temp = value(k.temp_index, k.temp_unit, line_number, k.channel->temperature_column);
+      const double measured = value(k.value_index, &k.value_unit, line_number, k.channel->role);
+      const double temp = value(k.temp_index, &k.temp_unit, line_number, k.channel->temperature_column);
       if (k.device_index && !k.channel->device_id.empty()) {
-        const double id = value(*k.device_index, *find_unit("1"), line_number, "device_id");
-        char text[32];
-        const auto res = std::to_chars(text, text + sizeof text, id);
-        if (std::string_view(text, static_cast<std::size_t>(res.ptr - text)) != k.channel->device_id)
-          throw ConfigError({file_, line_number, "device_id"},
-                            "this record is device " + std::string(text, res.ptr) + ", the model's " + k.channel->role +
-                                " was fitted on device " + k.channel->device_id);
+        std::string id;
+        append_number(value(*k.device_index, nullptr, line_number, "device_id"), id);
+        if (id != k.channel->device_id)
+          throw ConfigError({file_, line_number, "device_id"}, "this record is device " + id + ", the model's " +
+                                                                   k.channel->role + " was fitted on device " +
+                                                                   k.channel->device_id);
       }
       double w;
       try {
@@ -177,12 +176,12 @@ class Engine {
         y = k.filter->step(w);
       }
       extrapolated = extrapolated || k.compensator.last_extrapolated();
-      number(y, k.value_unit, replaced_[k.value_index]);
+      append_number(from_internal(y, k.value_unit), replaced_[k.value_index]);
       tail += ',';
-      number(k.compensator.last_bias_rad_s() / k.value_unit.scale, *find_unit("1"), tail);
+      append_number(difference_from_internal(k.compensator.last_bias_rad_s(), k.value_unit), tail);
       if (k.kalman) {
         tail += ',';
-        number(w, k.value_unit, tail);
+        append_number(from_internal(w, k.value_unit), tail);
       }
     }
     for (std::size_t i = 0; i < cells_.size(); ++i) {
@@ -209,7 +208,8 @@ class Engine {
     std::optional<kalman::ScalarFilter> filter;
   };
 
-  double value(std::size_t index, const Unit& unit, int line_number, const std::string& field) const {
+  // The cell as a number in internal units (`unit` null: the number as written).
+  double value(std::size_t index, const Unit* unit, int line_number, const std::string& field) const {
     std::string_view text = cells_[index];
     while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
     while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
@@ -217,7 +217,7 @@ class Engine {
     if (text.empty() || !parse_csv_number(text, v))
       throw DataError({file_, line_number, field}, "expected a number, got " + quoted_excerpt(text));
     if (!std::isfinite(v)) throw DataError({file_, line_number, field}, "NaN or Inf");
-    return to_internal(v, unit);
+    return unit ? to_internal(v, *unit) : v;
   }
 
   const calibration::ImuCalibration& model_;
