@@ -187,6 +187,8 @@ nlohmann::json model_body(const CalibrationModel& m, imu::Sensor sensor) {
               {"holdout_blocks", m.fit.holdout_blocks},
               {"holdout_rms_" + u.value, m.fit.holdout_rms_rad_s},
               {"train_rms_" + u.value, m.fit.train_rms_rad_s},
+              {"holdout_design", m.fit.holdout_design},
+              {"uncompensated_rms_" + u.value, m.fit.uncompensated_rms_rad_s},
               {"heating_only", m.fit.heating_only},
               {"scale_factor_fitted", m.fit.scale_factor_fitted}};
   return j;
@@ -342,9 +344,11 @@ CalibrationModel read_model_body(const Reader& r, const nlohmann::json& j, const
     m.fit.samples = r.count_or(*f, fa, "samples");
     m.fit.bin_s = r.number_or(*f, fa, "bin_s", 0.0);
     if (r.optional(*f, "selection")) m.fit.selection = r.text(*f, fa, "selection");
+    if (r.optional(*f, "holdout_design")) m.fit.holdout_design = r.text(*f, fa, "holdout_design");
     m.fit.holdout_blocks = r.count_or(*f, fa, "holdout_blocks");
     m.fit.holdout_rms_rad_s = r.number_or(*f, fa, "holdout_rms_" + u.value, 0.0);
     m.fit.train_rms_rad_s = r.number_or(*f, fa, "train_rms_" + u.value, 0.0);
+    m.fit.uncompensated_rms_rad_s = r.number_or(*f, fa, "uncompensated_rms_" + u.value, 0.0);
     if (const auto* h = r.optional(*f, "heating_only"); h && h->is_boolean()) m.fit.heating_only = h->get<bool>();
     if (const auto* h = r.optional(*f, "scale_factor_fitted"); h && h->is_boolean()) {
       m.fit.scale_factor_fitted = h->get<bool>();

@@ -95,7 +95,9 @@ struct FitSummary {
   double bin_s = 0.0;                    // fitting rows are means over bins of this length, s
   std::string selection;                 // how order / time constants were chosen
   std::size_t holdout_blocks = 0;        // contiguous time blocks per record
-  double holdout_rms_rad_s = 0.0;        // pooled RMS of held-out bin residuals (blocked CV)
+  std::string holdout_design;            // how bins were held out: whole legs, or time blocks (and why)
+  double holdout_rms_rad_s = 0.0;        // pooled RMS of held-out bin residuals: the model's stated accuracy
+  double uncompensated_rms_rad_s = 0.0;  // RMS of the fitted bins' bias itself (what no compensation leaves)
   double train_rms_rad_s = 0.0;          // in-sample RMS of bin residuals
   bool heating_only = false;             // fitted on heating samples only (PX4 practice)
   bool scale_factor_fitted = false;      // a true-rate column was present and varied

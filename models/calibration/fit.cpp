@@ -9,6 +9,7 @@
 #include "framework/golden_section.hpp"
 #include "framework/sampling.hpp"
 #include "models/calibration/evidence.hpp"
+#include "models/calibration/oven_run.hpp"
 #include "plugins/common/holdout.hpp"
 #include "plugins/ga/ga.hpp"
 #include "plugins/polynomial/polynomial.hpp"
@@ -155,12 +156,107 @@ Design design(const std::vector<Features>& fs, const std::vector<Eigen::Index>& 
   return out;
 }
 
+// What the oven runs can determine (oven_run.hpp's limits): which history terms may be fitted at all.
+struct Determinable {
+  bool rate_and_hysteresis = false;  // span >= kMinHistorySpanK and both directions
+  double max_lag_s = 0.0;            // the longest soak (0: no lag term)
+  std::string why_not;               // what is missing, for the selection text
+};
+
+Determinable determinable(const std::vector<OvenRun>& runs) {
+  Determinable d;
+  double lo = runs.front().min_c, hi = runs.front().max_c, soak = 0.0;
+  bool heating = false, cooling = false;
+  for (const auto& r : runs) {
+    lo = std::min(lo, r.min_c);
+    hi = std::max(hi, r.max_c);
+    soak = std::max(soak, r.longest_soak_s);
+    heating = heating || r.heating();
+    cooling = cooling || r.cooling();
+  }
+  const bool span = hi - lo >= kMinHistorySpanK;
+  d.rate_and_hysteresis = span && heating && cooling;
+  d.max_lag_s = span ? soak : 0.0;
+  if (!span) d.why_not = "span below " + std::to_string(static_cast<int>(kMinHistorySpanK)) + " K: no history terms";
+  else if (!(heating && cooling)) d.why_not = "one direction: no dT/dt or hysteresis term";
+  if (span && soak < kMinSoakS) d.why_not += std::string(d.why_not.empty() ? "" : "; ") + "no soak: no lag term";
+  return d;
+}
+
+// Significance and plausibility of a fitted candidate's history terms: each coefficient beyond
+// kSignificanceSigmas standard errors, and no larger than the bias swing of the bins it explains
+// (a dT/dt term over the largest |dT/dt| of the bins; a hysteresis term over its +-1 state).
+constexpr double kSignificanceSigmas = 3.0;
+// A richer model is kept only when it lowers the held-out error of the simpler one by this fraction.
+constexpr double kTransferMargin = 0.1;
+
 double lag1_inflation(const Eigen::VectorXd& r) {
   if (r.size() < 3) return 1.0;
   const double num = r.head(r.size() - 1).dot(r.tail(r.size() - 1));
   const double den = r.squaredNorm();
   const double rho = den > 0 ? std::clamp(num / den, 0.0, 0.99) : 0.0;
   return std::sqrt((1.0 + rho) / (1.0 - rho));
+}
+
+// Pooled RMSE of each held-out group predicted by the fit on the other groups, with the model's
+// extrapolation policy applied to held-out rows whose model temperature lies outside the training
+// rows' range (as the compensator will apply it): the polynomial columns are evaluated at the
+// nearest edge (clamp), continued along their tangent there (linear) or as they are (evaluate).
+double policy_cv_rmse(const Design& dz, const Eigen::VectorXd& tm, const Eigen::VectorXd& y,
+                      const std::vector<int>& groups, double t0, Extrapolation policy) {
+  const int count = *std::max_element(groups.begin(), groups.end()) + 1;
+  double ss = 0.0;
+  for (int k = 0; k < count; ++k) {
+    std::vector<Eigen::Index> train, test;
+    for (std::size_t i = 0; i < groups.size(); ++i) (groups[i] == k ? test : train).push_back(static_cast<Eigen::Index>(i));
+    if (train.empty() || test.empty()) continue;
+    polynomial::LinearFit lf;
+    try {
+      lf = polynomial::least_squares(dz.A(train, Eigen::all), y(train));
+    } catch (const std::invalid_argument&) {
+      return std::numeric_limits<double>::infinity();
+    }
+    const double lo = tm(train).minCoeff(), hi = tm(train).maxCoeff();
+    Eigen::MatrixXd At = dz.A(test, Eigen::all);
+    if (policy != Extrapolation::Evaluate) {
+      for (Eigen::Index r = 0; r < At.rows(); ++r) {
+        const double x = tm[test[static_cast<std::size_t>(r)]];
+        if (x >= lo && x <= hi) continue;
+        const double edge = std::clamp(x, lo, hi), u = (edge - t0) / dz.scale, du = (x - edge) / dz.scale;
+        double power = 1.0;  // u^i at the edge
+        for (int i = 0; i <= dz.order; ++i) {
+          At(r, i) = power + (policy == Extrapolation::Linear && i > 0 ? i * std::pow(u, i - 1) * du : 0.0);
+          power *= u;
+        }
+      }
+    }
+    ss += (y(test) - At * lf.coefficients).squaredNorm();
+  }
+  return std::sqrt(ss / static_cast<double>(y.size()));
+}
+
+// "" when the history terms of the fit are significant and plausible, else why not.
+// Standard errors: the larger of the least-squares ones (inflated for lag-1 correlation) and the
+// delete-one-group jackknife over the held-out groups (legs or time blocks).
+std::string implausible(const Design& dz, const polynomial::LinearFit& lf, const Eigen::VectorXd& y,
+                        const Eigen::VectorXd& d_rows, const std::vector<int>& groups) {
+  const double inflate = lag1_inflation(y - dz.A * lf.coefficients);
+  const Eigen::VectorXd jackknife = polynomial::jackknife_standard_errors(dz.A, y, groups);
+  const double swing = y.maxCoeff() - y.minCoeff();
+  Eigen::Index c = dz.order + 1;
+  const auto significant = [&](Eigen::Index k) {
+    return std::abs(lf.coefficients[k]) > kSignificanceSigmas * std::max(inflate * lf.standard_errors[k], jackknife[k]);
+  };
+  if (dz.rate_term) {
+    if (!significant(c)) return "dT/dt term within 3 sigma of 0";
+    if (std::abs(lf.coefficients[c]) * d_rows.cwiseAbs().maxCoeff() > swing) return "dT/dt term larger than the bias swing";
+    ++c;
+  }
+  if (dz.hysteresis) {
+    if (!significant(c)) return "hysteresis within 3 sigma of 0";
+    if (2.0 * std::abs(lf.coefficients[c]) > swing) return "hysteresis larger than the bias swing";
+  }
+  return "";
 }
 
 }  // namespace
@@ -245,12 +341,87 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
     return fs;
   };
 
-  // ---- search -----------------------------------------------------------------------------
+  // ---- what the runs determine, and how candidates are held out ------------------------------
+  std::vector<OvenRun> runs;
+  for (std::size_t i = 0; i < records.size(); ++i) runs.push_back(analyse_oven_run(records[i].name, records[i].time_s, records[i].temp_c, o.bin_s));
+  for (const auto& f : quality_gate(runs))
+    if (f.severity == Finding::Severity::Error) throw DataError({records.front().name, 0, "temperature"}, f.message);
   const bool physical = o.kind != ModelKind::Polynomial;
-  const std::vector<double> lags = physical ? o.lag_grid_s : std::vector<double>{0.0};
-  const std::vector<double> widths = physical ? o.hysteresis_width_grid_k : std::vector<double>{0.0};
-  const std::vector<bool> rate_terms = physical ? std::vector<bool>{false, true} : std::vector<bool>{false};
-  Candidate best;
+  const Determinable can = determinable(runs);
+
+  // Two hold-out designs. Orders and history terms are searched on contiguous time blocks of each
+  // record (noise inside the range the final fit covers, so scored as evaluated). History terms
+  // are then kept only when they also lower the error on what transfers: whole runs when there
+  // are several records, else whole legs when the record has at least two legs of every
+  // direction it holds (so each fold still holds that direction), with the extrapolation policy.
+  std::vector<int> blocks, transfer;
+  try {
+    blocks = polynomial::block_labels(y.size(), o.holdout_blocks, st.group_ends);
+  } catch (const std::invalid_argument& e) {
+    throw DataError({records.front().name, 0, "t_s"}, e.what());
+  }
+  std::string holdout_design = std::to_string(o.holdout_blocks) + " contiguous time blocks per record";
+  if (records.size() >= 2) {
+    for (std::size_t i = 0, at = 0; i < records.size(); ++i)
+      for (; at < static_cast<std::size_t>(st.group_ends[i]); ++at) transfer.push_back(static_cast<int>(i));
+    holdout_design += "; history terms also on whole runs (leave-one-run-out over " + std::to_string(records.size()) +
+                      " records)";
+  } else {
+    int heating_legs = 0, cooling_legs = 0, legs = 0;
+    for (const auto& l : runs.front().legs) {
+      heating_legs += l.direction > 0;
+      cooling_legs += l.direction < 0;
+      ++legs;
+    }
+    if (legs >= 3 && heating_legs != 1 && cooling_legs != 1) {
+      const auto& r = records.front();
+      std::vector<double> bin_start(static_cast<std::size_t>(bins.front().bins), 0.0);
+      for (Eigen::Index k = r.time_s.size() - 1; k >= 0; --k)
+        bin_start[static_cast<std::size_t>(bins.front().bin_of[static_cast<std::size_t>(k)])] = r.time_s[k];
+      std::vector<int> leg_of_bin;
+      std::size_t leg = 0;
+      for (const double t : bin_start) {
+        while (leg + 1 < runs.front().legs.size() && t > runs.front().legs[leg].end_s) ++leg;
+        leg_of_bin.push_back(static_cast<int>(leg));
+      }
+      for (const auto row : st.rows) transfer.push_back(leg_of_bin[static_cast<std::size_t>(row)]);
+      holdout_design += "; history terms also on whole legs (leave-one-leg-out over " + std::to_string(legs) + " legs: " +
+                        std::to_string(heating_legs) + " heating, " + std::to_string(cooling_legs) + " cooling)";
+    } else {
+      holdout_design += " (one record with fewer than two legs of a direction: whole legs cannot be held out)";
+    }
+  }
+  const auto cv_of = [&](const std::vector<Features>& fs, const Design& dz) {
+    return policy_cv_rmse(dz, stacked(fs, &Features::tm)(st.rows), y, blocks, t0, Extrapolation::Evaluate);
+  };
+  const auto groups = blocks;
+
+  // ---- search -----------------------------------------------------------------------------
+  // Candidates whose history terms the runs cannot determine are not scored; a scored candidate
+  // with history terms is kept only when they are significant and plausible (implausible()).
+  std::vector<double> lags{0.0}, widths{0.0};
+  std::vector<bool> rate_terms{false};
+  if (physical) {
+    for (double lag : o.lag_grid_s)
+      if (lag > 0 && lag <= can.max_lag_s) lags.push_back(lag);
+    if (can.rate_and_hysteresis) {
+      for (double w : o.hysteresis_width_grid_k)
+        if (w > 0) widths.push_back(w);
+      rate_terms.push_back(true);
+    }
+  }
+  std::vector<std::string> rejected;
+  const auto admissible = [&](const std::vector<Features>& fs, const Design& dz) {
+    if (!dz.rate_term && !dz.hysteresis) return true;
+    try {
+      const auto why = implausible(dz, polynomial::least_squares(dz.A, y), y, stacked(fs, &Features::d)(st.rows), groups);
+      if (!why.empty() && std::find(rejected.begin(), rejected.end(), why) == rejected.end()) rejected.push_back(why);
+      return why.empty();
+    } catch (const std::invalid_argument&) {
+      return false;
+    }
+  };
+  Candidate best, simple;  // simple: the best polynomial without history terms
   std::size_t done = 0;
   const std::size_t total = lags.size() * widths.size();
   for (double lag : lags) {
@@ -259,12 +430,10 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
       for (bool rate_term : rate_terms) {
         for (int p = o.min_order; p <= o.max_order; ++p) {
           const Design dz = design(fs, st.rows, t0, p, rate_term, width > 0, with_sf);
-          double cv = std::numeric_limits<double>::infinity();
-          try {
-            cv = polynomial::blocked_cv_rmse(dz.A, y, o.holdout_blocks, st.group_ends);
-          } catch (const std::invalid_argument&) {
-          }
-          if (cv < best.cv) best = {lag, width, rate_term, p, cv};
+          const double cv = cv_of(fs, dz);
+          const Candidate c{lag, width, rate_term, p, cv};
+          if (lag == 0 && width == 0 && !rate_term && cv < simple.cv) simple = c;
+          if (cv < best.cv && admissible(fs, dz)) best = c;
         }
       }
       o.progress(physical ? "calibrate: physical model search" : "calibrate: polynomial order", double(++done) / total);
@@ -274,21 +443,18 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
 
   // ---- refinement of the best cell's lag and width between their grid neighbours ------------
   const auto cv_at = [&](double lag, double width) {
-    const Design d = design(features_for(lag, width), st.rows, t0, best.order, best.rate_term, width > 0, with_sf);
-    try {
-      return polynomial::blocked_cv_rmse(d.A, y, o.holdout_blocks, st.group_ends);
-    } catch (const std::invalid_argument&) {
-      return std::numeric_limits<double>::infinity();
-    }
+    const auto fs = features_for(lag, width);
+    const Design d = design(fs, st.rows, t0, best.order, best.rate_term, width > 0, with_sf);
+    return admissible(fs, d) ? cv_of(fs, d) : std::numeric_limits<double>::infinity();
   };
-  const auto refine = [&](const std::vector<double>& grid, double value, const std::function<double(double)>& cv) {
+  const auto refine = [&](const std::vector<double>& grid, double value, double upper, const std::function<double(double)>& cv) {
     if (!(value > 0) || o.refine_iterations <= 0) return value;
     std::vector<double> sorted = grid;
     std::sort(sorted.begin(), sorted.end());
     const auto at = std::find(sorted.begin(), sorted.end(), value);
     if (at == sorted.end()) return value;
     const double lo = at == sorted.begin() || *std::prev(at) <= 0 ? value / 2 : *std::prev(at);
-    const double hi = std::next(at) == sorted.end() ? value : *std::next(at);
+    const double hi = std::min(upper, std::next(at) == sorted.end() ? value : *std::next(at));
     const auto m = golden_section_minimize([&](double u) { return cv(std::exp(u)); }, std::log(lo), std::log(hi),
                                            o.refine_iterations);
     if (m.value < best.cv) {
@@ -299,9 +465,33 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
   };
   if (physical) {
     o.progress("calibrate: refining lag and hysteresis width", 0.0);
-    best.lag_s = refine(lags, best.lag_s, [&](double lag) { return cv_at(lag, best.width_k); });
-    best.width_k = refine(widths, best.width_k, [&](double width) { return cv_at(best.lag_s, width); });
+    best.lag_s = refine(lags, best.lag_s, can.max_lag_s, [&](double lag) { return cv_at(lag, best.width_k); });
+    best.width_k = refine(widths, best.width_k, INFINITY, [&](double width) { return cv_at(best.lag_s, width); });
     o.progress("calibrate: refining lag and hysteresis width", 1.0);
+  }
+  // Never worse than the simple model: history terms stay only when they transfer by the margin.
+  std::string chosen_why;
+  if ((best.lag_s > 0 || best.width_k > 0 || best.rate_term) && !(best.cv < (1.0 - kTransferMargin) * simple.cv)) {
+    chosen_why = "history terms lowered the held-out error by less than " +
+                 std::to_string(static_cast<int>(100 * kTransferMargin)) + " % (" + std::to_string(best.cv) + " vs " +
+                 std::to_string(simple.cv) + "): polynomial kept";
+    best = simple;
+  }
+
+  if (best.lag_s > 0 || best.width_k > 0 || best.rate_term) {
+    if (!transfer.empty()) {
+      const auto transfer_cv = [&](const Candidate& c) {
+        const auto fs = features_for(c.lag_s, c.width_k);
+        return policy_cv_rmse(design(fs, st.rows, t0, c.order, c.rate_term, c.width_k > 0, with_sf),
+                              stacked(fs, &Features::tm)(st.rows), y, transfer, t0, o.extrapolation);
+      };
+      const double rich = transfer_cv(best), plain = transfer_cv(simple);
+      if (!(rich < (1.0 - kTransferMargin) * plain)) {
+        chosen_why = "history terms did not transfer to held-out whole runs/legs (" + std::to_string(rich) + " vs " +
+                     std::to_string(plain) + "): polynomial kept";
+        best = simple;
+      }
+    }
   }
 
   // ---- final linear fit -------------------------------------------------------------------
@@ -320,19 +510,10 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
   m.kind = o.kind;
   m.reference_temp_c = t0;
   m.extrapolation = o.extrapolation;
-  {
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (const auto& f : fs) {
-      lo = std::min(lo, f.tm_min);
-      hi = std::max(hi, f.tm_max);
-    }
-    if (o.heating_only) {  // the range of the bins used
-      const Eigen::VectorXd tm = stacked(fs, &Features::tm)(st.rows);
-      lo = tm.minCoeff();
-      hi = tm.maxCoeff();
-    }
-    m.valid_min_c = lo;
-    m.valid_max_c = hi;
+  {  // the range the fitted bins cover
+    const Eigen::VectorXd tm = stacked(fs, &Features::tm)(st.rows);
+    m.valid_min_c = tm.minCoeff();
+    m.valid_max_c = tm.maxCoeff();
   }
   double si = 1.0;
   int c = 0;
@@ -368,12 +549,22 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
     m.fit.records.push_back(r.name);
     m.fit.samples += static_cast<std::size_t>(r.time_s.size());
   }
-  m.fit.selection = physical ? "order, lag_tau_s, dT/dt term and hysteresis width by blocked CV over orders " +
-                                   std::to_string(o.min_order) + ".." + std::to_string(o.max_order)
-                             : "order by blocked CV over " + std::to_string(o.min_order) + ".." + std::to_string(o.max_order);
+  m.fit.holdout_design = holdout_design;
+  m.fit.uncompensated_rms_rad_s = std::sqrt(y.squaredNorm() / static_cast<double>(y.size()));
+  m.fit.selection = "order " + std::string(physical ? "and history terms (lag_tau_s, dT/dt, hysteresis width) " : "") +
+                    "by held-out error over orders " + std::to_string(o.min_order) + ".." + std::to_string(o.max_order);
+  if (physical && !can.why_not.empty()) m.fit.selection += "; " + can.why_not;
+  if (!rejected.empty()) {
+    m.fit.selection += "; candidates rejected:";
+    for (const auto& r : rejected) m.fit.selection += " " + r + (&r == &rejected.back() ? "" : ",");
+  }
+  if (!chosen_why.empty()) m.fit.selection += "; " + chosen_why;
+  if (physical && !m.uses_state()) m.kind = ModelKind::Polynomial;
 
   // ---- RBF on the physical residual ----------------------------------------------------------
-  if (o.kind == ModelKind::Rbf) {
+  if (o.kind == ModelKind::Rbf && !can.rate_and_hysteresis) {
+    m.fit.selection += "; no RBF network (its inputs dT/dt and branch state need both directions and the span)";
+  } else if (o.kind == ModelKind::Rbf) {
     Eigen::MatrixXd X(y.size(), 3);
     X.col(0) = stacked(fs, &Features::tm)(st.rows).cwiseMax(m.valid_min_c).cwiseMin(m.valid_max_c);
     X.col(1) = stacked(fs, &Features::d)(st.rows);
@@ -410,7 +601,7 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
     const double max_centres = std::min<double>(40.0, static_cast<double>(split.train.size()) / 4.0);
     const auto result = ga::minimize(objective, {{0.1, 3.0, false}, {-8.0, -1.0, false}, {3.0, std::max(3.0, max_centres), true}}, gc);
     const double no_rbf = holdout::rmse(Eigen::VectorXd::Zero(rh.size()), rh);
-    if (std::isfinite(result.best_value) && result.best_value < no_rbf) {
+    if (std::isfinite(result.best_value) && result.best_value < (1.0 - kTransferMargin) * no_rbf) {
       const auto net = rbf::fit(X, residual, decode(result.best)).network;
       RbfTerm t;
       for (int k = 0; k < 3; ++k) {
@@ -424,13 +615,12 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
       t.weights_rad_s.assign(net.weights().data(), net.weights().data() + net.weights().size());
       t.bias_rad_s = net.bias();
       m.rbf = std::move(t);
+      m.kind = ModelKind::Rbf;
       m.fit.selection += "; RBF on the physical residual, GA-tuned (holdout RMSE " + std::to_string(result.best_value) +
                          " vs " + std::to_string(no_rbf) + " rad/s without it)";
     } else {
-      // Honest fallback: the network did not help on held-out bins, so the model stays physical.
-      m.rbf = RbfTerm{{0, 0, 0}, {1, 1, 1}, {}, {}, Eigen::MatrixXd::Zero(0, 3), 1.0, {}, 0.0};
-      m.fit.selection += "; RBF did not improve the held-out residual (" + std::to_string(no_rbf) +
-                         " rad/s), network left empty";
+      m.fit.selection += "; no RBF network: it did not lower the held-out residual (" + std::to_string(no_rbf) +
+                         " rad/s) by " + std::to_string(static_cast<int>(100 * kTransferMargin)) + " %";
     }
   }
   m.validate();

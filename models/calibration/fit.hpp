@@ -7,16 +7,31 @@
 // (regressor/polynomial's kernel). The model terms are linear in their coefficients, so bin means
 // of the features give the exact bin means of the fitted bias.
 //
-// Selection, on held-out contiguous time blocks of each record (blocked cross-validation):
-//   poly      order in [min_order, max_order]
-//   physical  order x lag_tau_s (lag_grid_s) x with/without dT/dt x hysteresis width
-//             (hysteresis_width_grid_k; 0 = no hysteresis term); then the best cell's lag and width
-//             (when not 0) are refined on a log scale between their grid neighbours by golden
-//             section (refine_iterations each, framework/golden_section.hpp) on the same score: the
-//             grid doubles, so without it a 400-s lag was fitted as 480 s
+// Selection: terms are kept only where they transfer (issue: calibration that holds on real IMUs).
+//   Before fitting, the oven runs are analysed (oven_run.hpp: legs, soaks, span) and the quality
+//   gate's errors (a span below kMinFitSpanK) stop the fit. A history term is only scored when the
+//   runs can determine it: lag (up to the longest soak) and dT/dt / hysteresis (span of at least
+//   kMinHistorySpanK and both directions).
+//   poly      order in [min_order, max_order] by the held-out error on contiguous time blocks of
+//             each record (holdout_blocks per record)
+//   physical  order x lag_tau_s (lag_grid_s up to the longest soak) x with/without dT/dt x
+//             hysteresis width (hysteresis_width_grid_k) on the same blocks; a candidate with a
+//             dT/dt or hysteresis term counts only when each coefficient is beyond 3 standard
+//             errors (the larger of the least-squares ones, inflated for lag-1 correlation, and
+//             the delete-one-block jackknife) and no larger than the bias swing it explains. The
+//             best cell's lag and width are refined between their grid neighbours by golden
+//             section (refine_iterations, framework/golden_section.hpp). The history terms are then
+//             kept only when they lower the block error of the best polynomial by 10 % and, where
+//             whole runs (several records) or whole legs (a record with two legs of every
+//             direction it holds) can be held out, the error on those too, scored with the
+//             extrapolation policy; otherwise the polynomial is the model and fit.selection says why
 //   rbf       the physical model, plus a Gaussian RBF network on (T_c, D, s) fitted to the physical
-//             residual; its width, ridge and number of centres are tuned by the GA (plugins/ga) on
-//             a blocked holdout (rbf::blocked_holdout), then refitted on all bins
+//             residual when the runs hold both directions; its width, ridge and number of centres
+//             are tuned by the GA (plugins/ga) on a blocked holdout, kept when it lowers that
+//             holdout's error by 10 %
+// The model's kind is what was kept (a physical fit without history terms is a poly model), its
+// valid range is the range of the fitted bins' model temperature, and fit.holdout_rms_rad_s (the
+// block error of the kept model) is its stated accuracy, fit.holdout_design how it was held out.
 // Target: rate - true_rate when a true-rate column exists; when the true rate varies (a rate
 // table, std > 1e-3 rad/s), the scale factor (1 + sum_j k_j (T - T0)^j, j = 0..2) is fitted jointly.
 // Heating only (PX4 practice): only bins whose dT/dt estimate is > 0 are used.

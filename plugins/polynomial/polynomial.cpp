@@ -82,43 +82,76 @@ std::vector<int> block_labels(Eigen::Index rows, std::size_t blocks, const std::
 double blocked_cv_rmse(const Eigen::MatrixXd& A, const Eigen::VectorXd& y, std::size_t blocks,
                        const std::vector<Eigen::Index>& group_ends) {
   check_inputs(A, y);
-  const auto label = block_labels(A.rows(), blocks, group_ends);
-  const int nb = label.empty() ? 0 : label.back() + 1;
+  return labelled_cv_rmse(A, y, block_labels(A.rows(), blocks, group_ends));
+}
+
+namespace {
+
+// Per group: A_g^T A_g, A_g^T y_g, y_g^T y_g; and their sums.
+struct GroupGrams {
+  std::vector<Eigen::MatrixXd> G;
+  std::vector<Eigen::VectorXd> h;
+  std::vector<double> yy;
+  Eigen::MatrixXd G_total;
+  Eigen::VectorXd h_total;
+};
+
+GroupGrams group_grams(const Eigen::MatrixXd& A, const Eigen::VectorXd& y, const std::vector<int>& label) {
+  check_inputs(A, y);
+  if (label.size() != static_cast<std::size_t>(A.rows())) throw std::invalid_argument("one label per row needed");
+  const int nb = label.empty() ? 0 : *std::max_element(label.begin(), label.end()) + 1;
+  if (nb < 2 || *std::min_element(label.begin(), label.end()) < 0) throw std::invalid_argument("need labels 0 .. G-1, G >= 2");
   const Eigen::Index c = A.cols();
-  std::vector<Eigen::MatrixXd> G(static_cast<std::size_t>(nb), Eigen::MatrixXd::Zero(c, c));
-  std::vector<Eigen::VectorXd> h(static_cast<std::size_t>(nb), Eigen::VectorXd::Zero(c));
-  std::vector<double> yy(static_cast<std::size_t>(nb), 0.0);
+  GroupGrams g{std::vector<Eigen::MatrixXd>(static_cast<std::size_t>(nb), Eigen::MatrixXd::Zero(c, c)),
+               std::vector<Eigen::VectorXd>(static_cast<std::size_t>(nb), Eigen::VectorXd::Zero(c)),
+               std::vector<double>(static_cast<std::size_t>(nb), 0.0), Eigen::MatrixXd::Zero(c, c),
+               Eigen::VectorXd::Zero(c)};
   Eigen::Index begin = 0;
   while (begin < A.rows()) {
     Eigen::Index end = begin;
-    const int b = label[static_cast<std::size_t>(begin)];
-    while (end < A.rows() && label[static_cast<std::size_t>(end)] == b) ++end;
+    const auto b = static_cast<std::size_t>(label[static_cast<std::size_t>(begin)]);
+    while (end < A.rows() && label[static_cast<std::size_t>(end)] == static_cast<int>(b)) ++end;
     const auto Ab = A.middleRows(begin, end - begin);
     const auto yb = y.segment(begin, end - begin);
-    G[static_cast<std::size_t>(b)].noalias() += Ab.transpose() * Ab;
-    h[static_cast<std::size_t>(b)].noalias() += Ab.transpose() * yb;
-    yy[static_cast<std::size_t>(b)] += yb.squaredNorm();
+    g.G[b].noalias() += Ab.transpose() * Ab;
+    g.h[b].noalias() += Ab.transpose() * yb;
+    g.yy[b] += yb.squaredNorm();
     begin = end;
   }
-  Eigen::MatrixXd Gt = Eigen::MatrixXd::Zero(c, c);
-  Eigen::VectorXd ht = Eigen::VectorXd::Zero(c);
-  for (int b = 0; b < nb; ++b) {
-    Gt += G[static_cast<std::size_t>(b)];
-    ht += h[static_cast<std::size_t>(b)];
+  for (std::size_t b = 0; b < g.G.size(); ++b) {
+    g.G_total += g.G[b];
+    g.h_total += g.h[b];
   }
+  return g;
+}
+
+}  // namespace
+
+double labelled_cv_rmse(const Eigen::MatrixXd& A, const Eigen::VectorXd& y, const std::vector<int>& label) {
+  const GroupGrams g = group_grams(A, y, label);
   double ss = 0.0;
-  for (int b = 0; b < nb; ++b) {
-    const auto k = static_cast<std::size_t>(b);
+  for (std::size_t k = 0; k < g.G.size(); ++k) {
     Eigen::VectorXd coef;
     try {
-      coef = solve_gram(Gt - G[k], ht - h[k]);
+      coef = solve_gram(g.G_total - g.G[k], g.h_total - g.h[k]);
     } catch (const std::invalid_argument&) {
       return std::numeric_limits<double>::infinity();
     }
-    // sum over the block of (y - A c)^2 = yy - 2 c.h + c^T G c
-    ss += std::max(0.0, yy[k] - 2.0 * coef.dot(h[k]) + coef.dot(G[k] * coef));
+    // sum over the group of (y - A c)^2 = yy - 2 c.h + c^T G c
+    ss += std::max(0.0, g.yy[k] - 2.0 * coef.dot(g.h[k]) + coef.dot(g.G[k] * coef));
   }
   return std::sqrt(ss / static_cast<double>(A.rows()));
+}
+
+Eigen::VectorXd jackknife_standard_errors(const Eigen::MatrixXd& A, const Eigen::VectorXd& y,
+                                          const std::vector<int>& label) {
+  const GroupGrams g = group_grams(A, y, label);
+  const auto n = static_cast<double>(g.G.size());
+  Eigen::MatrixXd coef(A.cols(), static_cast<Eigen::Index>(g.G.size()));
+  for (std::size_t k = 0; k < g.G.size(); ++k)
+    coef.col(static_cast<Eigen::Index>(k)) = solve_gram(g.G_total - g.G[k], g.h_total - g.h[k]);
+  const Eigen::VectorXd mean = coef.rowwise().mean();
+  return ((n - 1.0) / n * (coef.colwise() - mean).rowwise().squaredNorm()).cwiseSqrt();
 }
 
 Eigen::MatrixXd scaled_powers(const Eigen::VectorXd& x, double x0, double s, int order) {

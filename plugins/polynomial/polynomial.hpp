@@ -46,6 +46,18 @@ LinearFit least_squares(const Eigen::MatrixXd& A, const Eigen::VectorXd& y);
 double blocked_cv_rmse(const Eigen::MatrixXd& A, const Eigen::VectorXd& y, std::size_t blocks,
                        const std::vector<Eigen::Index>& group_ends = {});
 
+// Pooled RMSE of each group of rows (label 0 .. G-1, any order) predicted by the fit on all other
+// groups: leave-one-group-out, e.g. whole legs of an oven run. Throws std::invalid_argument for
+// fewer than 2 groups or a label count that differs from the rows.
+double labelled_cv_rmse(const Eigen::MatrixXd& A, const Eigen::VectorXd& y, const std::vector<int>& labels);
+
+// Delete-one-group jackknife standard errors of the least-squares coefficients (labels as for
+// labelled_cv_rmse): sqrt((G-1)/G sum_g (c_(g) - mean c)^2). Unlike the textbook standard errors
+// they hold when residuals are correlated within a group (a slow wander over a leg of an oven
+// run). Throws std::invalid_argument as labelled_cv_rmse, or for a singular fold.
+Eigen::VectorXd jackknife_standard_errors(const Eigen::MatrixXd& A, const Eigen::VectorXd& y,
+                                          const std::vector<int>& labels);
+
 // Block index of every row (0 .. total blocks - 1) as used by blocked_cv_rmse.
 std::vector<int> block_labels(Eigen::Index rows, std::size_t blocks, const std::vector<Eigen::Index>& group_ends);
 

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -185,6 +186,42 @@ TEST_F(CalibrateCli, ThePaperPipelineIsScoredOnTheHeldOutRecordByItsFinalStage) 
   EXPECT_LT(paper["residual_drift_dph"].get<double>(), methods[0]["residual_drift_dph"].get<double>());
 }
 
+// The oven-run quality gate: a record without temperature variation is refused (exit 3, naming
+// the span); a cooling-only run is fitted with a named warning, which --strict makes an error; a
+// model worse than no compensation on held-out bins (a bias-free gyro: pure noise) is not written
+// without --force.
+TEST_F(CalibrateCli, TheQualityGateNamesWhatTheOvenRunLacksAndStrictRefusesIt) {
+  const auto write = [&](const std::string& name, double t_from, double t_to, double bias_per_k) {
+    std::ofstream f(dir_ + "/" + name);
+    f << "t_s,gyro_z_rps,temp\n";
+    std::uint64_t state = 7;
+    for (int i = 0; i < 7200; ++i) {
+      state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+      const double noise = (static_cast<double>(state >> 11) * 0x1.0p-53 - 0.5) * 2e-3;
+      const double temp = t_from + (t_to - t_from) * i / 7199.0;
+      f << i << "," << bias_per_k * (temp - 25) + noise << "," << temp << "\n";
+    }
+  };
+  write("flat.csv", 25.0, 25.0, 1e-4);
+  write("cooling.csv", 40.0, 10.0, 1e-4);
+  const auto flat = run_driftlab("calibrate --data " + dir_ + "/flat.csv --out " + dir_ + "/flat.json");
+  EXPECT_EQ(flat.exit_code, 3);
+  EXPECT_NE(flat.err.find("temperature span 0.000 K"), std::string::npos) << flat.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ + "/flat.json"));
+
+  const auto cooling = run_driftlab("calibrate --data " + dir_ + "/cooling.csv --out " + dir_ + "/cooling.json");
+  EXPECT_EQ(cooling.exit_code, 0) << cooling.err;
+  EXPECT_NE(cooling.out.find("quality gate warning [one_direction] temp: cooling only"), std::string::npos)
+      << cooling.out;
+  const auto model = nlohmann::json::parse(read_text(dir_ + "/cooling.json"));
+  EXPECT_EQ(model["channels"][0]["model"]["kind"], "poly") << "no history terms from one direction";
+  const auto strict = run_driftlab("calibrate --strict --data " + dir_ + "/cooling.csv --out " + dir_ + "/strict.json");
+  EXPECT_EQ(strict.exit_code, 3);
+  EXPECT_NE(strict.err.find("quality gate (--strict)"), std::string::npos) << strict.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ + "/strict.json"));
+
+}
+
 TEST_F(CalibrateCli, EveryCommandHasHelp) {
   EXPECT_EQ(run_driftlab("calibrate --help").exit_code, 0);
   EXPECT_EQ(run_driftlab("compensate --help").exit_code, 0);
@@ -210,7 +247,7 @@ class ExportCli : public ::testing::Test {
     const auto s = run_driftlab("simulate --device " + std::string(DRIFTLAB_SOURCE_DIR) +
                                 "/devices/imu3.yaml --fs 2 --seed 1 --out " + dir_ + "/imu.csv");
     ASSERT_EQ(s.exit_code, 0) << s.err;
-    const auto c = run_driftlab("-q calibrate --data " + dir_ + "/imu.csv --channels gyro,accel --out " + dir_ + "/m.json");
+    const auto c = run_driftlab("-q calibrate --data " + dir_ + "/imu.csv --channels gyro,accel --model poly --out " + dir_ + "/m.json");
     ASSERT_EQ(c.exit_code, 0) << c.err;
     model_ = nlohmann::json::parse(read_text(dir_ + "/m.json"));
     ASSERT_EQ(model_["channels"].size(), 12u);

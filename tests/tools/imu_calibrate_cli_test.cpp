@@ -47,7 +47,9 @@ class ImuCalibrateCli : public ::testing::Test {
                                   " --out " + (kDir / name).string());
       ASSERT_EQ(r.exit_code, 0) << r.err;
     }
-    const auto c = run_driftlab("-q --threads 2 calibrate --data " + (kDir / "cal.csv").string() + " --out " +
+    // The polynomial model: these checks are about the whole-IMU flow and its exports (model
+    // selection on real and simulated records is tests/models/calibration_real_test.cpp's).
+    const auto c = run_driftlab("-q --threads 2 calibrate --data " + (kDir / "cal.csv").string() + " --model poly --out " +
                                 (kDir / "imu.json").string());
     ASSERT_EQ(c.exit_code, 0) << c.err;
   }

@@ -201,10 +201,10 @@ void print_model_summary(std::ostream& out, const calibration::ChannelCalibratio
     for (std::size_t j = 0; j < m.scale_factor_per_k.size(); ++j) out << " " << m.scale_factor_per_k[j] << " dT^" << j;
     out << "\n";
   }
-  std::snprintf(line, sizeof line, "  held-out residual (blocked CV, %g-s bins): %.4g %s; in-sample %.4g %s\n",
+  std::snprintf(line, sizeof line, "  held-out residual (%g-s bins): %.4g %s; in-sample %.4g %s; uncompensated %.4g %s\n",
                 m.fit.bin_s, m.fit.holdout_rms_rad_s * display, display_unit, m.fit.train_rms_rad_s * display,
-                display_unit);
-  out << line << "  selection: " << m.fit.selection << "\n";
+                display_unit, m.fit.uncompensated_rms_rad_s * display, display_unit);
+  out << line << "  held out: " << m.fit.holdout_design << "\n  selection: " << m.fit.selection << "\n";
 }
 
 }  // namespace driftlab::cli

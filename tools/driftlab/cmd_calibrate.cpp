@@ -1,6 +1,7 @@
 // `driftlab calibrate`: fits a causal temperature-calibration model (poly | physical | rbf) for every
 // gyro and accelerometer channel of one or more oven records of one IMU and writes it as
 // driftlab-calibration/2 JSON (models/calibration/).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -11,6 +12,7 @@
 #include "framework/error.hpp"
 #include "framework/parallel.hpp"
 #include "models/calibration/fit.hpp"
+#include "models/calibration/oven_run.hpp"
 #include "framework/pipeline.hpp"
 #include "tools/driftlab/calibration_cli.hpp"
 #include "tools/driftlab/calibration_report.hpp"
@@ -22,7 +24,9 @@ namespace {
 
 struct CalibrateOptions {
   CalibrationDataOptions data;
-  std::string model = "poly";
+  std::string model = "physical";
+  bool strict = false;                // quality-gate warnings are errors
+  bool force = false;                 // write a model even when its held-out error exceeds the raw one
   std::string out;
   std::string extrapolation = "clamp";
   calibration::FitOptions fit;        // the numeric options are bound to its fields directly
@@ -69,6 +73,32 @@ calibration::ChannelCalibration fit_channel(const ChannelRecords& ch, const std:
   return c;
 }
 
+// The quality gate over each temperature the channels are fitted against (one per instance),
+// printed once per finding; errors, and warnings under --strict, stop the command (exit 3).
+std::vector<calibration::Finding> run_quality_gate(const std::vector<ChannelRecords>& channels, double bin_s, bool strict) {
+  std::vector<calibration::Finding> all;
+  std::vector<std::string> seen_temperatures;
+  for (const auto& ch : channels) {
+    if (std::find(seen_temperatures.begin(), seen_temperatures.end(), ch.temperature_column) != seen_temperatures.end())
+      continue;
+    seen_temperatures.push_back(ch.temperature_column);
+    std::vector<calibration::OvenRun> runs;
+    for (const auto& r : ch.records) runs.push_back(calibration::analyse_oven_run(r.name, r.time_s, r.temp_c, bin_s));
+    for (auto f : calibration::quality_gate(runs)) {
+      f.message = ch.temperature_column + ": " + f.message;
+      std::cout << "quality gate " << calibration::to_string(f.severity) << " [" << f.code << "] " << f.message << "\n";
+      all.push_back(std::move(f));
+    }
+  }
+  for (const auto& f : all) {
+    if (f.severity == calibration::Finding::Severity::Error ||
+        (strict && f.severity == calibration::Finding::Severity::Warning))
+      throw DataError({channels.front().records.front().name, 0, "temperature"},
+                      "quality gate" + std::string(strict ? " (--strict)" : "") + ": " + f.message);
+  }
+  return all;
+}
+
 // The records of `channels` that match `ch` (by role), for held-out scoring.
 std::vector<calibration::Record> matching(const std::vector<ChannelRecords>& channels, const ChannelRecords& ch) {
   for (const auto& c : channels)
@@ -80,9 +110,14 @@ std::vector<calibration::Record> matching(const std::vector<ChannelRecords>& cha
 
 void report_channel(const CalibrateOptions& o, CommandEnv& env, const ChannelRecords& ch,
                     const std::vector<calibration::Record>& records, const std::vector<calibration::Record>& held_out,
-                    const calibration::ChannelCalibration& chosen, const ReportFiles& report_files, OutputSet& files) {
+                    const calibration::ChannelCalibration& chosen, const std::vector<calibration::Finding>& gate,
+                    const ReportFiles& report_files, OutputSet& files) {
   const calibration::FitOptions base = fit_options(o, env, ch.role);
   ReportInput in;
+  for (const auto& f : gate)
+    in.notes.push_back("quality gate " + calibration::to_string(f.severity) + " [" + f.code + "]: " + f.message);
+  in.notes.push_back(ch.role + ": chosen " + calibration::to_string(chosen.model.kind) + " (" +
+                     chosen.model.fit.selection + "; held out: " + chosen.model.fit.holdout_design + ")");
   in.command = o.command_line;
   for (const auto& r : records) in.calibration_records.push_back(r.name);
   in.evaluations = held_out;
@@ -160,6 +195,7 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
     throw ConfigError({"", 0, "--train-until"}, "--train-until splits a single --data record");
   }
   auto channels = load_channel_records(o.data.paths, o.data);
+  const auto gate = run_quality_gate(channels, o.fit.bin_s, o.strict);
   // --report scores the gyro channels (its figures are in deg/h): one gyro channel writes
   // DIR/report.{json,html}, several write DIR/<channel>/report.{json,html}.
   std::vector<std::optional<ReportFiles>> report_files(channels.size());
@@ -205,9 +241,17 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
     model.channels[c] = fit_channel(channels[c], fitted[c], fit_options(o, env, channels[c].role));
   });
   model.validate();
+  for (const auto& ch : model.channels) {
+    const auto& fit = ch.model.fit;
+    if (!o.force && fit.holdout_rms_rad_s > fit.uncompensated_rms_rad_s)
+      throw DataError({ch.model.fit.records.empty() ? "" : ch.model.fit.records.front(), 0, ch.column},
+                      "the fitted model's held-out error (" + std::to_string(fit.holdout_rms_rad_s) + " " + ch.unit() +
+                          ") exceeds the uncompensated error (" + std::to_string(fit.uncompensated_rms_rad_s) +
+                          "): not written (--force writes it)");
+  }
   files.write(o.out, calibration::to_json_text(model));
   for (std::size_t c = 0; c < channels.size(); ++c)
-    if (report_files[c]) report_channel(o, env, channels[c], fitted[c], held_out[c], model.channels[c], *report_files[c], files);
+    if (report_files[c]) report_channel(o, env, channels[c], fitted[c], held_out[c], model.channels[c], gate, *report_files[c], files);
   files.commit();
   for (const auto& ch : model.channels) print_model_summary(std::cout, ch);
   std::cout << "wrote " << o.out << " (" << model.channels.size() << " channel" << (model.channels.size() == 1 ? "" : "s")
@@ -229,8 +273,9 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
       "fit a causal temperature-calibration model for every gyro and accelerometer channel of an IMU's oven "
       "records (bias, and scale factor when a varying true rate exists); write driftlab-calibration/2 JSON");
   add_calibration_data_options(cmd, o->data, true);
-  cmd->add_option("--model", o->model, "poly: polynomial (order by held-out blocks); physical: + lag, dT/dt, "
-                                       "hysteresis; rbf: physical + GA-tuned RBF network")
+  cmd->add_option("--model", o->model, "the richest model considered: poly (polynomial, order by held-out blocks); "
+                                       "physical (+ lag, dT/dt, hysteresis, each kept only when determinable, "
+                                       "significant, plausible and transferring); rbf (+ a GA-tuned RBF network)")
       ->check(CLI::IsMember({"poly", "physical", "rbf"}))
       ->capture_default_str();
   cmd->add_option("--out", o->out, "model JSON to write (atomically)")->required();
@@ -253,6 +298,9 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--derivative-tau", o->fit.derivative_tau_s, "smoothing time constant of the causal dT/dt estimate, s")
       ->check(finite_number(0.0, 1e12, true))
       ->capture_default_str();
+  cmd->add_flag("--strict", o->strict, "treat quality-gate warnings (span, one direction, no soak, fast ramp, short "
+                                       "leg, dropouts) as errors");
+  cmd->add_flag("--force", o->force, "write the model even when its held-out error exceeds the uncompensated error");
   cmd->add_flag("--heating-only", o->fit.heating_only, "fit on heating samples only (PX4 practice; for comparison)");
   cmd->add_option("--device", o->device, "device name stored in the model");
   cmd->add_option("--ga-population", o->fit.ga_population, "RBF tuning: GA population")->check(CLI::Range(2, 1000))->capture_default_str();

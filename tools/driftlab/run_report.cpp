@@ -1,10 +1,12 @@
 #include "tools/driftlab/run_report.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 #include "framework/units.hpp"
 #include "models/calibration/fit.hpp"
+#include "models/calibration/oven_run.hpp"
 #include "tools/driftlab/html_report.hpp"
 #include "tools/driftlab/plot.hpp"
 
@@ -72,7 +74,12 @@ RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const st
   s.stages.push_back(evaluation::score_stage("original", rate, time, fs, reference_n, t));
   for (const auto& name : rate_stages(pipeline, outputs))
     s.stages.push_back(evaluation::score_stage(name, outputs.at(name).columns.col(0), time, fs, reference_n, t));
-  if (record.has(role::kTemperature)) {
+  // The PX4-style row needs an oven run the calibration quality gate does not refuse.
+  const auto fittable = [&](const Eigen::VectorXd& temp) {
+    const auto gate = calibration::quality_gate({calibration::analyse_oven_run("the record", time, temp, calibration::FitOptions{}.bin_s)});
+    return std::none_of(gate.begin(), gate.end(), [](const auto& f) { return f.severity == calibration::Finding::Severity::Error; });
+  };
+  if (record.has(role::kTemperature) && fittable(record.channel(role::kTemperature).values)) {
     const Eigen::VectorXd& temp = record.channel(role::kTemperature).values;
     auto model = calibration::fit_px4_style({{"the record", time, rate, temp, {}, {}}}, {});
     Eigen::VectorXd compensated = calibration::compensate(model, time, rate, temp).rate_rad_s;
