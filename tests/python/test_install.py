@@ -1,0 +1,31 @@
+"""`cmake --install` into a fresh prefix gives a package that imports from there, from any working
+directory, and reads its data from its own location, not from the source or build tree."""
+import json
+import os
+import pathlib
+import subprocess
+import sys
+
+
+def test_the_installed_package_imports_and_finds_its_devices_from_its_install_location(build_dir, cmake_command, tmp_path):
+    prefix = tmp_path / "prefix"
+    subprocess.run([cmake_command, "--install", str(build_dir), "--prefix", str(prefix), "--component", "python"],
+                   check=True, capture_output=True)
+    packages = [p.parent.parent for p in prefix.rglob("driftlab/__init__.py")]
+    assert len(packages) == 1
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    env = {k: v for k, v in os.environ.items() if not k.startswith("DRIFTLAB_")}
+    env["PYTHONPATH"] = str(packages[0])
+    probe = ("import driftlab, json; print(json.dumps({'file': driftlab.__file__, 'version': driftlab.__version__, "
+             "'devices': sorted(p.name for p in driftlab.devices_dir().glob('*.yaml')), "
+             "'devices_dir': str(driftlab.devices_dir())}))")
+    done = subprocess.run([sys.executable, "-c", probe], cwd=elsewhere, env=env, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    found = json.loads(done.stdout)
+    installed = packages[0] / "driftlab"
+    assert pathlib.Path(found["file"]).parent == installed
+    assert found["version"] == subprocess.run([sys.executable, "-c", "import driftlab; print(driftlab.__version__)"],
+                                              capture_output=True, text=True, check=True).stdout.strip()
+    assert pathlib.Path(found["devices_dir"]).is_relative_to(installed)
+    assert "fmvmg.yaml" in found["devices"]
