@@ -17,7 +17,8 @@ def _env(name):
 
 @pytest.fixture
 def cli(tmp_path):
-    """Runs `driftlab ARGS...` in tmp_path; returns its standard output, fails the test on a non-zero exit."""
+    """Runs `driftlab ARGS...` in tmp_path; returns its standard output, fails the test on a non-zero exit.
+    cli.fails(ARGS...) runs one that must fail and returns the completed process."""
     exe = _env("DRIFTLAB_EXE")
 
     def run(*args):
@@ -25,6 +26,13 @@ def cli(tmp_path):
         assert done.returncode == 0, f"driftlab {' '.join(map(str, args))}: {done.stderr}"
         return done.stdout
 
+    def fails(*args):
+        """The completed process of a run that must fail."""
+        done = subprocess.run([exe, *map(str, args)], cwd=tmp_path, capture_output=True, text=True)
+        assert done.returncode != 0, f"driftlab {' '.join(map(str, args))} succeeded"
+        return done
+
+    run.fails = fails
     return run
 
 
