@@ -12,8 +12,9 @@ import os
 import pathlib
 
 from . import _driftlab
-from ._driftlab import (ConfigError, DataError, Decomposition, Error, NotFittedError, SampleEntropy,
-                        UnknownPluginError, plugin_info, plugins)
+from ._driftlab import (DEG_H_PER_RAD_S, Allan, BiasInstability, ConfigError, DataError, Decomposition, Error,
+                        NoiseTerm, NoiseTerms, NotFittedError, SampleEntropy, UnknownPluginError, allan, plugin_info,
+                        plugins)
 
 __version__ = _driftlab.__version__
 

@@ -17,5 +17,6 @@ namespace py = pybind11;
 // command line), made on first use.
 const Registry& registry();
 
-void bind_plugins(py::module_& m);  // plugin tables, decomposition plugins (plugins.cpp)
+void bind_plugins(py::module_& m);  // plugin tables, decompositions, sample entropy (plugins.cpp)
+void bind_allan(py::module_& m);    // Allan deviation and its readings (allan.cpp)
 }  // namespace driftlab::python

@@ -10,4 +10,5 @@ PYBIND11_MODULE(_driftlab, m) {
   m.attr("__version__") = DRIFTLAB_VERSION;
   driftlab::python::register_errors(m);
   driftlab::python::bind_plugins(m);
+  driftlab::python::bind_allan(m);
 }
