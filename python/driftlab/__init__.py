@@ -12,9 +12,10 @@ import os
 import pathlib
 
 from . import _driftlab
-from ._driftlab import (DEG_H_PER_RAD_S, Allan, BiasInstability, ConfigError, DataError, Decomposition, Error,
-                        NoiseTerm, NoiseTerms, NotFittedError, SampleEntropy, UnknownPluginError, allan, plugin_info,
-                        plugins)
+from ._driftlab import (DEG_H_PER_RAD_S, Allan, BiasInstability, CalibrationModel, Compensation, ConfigError,
+                        DataError, Decomposition, Error, NoiseTerm, NoiseTerms, NotFittedError, Pipeline, PipelineRun,
+                        Record, SampleEntropy, UnknownPluginError, allan, device_files, load_calibration, plugin_info,
+                        plugins, read_record, simulate)
 
 __version__ = _driftlab.__version__
 

@@ -19,4 +19,5 @@ const Registry& registry();
 
 void bind_plugins(py::module_& m);  // plugin tables, decompositions, sample entropy (plugins.cpp)
 void bind_allan(py::module_& m);    // Allan deviation and its readings (allan.cpp)
+void bind_data(py::module_& m);     // records, devices, calibration models, pipelines (data.cpp)
 }  // namespace driftlab::python

@@ -11,4 +11,5 @@ PYBIND11_MODULE(_driftlab, m) {
   driftlab::python::register_errors(m);
   driftlab::python::bind_plugins(m);
   driftlab::python::bind_allan(m);
+  driftlab::python::bind_data(m);
 }
