@@ -331,7 +331,7 @@ die_temp_c, chamber_temp_c, and drive_frequency_hz when the device has that chan
       .def("__repr__", [](const CalibrationModel& c) {
         return "<driftlab.CalibrationModel " + std::to_string(c.model->channels.size()) + " channel(s)>";
       });
-  m.def("load_calibration", [](const std::string& path) {
+  m.def("load_calibration", [](const std::filesystem::path& path) {
     return CalibrationModel{std::make_shared<const calibration::ImuCalibration>(calibration::read_calibration(path))};
   }, py::arg("path"), "Reads a calibration model file (driftlab-calibration/2, or /1 as one gyro channel).");
 
