@@ -1,5 +1,5 @@
 """`cmake --install` into a fresh prefix gives a package that imports from there, from any working
-directory, and reads its data from its own location, not from the source or build tree."""
+directory, and reads its data (devices, pipelines) from its own location, not the source or build tree."""
 import json
 import os
 import pathlib
@@ -18,8 +18,9 @@ def test_the_installed_package_imports_and_finds_its_devices_from_its_install_lo
     env = {k: v for k, v in os.environ.items() if not k.startswith("DRIFTLAB_")}
     env["PYTHONPATH"] = str(packages[0])
     probe = ("import driftlab, json; print(json.dumps({'file': driftlab.__file__, 'version': driftlab.__version__, "
-             "'devices': sorted(p.name for p in driftlab.devices_dir().glob('*.yaml')), "
-             "'devices_dir': str(driftlab.devices_dir())}))")
+             "'devices': [str(p) for p in driftlab.device_files()], "
+             "'simulated': len(driftlab.simulate('fmvmg', fs_hz=1.0, duration_s=10)['rate_rad_s']), "
+             "'pipeline_steps': len(driftlab.Pipeline.from_yaml('li2023').steps)}))")
     done = subprocess.run([sys.executable, "-c", probe], cwd=elsewhere, env=env, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     found = json.loads(done.stdout)
@@ -27,5 +28,8 @@ def test_the_installed_package_imports_and_finds_its_devices_from_its_install_lo
     assert pathlib.Path(found["file"]).parent == installed
     assert found["version"] == subprocess.run([sys.executable, "-c", "import driftlab; print(driftlab.__version__)"],
                                               capture_output=True, text=True, check=True).stdout.strip()
-    assert pathlib.Path(found["devices_dir"]).is_relative_to(installed)
-    assert "fmvmg.yaml" in found["devices"]
+    devices = [pathlib.Path(p) for p in found["devices"]]
+    assert "fmvmg.yaml" in [p.name for p in devices]
+    assert all(p.is_relative_to(installed) for p in devices)
+    assert found["simulated"] == 10  # the device found by name in the installed data
+    assert found["pipeline_steps"] > 0  # the shipped pipeline found by name
