@@ -1,5 +1,6 @@
 """The GIL is released while a kernel runs (a Python thread keeps running meanwhile), results do not
 depend on concurrent callers, and repeated calls do not leak."""
+import pathlib
 import sys
 import threading
 import time
@@ -10,6 +11,8 @@ import pytest
 
 RNG = np.random.default_rng(1)
 X = RNG.standard_normal(200_000)
+# A model fixture of the C++ tests (a driftlab-calibration/1 RBF model): the costliest compensator.
+MODEL = pathlib.Path(__file__).parent.parent / "data" / "calibration" / "v1_rbf_ranged.json"
 
 
 def other_thread_progress(call):
@@ -59,6 +62,21 @@ def test_the_measurement_tells_a_held_gil_from_a_released_one():
 ])
 def test_a_python_thread_keeps_running_while_a_kernel_runs(name, call):
     assert other_thread_progress(call) > 0.2, name
+
+
+def test_a_python_thread_keeps_running_while_a_record_is_read_compensated_and_run(tmp_path):
+    n = 400_000
+    t = np.arange(n) / 100.0
+    temperature = 20 + 20 * np.sin(t / 600)
+    path = tmp_path / "r.csv"
+    np.savetxt(path, np.column_stack([t, np.degrees(X[: n // 2].repeat(2)), temperature]), delimiter=",",
+               header="t_s,rate_dps,temp_c", comments="")
+    assert other_thread_progress(lambda: driftlab.read_record(path)) > 0.2
+    model = driftlab.load_calibration(MODEL)
+    assert other_thread_progress(lambda: model.compensate(t, X[: n // 2].repeat(2), temperature)) > 0.2
+    pipeline = driftlab.Pipeline.from_yaml("polynomial_baseline")
+    inputs = {"time": t, "rate": X[: n // 2].repeat(2), "temperature": temperature}
+    assert other_thread_progress(lambda: pipeline.run(inputs)) > 0.2
 
 
 def test_kernels_called_from_several_threads_at_once_give_the_sequential_results():
