@@ -19,6 +19,11 @@ from ._driftlab import (DEG_H_PER_RAD_S, Allan, BiasInstability, CalibrationMode
 
 __version__ = _driftlab.__version__
 
+# The result classes are the package's, whichever file defines them.
+for _class in (Allan, BiasInstability, CalibrationModel, Compensation, Decomposition, NoiseTerm, NoiseTerms, Pipeline,
+               PipelineRun, Record, SampleEntropy):
+    _class.__module__ = __name__
+
 # The package's data (device files, pipelines), beside its own files in the build tree and in an
 # installed copy alike (python/CMakeLists.txt lays both out).
 DATA_DIR = pathlib.Path(__file__).resolve().parent / "data"

@@ -75,6 +75,16 @@ def test_other_rate_units_are_converted_to_rad_s_at_the_boundary(cli, tmp_path):
     assert json.loads((tmp_path / "summary.json").read_text())["si"]["N"]["value"] == a.noise_terms.N_rad_sqrt_s.value
 
 
+def test_an_integrated_angle_gives_the_deviations_of_its_rate():
+    x = white_rate(n=10_000)
+    angle = np.concatenate([[0.0], np.cumsum(x) / FS_HZ])  # rad
+    from_angle = driftlab.allan(angle, FS_HZ, input="angle")
+    from_rate = driftlab.allan(x, FS_HZ)
+    assert np.array_equal(from_angle.taus_s, from_rate.taus_s)
+    # The same differences of the same angle, up to the rate's mean that integration removes first.
+    assert from_angle.dev_rad_s == pytest.approx(from_rate.dev_rad_s, rel=1e-9)
+
+
 def test_lists_are_accepted_and_the_input_is_not_modified():
     x = white_rate(n=1000)
     kept = x.copy()

@@ -36,5 +36,15 @@ def test_the_error_classes_mirror_the_libraries():
 
 def test_an_unknown_plugin_raises_UnknownPluginError_with_the_libraries_message():
     with pytest.raises(driftlab.UnknownPluginError, match="decomposition/emd") as info:
-        driftlab.plugin_params("decomposition/nonesuch")
+        driftlab.plugin_info("decomposition/nonesuch")
     assert info.value.problems[0]["field"] == "decomposition/nonesuch"
+
+
+def test_the_registry_holds_the_built_in_plugins_with_their_tables():
+    assert driftlab.plugins("decomposition") == ["decomposition/ceemdan", "decomposition/eemd", "decomposition/emd",
+                                                 "decomposition/vmd"]
+    assert "classifier/sample_entropy" in driftlab.plugins()
+    info = driftlab.plugin_info("decomposition/vmd")
+    assert info["origin"] == "built-in" and info["reference"]
+    modes = next(p for p in info["params"] if p["key"] == "modes")
+    assert (modes["type"], modes["unit"], modes["constraint"]) == ("integer", "1", "[1, 64]")
