@@ -96,22 +96,23 @@ std::shared_ptr<const TimeSeries> record_from_arrays(const py::dict& arrays, std
   }
   for (Eigen::Index i = 1; i < time->size(); ++i)
     if (!((*time)[i] > (*time)[i - 1]))
-      throw DataError({"", 0, "time"}, "time stamps must increase: sample " + std::to_string(i) + " is not after sample " +
-                                           std::to_string(i - 1));
+      throw DataError({"", 0, "time"}, "time stamps must increase: sample " + std::to_string(i) +
+                                           " is not after sample " + std::to_string(i - 1));
   auto series = std::make_shared<TimeSeries>(std::move(*time));
   for (auto& [role, values] : channels) {
     const auto q = quantity_of_role(role);
-    series->set_channel({.role = role, .unit = q ? internal_unit_symbol(*q) : "1", .source = role, .values = std::move(values)});
+    series->set_channel(
+        {.role = role, .unit = q ? internal_unit_symbol(*q) : "1", .source = role, .values = std::move(values)});
   }
   return series;
 }
 
 // ---- devices ---------------------------------------------------------------------------------
 
-py::dict simulate_device(const std::filesystem::path& device_name, const std::filesystem::path& profile, double fs_hz, std::uint64_t seed,
-                         std::optional<double> duration_s) {
-  const auto device =
-      devices::load_device_file(devices::find_device_file(device_name.string(), package("devices_dir")().cast<std::filesystem::path>()));
+py::dict simulate_device(const std::filesystem::path& device_name, const std::filesystem::path& profile, double fs_hz,
+                         std::uint64_t seed, std::optional<double> duration_s) {
+  const auto devices_dir = package("devices_dir")().cast<std::filesystem::path>();
+  const auto device = devices::load_device_file(devices::find_device_file(device_name.string(), devices_dir));
   const auto chamber = profile == "oven" ? devices::default_oven_profile() : devices::load_profile_file(profile);
   devices::SimulationOptions options{.sample_rate_hz = fs_hz, .duration_s = duration_s, .seed = seed};
   // The record: 9 series of n doubles (simulator.hpp), refused above the memory limit as by the CLI.
@@ -289,10 +290,10 @@ max_gap_factor: a time step above this times the median step is a DataError (0 a
 topic, instance, sensor: what to take from a log (ignored for CSV). required: roles that must be
 present. Returns Record (time_s, channels, units, sources, sample_rate_hz, notes).)");
 
-  m.def("device_files", [] {
-    std::vector<std::filesystem::path> files = devices::list_device_files(package("devices_dir")().cast<std::filesystem::path>());
-    return files;
-  }, "The device files (*.yaml) of driftlab.devices_dir(), sorted.");
+  m.def(
+      "device_files",
+      [] { return devices::list_device_files(package("devices_dir")().cast<std::filesystem::path>()); },
+      "The device files (*.yaml) of driftlab.devices_dir(), sorted.");
   const devices::SimulationOptions simulation_defaults;
   m.def("simulate", &simulate_device, py::arg("device"), py::arg("profile") = "oven",
         py::arg("fs_hz") = simulation_defaults.sample_rate_hz, py::arg("seed") = simulation_defaults.seed,

@@ -60,7 +60,8 @@ def test_the_curve_and_readings_equal_driftlab_allan_on_the_same_data(cli, tmp_p
     assert readings["B_flat_floor"]["value"] == a.bias_instability.value_rad_s * driftlab.DEG_H_PER_RAD_S
     assert readings["B_flat_floor"]["tau_s"] == a.bias_instability.tau_s
     assert readings["N_at_1s"]["value"] == a.arw_rad_sqrt_s * driftlab.DEG_H_PER_RAD_S
-    for key, term in [("N", a.noise_terms.N_rad_sqrt_s), ("B", a.noise_terms.B_rad_s), ("K", a.noise_terms.K_rad_s_sqrt_s)]:
+    terms = a.noise_terms
+    for key, term in [("N", terms.N_rad_sqrt_s), ("B", terms.B_rad_s), ("K", terms.K_rad_s_sqrt_s)]:
         assert summary["si"][key]["value"] == term.value
         assert summary["si"][key]["fitted"] == term.resolved
 

@@ -7,7 +7,8 @@ import subprocess
 import sys
 
 
-def test_the_installed_package_imports_and_finds_its_devices_from_its_install_location(build_dir, cmake_command, tmp_path):
+def test_the_installed_package_imports_and_finds_its_data_from_its_install_location(build_dir, cmake_command,
+                                                                                   tmp_path):
     prefix = tmp_path / "prefix"
     subprocess.run([cmake_command, "--install", str(build_dir), "--prefix", str(prefix), "--component", "python"],
                    check=True, capture_output=True)
