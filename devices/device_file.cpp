@@ -466,6 +466,14 @@ std::vector<std::filesystem::path> list_device_files(const std::filesystem::path
   return files;
 }
 
+std::filesystem::path find_device_file(const std::string& argument, const std::filesystem::path& dir) {
+  const std::filesystem::path path(argument);
+  if (std::filesystem::exists(path)) return path;
+  const std::string file_name = path.filename().string();
+  const auto in_dir = dir / (path.extension() == ".yaml" ? file_name : file_name + ".yaml");
+  return std::filesystem::exists(in_dir) ? in_dir : path;
+}
+
 void parse_effects(const YAML::Node& node, const std::string& file, const std::string& path,
                    error_model::Effects& effects, std::vector<Diagnostic>& problems) {
   YamlFields y(file, problems);

@@ -110,6 +110,10 @@ DeviceDefinition parse_device(const std::string& yaml_text, const std::string& f
 
 // Sorted *.yaml files of a directory. Throws ConfigError when it is not a directory.
 std::vector<std::filesystem::path> list_device_files(const std::filesystem::path& dir);
+// A device argument: a file path, or the name of a file in `dir` ("fmvmg" or "fmvmg.yaml"); the
+// argument as given when neither exists (reading it then names it in the error). The one rule of
+// the command line (tools/driftlab/devices_dir.hpp) and the Python module.
+std::filesystem::path find_device_file(const std::string& argument, const std::filesystem::path& dir);
 
 // ---- effects: the `effects:` section and `--effect`, both from framework/effect_catalogue.hpp ----
 // Reads an `effects:` mapping into `effects` (added or replaced), reporting problems.

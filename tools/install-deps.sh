@@ -13,6 +13,7 @@ packages=(
   libfftw3-dev libgsl-dev
   libpagmo-dev libdlib-dev   # optimizer/pagmo, regressor/svr
   clang libclang-rt-14-dev   # libFuzzer harnesses of tests/fuzz (ASan + UBSan runtimes)
+  pybind11-dev python3-pybind11 python3-dev python3-pytest   # the Python module (python/) and its tests
 )
 # The MRPT bridge (tools/mrpt): libmrpt-obs-dev alone pulls the obs, bayes, poses, math, io and
 # serialization modules (~170 MB); mrpt-apps gives rawlog-edit, which the bridge's tests use.

@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <string>
 
+#include "devices/device_file.hpp"
+
 namespace driftlab::cli {
 
 inline std::filesystem::path resolve_devices_dir(const std::string& option) {
@@ -16,12 +18,7 @@ inline std::filesystem::path resolve_devices_dir(const std::string& option) {
 
 // A device argument is a file path, or the name of a file in the devices directory ("fmvmg").
 inline std::filesystem::path resolve_device_file(const std::string& argument, const std::string& devices_dir_option) {
-  const std::filesystem::path path(argument);
-  if (std::filesystem::exists(path)) return path;
-  const std::string file_name = path.filename().string();
-  const auto in_dir = resolve_devices_dir(devices_dir_option) /
-                      (path.extension() == ".yaml" ? file_name : file_name + ".yaml");
-  return std::filesystem::exists(in_dir) ? in_dir : path;
+  return devices::find_device_file(argument, resolve_devices_dir(devices_dir_option));
 }
 
 }  // namespace driftlab::cli
