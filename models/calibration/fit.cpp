@@ -21,30 +21,6 @@ namespace {
 constexpr int kScaleFactorOrder = 2;        // k_0 + k_1 dT + k_2 dT^2
 constexpr double kVaryingTrueRate = 1e-3;   // rad/s: a true rate with a larger std drives a scale-factor fit
 
-// Bins of one record: which bin each sample falls in (bins without samples are dropped).
-struct Binning {
-  std::vector<int> bin_of;   // per sample
-  std::vector<double> count; // per bin
-  int bins = 0;
-};
-
-Binning make_bins(const Record& r, double bin_s) {
-  Binning b;
-  b.bin_of.resize(static_cast<std::size_t>(r.time_s.size()));
-  long last = -1;
-  for (Eigen::Index i = 0; i < r.time_s.size(); ++i) {
-    const long k = static_cast<long>(std::floor((r.time_s[i] - r.time_s[0]) / bin_s));
-    if (k != last) {
-      ++b.bins;
-      b.count.push_back(0.0);
-      last = k;
-    }
-    b.bin_of[static_cast<std::size_t>(i)] = b.bins - 1;
-    b.count.back() += 1.0;
-  }
-  return b;
-}
-
 // Per-bin means of the causal features for one (lag, width) candidate.
 struct Features {
   Eigen::VectorXd tm, d, s;
@@ -164,22 +140,14 @@ struct Determinable {
 };
 
 Determinable determinable(const std::vector<OvenRun>& runs) {
+  const RunsSummary all = summarize(runs);
+  const bool span = all.span_k() >= kMinHistorySpanK;
   Determinable d;
-  double lo = runs.front().min_c, hi = runs.front().max_c, soak = 0.0;
-  bool heating = false, cooling = false;
-  for (const auto& r : runs) {
-    lo = std::min(lo, r.min_c);
-    hi = std::max(hi, r.max_c);
-    soak = std::max(soak, r.longest_soak_s);
-    heating = heating || r.heating();
-    cooling = cooling || r.cooling();
-  }
-  const bool span = hi - lo >= kMinHistorySpanK;
-  d.rate_and_hysteresis = span && heating && cooling;
-  d.max_lag_s = span ? soak : 0.0;
+  d.rate_and_hysteresis = span && all.heating && all.cooling;
+  d.max_lag_s = span ? all.longest_soak_s : 0.0;
   if (!span) d.why_not = "span below " + std::to_string(static_cast<int>(kMinHistorySpanK)) + " K: no history terms";
-  else if (!(heating && cooling)) d.why_not = "one direction: no dT/dt or hysteresis term";
-  if (span && soak < kMinSoakS) d.why_not += std::string(d.why_not.empty() ? "" : "; ") + "no soak: no lag term";
+  else if (!(all.heating && all.cooling)) d.why_not = "one direction: no dT/dt or hysteresis term";
+  if (span && all.longest_soak_s < kMinSoakS) d.why_not += std::string(d.why_not.empty() ? "" : "; ") + "no soak: no lag term";
   return d;
 }
 
@@ -306,7 +274,7 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
   std::vector<double> y_all, heating;
   Eigen::Index offset = 0;
   for (const auto& r : records) {
-    bins.push_back(make_bins(r, o.bin_s));
+    bins.push_back(make_bins(r.time_s, o.bin_s));
     const Binning& b = bins.back();
     if (static_cast<std::size_t>(b.bins) < 2 * o.holdout_blocks) {
       throw DataError({r.name, 0, "t_s"}, "record too short: " + std::to_string(b.bins) + " bins of " +
@@ -374,14 +342,10 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
       ++legs;
     }
     if (legs >= 3 && heating_legs != 1 && cooling_legs != 1) {
-      const auto& r = records.front();
-      std::vector<double> bin_start(static_cast<std::size_t>(bins.front().bins), 0.0);
-      for (Eigen::Index k = r.time_s.size() - 1; k >= 0; --k)
-        bin_start[static_cast<std::size_t>(bins.front().bin_of[static_cast<std::size_t>(k)])] = r.time_s[k];
       std::vector<int> leg_of_bin;
       std::size_t leg = 0;
-      for (const double t : bin_start) {
-        while (leg + 1 < runs.front().legs.size() && t > runs.front().legs[leg].end_s) ++leg;
+      for (const Eigen::Index first : bins.front().first) {
+        while (leg + 1 < runs.front().legs.size() && records.front().time_s[first] > runs.front().legs[leg].end_s) ++leg;
         leg_of_bin.push_back(static_cast<int>(leg));
       }
       for (const auto row : st.rows) transfer.push_back(leg_of_bin[static_cast<std::size_t>(row)]);
@@ -391,10 +355,13 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
       holdout_design += " (one record with fewer than two legs of a direction: whole legs cannot be held out)";
     }
   }
-  const auto cv_of = [&](const std::vector<Features>& fs, const Design& dz) {
-    return policy_cv_rmse(dz, stacked(fs, &Features::tm)(st.rows), y, blocks, t0, Extrapolation::Evaluate);
+  const auto cv_of = [&](const Design& dz) {
+    try {
+      return polynomial::labelled_cv_rmse(dz.A, y, blocks);
+    } catch (const std::invalid_argument&) {
+      return std::numeric_limits<double>::infinity();
+    }
   };
-  const auto groups = blocks;
 
   // ---- search -----------------------------------------------------------------------------
   // Candidates whose history terms the runs cannot determine are not scored; a scored candidate
@@ -414,7 +381,7 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
   const auto admissible = [&](const std::vector<Features>& fs, const Design& dz) {
     if (!dz.rate_term && !dz.hysteresis) return true;
     try {
-      const auto why = implausible(dz, polynomial::least_squares(dz.A, y), y, stacked(fs, &Features::d)(st.rows), groups);
+      const auto why = implausible(dz, polynomial::least_squares(dz.A, y), y, stacked(fs, &Features::d)(st.rows), blocks);
       if (!why.empty() && std::find(rejected.begin(), rejected.end(), why) == rejected.end()) rejected.push_back(why);
       return why.empty();
     } catch (const std::invalid_argument&) {
@@ -430,7 +397,7 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
       for (bool rate_term : rate_terms) {
         for (int p = o.min_order; p <= o.max_order; ++p) {
           const Design dz = design(fs, st.rows, t0, p, rate_term, width > 0, with_sf);
-          const double cv = cv_of(fs, dz);
+          const double cv = cv_of(dz);
           const Candidate c{lag, width, rate_term, p, cv};
           if (lag == 0 && width == 0 && !rate_term && cv < simple.cv) simple = c;
           if (cv < best.cv && admissible(fs, dz)) best = c;
@@ -445,7 +412,7 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
   const auto cv_at = [&](double lag, double width) {
     const auto fs = features_for(lag, width);
     const Design d = design(fs, st.rows, t0, best.order, best.rate_term, width > 0, with_sf);
-    return admissible(fs, d) ? cv_of(fs, d) : std::numeric_limits<double>::infinity();
+    return admissible(fs, d) ? cv_of(d) : std::numeric_limits<double>::infinity();
   };
   const auto refine = [&](const std::vector<double>& grid, double value, double upper, const std::function<double(double)>& cv) {
     if (!(value > 0) || o.refine_iterations <= 0) return value;
@@ -666,7 +633,7 @@ Disagreement largest_disagreement(const std::vector<Record>& records) {
   };
   std::vector<Curve> curves;
   for (const auto& r : records) {
-    const Binning b = make_bins(r, kBinS);
+    const Binning b = make_bins(r.time_s, kBinS);
     Curve c;
     c.temp = Eigen::VectorXd::Zero(b.bins);
     c.bias = Eigen::VectorXd::Zero(b.bins);

@@ -27,6 +27,36 @@ std::string to_string(Finding::Severity severity) {
   return "warning";
 }
 
+Binning make_bins(const Eigen::VectorXd& time_s, double bin_s) {
+  Binning b;
+  b.bin_of.resize(static_cast<std::size_t>(time_s.size()));
+  long last = -1;
+  for (Eigen::Index i = 0; i < time_s.size(); ++i) {
+    const long k = static_cast<long>(std::floor((time_s[i] - time_s[0]) / bin_s));
+    if (k != last) {
+      ++b.bins;
+      b.count.push_back(0.0);
+      b.first.push_back(i);
+      last = k;
+    }
+    b.bin_of[static_cast<std::size_t>(i)] = b.bins - 1;
+    b.count.back() += 1.0;
+  }
+  return b;
+}
+
+RunsSummary summarize(const std::vector<OvenRun>& runs) {
+  RunsSummary out{runs.front().min_c, runs.front().max_c, 0.0, false, false};
+  for (const auto& r : runs) {
+    out.min_c = std::min(out.min_c, r.min_c);
+    out.max_c = std::max(out.max_c, r.max_c);
+    out.longest_soak_s = std::max(out.longest_soak_s, r.longest_soak_s);
+    out.heating = out.heating || r.heating();
+    out.cooling = out.cooling || r.cooling();
+  }
+  return out;
+}
+
 bool OvenRun::heating() const {
   return std::any_of(legs.begin(), legs.end(), [](const Leg& l) { return l.direction > 0; });
 }
@@ -41,23 +71,12 @@ OvenRun analyse_oven_run(const std::string& record, const Eigen::VectorXd& time_
   OvenRun run;
   run.record = record;
   // Bin means of the temperature.
-  std::vector<double> t, temp;
-  {
-    long last = -1;
-    double n = 0;
-    for (Eigen::Index i = 0; i < time_s.size(); ++i) {
-      const long k = static_cast<long>(std::floor((time_s[i] - time_s[0]) / bin_s));
-      if (k != last) {
-        if (n > 0) temp.back() /= n;
-        t.push_back(time_s[i]);
-        temp.push_back(0.0);
-        n = 0;
-        last = k;
-      }
-      temp.back() += temp_c[i];
-      n += 1;
-    }
-    temp.back() /= n;
+  const Binning b = make_bins(time_s, bin_s);
+  std::vector<double> t, temp(static_cast<std::size_t>(b.bins), 0.0);
+  for (Eigen::Index i = 0; i < time_s.size(); ++i) temp[static_cast<std::size_t>(b.bin_of[static_cast<std::size_t>(i)])] += temp_c[i];
+  for (int k = 0; k < b.bins; ++k) {
+    temp[static_cast<std::size_t>(k)] /= b.count[static_cast<std::size_t>(k)];
+    t.push_back(time_s[b.first[static_cast<std::size_t>(k)]]);
   }
   run.min_c = *std::min_element(temp.begin(), temp.end());
   run.max_c = *std::max_element(temp.begin(), temp.end());
@@ -116,16 +135,9 @@ std::vector<Finding> quality_gate(const std::vector<OvenRun>& runs) {
   using S = Finding::Severity;
   std::vector<Finding> out;
   if (runs.empty()) return out;
-  double lo = runs.front().min_c, hi = runs.front().max_c, longest_soak = 0.0;
-  bool heating = false, cooling = false;
-  for (const auto& r : runs) {
-    lo = std::min(lo, r.min_c);
-    hi = std::max(hi, r.max_c);
-    longest_soak = std::max(longest_soak, r.longest_soak_s);
-    heating = heating || r.heating();
-    cooling = cooling || r.cooling();
-  }
-  const double span = hi - lo;
+  const RunsSummary all = summarize(runs);
+  const double lo = all.min_c, hi = all.max_c, span = all.span_k(), longest_soak = all.longest_soak_s;
+  const bool heating = all.heating, cooling = all.cooling;
   if (span < kMinFitSpanK) {
     out.push_back({S::Error, "span", "temperature span " + fixed(span, 3) + " K (" + fixed(lo, 2) + " .. " + fixed(hi, 2) +
                                          " degC) is below " + fixed(kMinFitSpanK, 2) + " K: nothing to fit"});

@@ -47,6 +47,16 @@ inline constexpr double kMinHistorySpanK = 10.0;
 inline constexpr double kMaxRampKPerMin = 5.0;
 inline constexpr double kMinLegS = 300.0;
 
+// Bins of bin_s seconds from the first sample (bin k: t0 + k bin_s <= t < t0 + (k+1) bin_s), empty
+// bins dropped: the rows every calibration fit and this analysis average over.
+struct Binning {
+  std::vector<int> bin_of;          // per sample: its bin
+  std::vector<double> count;        // per bin: samples
+  std::vector<Eigen::Index> first;  // per bin: its first sample
+  int bins = 0;
+};
+Binning make_bins(const Eigen::VectorXd& time_s, double bin_s);
+
 struct Leg {
   double start_s = 0.0, end_s = 0.0;      // time of its first and last bin
   double from_c = 0.0, to_c = 0.0;        // bin-mean temperature at its ends
@@ -79,6 +89,14 @@ struct OvenRun {
   bool cooling() const;
   double span_k() const { return max_c - min_c; }
 };
+
+// What several runs fitted together hold (directions and soaks may come from any run).
+struct RunsSummary {
+  double min_c = 0.0, max_c = 0.0, longest_soak_s = 0.0;
+  bool heating = false, cooling = false;
+  double span_k() const { return max_c - min_c; }
+};
+RunsSummary summarize(const std::vector<OvenRun>& runs);  // runs must not be empty
 
 // Throws DataError (naming the record) when time and temperature differ in length or hold fewer
 // than 2 samples.

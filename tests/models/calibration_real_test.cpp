@@ -113,8 +113,11 @@ TEST(CalibrationReal, TheDefaultModelIsNeverWorseThanTheSimpleOnesOnHeldOutRealL
 // ~700 deg/h below the heating one), the physical model is chosen and wins.
 TEST(CalibrationReal, ThePhysicalModelIsChosenWhereTheHistoryTransfers) {
   if (!std::filesystem::exists(kReal)) GTEST_SKIP() << "no " << kReal;
-  for (const auto& d : designs()) {
-    if (d.name != "tofupilot x, test cool2") continue;
+  const auto all = designs();
+  const auto found = std::find_if(all.begin(), all.end(), [](const Design& d) { return d.name == "tofupilot x, test cool2"; });
+  ASSERT_NE(found, all.end());
+  {
+    const Design& d = *found;
     FitOptions o;
     o.kind = ModelKind::Physical;
     const CalibrationModel chosen = fit_calibration(d.fit, o);
@@ -130,8 +133,10 @@ TEST(CalibrationReal, ThePhysicalModelIsChosenWhereTheHistoryTransfers) {
 // term, and the quality gate names what is missing.
 TEST(CalibrationReal, DegenerateRunsGetNoHistoryTermsAndTheGateSaysWhy) {
   if (!std::filesystem::exists(kReal)) GTEST_SKIP() << "no " << kReal;
+  int checked = 0;
   for (const auto& d : designs()) {
     if (d.name.rfind("mpu6050", 0) != 0 && d.name.rfind("lsm6dsm", 0) != 0) continue;
+    ++checked;
     FitOptions o = d.options;
     o.kind = ModelKind::Rbf;
     const CalibrationModel m = fit_calibration(d.fit, o);
@@ -147,6 +152,7 @@ TEST(CalibrationReal, DegenerateRunsGetNoHistoryTermsAndTheGateSaysWhy) {
       EXPECT_TRUE(has("dropouts")) << d.name;  // bursts
     }
   }
+  EXPECT_EQ(checked, 7) << "four LSM6DSM and three MPU6050 designs";
 }
 
 }  // namespace
