@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 
+#include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/imu_streams.hpp"
 
@@ -18,9 +20,6 @@ constexpr char kAxisNames[3] = {'X', 'Y', 'Z'};
 [[noreturn]] void fail(const Log& log, const std::string& field, const std::string& message) {
   throw DataError({log.file, 0, field}, message);
 }
-
-// "", "2", "3": the suffix ArduPilot gives instance 0, 1, 2 in INS_GYR_ID, INS_GYR2_ID, ...
-std::string id_suffix(int instance) { return instance == 0 ? "" : std::to_string(instance + 1); }
 
 // Names whose value changes after it was first logged, for a note.
 std::vector<std::string> changed(const Log& log, const std::vector<std::string>& names) {
@@ -108,11 +107,11 @@ std::map<int, Instance> instances(const Log& log) {
   return out;
 }
 
-void device_id(const Log& log, imu::Stream& s, std::vector<std::string>* notes) {
-  const std::string name = std::string(s.sensor == imu::Sensor::Gyro ? "INS_GYR" : "INS_ACC") + id_suffix(s.instance) + "_ID";
-  const auto id = log.parameter(name);
-  if (s.instance >= kParameterInstances || !id || !(*id > 0)) return;
-  s.device_id = std::to_string(static_cast<std::uint64_t>(*id));
+void set_device_id(const Log& log, imu::Stream& s, std::vector<std::string>* notes) {
+  const auto id = device_id(log, s.sensor, s.instance);
+  if (!id) return;
+  s.device_id = std::to_string(*id);
+  const std::string name = device_id_parameter(s.sensor, s.instance);
   if (notes && !changed(log, {name}).empty())
     notes->push_back(name + " changes within the log; the first value (" + s.device_id + ") is the record's");
 }
@@ -139,10 +138,17 @@ void remove_tcal(const Log& log, int instance, const std::string& label, imu::St
                 " and the correction lives in the sensor frame (board rotations are not implemented); values as logged");
   for (imu::Stream* s : {&gyro, &accel})
     for (int a = 0; a < 3; ++a)
-      for (std::size_t i = 0; i < s->axes[a].size(); ++i)
-        s->axes[a][i] += firmware_correction(*tcal, s->sensor, a, gyro.temperature[i]);
-  std::string text = "removed (TMIN " + std::to_string(tcal->tmin) + ", TMAX " + std::to_string(tcal->tmax) +
-                     " degC), as ArduPilot's tempcal_IMU.py does; gyro and accel are the raw values";
+      for (std::size_t i = 0; i < s->axes[a].size(); ++i) {
+        double& v = s->axes[a][i];
+        v += firmware_correction(*tcal, s->sensor, a, gyro.temperature[i]);
+        if (!std::isfinite(v) || std::abs(v) > kMaxMagnitude)
+          fail(log, "INS_TCAL" + n, label + ": removing the firmware's temperature correction gives " +
+                                        (std::isfinite(v) ? "a value beyond 1e100" : "a non-finite value") + " at time stamp " +
+                                        std::to_string(s->time_us[i]) + " us: are the INS_TCAL" + n + " parameters corrupt?");
+      }
+  char range[96];
+  std::snprintf(range, sizeof range, "TMIN %g, TMAX %g degC", tcal->tmin, tcal->tmax);
+  std::string text = std::string("removed (") + range + "), as ArduPilot's tempcal_IMU.py does; gyro and accel are the raw values";
   if (const auto later = changed(log, tcal_names(instance)); !later.empty())
     text += "; " + later.front() + (later.size() > 1 ? " and others change" : " changes") +
             " within the log: the values at boot are used";
@@ -154,6 +160,19 @@ void remove_tcal(const Log& log, int instance, const std::string& label, imu::St
 const std::vector<std::string>& imu_types() {
   static const std::vector<std::string> types{"IMU", "IMU2", "IMU3"};
   return types;
+}
+
+std::string device_id_parameter(imu::Sensor sensor, int instance) {
+  return std::string(sensor == imu::Sensor::Gyro ? "INS_GYR" : "INS_ACC") +
+         (instance == 0 ? "" : std::to_string(instance + 1)) + "_ID";
+}
+
+std::optional<std::uint32_t> device_id(const Log& log, imu::Sensor sensor, int instance) {
+  if (instance < 0 || instance >= kParameterInstances) return std::nullopt;
+  const auto id = log.parameter(device_id_parameter(sensor, instance));
+  constexpr double kMaxId = 4294967295.0;
+  if (!id || !(*id >= 1 && *id <= kMaxId) || *id != std::floor(*id)) return std::nullopt;
+  return static_cast<std::uint32_t>(*id);
 }
 
 std::optional<TemperatureCalibration> temperature_calibration(const Log& log, int instance, std::string* missing) {
@@ -228,8 +247,8 @@ TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector
     }
     if (!t.has_column("T") && notes) notes->push_back(in.label + ": no temperature column T; no temperature channel");
     remove_tcal(log, id, in.label, gyro, accel, notes);
-    device_id(log, gyro, notes);
-    device_id(log, accel, notes);
+    set_device_id(log, gyro, notes);
+    set_device_id(log, accel, notes);
     all.push_back(std::move(gyro));
     all.push_back(std::move(accel));
   }

@@ -13,8 +13,8 @@
 // info`, not made a record.
 //
 // Device ids: the parameters INS_GYR_ID, INS_GYR2_ID, INS_GYR3_ID (gyros of instances 0, 1, 2) and
-// INS_ACC_ID, INS_ACC2_ID, INS_ACC3_ID, as first logged (at boot), in decimal; 0 means none; a later
-// change is noted. Instances above 2 get none.
+// INS_ACC_ID, INS_ACC2_ID, INS_ACC3_ID, as first logged (at boot), in decimal; 0 (or anything but a
+// whole number 1 .. 2^32-1) means none; a later change is noted. Instances above 2 get none.
 //
 // Temperature calibration. ArduPilot corrects each IMU instance n-1 with INS_TCALn (n = 1..3) when
 // INS_TCALn_ENABLE is 1 (AP_InertialSensor_tempcal.cpp, correct_sensor): per axis,
@@ -37,11 +37,13 @@
 // Repairs and errors shared with the other log readers (time base, sorting, duplicates,
 // non-finite values): framework/imu_streams.hpp. Errors of this adapter (DataError naming the file):
 // no IMU messages (the message names unknown types and truncation when the log had them), an IMU
-// message without the columns above, an instance value that is not an integer 0..255; --topic
+// message without the columns above, an instance value that is not an integer 0..255, INS_TCAL
+// parameters whose removal makes a value non-finite or beyond kMaxMagnitude (csv.hpp); --topic
 // other than "" or IMU is a ConfigError.
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -56,6 +58,11 @@ namespace driftlab::dataflash {
 
 // The message types imu_record reads: pass them as ReadOptions::keep_types.
 const std::vector<std::string>& imu_types();
+
+// "INS_GYR_ID", "INS_ACC2_ID", ...: the parameter holding the device id of a sensor of an instance.
+std::string device_id_parameter(imu::Sensor sensor, int instance);
+// Its value as first logged, when it is a device id (see above); nullopt otherwise.
+std::optional<std::uint32_t> device_id(const Log& log, imu::Sensor sensor, int instance);
 
 // INS_TCALn of one IMU instance (n = instance + 1), as first logged.
 struct TemperatureCalibration {

@@ -8,6 +8,7 @@
 // framework/dataflash_imu.hpp) as CSV, in column names the CSV reader recognises: t_s, gyro_x_rad_s,
 // accel1_z_m_s2, temp_c, temp1_c, device_id.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -185,11 +186,10 @@ void dataflash_imu_lines(const dataflash::Log& log) {
       std::cout << ", " << span(temp, 2, "degC");
     }
     std::cout << "\n";
-    const std::string suffix = instance == 0 ? "" : std::to_string(instance + 1);
-    for (const char* sensor : {"GYR", "ACC"})
-      if (const auto id = log.parameter(std::string("INS_") + sensor + suffix + "_ID"); id && *id > 0 && instance < 3)
-        std::cout << "    " << (sensor == std::string("GYR") ? "gyro " : "accel") << " device id " << device_text(*id)
-                  << " (INS_" << sensor << suffix << "_ID)\n";
+    for (const auto sensor : {imu::Sensor::Gyro, imu::Sensor::Accel})
+      if (const auto id = dataflash::device_id(log, sensor, instance))
+        std::cout << "    " << (sensor == imu::Sensor::Gyro ? "gyro " : "accel") << " device id " << device_text(*id) << " ("
+                  << dataflash::device_id_parameter(sensor, instance) << ")\n";
   }
   if (!any) std::cout << "IMU: no IMU messages\n";
 }
@@ -233,9 +233,11 @@ void dataflash_tclr_lines(const dataflash::Log& log) {
   }
   std::cout << "TCLR (temperature-calibration learning): " << t->count << " messages\n";
   if (!t->has_column("I") || !t->has_column("SType") || !t->has_column("Temp")) return;
-  std::map<std::pair<int, int>, std::vector<double>> temps;  // (instance, 0 accel / 1 gyro) -> temperatures
+  // (instance, 0 accel / 1 gyro) -> temperatures; -1 for a value that is no small whole number
+  std::map<std::pair<int, int>, std::vector<double>> temps;
+  auto small = [](double v) { return v >= 0 && v <= 255 && v == std::floor(v) ? static_cast<int>(v) : -1; };
   for (std::size_t i = 0; i < t->count; ++i)
-    temps[{static_cast<int>(t->column("I")[i]), static_cast<int>(t->column("SType")[i])}].push_back(t->column("Temp")[i]);
+    temps[{small(t->column("I")[i]), small(t->column("SType")[i])}].push_back(t->column("Temp")[i]);
   for (const auto& [key, values] : temps)
     std::cout << "  instance " << key.first << " " << (key.second == 0 ? "accel" : key.second == 1 ? "gyro " : "other") << ": "
               << values.size() << " averages, " << span(values, 2, "degC") << "\n";
