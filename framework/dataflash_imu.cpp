@@ -133,9 +133,12 @@ void remove_tcal(const Log& log, int instance, const std::string& label, imu::St
   if (gyro.temperature.empty())
     return note("the correction is not removed: the IMU messages carry no temperature; values as logged");
   const double orientation = log.parameter("AHRS_ORIENTATION").value_or(0.0);
-  if (orientation != 0.0)
-    return note("the correction is not removed: AHRS_ORIENTATION is " + std::to_string(static_cast<int>(orientation)) +
+  if (orientation != 0.0) {
+    char value[32];
+    std::snprintf(value, sizeof value, "%g", orientation);
+    return note(std::string("the correction is not removed: AHRS_ORIENTATION is ") + value +
                 " and the correction lives in the sensor frame (board rotations are not implemented); values as logged");
+  }
   for (imu::Stream* s : {&gyro, &accel})
     for (int a = 0; a < 3; ++a)
       for (std::size_t i = 0; i < s->axes[a].size(); ++i) {
