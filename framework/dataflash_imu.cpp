@@ -61,9 +61,12 @@ const std::vector<double>& field(const Log& log, const MessageType& t, const std
 std::string no_imu_detail(const Log& log) {
   std::string out;
   if (!log.unknown_types.empty()) {
-    const auto& [type, u] = *log.unknown_types.begin();
+    const auto first = std::min_element(log.unknown_types.begin(), log.unknown_types.end(), [](const auto& a, const auto& b) {
+      return a.second.first_offset < b.second.first_offset;
+    });
     out += "; " + std::to_string(log.unknown_types.size()) + " message type(s) without an FMT, the first (" +
-           std::to_string(type) + ") at byte " + std::to_string(u.first_offset) + ": did the log lose its FMT messages?";
+           std::to_string(first->first) + ") at byte " + std::to_string(first->second.first_offset) +
+           ": did the log lose its FMT messages?";
   }
   if (log.truncated_bytes > 0) out += "; the file ends within a message (" + std::to_string(log.truncated_bytes) + " bytes)";
   return out;
