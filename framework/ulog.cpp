@@ -7,10 +7,14 @@
 #include <system_error>
 #include <unordered_map>
 
+#include "framework/binary_input.hpp"
 #include "framework/error.hpp"
 
 namespace driftlab::ulog {
 namespace {
+
+using binary::Input;
+using binary::load;
 
 constexpr unsigned char kMagicBytes[kMagicSize] = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35};
 constexpr std::size_t kHeaderSize = 16;
@@ -21,15 +25,6 @@ constexpr int kMaxNesting = 32;
 // Flattened columns kept over all topics: a real log has some 10^4; the bound keeps a hostile file
 // (thousands of subscriptions of one 65 535-byte format) from asking for gigabytes of names.
 constexpr std::size_t kMaxKeptColumns = std::size_t{1} << 20;
-constexpr std::size_t kBlockSize = std::size_t{1} << 20;
-
-// Little-endian load of N bytes, independent of the host's byte order.
-template <std::size_t N>
-std::uint64_t load(const unsigned char* p) {
-  std::uint64_t v = 0;
-  for (std::size_t i = N; i-- > 0;) v = (v << 8) | p[i];
-  return v;
-}
 
 struct BaseType {
   std::string_view name;
@@ -67,18 +62,8 @@ double decode(Type type, const unsigned char* p) {
     case Type::UInt32: return static_cast<double>(load<4>(p));
     case Type::Int64: return static_cast<double>(static_cast<std::int64_t>(load<8>(p)));
     case Type::UInt64: return static_cast<double>(load<8>(p));
-    case Type::Float: {
-      const auto bits = static_cast<std::uint32_t>(load<4>(p));
-      float f;
-      std::memcpy(&f, &bits, sizeof f);
-      return f;
-    }
-    case Type::Double: {
-      const auto bits = load<8>(p);
-      double d;
-      std::memcpy(&d, &bits, sizeof d);
-      return d;
-    }
+    case Type::Float: return binary::load_float(p);
+    case Type::Double: return binary::load_double(p);
     case Type::Nested: break;
   }
   return 0.0;
@@ -89,10 +74,7 @@ std::string render(Type type, const unsigned char* p) {
   char buf[64];
   std::to_chars_result r{};
   if (type == Type::Float) {
-    const auto bits = static_cast<std::uint32_t>(load<4>(p));
-    float f;
-    std::memcpy(&f, &bits, sizeof f);
-    r = std::to_chars(buf, buf + sizeof buf, f);
+    r = std::to_chars(buf, buf + sizeof buf, binary::load_float(p));
   } else if (type == Type::Double) {
     r = std::to_chars(buf, buf + sizeof buf, decode(type, p));
   } else if (type == Type::Int64) {
@@ -104,80 +86,6 @@ std::string render(Type type, const unsigned char* p) {
   }
   return std::string(buf, r.ptr);
 }
-
-// The file or the memory being parsed, read forward in blocks.
-class Input {
- public:
-  Input(std::string_view memory, std::string file) : memory_(memory), file_name_(std::move(file)), size_(memory.size()) {}
-  Input(const std::filesystem::path& path, std::string file) : file_name_(std::move(file)) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec))
-      throw DataError({file_name_, 0, ""}, "not a readable file (missing, or a directory)");
-    size_ = std::filesystem::file_size(path, ec);
-    if (ec) throw DataError({file_name_, 0, ""}, "cannot read the file size: " + ec.message());
-    file_ = std::fopen(path.c_str(), "rb");
-    if (!file_) throw DataError({file_name_, 0, ""}, "cannot open the file");
-    block_.resize(kBlockSize + kMaxMessageBytes + kMessageHeaderSize);
-  }
-  ~Input() {
-    if (file_) std::fclose(file_);
-  }
-  Input(const Input&) = delete;
-  Input& operator=(const Input&) = delete;
-
-  std::uint64_t size() const { return size_; }
-  std::uint64_t offset() const { return offset_; }
-
-  // The next n bytes; the caller has checked n <= size() - offset() and n <= one message.
-  const unsigned char* take(std::size_t n) {
-    const unsigned char* p = nullptr;
-    if (!file_) {
-      p = reinterpret_cast<const unsigned char*>(memory_.data()) + offset_;
-    } else {
-      if (end_ - begin_ < n) refill(n);
-      p = block_.data() + begin_;
-      begin_ += n;
-    }
-    offset_ += n;
-    return p;
-  }
-
-  // Moves forward to `target` (<= size()).
-  void seek(std::uint64_t target) {
-    if (file_) {
-      if (target - offset_ <= end_ - begin_) {
-        begin_ += static_cast<std::size_t>(target - offset_);
-      } else {
-        if (::fseeko(file_, static_cast<off_t>(target), SEEK_SET) != 0)
-          throw DataError({file_name_, 0, "byte " + std::to_string(target)}, "cannot seek to this offset");
-        begin_ = end_ = 0;
-      }
-    }
-    offset_ = target;
-  }
-
- private:
-  void refill(std::size_t n) {
-    const std::size_t have = end_ - begin_;
-    std::memmove(block_.data(), block_.data() + begin_, have);
-    begin_ = 0;
-    end_ = have;
-    const std::uint64_t left_in_file = size_ - (offset_ + have);
-    const auto want = static_cast<std::size_t>(std::min<std::uint64_t>(block_.size() - have, left_in_file));
-    const std::size_t got = std::fread(block_.data() + have, 1, want, file_);
-    end_ += got;
-    if (end_ < n)
-      throw DataError({file_name_, 0, "byte " + std::to_string(offset_ + end_)},
-                      "the file ended before its size said (was it changed while being read?)");
-  }
-
-  std::string_view memory_;
-  std::string file_name_;
-  std::FILE* file_ = nullptr;
-  std::uint64_t size_ = 0, offset_ = 0;
-  std::vector<unsigned char> block_;
-  std::size_t begin_ = 0, end_ = 0;  // buffered bytes: file [offset_, offset_ + end_ - begin_)
-};
 
 struct RawField {
   std::string type_name;
@@ -650,7 +558,7 @@ std::vector<const Topic*> Log::instances(std::string_view name) const {
 }
 
 Log read(const std::filesystem::path& path, const ReadOptions& options) {
-  Input in(path, path.string());
+  Input in(path, path.string(), kMaxMessageBytes + kMessageHeaderSize);
   return parse_input(in, path.string(), options);
 }
 

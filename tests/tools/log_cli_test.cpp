@@ -1,10 +1,11 @@
-// `driftlab log info / export` and the record-reading commands on PX4 ULogs, end to end: exit
-// codes (3 for a bad log), messages naming file and byte offset, the export read back by the CSV
-// reader.
+// `driftlab log info / export` and the record-reading commands on PX4 ULogs and ArduPilot DataFlash
+// logs, end to end: exit codes (3 for a bad log), messages naming file and byte offset, the export
+// read back by the CSV reader; calibrate, compensate and allan reading a .bin directly.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "framework/csv.hpp"
+#include "tests/framework/dataflash_writer.hpp"
 #include "tests/framework/ulog_writer.hpp"
 #include "tests/tools/cli_harness.hpp"
 
@@ -113,6 +114,108 @@ TEST(LogCliPyulog, InfoOnEachFixture) {
   }
   const auto small = run_driftlab("log info " + (pyulog_dir() / "sample_log_small.ulg").string());
   EXPECT_THAT(small.out, AllOf(HasSubstr("ver_hw: CUBEPILOT_CUBEORANGE"), HasSubstr("instance 2:"), HasSubstr("degC")));
+}
+
+// --- ArduPilot DataFlash ------------------------------------------------------------------------
+
+fs::path dataflash_logs() { return fs::path(DRIFTLAB_TEST_DATA) / "logs"; }
+const fs::path kSpark404 = dataflash_logs() / "spark404-dataflashlog" / "log.bin";  // 1 258 IMU + IMU2, pymavlink's counts
+
+TEST(LogCliDataflash, InfoOnEachFixture) {
+  for (const char* file : {"pymavlink/test.BIN", "spark404-dataflashlog/log.bin", "methodic-configurator/backend_log_80k.bin"}) {
+    SCOPED_TRACE(file);
+    const auto r = run_driftlab("log info " + (dataflash_logs() / file).string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_THAT(r.out, AllOf(HasSubstr("ArduPilot DataFlash log"), HasSubstr("IMU instances"), HasSubstr("instance 1:"),
+                             HasSubstr("PARM"), HasSubstr("TCLR (temperature-calibration learning): none")));
+  }
+  const auto spark = run_driftlab("log info " + kSpark404.string());
+  EXPECT_THAT(spark.out, AllOf(HasSubstr("instance 0: 1258 messages at 24.7 Hz, 27.18 to 27.68 degC"),
+                               HasSubstr("gyro  device id 2163722 (0x21040a) (INS_GYR_ID)"),
+                               HasSubstr("temperature calibration: no INS_TCAL* parameters")));
+  const auto newer = run_driftlab("log info " + (dataflash_logs() / "methodic-configurator" / "backend_log_80k.bin").string());
+  EXPECT_THAT(newer.out, AllOf(HasSubstr("IMU messages by I"), HasSubstr("INS_TCAL1_ENABLE 0 (off"),
+                               HasSubstr("INS_GYR1_CALTEMP = 30.7045"), HasSubstr("its last 2 bytes left out")));
+}
+
+TEST(LogCliDataflash, ExportWritesEveryInstanceTheCsvReaderReadsBack) {
+  const auto dir = scratch_dir("log_cli_dataflash_export");
+  const auto out = (dir / "imu.csv").string();
+  const auto r = run_driftlab("log export " + kSpark404.string() + " --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  CsvReadOptions options;
+  options.required_roles = {"gyro_z", "gyro1_z", "accel1_z", "temperature", "temperature1"};
+  const auto record = read_csv(out, options);
+  EXPECT_EQ(record.size(), 1258);
+  EXPECT_EQ(record.time()[0], 402.644506);  // TimeUS 402644506 of the first IMU message (DFReader)
+  EXPECT_EQ(record.channel("temperature").values[0], 27.466842651367188);
+  EXPECT_EQ(record.device_id(0), "2163722");
+  EXPECT_EQ(record.device_id(1), "2228490");
+  const auto gyros = run_driftlab("log export " + kSpark404.string() + " --sensor gyro1 --out " + (dir / "g1.csv").string());
+  ASSERT_EQ(gyros.exit_code, 0) << gyros.err;
+  EXPECT_THAT(read_text(dir / "g1.csv").substr(0, 60), HasSubstr("t_s,gyro1_x_rad_s,gyro1_y_rad_s,gyro1_z_rad_s,temp1_c"));
+}
+
+TEST(LogCliDataflash, CalibrateCompensateAndAllanReadTheBinDirectly) {
+  const auto dir = scratch_dir("log_cli_dataflash_commands");
+  const std::string bin = kSpark404.string(), model = (dir / "cal.json").string();
+  // A flight log, not an oven run: instance 0 warms by 0.5 K, its model does not beat no model
+  // (--force writes it anyway; what is checked here is that calibrate reads the .bin); IMU2 of this
+  // log reports 0 degC throughout, which the calibration's quality gate refuses.
+  const auto cal = run_driftlab("-q calibrate --data " + bin + " --instance 0 --bin 2 --force --out " + model);
+  ASSERT_EQ(cal.exit_code, 0) << cal.err;
+  EXPECT_THAT(read_text(model), AllOf(HasSubstr("\"device_id\": \"2163722\""), HasSubstr("\"samples\": 1258")));
+  EXPECT_THAT(cal.out, HasSubstr("6 channels"));
+  const auto gyros = run_driftlab("-q calibrate --data " + bin + " --instance 0 --sensor gyro --bin 2 --force --out " +
+                                  (dir / "g.json").string());
+  ASSERT_EQ(gyros.exit_code, 0) << gyros.err;
+  EXPECT_THAT(gyros.out, HasSubstr("3 channels"));
+  const auto flat = run_driftlab("-q calibrate --data " + bin + " --instance 1 --bin 2 --force --out " + (dir / "g1.json").string());
+  EXPECT_EQ(flat.exit_code, 3);
+  EXPECT_THAT(flat.err, AllOf(HasSubstr("log.bin"), HasSubstr("IMU2")));
+
+  // compensate on the .bin writes what it writes on the log's export
+  const auto exported = run_driftlab("log export " + bin + " --out " + (dir / "imu.csv").string());
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  const auto from_csv = run_driftlab("-q compensate --model " + model + " --data " + (dir / "imu.csv").string() + " --out " +
+                                     (dir / "c1.csv").string());
+  const auto from_bin = run_driftlab("-q compensate --model " + model + " --data " + bin + " --out " + (dir / "c2.csv").string());
+  ASSERT_EQ(from_csv.exit_code, 0) << from_csv.err;
+  ASSERT_EQ(from_bin.exit_code, 0) << from_bin.err;
+  EXPECT_EQ(read_text(dir / "c1.csv"), read_text(dir / "c2.csv"));
+
+  const auto allan = run_driftlab("allan --data " + bin + " --column rate=gyro1_z --out " + (dir / "a.csv").string());
+  EXPECT_EQ(allan.exit_code, 0) << allan.err;
+  EXPECT_THAT(allan.out, HasSubstr("1258 samples"));
+}
+
+TEST(LogCliDataflash, BadLogsExitWithThreeNamingFileAndOffset) {
+  const auto dir = scratch_dir("log_cli_dataflash_bad");
+  namespace df = testing_dataflash;
+  df::Writer corrupt;
+  corrupt.fmt(70, "BAD", "Qz", "TimeUS,Z", 20);
+  df::Writer no_imu;
+  df::define_imu_log(no_imu);
+  df::parm(no_imu, 0, "INS_GYR_ID", 1);
+  write(dir / "corrupt.bin", corrupt.bytes());
+  write(dir / "noimu.bin", no_imu.bytes());
+  write(dir / "cut.bin", read_text(kSpark404).substr(0, 60));
+  const std::string x = (dir / "x.csv").string();
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"log info " + (dir / "corrupt.bin").string(), "corrupt.bin: byte 89: FMT of type 70"},
+           {"log export " + (dir / "cut.bin").string() + " --out " + x, "cut.bin: byte 0: truncated"},
+           {"log export " + (dir / "noimu.bin").string() + " --out " + x, "no IMU messages"},
+           {"-q calibrate --data " + (dir / "noimu.bin").string() + " --out " + x, "no IMU messages"},
+           {"log export " + kSpark404.string() + " --instance 5 --out " + x, "matches no stream of the log"}}) {
+    SCOPED_TRACE(args);
+    const auto r = run_driftlab(args);
+    EXPECT_EQ(r.exit_code, 3);
+    EXPECT_THAT(r.err, HasSubstr(expected));
+    EXPECT_FALSE(fs::exists(x));
+  }
+  const auto topic = run_driftlab("log export " + kSpark404.string() + " --topic sensor_gyro --out " + x);
+  EXPECT_EQ(topic.exit_code, 2);
+  EXPECT_THAT(topic.err, HasSubstr("--topic IMU"));
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "framework/output_set.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
+#include "framework/imu.hpp"
 #include "framework/record_reader.hpp"
 
 namespace driftlab::cli {
@@ -70,9 +71,9 @@ CLI::Validator whole_number(double lo, double hi) {
 
 void add_data_options(CLI::App* command, DataOptions& data, const std::string& column_help) {
   command->add_option("--data", data.path,
-                      "input record: CSV (header row; default columns t_s, rate_dps, temp_c) or a PX4 ULog (.ulg, "
-                      "recognised by content; name the channel to analyse, e.g. --column rate=gyro_z for the z gyro "
-                      "in rad/s)");
+                      "input record: CSV (header row; default columns t_s, rate_dps, temp_c), a PX4 ULog (.ulg) or an "
+                      "ArduPilot DataFlash log (.bin), recognised by content; for a log name the channel to analyse, "
+                      "e.g. --column rate=gyro_z for the z gyro in rad/s");
   command->add_option("--column", data.columns, column_help);
   add_sampling_options(command, data.sample_rate_hz, data.max_gap_factor);
   add_log_selection_options(command, data.log);
@@ -80,14 +81,41 @@ void add_data_options(CLI::App* command, DataOptions& data, const std::string& c
 
 void add_log_selection_options(CLI::App* command, LogSelection& selection) {
   command->add_option("--topic", selection.topic,
-                      "log topic to read the IMU from: sensor_gyro, sensor_accel or sensor_combined (default: "
-                      "sensor_gyro + sensor_accel when the log has them, else sensor_combined)");
+                      "log topic to read the IMU from: PX4 ULog sensor_gyro, sensor_accel or sensor_combined (default: "
+                      "sensor_gyro + sensor_accel when the log has them, else sensor_combined); ArduPilot DataFlash: IMU");
   command->add_option("--instance", selection.instance,
-                      "log IMU instance (PX4 multi_id) to read; its gyro is the time base (default: every instance, "
+                      "log IMU instance (PX4 multi_id, ArduPilot IMU's I) to read; its gyro is the time base (default: every instance, "
                       "on the time base of the first gyro)")
       ->check(CLI::Range(0, 255));
   command->add_option("--sensor", selection.sensor,
                       "log channels to read: gyro, accel, gyro1, gyro_z, ... comma-separated (default: all)");
+}
+
+namespace {
+
+// Column name and unit of an IMU record channel in the export.
+CsvColumn export_column(const Channel& c) {
+  if (const auto id = imu::parse_role(c.role)) {
+    const bool gyro = id->sensor == imu::Sensor::Gyro;
+    return {c.role + (gyro ? "_rad_s" : "_m_s2"), c.values, gyro ? "rad/s" : "m/s^2"};
+  }
+  const int instance = imu::parse_temperature_role(c.role).value_or(0);
+  return {instance ? "temp" + std::to_string(instance) + "_c" : "temp_c", c.values, "degC"};
+}
+
+}  // namespace
+
+std::vector<CsvColumn> imu_record_columns(const TimeSeries& record) {
+  constexpr int kMaxInstance = 99;  // the IMU role names' last instance (imu.hpp)
+  std::vector<CsvColumn> columns{{"t_s", record.time(), "s"}};
+  for (const auto& c : record.channels()) columns.push_back(export_column(c));
+  for (int instance = 0; instance <= kMaxInstance; ++instance) {
+    const auto& id = record.device_id(instance);
+    if (id.empty()) continue;
+    columns.push_back({instance ? "device_id" + std::to_string(instance) : "device_id",
+                       Eigen::VectorXd::Constant(record.size(), std::stod(id)), "1"});
+  }
+  return columns;
 }
 
 void add_sampling_options(CLI::App* command, double& sample_rate_hz, double& max_gap_factor,

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "framework/csv.hpp"
 #include "framework/output_set.hpp"
 #include "framework/record_reader.hpp"
 #include "framework/registry.hpp"
@@ -61,6 +62,11 @@ void add_sampling_options(CLI::App* command, double& sample_rate_hz, double& max
 void add_data_options(CLI::App* command, DataOptions& data, const std::string& column_help);
 // Adds --topic, --instance and --sensor (framework/record_reader.hpp LogSelection).
 void add_log_selection_options(CLI::App* command, LogSelection& selection);
+
+// A log's IMU record as CSV columns, in names the CSV reader recognises: t_s (s), gyro*_rad_s
+// (rad/s), accel*_m_s2 (m/s^2), temp*_c (degC), device_id* -- what `log export` writes and what
+// `compensate` reads a log as.
+std::vector<CsvColumn> imu_record_columns(const TimeSeries& record);
 // Reads the record, CSV or a log by its content (framework/record_reader.hpp); `required_roles`
 // must be present (the role of the first --column that is not the time column replaces "rate").
 // A log has no "rate" channel: single-signal commands name one, `--column rate=gyro_z` (the z gyro

@@ -3,6 +3,9 @@
 // (--stream: CSV rows on standard input, compensated rows on standard output, one by one, constant
 // memory). Optional causal Kalman stage on the gyro channels (plugins/kalman scalar random-walk
 // filter). Both modes run one row engine, so streaming output equals batch output byte for byte.
+// A log (PX4 ULog, ArduPilot DataFlash; --data, recognised by content) is read as its IMU record in
+// the columns `driftlab log export` writes (cli.hpp imu_record_columns), --topic/--instance/--sensor
+// picking what to read; --column then names those columns.
 //
 // Output: every input column in its own name, unit and order; the columns of the channels the model
 // covers hold the compensated values (in the column's own unit), every other cell is passed through
@@ -24,6 +27,7 @@
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
 #include "framework/output_set.hpp"
+#include "framework/record_reader.hpp"
 #include "framework/units.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "plugins/kalman/kalman.hpp"
@@ -242,7 +246,16 @@ void batch(const calibration::ImuCalibration& model, const CompensateOptions& o)
   read.required_roles = {};
   read.sample_rate_hz = o.data.sample_rate_hz;
   read.max_gap_factor = o.data.max_gap_factor;
-  const std::string text = read_text_file(path);
+  std::string text;
+  if (sniff_record_format(path) == RecordFormat::Csv) {
+    text = read_text_file(path);
+  } else {
+    CsvReadOptions log_read = read;
+    log_read.columns.clear();
+    std::vector<std::string> notes;
+    text = format_csv(imu_record_columns(read_record(path, log_read, o.data.log, &notes)), path);
+    for (const auto& n : notes) std::cerr << "note: " << n << "\n";
+  }
   parse_csv(text, path, read);
   // ... then every row through the engine.
   Engine engine(model, o, path);
@@ -323,9 +336,11 @@ void add_compensate_command(CLI::App& app, CommandEnv&) {
       "compensate", "apply a calibration model sample by sample (causal), to a file or as a stdin -> stdout pipe");
   cmd->add_option("--model", o->model, "calibration model JSON (from driftlab calibrate)")->required();
   cmd->add_option("--data", o->data.paths, "input CSV (the columns the model was fitted on; every other column is "
-                                           "passed through)")->expected(1);
+                                           "passed through), or a PX4 ULog / ArduPilot DataFlash log, read as "
+                                           "`driftlab log export` writes it")->expected(1);
   cmd->add_option("--column", o->data.columns,
                   "column mapping role=column:unit, as for driftlab calibrate (gyro_x=gx:deg/s, temperature=T:degC, ...)");
+  add_log_selection_options(cmd, o->data.log);
   add_sampling_options(cmd, o->data.sample_rate_hz, o->data.max_gap_factor,
                        "sample rate in Hz, for input without a time column",
                        "batch: largest allowed time step, as a multiple of the median step (0 allows gaps)");

@@ -1,12 +1,21 @@
-// `driftlab log info FILE`: what a PX4 ULog holds (system info, topics with message counts, rates
-// and time spans, IMU instances with device ids and temperature spans, dropouts, parameters).
-// `driftlab log export FILE --out x.csv`: its IMU record (framework/ulog_imu.hpp) as CSV, in column
-// names the CSV reader recognises: t_s, gyro_x_rad_s, accel1_z_m_s2, temp_c, temp1_c, device_id.
+// `driftlab log info FILE`: what a log holds. PX4 ULog: system info, topics with message counts,
+// rates and time spans, IMU instances with device ids and temperature spans, dropouts, parameters.
+// ArduPilot DataFlash: message types with counts, rates and time spans, skipped garbage, unknown
+// types and a cut-off end, IMU instances with device ids and temperature spans, the INS_TCAL*
+// temperature-calibration parameters and whether the record has the firmware's correction removed,
+// TCLR (calibration learning) messages.
+// `driftlab log export FILE --out x.csv`: its IMU record (framework/ulog_imu.hpp,
+// framework/dataflash_imu.hpp) as CSV, in column names the CSV reader recognises: t_s, gyro_x_rad_s,
+// accel1_z_m_s2, temp_c, temp1_c, device_id.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 
+#include "framework/dataflash.hpp"
+#include "framework/dataflash_imu.hpp"
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
 #include "framework/output_set.hpp"
@@ -22,12 +31,14 @@ constexpr double kSecondsPerMicrosecond = 1e-6;
 constexpr std::size_t kInfoValueChars = 60;  // longer info values are cut in the listing
 constexpr int kMaxInstance = 99;
 
-void require_ulog(const std::string& path) {
+RecordFormat require_log(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw DataError({path, 0, ""}, "not a readable file (missing, or a directory)");
-  if (sniff_record_format(path) != RecordFormat::Ulog)
-    throw DataError({path, 0, ""}, "not a PX4 ULog (it does not start with 'ULog' 0x01 0x12 0x35); CSV records are "
-                                   "read by the other commands directly");
+  const RecordFormat format = sniff_record_format(path);
+  if (format == RecordFormat::Csv)
+    throw DataError({path, 0, ""}, "not a PX4 ULog (it does not start with 'ULog' 0x01 0x12 0x35) nor an ArduPilot "
+                                   "DataFlash log (0xA3 0x95 0x80); CSV records are read by the other commands directly");
+  return format;
 }
 
 std::string fixed(double v, int digits) {
@@ -43,26 +54,30 @@ double rate_hz(const ulog::Topic& t) {
 
 std::string seconds(std::uint64_t us) { return fixed(static_cast<double>(us) * kSecondsPerMicrosecond, 3); }
 
+// "2424842 (0x25000a)"
+std::string device_text(double id) {
+  const auto value = static_cast<unsigned long long>(id);
+  char hex[32];
+  std::snprintf(hex, sizeof hex, "0x%llx", value);
+  return std::to_string(value) + " (" + hex + ")";
+}
+
+std::string span(const std::vector<double>& values, int digits, const char* unit) {
+  const auto [lo, hi] = std::minmax_element(values.begin(), values.end());
+  return fixed(*lo, digits) + " to " + fixed(*hi, digits) + " " + unit;
+}
+
 // "device_id 2424842 (0x25000a), 6 messages at 1.0 Hz, 40.03 to 40.36 degC"
 std::string imu_line(const ulog::Topic& t) {
   std::string out;
-  if (t.has_column("device_id") && !t.column("device_id").empty()) {
-    const auto id = static_cast<unsigned long long>(t.column("device_id").front());
-    char hex[32];
-    std::snprintf(hex, sizeof hex, "0x%llx", id);
-    out += "device_id " + std::to_string(id) + " (" + hex + "), ";
-  }
+  if (t.has_column("device_id") && !t.column("device_id").empty())
+    out += "device_id " + device_text(t.column("device_id").front()) + ", ";
   out += std::to_string(t.count) + " messages at " + fixed(rate_hz(t), 1) + " Hz";
-  if (t.has_column("temperature") && !t.column("temperature").empty()) {
-    const auto& temp = t.column("temperature");
-    const auto [lo, hi] = std::minmax_element(temp.begin(), temp.end());
-    out += ", " + fixed(*lo, 2) + " to " + fixed(*hi, 2) + " degC";
-  }
+  if (t.has_column("temperature") && !t.column("temperature").empty()) out += ", " + span(t.column("temperature"), 2, "degC");
   return out;
 }
 
-void info_command(const std::string& path) {
-  require_ulog(path);
+void ulog_info(const std::string& path) {
   ulog::ReadOptions options;
   options.keep_topics = ulog::imu_topics();
   const ulog::Log log = ulog::read(path, options);
@@ -136,39 +151,163 @@ void info_command(const std::string& path) {
   }
 }
 
+double rate_hz(const dataflash::MessageType& t) {
+  if (t.count < 2 || t.last_time_us <= t.first_time_us) return 0.0;
+  return static_cast<double>(t.count - 1) / (static_cast<double>(t.last_time_us - t.first_time_us) * kSecondsPerMicrosecond);
+}
+
+// Rate of `count` samples between two time stamps (us), 0 when it cannot be told.
+double rate_hz(std::size_t count, double first_us, double last_us) {
+  if (count < 2 || last_us <= first_us) return 0.0;
+  return static_cast<double>(count - 1) / ((last_us - first_us) * kSecondsPerMicrosecond);
+}
+
+// The IMU messages of one instance (ArduPilot's I, or IMU/IMU2/IMU3 of older logs).
+void dataflash_imu_lines(const dataflash::Log& log) {
+  const auto* imu = log.find("IMU");
+  const bool by_column = imu && imu->has_column("I");
+  const char* old_names[] = {"IMU", "IMU2", "IMU3"};
+  bool any = false;
+  for (int instance = 0; instance <= kMaxInstance; ++instance) {
+    const dataflash::MessageType* t = by_column ? imu : (instance < 3 ? log.find(old_names[instance]) : nullptr);
+    if (!t || t->count == 0) continue;
+    std::vector<std::size_t> rows;
+    for (std::size_t i = 0; i < t->count; ++i)
+      if (!by_column || t->column("I")[i] == instance) rows.push_back(i);
+    if (rows.empty()) continue;
+    if (!any) std::cout << "IMU instances (" << (by_column ? "IMU messages by I" : "IMU, IMU2, IMU3") << "):\n";
+    any = true;
+    std::cout << "  instance " << instance << ": " << rows.size() << " messages at "
+              << fixed(rate_hz(rows.size(), static_cast<double>(t->time_us[rows.front()]), static_cast<double>(t->time_us[rows.back()])), 1)
+              << " Hz";
+    if (t->has_column("T")) {
+      std::vector<double> temp;
+      for (const auto i : rows) temp.push_back(t->column("T")[i]);
+      std::cout << ", " << span(temp, 2, "degC");
+    }
+    std::cout << "\n";
+    for (const auto sensor : {imu::Sensor::Gyro, imu::Sensor::Accel})
+      if (const auto id = dataflash::device_id(log, sensor, instance))
+        std::cout << "    " << (sensor == imu::Sensor::Gyro ? "gyro " : "accel") << " device id " << device_text(*id) << " ("
+                  << dataflash::device_id_parameter(sensor, instance) << ")\n";
+  }
+  if (!any) std::cout << "IMU: no IMU messages\n";
+}
+
+void dataflash_tcal_lines(const dataflash::Log& log) {
+  std::vector<const dataflash::Parameter*> tcal;
+  std::vector<std::string> seen;
+  for (const auto& p : log.parameters) {
+    const bool calibration = p.name.starts_with("INS_TCAL") ||
+                             ((p.name.starts_with("INS_GYR") || p.name.starts_with("INS_ACC")) && p.name.ends_with("_CALTEMP"));
+    if (!calibration || std::find(seen.begin(), seen.end(), p.name) != seen.end()) continue;
+    seen.push_back(p.name);
+    tcal.push_back(&p);
+  }
+  if (tcal.empty()) {
+    std::cout << "temperature calibration: no INS_TCAL* parameters in the log\n";
+    return;
+  }
+  std::cout << "temperature calibration (INS_TCALn, n = instance + 1; values at boot):\n";
+  for (int instance = 0; instance < 3; ++instance) {
+    const auto enable = log.parameter("INS_TCAL" + std::to_string(instance + 1) + "_ENABLE");
+    if (!enable) continue;
+    std::cout << "  instance " << instance << ": INS_TCAL" << instance + 1 << "_ENABLE " << *enable;
+    if (*enable == 1.0)
+      std::cout << " (the firmware corrected the logged values; the record has the correction removed, see the notes of "
+                   "log export)";
+    else if (*enable == 2.0)
+      std::cout << " (learning: TCLR messages hold the samples)";
+    else
+      std::cout << " (off: the logged values are raw)";
+    std::cout << "\n";
+  }
+  for (const auto* p : tcal) std::cout << "  " << p->name << " = " << p->value << "\n";
+}
+
+void dataflash_tclr_lines(const dataflash::Log& log) {
+  const auto* t = log.find("TCLR");
+  if (!t || t->count == 0) {
+    std::cout << "TCLR (temperature-calibration learning): none\n";
+    return;
+  }
+  std::cout << "TCLR (temperature-calibration learning): " << t->count << " messages\n";
+  if (!t->has_column("I") || !t->has_column("SType") || !t->has_column("Temp")) return;
+  // (instance, 0 accel / 1 gyro) -> temperatures; -1 for a value that is no small whole number
+  std::map<std::pair<int, int>, std::vector<double>> temps;
+  auto small = [](double v) { return v >= 0 && v <= 255 && v == std::floor(v) ? static_cast<int>(v) : -1; };
+  for (std::size_t i = 0; i < t->count; ++i)
+    temps[{small(t->column("I")[i]), small(t->column("SType")[i])}].push_back(t->column("Temp")[i]);
+  for (const auto& [key, values] : temps)
+    std::cout << "  instance " << key.first << " " << (key.second == 0 ? "accel" : key.second == 1 ? "gyro " : "other") << ": "
+              << values.size() << " averages, " << span(values, 2, "degC") << "\n";
+}
+
+void dataflash_info(const std::string& path) {
+  dataflash::ReadOptions options;
+  options.keep_types = dataflash::imu_types();
+  options.keep_types.push_back("TCLR");
+  const dataflash::Log log = dataflash::read(path, options);
+  std::size_t with_data = 0;
+  std::uint64_t first = 0, last = 0;
+  for (const auto& t : log.types) {
+    with_data += t.count > 0;
+    if (!t.timed || t.count < 2) continue;  // a single message may carry a stale time stamp
+    first = first == 0 ? t.first_time_us : std::min(first, t.first_time_us);
+    last = std::max(last, t.last_time_us);
+  }
+  std::cout << path << ": ArduPilot DataFlash log, " << log.file_size << " bytes, " << log.messages << " messages\n";
+  if (last > first)
+    std::cout << "time span: " << seconds(first) << " to " << seconds(last) << " s since boot (" << seconds(last - first) << " s)\n";
+  std::cout << "skipped: " << log.skipped_bytes << " bytes of garbage";
+  if (log.skipped_runs > 0) std::cout << " in " << log.skipped_runs << " places, the first at byte " << log.first_skip_offset;
+  std::cout << " (resynchronised on the next message header)\n";
+  for (const auto& [type, u] : log.unknown_types)
+    std::cout << "unknown message type " << static_cast<int>(type) << " (no FMT): " << u.headers << " headers skipped, the first at byte "
+              << u.first_offset << "\n";
+  if (log.truncated_bytes > 0) std::cout << "the file ends within a message: its last " << log.truncated_bytes << " bytes left out\n";
+  std::cout << "parameters: " << log.parameters.size() << " PARM messages\n";
+  std::cout << "message types: " << log.types.size() << " defined, " << with_data << " with messages\n";
+  char row[256];
+  std::snprintf(row, sizeof row, "  %-6s %5s %10s %10s %12s %12s\n", "name", "type", "messages", "rate Hz", "from s", "to s");
+  std::cout << row;
+  for (const auto& t : log.types) {
+    if (t.count == 0) continue;
+    if (t.timed)
+      std::snprintf(row, sizeof row, "  %-6s %5d %10llu %10.1f %12.3f %12.3f\n", t.name.c_str(), t.type,
+                    static_cast<unsigned long long>(t.count), rate_hz(t), static_cast<double>(t.first_time_us) * kSecondsPerMicrosecond,
+                    static_cast<double>(t.last_time_us) * kSecondsPerMicrosecond);
+    else
+      std::snprintf(row, sizeof row, "  %-6s %5d %10llu\n", t.name.c_str(), t.type, static_cast<unsigned long long>(t.count));
+    std::cout << row;
+  }
+  dataflash_imu_lines(log);
+  dataflash_tcal_lines(log);
+  dataflash_tclr_lines(log);
+}
+
+void info_command(const std::string& path) {
+  if (require_log(path) == RecordFormat::Ulog)
+    ulog_info(path);
+  else
+    dataflash_info(path);
+}
+
 struct ExportOptions {
   std::string path, out;
   LogSelection log;
 };
 
-// Column name and unit of an IMU record channel in the export.
-CsvColumn export_column(const Channel& c) {
-  if (const auto id = imu::parse_role(c.role)) {
-    const bool gyro = id->sensor == imu::Sensor::Gyro;
-    return {c.role + (gyro ? "_rad_s" : "_m_s2"), c.values, gyro ? "rad/s" : "m/s^2"};
-  }
-  const int instance = imu::parse_temperature_role(c.role).value_or(0);
-  return {instance ? "temp" + std::to_string(instance) + "_c" : "temp_c", c.values, "degC"};
-}
-
 void export_command(const ExportOptions& o) {
   OutputSet outputs({o.path});
   outputs.plan(o.out, "--out");
-  require_ulog(o.path);
+  require_log(o.path);
   CsvReadOptions options;
   options.required_roles = {};
   options.max_gap_factor = 0.0;  // exported as logged; readers of the CSV check gaps with their own --max-gap
   std::vector<std::string> notes;
   const TimeSeries record = read_record(o.path, options, o.log, &notes);
-  std::vector<CsvColumn> columns{{"t_s", record.time(), "s"}};
-  for (const auto& c : record.channels()) columns.push_back(export_column(c));
-  for (int instance = 0; instance <= kMaxInstance; ++instance) {
-    const auto& id = record.device_id(instance);
-    if (id.empty()) continue;
-    columns.push_back({instance ? "device_id" + std::to_string(instance) : "device_id",
-                       Eigen::VectorXd::Constant(record.size(), std::stod(id)), "1"});
-  }
-  outputs.write_csv(o.out, columns);
+  outputs.write_csv(o.out, imu_record_columns(record));
   outputs.commit();
   for (const auto& n : notes) std::cerr << "note: " << n << "\n";
   std::cout << "wrote " << o.out << ": " << record.size() << " samples, " << record.channels().size() << " channels\n";
@@ -177,21 +316,23 @@ void export_command(const ExportOptions& o) {
 }  // namespace
 
 void add_log_command(CLI::App& app, CommandEnv&) {
-  auto* log = app.add_subcommand("log", "read flight-controller logs (PX4 ULog): list what they hold, export the IMU as CSV");
+  auto* log = app.add_subcommand(
+      "log", "read flight-controller logs (PX4 ULog, ArduPilot DataFlash): list what they hold, export the IMU as CSV");
   log->require_subcommand(1);
 
   auto path = std::make_shared<std::string>();
   auto* info = log->add_subcommand(
-      "info", "list a ULog: system info, topics (messages, rate in Hz, time span in s since boot), IMU instances "
-              "(device id, temperature span in degC), dropouts (ms), parameters");
-  info->add_option("file", *path, "PX4 ULog file")->required();
+      "info", "list a log: topics or message types (messages, rate in Hz, time span in s since boot), IMU instances "
+              "(device id, temperature span in degC); ULog: system info, dropouts (ms), parameters; DataFlash: skipped "
+              "bytes, INS_TCAL* temperature calibration, TCLR");
+  info->add_option("file", *path, "PX4 ULog or ArduPilot DataFlash (.bin) file")->required();
   info->callback([path] { info_command(*path); });
 
   auto o = std::make_shared<ExportOptions>();
   auto* exp = log->add_subcommand(
-      "export", "write a ULog's IMU record as CSV: t_s (s since boot), gyro*_rad_s (rad/s), accel*_m_s2 (m/s^2), "
+      "export", "write a log's IMU record as CSV: t_s (s since boot), gyro*_rad_s (rad/s), accel*_m_s2 (m/s^2), "
                 "temp*_c (degC), device_id*; other streams interpolated onto the first gyro's time stamps");
-  exp->add_option("file", o->path, "PX4 ULog file")->required();
+  exp->add_option("file", o->path, "PX4 ULog or ArduPilot DataFlash (.bin) file")->required();
   exp->add_option("--out", o->out, "output CSV (written atomically)")->required();
   add_log_selection_options(exp, o->log);
   exp->callback([o] { export_command(*o); });
