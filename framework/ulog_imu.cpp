@@ -3,32 +3,20 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <numeric>
 #include <optional>
 
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
+#include "framework/imu_streams.hpp"
 
 namespace driftlab::ulog {
 namespace {
 
-constexpr double kMicrosecondsPerSecond = 1e6;  // divided by: 22311243 us -> 22.311243 s exactly rounded
+constexpr std::int64_t kMicrosecondsPerSecond = 1000000;
 constexpr std::int32_t kRelativeTimestampInvalid = 0x7fffffff;  // PX4's RELATIVE_TIMESTAMP_INVALID
-constexpr int kMaxInstance = 99;                                  // imu role names: gyro1_x .. gyro99_x
 constexpr char kAxes[3] = {'x', 'y', 'z'};
-
-// One sensor of one instance, repaired: strictly increasing time stamps.
-struct Stream {
-  imu::Sensor sensor = imu::Sensor::Gyro;
-  int instance = 0;
-  std::string label;   // "sensor_gyro multi_id 1", for notes and errors
-  std::string source;  // "sensor_gyro[1]", the channels' source
-  std::vector<std::int64_t> time_us;
-  std::array<std::vector<double>, 3> axes;
-  std::vector<double> temperature;  // empty: none
-  std::string device_id;            // empty: none
-};
+using Stream = imu::SensorStream;
 
 // Raw samples of a stream before repair: time and the message index they come from.
 struct Raw {
@@ -65,26 +53,11 @@ std::int64_t time_stamp(const Log& log, const std::string& source, double us) {
 
 // Sorts `raw` by time (stable) and drops repeated time stamps, keeping the first; notes the counts.
 void repair_order(Raw& raw, const std::string& label, std::vector<std::string>* notes) {
-  std::size_t out_of_order = 0;
-  for (std::size_t i = 1; i < raw.time_us.size(); ++i) out_of_order += raw.time_us[i] < raw.time_us[i - 1];
-  std::vector<std::size_t> order(raw.time_us.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  if (out_of_order > 0)
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return raw.time_us[a] < raw.time_us[b]; });
   Raw repaired;
-  std::size_t duplicates = 0;
-  for (const auto i : order) {
-    if (!repaired.time_us.empty() && repaired.time_us.back() == raw.time_us[i]) {
-      ++duplicates;
-      continue;
-    }
+  for (const auto i : imu::repaired_order(raw.time_us, label, notes)) {
     repaired.time_us.push_back(raw.time_us[i]);
     repaired.message.push_back(raw.message[i]);
   }
-  if (notes && out_of_order > 0)
-    notes->push_back(label + ": " + std::to_string(out_of_order) + " samples earlier than the one before; sorted by time");
-  if (notes && duplicates > 0)
-    notes->push_back(label + ": " + std::to_string(duplicates) + " repeated time stamps; the first sample of each kept");
   raw = std::move(repaired);
 }
 
@@ -138,7 +111,7 @@ void sensor_streams(const Log& log, const std::string& topic, imu::Sensor sensor
       raw.message.push_back(i);
     }
     repair_order(raw, s.label, notes);
-    s.time_us = raw.time_us;
+    s.time = raw.time_us;
     for (int a = 0; a < 3; ++a) {
       const std::string axis(1, kAxes[a]);
       s.axes[a] = pick(log, s, field(log, *t, axis), raw, axis);
@@ -171,7 +144,7 @@ void combined_streams(const Log& log, std::vector<Stream>& out, std::vector<std:
       raw.message.push_back(i);
     }
     repair_order(raw, s.label, notes);
-    s.time_us = raw.time_us;
+    s.time = raw.time_us;
     for (int a = 0; a < 3; ++a) {
       const std::string name = "gyro_rad[" + std::to_string(a) + "]";
       s.axes[a] = pick(log, s, field(log, *t, name), raw, name);
@@ -194,7 +167,7 @@ void combined_streams(const Log& log, std::vector<Stream>& out, std::vector<std:
     if (notes && invalid > 0)
       notes->push_back(s.label + ": " + std::to_string(invalid) + " samples with an invalid relative time stamp left out");
     repair_order(raw, s.label, notes);
-    s.time_us = raw.time_us;
+    s.time = raw.time_us;
     for (int a = 0; a < 3; ++a) {
       const std::string name = "accelerometer_m_s2[" + std::to_string(a) + "]";
       s.axes[a] = pick(log, s, field(log, *t, name), raw, name);
@@ -202,26 +175,6 @@ void combined_streams(const Log& log, std::vector<Stream>& out, std::vector<std:
     out.push_back(std::move(s));
   }
   if (notes) notes->push_back("sensor_combined carries no IMU temperature: the record has no temperature channel");
-}
-
-// Values of `s` at the times `base` (all within s's span), linear between its samples.
-Eigen::VectorXd resample(const std::vector<std::int64_t>& time_us, const std::vector<double>& values,
-                         const std::vector<std::int64_t>& base) {
-  Eigen::VectorXd out(static_cast<Eigen::Index>(base.size()));
-  std::size_t j = 0;
-  for (std::size_t i = 0; i < base.size(); ++i) {
-    const std::int64_t t = base[i];
-    while (j + 1 < time_us.size() && time_us[j + 1] <= t) ++j;
-    double v = values[j];
-    if (time_us[j] != t && j + 1 < time_us.size())
-      v += (values[j + 1] - values[j]) * static_cast<double>(t - time_us[j]) / static_cast<double>(time_us[j + 1] - time_us[j]);
-    out[static_cast<Eigen::Index>(i)] = v;
-  }
-  return out;
-}
-
-bool selects_any_axis(const imu::Selection& sel, imu::Sensor sensor, int instance) {
-  return std::any_of(std::begin(kAxes), std::end(kAxes), [&](char axis) { return sel.selects({sensor, axis, instance}); });
 }
 
 }  // namespace
@@ -232,7 +185,7 @@ const std::vector<std::string>& imu_topics() {
 }
 
 TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector<std::string>* notes) {
-  const imu::Selection sel = selection.sensor.empty() ? imu::Selection{} : imu::parse_selection(selection.sensor, "--sensor");
+  if (!selection.sensor.empty()) imu::parse_selection(selection.sensor, "--sensor");  // reported before the topics
   std::string topic = selection.topic;
   if (topic.empty()) {
     const bool has_sensor_topics = !log.instances("sensor_gyro").empty() || !log.instances("sensor_accel").empty();
@@ -254,71 +207,7 @@ TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector
   if (topic == "sensor" || topic == "sensor_accel") sensor_streams(log, "sensor_accel", imu::Sensor::Accel, all, notes);
   if (topic == "sensor_combined") combined_streams(log, all, notes);
 
-  std::vector<Stream> streams;
-  for (auto& s : all) {
-    if (selection.instance >= 0 && s.instance != selection.instance) continue;
-    if (!selects_any_axis(sel, s.sensor, s.instance)) continue;
-    if (s.instance > kMaxInstance)
-      fail(log, s.source, "instance " + std::to_string(s.instance) + " is beyond the IMU role names (0 to 99)");
-    if (s.time_us.size() < 2)
-      fail(log, s.source, s.label + " has " + std::to_string(s.time_us.size()) + " samples; a record needs at least 2");
-    streams.push_back(std::move(s));
-  }
-  if (streams.empty()) {
-    std::string have;
-    for (const auto& s : all) have += (have.empty() ? "" : ", ") + s.label;
-    fail(log, selection.instance >= 0 ? "--instance" : "--sensor",
-         "the selection (instance " + (selection.instance >= 0 ? std::to_string(selection.instance) : std::string("any")) +
-             ", sensor '" + (selection.sensor.empty() ? std::string("all") : selection.sensor) +
-             "') matches no stream of the log (it has: " + (have.empty() ? std::string("none") : have) + ")");
-  }
-  // Gyros first, then accelerometers; by instance within each.
-  std::stable_sort(streams.begin(), streams.end(), [](const Stream& a, const Stream& b) {
-    return std::pair(a.sensor != imu::Sensor::Gyro, a.instance) < std::pair(b.sensor != imu::Sensor::Gyro, b.instance);
-  });
-
-  std::int64_t from = streams.front().time_us.front(), to = streams.front().time_us.back();
-  for (const auto& s : streams) {
-    from = std::max(from, s.time_us.front());
-    to = std::min(to, s.time_us.back());
-  }
-  const Stream& base = streams.front();
-  std::vector<std::int64_t> base_time;
-  for (const auto t : base.time_us)
-    if (t >= from && t <= to) base_time.push_back(t);
-  if (base_time.size() < 2)
-    fail(log, base.source, "the selected streams overlap in time at fewer than 2 samples of the time base (" + base.label + ")");
-  if (notes && streams.size() > 1) {
-    notes->push_back("time base: " + base.label + "; " + std::to_string(streams.size() - 1) +
-                     " other streams linearly interpolated onto it");
-    if (base_time.size() < base.time_us.size())
-      notes->push_back(std::to_string(base.time_us.size() - base_time.size()) + " samples of the time base outside the span " +
-                       "every selected stream covers were dropped");
-  }
-
-  Eigen::VectorXd time(static_cast<Eigen::Index>(base_time.size()));
-  for (std::size_t i = 0; i < base_time.size(); ++i)
-    time[static_cast<Eigen::Index>(i)] = static_cast<double>(base_time[i]) / kMicrosecondsPerSecond;
-  TimeSeries record(std::move(time));
-  std::vector<bool> has_temperature(kMaxInstance + 1, false), has_device(kMaxInstance + 1, false);
-  for (const auto& s : streams) {
-    for (int a = 0; a < 3; ++a) {
-      const imu::ChannelId id{s.sensor, kAxes[a], s.instance};
-      if (!sel.selects(id)) continue;
-      const std::string unit = imu::internal_unit(s.sensor);
-      record.set_channel({id.role(), unit, s.source, resample(s.time_us, s.axes[a], base_time), unit});
-    }
-    const auto instance = static_cast<std::size_t>(s.instance);
-    if (!s.temperature.empty() && !has_temperature[instance]) {
-      has_temperature[instance] = true;
-      record.set_channel({imu::temperature_role(s.instance), "degC", s.source, resample(s.time_us, s.temperature, base_time), "degC"});
-    }
-    if (!s.device_id.empty() && !has_device[instance]) {
-      has_device[instance] = true;
-      record.set_device_id(s.instance, s.device_id);
-    }
-  }
-  return record;
+  return imu::assemble(std::move(all), {}, selection, kMicrosecondsPerSecond, log.file, notes);
 }
 
 TimeSeries read_imu(const std::filesystem::path& path, const LogSelection& selection, std::vector<std::string>* notes) {

@@ -13,20 +13,14 @@
 // vehicle_imu (integrated delta angles) and sensor_gyro_fifo (packed int16 samples with a scale)
 // are not read: they need integration / unpacking that these topics do not.
 //
-// Time base. One record has one time vector, but every sensor and instance samples at its own
-// instants. Policy: the first selected stream -- gyro of the lowest selected instance (accel when
-// no gyro is selected) -- is the time base; every other stream (other instances, the accelerometers,
-// temperatures) is linearly interpolated onto it. Time stamps of the base outside the span that
-// every selected stream covers are dropped (no extrapolation), and a note gives the count. Why: the
-// gyro is what drift calibration models, so its samples stay exactly as logged; interpolating the
-// slower-varying accelerometer and temperature costs least; one record keeps all instances side by
-// side for a whole-IMU calibration. Pick one instance (LogSelection::instance) to make that
-// instance's gyro the base.
-// A temperature channel per instance comes from its gyro (the accel's when no gyro is selected);
-// the device id likewise (decimal, as PX4's CAL_GYROn_ID parameters show it).
+// Time base, interpolation, the temperature and device id of an instance, and the repairs of time
+// order: framework/imu_streams.hpp (shared by every log reader); the time stamps are
+// timestamp_sample (us; else timestamp). A temperature channel per instance comes from its gyro
+// (the accel's when no gyro is selected); the device id likewise (decimal, as PX4's CAL_GYROn_ID
+// parameters show it).
 //
-// Repairs, each with a note: samples out of time order are sorted (stable); repeated time stamps
-// keep the first sample; a temperature that is NaN throughout leaves the channel out. Errors
+// Repairs, each with a note: samples out of time order are sorted and repeated time stamps dropped
+// (imu_streams.hpp); a temperature that is NaN throughout leaves the channel out. Errors
 // (DataError naming the file and topic): a requested topic or instance not in the log, a stream
 // with fewer than 2 samples, streams that do not overlap in time, a non-finite value or one beyond
 // kMaxMagnitude (csv.hpp), a temperature NaN only in part, an instance above 99 (the role names
