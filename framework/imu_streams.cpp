@@ -1,8 +1,10 @@
 #include "framework/imu_streams.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
+#include "framework/csv.hpp"
 #include "framework/error.hpp"
 
 namespace driftlab::imu {
@@ -66,6 +68,18 @@ std::vector<std::size_t> repaired_order(const std::vector<std::int64_t>& time, c
   if (notes && duplicates > 0)
     notes->push_back(label + ": " + std::to_string(duplicates) + " repeated time stamps; the first sample of each kept");
   return kept;
+}
+
+void check_temperature(std::vector<double>& values, const std::string& file, const std::string& field,
+                       const std::string& label, std::vector<std::string>* notes) {
+  const auto missing = static_cast<std::size_t>(
+      std::count_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v) || std::abs(v) > kMaxMagnitude; }));
+  if (missing == 0) return;
+  if (missing < values.size())
+    throw DataError({file, 0, field}, std::to_string(missing) + " of " + std::to_string(values.size()) +
+                                          " temperatures are not finite (" + label + ")");
+  if (notes) notes->push_back(label + ": temperature is NaN throughout; no temperature channel for it");
+  values.clear();
 }
 
 TimeSeries assemble(std::vector<SensorStream> sensors, std::vector<TemperatureStream> temperatures,

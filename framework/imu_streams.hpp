@@ -68,6 +68,12 @@ struct TemperatureStream {
 std::vector<std::size_t> repaired_order(const std::vector<std::int64_t>& time, const std::string& label,
                                         std::vector<std::string>* notes);
 
+// A temperature series as logged: every value finite (and within kMaxMagnitude) keeps it; NaN
+// throughout (a sensor without a thermometer) empties it, with a note naming `label`; NaN only in
+// part is a DataError at `field`.
+void check_temperature(std::vector<double>& values, const std::string& file, const std::string& field,
+                       const std::string& label, std::vector<std::string>* notes);
+
 // The record of the streams `selection` picks (instance and sensor; its topic is the reader's).
 // `selection.sensor` is parsed by imu::parse_selection (ConfigError naming --sensor). See above.
 TimeSeries assemble(std::vector<SensorStream> sensors, std::vector<TemperatureStream> temperatures,

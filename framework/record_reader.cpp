@@ -5,6 +5,8 @@
 
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
+#include "framework/ros_imu.hpp"
+#include "framework/rosbag.hpp"
 #include "framework/signal.hpp"
 #include "framework/ulog.hpp"
 #include "framework/ulog_imu.hpp"
@@ -61,13 +63,15 @@ void check_gaps(const TimeSeries& record, double max_gap_factor, const std::stri
                                              " x median, see --max-gap; 0 allows gaps)");
 }
 
-TimeSeries read_ulog_record(const std::filesystem::path& path, const CsvReadOptions& options,
-                            const LogSelection& selection, std::vector<std::string>* notes) {
+using LogReader = TimeSeries (*)(const std::filesystem::path&, const LogSelection&, std::vector<std::string>*);
+
+TimeSeries read_log_record(LogReader reader, const std::filesystem::path& path, const CsvReadOptions& options,
+                           const LogSelection& selection, std::vector<std::string>* notes) {
   const std::string file = path.string();
   if (options.sample_rate_hz > 0.0)
     throw ConfigError({file, 0, "--fs"}, "a log carries its own time stamps; --fs is for CSV files without a time column");
   if (!std::isfinite(options.max_gap_factor)) throw ConfigError({file, 0, "--max-gap"}, "must be a finite number");
-  const TimeSeries imu_record = ulog::read_imu(path, selection, notes);
+  const TimeSeries imu_record = reader(path, selection, notes);
   TimeSeries record = options.columns.empty() ? imu_record : mapped_record(imu_record, options, file);
   for (const auto& r : options.required_roles)
     if (!record.has(r))
@@ -84,13 +88,15 @@ RecordFormat sniff_record_format(const std::filesystem::path& path) {
   char first[ulog::kMagicSize] = {};
   in.read(first, sizeof first);
   // A file that cannot be read goes to the CSV reader, whose errors name it as before.
-  return in && ulog::has_magic({first, sizeof first}) ? RecordFormat::Ulog : RecordFormat::Csv;
+  if (in && ulog::has_magic({first, sizeof first})) return RecordFormat::Ulog;
+  return rosbag::sniff(path) ? RecordFormat::RosBag : RecordFormat::Csv;
 }
 
 TimeSeries read_record(const std::filesystem::path& path, const CsvReadOptions& options, const LogSelection& selection,
                        std::vector<std::string>* notes) {
   switch (sniff_record_format(path)) {
-    case RecordFormat::Ulog: return read_ulog_record(path, options, selection, notes);
+    case RecordFormat::Ulog: return read_log_record(ulog::read_imu, path, options, selection, notes);
+    case RecordFormat::RosBag: return read_log_record(ros::read_imu, path, options, selection, notes);
     case RecordFormat::Csv: break;
   }
   return read_csv(path, options);

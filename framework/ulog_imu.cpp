@@ -76,25 +76,6 @@ std::vector<double> pick(const Log& log, const Stream& s, const std::vector<doub
 
 std::string device_text(double id) { return std::to_string(static_cast<std::uint64_t>(id)); }
 
-// The temperature of a stream: all finite, or all NaN (left out with a note); else DataError.
-std::vector<double> temperature(const Log& log, const Stream& s, const std::vector<double>& values, const Raw& raw,
-                                std::vector<std::string>* notes) {
-  std::vector<double> out(raw.message.size());
-  std::size_t missing = 0;
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    out[i] = values[raw.message[i]];
-    missing += !std::isfinite(out[i]) || std::abs(out[i]) > kMaxMagnitude;
-  }
-  if (missing == out.size()) {
-    if (notes) notes->push_back(s.label + ": temperature is NaN throughout; no temperature channel for it");
-    return {};
-  }
-  if (missing > 0)
-    fail(log, s.source + ".temperature",
-         std::to_string(missing) + " of " + std::to_string(out.size()) + " temperatures are not finite (" + s.label + ")");
-  return out;
-}
-
 // sensor_gyro / sensor_accel, one stream per multi_id.
 void sensor_streams(const Log& log, const std::string& topic, imu::Sensor sensor, std::vector<Stream>& out,
                     std::vector<std::string>* notes) {
@@ -116,7 +97,11 @@ void sensor_streams(const Log& log, const std::string& topic, imu::Sensor sensor
       const std::string axis(1, kAxes[a]);
       s.axes[a] = pick(log, s, field(log, *t, axis), raw, axis);
     }
-    if (t->has_column("temperature")) s.temperature = temperature(log, s, t->column("temperature"), raw, notes);
+    if (t->has_column("temperature")) {
+      const auto& values = t->column("temperature");
+      for (const auto i : raw.message) s.temperature.push_back(values[i]);
+      imu::check_temperature(s.temperature, log.file, s.source + ".temperature", s.label, notes);
+    }
     if (t->has_column("device_id") && !raw.message.empty()) {
       const auto& ids = t->column("device_id");
       s.device_id = device_text(ids[raw.message.front()]);
