@@ -49,6 +49,12 @@ std::vector<std::string> split(const std::string& text) {
   return out;
 }
 
+std::string topic_list(const rosbag::Bag& bag) {
+  std::string out;
+  for (const auto& t : bag.topics) out += (out.empty() ? "" : ", ") + t.name + " (" + t.type + ")";
+  return out.empty() ? "none" : out;
+}
+
 std::string imu_topic_list(const rosbag::Bag& bag) {
   std::string out;
   for (const auto& t : bag.topics)
@@ -129,8 +135,6 @@ ImuLayout imu_layout(const rosbag::Bag& bag, const std::string& topic_option) {
       if (is_imu(t)) imus.push_back(&t);
       else if (is_temperature(t, false)) temperatures.push_back(&t);
     }
-    if (imus.empty())
-      throw DataError({bag.file, 0, "--topic"}, "no sensor_msgs/Imu topic in the bag (" + std::to_string(bag.topics.size()) + " topics)");
   } else {
     for (const auto& name : split(topic_option)) {
       const rosbag::Topic* t = bag.find(name);
@@ -233,6 +237,9 @@ ImuStreams read_streams(const std::filesystem::path& path, const std::string& to
 TimeSeries read_imu(const std::filesystem::path& path, const LogSelection& selection, std::vector<std::string>* notes) {
   if (!selection.sensor.empty()) imu::parse_selection(selection.sensor, "--sensor");  // reported before the bag is read
   ImuStreams s = read_streams(path, selection.topic, notes);
+  if (s.layout.instances.empty())
+    throw DataError({s.bag.file, 0, "--topic"}, "no sensor_msgs/Imu topic in the bag (its " + std::to_string(s.bag.topics.size()) +
+                                                    " topics: " + topic_list(s.bag) + ")");
   return imu::assemble(std::move(s.sensors), std::move(s.temperatures), selection, kNanosecondsPerSecond, s.bag.file, notes);
 }
 

@@ -51,7 +51,8 @@ struct ImuLayout {
 };
 
 // The instances of `bag` as `topic_option` (LogSelection::topic: "" or a comma-separated list) picks
-// them; DataError for a listed topic that is missing or of another type, or no IMU topic at all.
+// them (none when the bag has no IMU topic); DataError for a listed topic that is missing or of
+// another type, or a list without an IMU topic.
 ImuLayout imu_layout(const rosbag::Bag& bag, const std::string& topic_option);
 
 // The streams of those instances, decoded and repaired (notes), before the record is assembled.
@@ -64,7 +65,8 @@ struct ImuStreams {
 ImuStreams read_streams(const std::filesystem::path& path, const std::string& topic_option,
                         std::vector<std::string>* notes = nullptr);
 
-// read_streams, then imu::assemble with `selection`'s instance and sensor.
+// read_streams, then imu::assemble with `selection`'s instance and sensor; DataError when the bag
+// has no IMU topic.
 TimeSeries read_imu(const std::filesystem::path& path, const LogSelection& selection, std::vector<std::string>* notes = nullptr);
 
 }  // namespace driftlab::ros

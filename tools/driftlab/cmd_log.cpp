@@ -1,7 +1,9 @@
 // `driftlab log info FILE`: what a PX4 ULog holds (system info, topics with message counts, rates
-// and time spans, IMU instances with device ids and temperature spans, dropouts, parameters).
-// `driftlab log export FILE --out x.csv`: its IMU record (framework/ulog_imu.hpp) as CSV, in column
-// names the CSV reader recognises: t_s, gyro_x_rad_s, accel1_z_m_s2, temp_c, temp1_c, device_id.
+// and time spans, IMU instances with device ids and temperature spans, dropouts, parameters), or a
+// ROS bag (tools/driftlab/bag_info.hpp).
+// `driftlab log export FILE --out x.csv`: its IMU record (framework/ulog_imu.hpp, ros_imu.hpp) as
+// CSV, in column names the CSV reader recognises: t_s, gyro_x_rad_s, accel1_z_m_s2, temp_c, temp1_c,
+// device_id.
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
@@ -13,6 +15,7 @@
 #include "framework/record_reader.hpp"
 #include "framework/ulog.hpp"
 #include "framework/ulog_imu.hpp"
+#include "tools/driftlab/bag_info.hpp"
 #include "tools/driftlab/cli.hpp"
 
 namespace driftlab::cli {
@@ -22,12 +25,15 @@ constexpr double kSecondsPerMicrosecond = 1e-6;
 constexpr std::size_t kInfoValueChars = 60;  // longer info values are cut in the listing
 constexpr int kMaxInstance = 99;
 
-void require_ulog(const std::string& path) {
+RecordFormat require_log(const std::string& path) {
   std::error_code ec;
+  const auto format = sniff_record_format(path);
+  if (format == RecordFormat::RosBag) return format;  // a file, or a rosbag2 directory
   if (!std::filesystem::is_regular_file(path, ec)) throw DataError({path, 0, ""}, "not a readable file (missing, or a directory)");
-  if (sniff_record_format(path) != RecordFormat::Ulog)
-    throw DataError({path, 0, ""}, "not a PX4 ULog (it does not start with 'ULog' 0x01 0x12 0x35); CSV records are "
-                                   "read by the other commands directly");
+  if (format == RecordFormat::Csv)
+    throw DataError({path, 0, ""}, "not a log driftlab reads (a PX4 ULog, a ROS 1 bag, a ROS 2 bag (.db3, .mcap, or its "
+                                   "directory)); CSV records are read by the other commands directly");
+  return format;
 }
 
 std::string fixed(double v, int digits) {
@@ -62,7 +68,7 @@ std::string imu_line(const ulog::Topic& t) {
 }
 
 void info_command(const std::string& path) {
-  require_ulog(path);
+  if (require_log(path) == RecordFormat::RosBag) return print_bag_info(path, std::cout);
   ulog::ReadOptions options;
   options.keep_topics = ulog::imu_topics();
   const ulog::Log log = ulog::read(path, options);
@@ -154,7 +160,7 @@ CsvColumn export_column(const Channel& c) {
 void export_command(const ExportOptions& o) {
   OutputSet outputs({o.path});
   outputs.plan(o.out, "--out");
-  require_ulog(o.path);
+  require_log(o.path);
   CsvReadOptions options;
   options.required_roles = {};
   options.max_gap_factor = 0.0;  // exported as logged; readers of the CSV check gaps with their own --max-gap
@@ -177,21 +183,24 @@ void export_command(const ExportOptions& o) {
 }  // namespace
 
 void add_log_command(CLI::App& app, CommandEnv&) {
-  auto* log = app.add_subcommand("log", "read flight-controller logs (PX4 ULog): list what they hold, export the IMU as CSV");
+  auto* log = app.add_subcommand("log", "read the logs IMUs are recorded in (PX4 ULog, ROS 1 and ROS 2 bags): list what they "
+                                        "hold, export the IMU as CSV");
   log->require_subcommand(1);
 
   auto path = std::make_shared<std::string>();
   auto* info = log->add_subcommand(
-      "info", "list a ULog: system info, topics (messages, rate in Hz, time span in s since boot), IMU instances "
-              "(device id, temperature span in degC), dropouts (ms), parameters");
-  info->add_option("file", *path, "PX4 ULog file")->required();
+      "info", "list a log: ULog system info, topics (messages, rate in Hz, time span in s since boot), IMU instances "
+              "(device id, temperature span in degC), dropouts (ms), parameters; a bag's topics (type, messages, rate, "
+              "time span in s), IMU instances (one per sensor_msgs/Imu topic) with their temperature topics");
+  info->add_option("file", *path, "PX4 ULog, ROS 1 bag, ROS 2 bag (.db3, .mcap or its directory)")->required();
   info->callback([path] { info_command(*path); });
 
   auto o = std::make_shared<ExportOptions>();
   auto* exp = log->add_subcommand(
-      "export", "write a ULog's IMU record as CSV: t_s (s since boot), gyro*_rad_s (rad/s), accel*_m_s2 (m/s^2), "
-                "temp*_c (degC), device_id*; other streams interpolated onto the first gyro's time stamps");
-  exp->add_option("file", o->path, "PX4 ULog file")->required();
+      "export", "write a log's IMU record as CSV: t_s (ULog: s since boot; bags: header stamps, s since the epoch), "
+                "gyro*_rad_s (rad/s), accel*_m_s2 (m/s^2), temp*_c (degC), device_id*; other streams interpolated onto "
+                "the first gyro's time stamps");
+  exp->add_option("file", o->path, "PX4 ULog, ROS 1 bag, ROS 2 bag (.db3, .mcap or its directory)")->required();
   exp->add_option("--out", o->out, "output CSV (written atomically)")->required();
   add_log_selection_options(exp, o->log);
   exp->callback([o] { export_command(*o); });
