@@ -34,8 +34,10 @@ void check_size(std::size_t used, std::optional<std::uint64_t> expected, const L
 
 #if DRIFTLAB_HAVE_ZSTD
 std::string zstd(std::string_view input, std::optional<std::uint64_t> expected, const Location& where, const std::string& what) {
-  std::unique_ptr<ZSTD_DStream, decltype(&ZSTD_freeDStream)> stream(ZSTD_createDStream(), ZSTD_freeDStream);
+  // One decompression context per thread, reset for each input: a bag holds thousands of chunks.
+  thread_local std::unique_ptr<ZSTD_DStream, decltype(&ZSTD_freeDStream)> stream(ZSTD_createDStream(), ZSTD_freeDStream);
   if (!stream) fail(where, what, "out of memory for a zstd stream");
+  ZSTD_DCtx_reset(stream.get(), ZSTD_reset_session_only);
   ZSTD_inBuffer in{input.data(), input.size(), 0};
   std::string out;
   std::size_t used = 0;
@@ -57,9 +59,13 @@ std::string zstd(std::string_view input, std::optional<std::uint64_t> expected, 
 
 #if DRIFTLAB_HAVE_LZ4
 std::string lz4(std::string_view input, std::optional<std::uint64_t> expected, const Location& where, const std::string& what) {
-  LZ4F_dctx* raw = nullptr;
-  if (LZ4F_isError(LZ4F_createDecompressionContext(&raw, LZ4F_VERSION))) fail(where, what, "out of memory for an lz4 context");
-  std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> context(raw, LZ4F_freeDecompressionContext);
+  thread_local std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> context(nullptr, LZ4F_freeDecompressionContext);
+  if (!context) {
+    LZ4F_dctx* raw = nullptr;
+    if (LZ4F_isError(LZ4F_createDecompressionContext(&raw, LZ4F_VERSION))) fail(where, what, "out of memory for an lz4 context");
+    context.reset(raw);
+  }
+  LZ4F_resetDecompressionContext(context.get());
   std::string out;
   std::size_t used = 0, consumed = 0, hint = 1;
   while (hint != 0) {

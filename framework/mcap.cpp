@@ -1,11 +1,12 @@
 #include "framework/mcap.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cstdio>
 #include <cstring>
 #include <memory>
 #include <optional>
+
+#include <zlib.h>
 
 #include "framework/decompress.hpp"
 #include "framework/error.hpp"
@@ -17,7 +18,6 @@ constexpr unsigned char kMagic[kMagicSize] = {0x89, 'M', 'C', 'A', 'P', '0', '\r
 constexpr std::size_t kOpeningSize = 9;       // opcode + uint64 length
 constexpr std::size_t kFooterSize = 8 + 8 + 4;  // summary_start, summary_offset_start, summary_crc
 constexpr std::size_t kBlockSize = std::size_t{1} << 20;
-constexpr std::size_t kChannelIds = 65536;
 
 enum Opcode : std::uint8_t {
   kHeader = 0x01, kFooter = 0x02, kSchema = 0x03, kChannel = 0x04, kMessage = 0x05, kChunk = 0x06,
@@ -25,18 +25,13 @@ enum Opcode : std::uint8_t {
 };
 
 std::uint32_t crc32(std::string_view bytes) {
-  static const auto table = [] {
-    std::array<std::uint32_t, 256> t{};
-    for (std::uint32_t i = 0; i < 256; ++i) {
-      std::uint32_t c = i;
-      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-      t[i] = c;
-    }
-    return t;
-  }();
-  std::uint32_t c = 0xFFFFFFFFu;
-  for (const char b : bytes) c = table[(c ^ static_cast<unsigned char>(b)) & 0xFF] ^ (c >> 8);
-  return c ^ 0xFFFFFFFFu;
+  uLong crc = ::crc32(0L, Z_NULL, 0);
+  for (std::size_t at = 0; at < bytes.size();) {  // zlib takes uInt lengths
+    const auto n = static_cast<uInt>(std::min<std::size_t>(bytes.size() - at, std::size_t{1} << 30));
+    crc = ::crc32(crc, reinterpret_cast<const Bytef*>(bytes.data() + at), n);
+    at += n;
+  }
+  return static_cast<std::uint32_t>(crc);
 }
 
 std::string hex(unsigned value) {
@@ -135,7 +130,7 @@ class Input {
 
 class Parser {
  public:
-  Parser(Input& in, const Wanted& wanted, const Visitor& visit) : in_(in), wanted_(wanted), visit_(visit) {
+  Parser(Input& in, const Wanted& wanted, const Visitor& visit) : in_(in), wanted_channel_(wanted), visit_(visit) {
     file_.file = in.name();
     file_.file_size = in.size();
   }
@@ -233,14 +228,15 @@ class Parser {
     const Schema* schema = c.schema_id ? file_.find_schema(c.schema_id) : nullptr;
     if (c.schema_id && !schema)
       f.fail("channel " + std::to_string(c.id) + " names schema " + std::to_string(c.schema_id) + ", not defined before it");
-    if (const int known = channel_index_[c.id]; known >= 0) {
+    if (const int known = channel_index(c.id); known >= 0) {
       const Channel& k = file_.channels[static_cast<std::size_t>(known)];
       if (k.topic != c.topic || k.schema_id != c.schema_id || k.message_encoding != c.message_encoding)
         f.fail("channel id " + std::to_string(c.id) + " redefined ('" + k.topic + "', now " + quoted_excerpt(c.topic) + ")");
       return;
     }
+    if (channel_index_.size() <= c.id) channel_index_.resize(std::size_t{c.id} + 1, -1);
     channel_index_[c.id] = static_cast<int>(file_.channels.size());
-    wanted_by_id_[c.id] = wanted_ && wanted_(c, schema);
+    wanted_.push_back(wanted_channel_ && wanted_channel_(c, schema));
     file_.channels.push_back(std::move(c));
   }
 
@@ -251,7 +247,7 @@ class Parser {
     m.log_time = f.u64();
     m.publish_time = f.u64();
     m.data = f.rest();
-    const int index = channel_index_[id];
+    const int index = channel_index(id);
     if (index < 0) f.fail("a message of channel " + std::to_string(id) + ", which no Channel record defined before it");
     Channel& c = file_.channels[static_cast<std::size_t>(index)];
     if (c.count == 0) {
@@ -263,7 +259,7 @@ class Parser {
     c.last_log_time = m.log_time;
     ++c.count;
     ++file_.messages;
-    if (wanted_by_id_[id] && visit_) {
+    if (wanted_[static_cast<std::size_t>(index)] && visit_) {
       m.channel = &c;
       m.place = f.place();
       visit_(m);
@@ -292,7 +288,7 @@ class Parser {
     if (statistics_messages_ != file_.messages)
       fail("count " + std::to_string(statistics_messages_) + " messages; the data section holds " + std::to_string(file_.messages));
     for (const auto& [id, count] : statistics_counts_) {
-      const int index = channel_index_[id];
+      const int index = channel_index(id);
       const std::uint64_t have = index < 0 ? 0 : file_.channels[static_cast<std::size_t>(index)].count;
       if (have != count)
         fail("count " + std::to_string(count) + " messages on channel " + std::to_string(id) + "; the data section holds " +
@@ -331,12 +327,15 @@ class Parser {
     }
   }
 
+  // Index into file_.channels of a channel id, -1 when not defined.
+  int channel_index(std::uint16_t id) const { return id < channel_index_.size() ? channel_index_[id] : -1; }
+
   Input& in_;
-  const Wanted& wanted_;
+  const Wanted& wanted_channel_;
   const Visitor& visit_;
   File file_;
-  std::vector<int> channel_index_ = std::vector<int>(kChannelIds, -1);
-  std::vector<bool> wanted_by_id_ = std::vector<bool>(kChannelIds, false);
+  std::vector<int> channel_index_;  // by channel id, grown to the largest id defined
+  std::vector<bool> wanted_;        // by index into file_.channels
   std::uint64_t statistics_messages_ = 0;
   std::vector<std::pair<std::uint16_t, std::uint64_t>> statistics_counts_;
 };

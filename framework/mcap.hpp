@@ -23,7 +23,7 @@
 //
 // Reading. The data section is streamed from the start record by record (a file without a summary
 // section, e.g. one whose writer was stopped before it wrote one, reads the same way), every chunk
-// decompressed (framework/decompress.hpp) and its CRC checked; every message of a wanted channel is
+// decompressed (framework/decompress.hpp) and its CRC checked (zlib's crc32); every message of a wanted channel is
 // handed to the visitor, every channel's messages counted. When the footer points at a summary
 // section, its Schema and Channel records are read too (channels without messages are listed) and
 // its Statistics are checked against the count: a summary that disagrees with the data is a

@@ -79,6 +79,7 @@ Encoding encoding_of(const std::string& file, const rosbag::Topic& t) {
 struct Raw {
   const rosbag::Topic* topic = nullptr;
   std::optional<DataError> error;
+  Location where;  // of its messages' errors: the file and the topic
   Encoding encoding = Encoding::Cdr;
   int instance = 0;
   std::vector<std::int64_t> stamp, time;  // header stamp, message time
@@ -181,19 +182,18 @@ ImuStreams read_streams(const std::filesystem::path& path, const std::string& to
           if (!r.topic) {
             r.topic = m.topic;
             r.encoding = encoding_of(file, *m.topic);
+            r.where = {file, 0, m.topic->name};
           }
-          const Location where{file, 0, m.topic->name};
-          const std::string what = m.topic->name + " " + m.where;
           const auto type = *message_type(m.topic->type);
           if (type == MessageType::Imu) {
-            const Imu imu = decode_imu(m.data, r.encoding, where, what);
+            const Imu imu = decode_imu(m.data, r.encoding, r.where, m.where);
             r.stamp.push_back(imu.stamp_ns);
             r.gyro.push_back(imu.angular_velocity);
             r.accel.push_back(imu.linear_acceleration);
             r.gyro_cov0.push_back(imu.angular_velocity_covariance0);
             r.accel_cov0.push_back(imu.linear_acceleration_covariance0);
           } else {
-            const Temperature temperature = decode_temperature(m.data, type, r.encoding, where, what);
+            const Temperature temperature = decode_temperature(m.data, type, r.encoding, r.where, m.where);
             r.stamp.push_back(temperature.stamp_ns.value_or(m.time_ns));
             r.values.push_back(temperature.degc);
           }

@@ -22,11 +22,34 @@ std::string column_text(sqlite3_stmt* s, int column) {
   return p ? std::string(reinterpret_cast<const char*>(p), static_cast<std::size_t>(sqlite3_column_bytes(s, column))) : "";
 }
 
+// A path as the path part of an sqlite URI: '?', '#' and '%' (and non-ASCII bytes) percent-encoded.
+std::string percent_encoded(const std::string& path) {
+  static constexpr char kHex[] = "0123456789ABCDEF";
+  std::string out;
+  for (const char ch : path) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '?' || c == '#' || c == '%' || c < 0x20 || c >= 0x7f) {
+      out += '%';
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    } else {
+      out += ch;
+    }
+  }
+  return out;
+}
+
 class Database {
  public:
+  // Opened as immutable (no locks, no -shm / -wal files created next to the bag) unless a -wal
+  // file is there: then the bag was not closed cleanly and its last messages are in that file,
+  // which sqlite reads only in the normal read-only mode (it may create the -shm file for it).
   explicit Database(const std::filesystem::path& path) : file_(path.string()) {
+    std::error_code ec;
+    const bool wal = std::filesystem::exists(file_ + "-wal", ec);
+    const std::string uri = "file:" + percent_encoded(std::filesystem::absolute(path, ec).string()) + (wal ? "?mode=ro" : "?immutable=1");
     sqlite3* db = nullptr;
-    const int rc = sqlite3_open_v2(file_.c_str(), &db, SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX, nullptr);
+    const int rc = sqlite3_open_v2(uri.c_str(), &db, SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX | SQLITE_OPEN_URI, nullptr);
     db_.reset(db);
     if (rc != SQLITE_OK) fail("cannot open it as an sqlite3 database");
   }

@@ -238,6 +238,9 @@ TEST(Rosbag2, Sqlite3TopicsCountsAndTimesAreThoseOfTheSqlite3Cli) {
     }
   }
   EXPECT_EQ(rosbag::read(rosbag2_dir() / "talker-sqlite3").format, rosbag::Format::Directory);
+  // talker.db3 is in WAL mode: reading it leaves no -shm or -wal file next to it.
+  EXPECT_FALSE(fs::exists(rosbag2_dir() / "talker-sqlite3" / "talker.db3-shm"));
+  EXPECT_FALSE(fs::exists(rosbag2_dir() / "talker-sqlite3" / "talker.db3-wal"));
 }
 
 TEST(Rosbag2, TheMcapAndSqlite3BagsOfOneRecordingAgree) {
