@@ -267,6 +267,36 @@ TEST(Rosbag2, ADb3DirectoryGivesTheImuAndTemperatureOfItsMessages) {
   EXPECT_NEAR(record.time()[0], 47.58, kStampTolerance);
 }
 
+TEST(Rosbag2, MessagesCompressedOneByOneAreDecompressed) {
+  const auto bag = rosbag::read(ros2_dir() / "imu_db3_zstd_messages");
+  EXPECT_EQ(bag.container, "rosbag2 directory, sqlite3 storage, messages zstd-compressed (1 file)");
+  const TimeSeries compressed = ros::read_imu(ros2_dir() / "imu_db3_zstd_messages", {});
+  LogSelection imu_only;
+  imu_only.topic = "/imu/data";
+  const TimeSeries plain = ros::read_imu(ros2_dir() / "imu_lz4.mcap", imu_only);
+  ASSERT_EQ(compressed.size(), 100);
+  EXPECT_EQ(compressed.time(), plain.time().head(100));
+  EXPECT_EQ(compressed.channel("gyro_y").values, plain.channel("gyro_y").values.head(100));
+  EXPECT_EQ(compressed.channel("accel_x").values, plain.channel("accel_x").values.head(100));
+}
+
+TEST(Rosbag2, ADirectoryOfSeveralFilesIsOneBag) {
+  const auto dir = scratch("split");
+  fs::copy_file(ros2_dir() / "imu_lz4.mcap", dir / "split_0.mcap");
+  fs::copy_file(ros2_dir() / "imu_zstd.mcap", dir / "split_1.mcap");
+  write_bytes(dir / "metadata.yaml", "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: mcap\n"
+                                     "  relative_file_paths: [split_0.mcap, split_1.mcap]\n");
+  const auto bag = rosbag::read(dir);
+  EXPECT_EQ(bag.files.size(), 2u);
+  EXPECT_EQ(bag.find("/imu/data")->count, 500u + 3061u);
+  EXPECT_EQ(bag.find("/imu/temperature")->count, 307u);
+  std::vector<std::string> notes;
+  const TimeSeries r = ros::read_imu(dir, {}, &notes);
+  EXPECT_EQ(r.size(), 3061);  // the first 500 stamps twice: the first of each kept
+  EXPECT_THAT(notes, Contains("/imu/data: 1 samples earlier than the one before; sorted by time"));  // at the file boundary
+  EXPECT_THAT(notes, Contains("/imu/data: 500 repeated time stamps; the first sample of each kept"));
+}
+
 TEST(Rosbag2BadInput, TruncatedDb3AndBadMetadataAreDataErrors) {
   const auto dir = scratch("db3");
   const std::string db3 = read_bytes(ros2_dir() / "imu_db3" / "imu_db3_0.db3");

@@ -2,7 +2,7 @@
 // @mcap/core's McapWriter (chunking, summary; chunks compressed by @foxglove/wasm-zstd and lz4js),
 // @foxglove/rosmsg2-serialization's MessageWriter (CDR little endian, from the schema text) and
 // @foxglove/cdr's CdrWriter (big endian and XCDR2 variants). Also writes cdr_messages.json (the
-// serialized messages, base64) for make_db3.py.
+// serialized messages, base64; the first 100 IMU messages also zstd-compressed) for make_db3.py.
 import fs from "node:fs";
 import { McapWriter } from "@mcap/core";
 import { parse } from "@foxglove/rosmsg";
@@ -97,7 +97,10 @@ await write("imu_big_endian.mcap", { count: short, codec: "zstd", chunkSize: 256
 await write("imu_xcdr2.mcap", { count: short, codec: "zstd", chunkSize: 256 * 1024, encode: (m) => imuCdr(m, EncapsulationKind.RTPS_CDR2_LE) });
 
 const b64 = (u8) => Buffer.from(u8).toString("base64");
+// rosbag2's compression_mode MESSAGE: each message's CDR bytes one zstd frame (level 3, rosbag2's default).
+const zstdB64 = (u8) => b64(zstd.compress(u8, 3));
 fs.writeFileSync("cdr_messages.json", JSON.stringify({
   imu: imu.slice(0, short).map((m) => ({ time_ns: m.time_ns, data: b64(imuWriter.writeMessage(rosImu(m))) })),
   temperature: temperatures.slice(0, short / 10).map((t) => ({ time_ns: t.time_ns, data: b64(temperatureWriter.writeMessage(rosTemperature(t))) })),
+  imu_zstd: imu.slice(0, 100).map((m) => ({ time_ns: m.time_ns, data: zstdB64(imuWriter.writeMessage(rosImu(m))) })),
 }));
