@@ -351,12 +351,6 @@ bool has_magic(std::string_view first_bytes) {
   return first_bytes.size() >= kMagicSize && std::memcmp(first_bytes.data(), kMagic, kMagicSize) == 0;
 }
 
-const Channel* File::find_channel(std::uint16_t id) const {
-  for (const auto& c : channels)
-    if (c.id == id) return &c;
-  return nullptr;
-}
-
 const Schema* File::find_schema(std::uint16_t id) const {
   for (const auto& s : schemas)
     if (s.id == id) return &s;

@@ -103,7 +103,6 @@ struct File {
   bool has_summary = false;
   bool has_statistics = false;
 
-  const Channel* find_channel(std::uint16_t id) const;
   const Schema* find_schema(std::uint16_t id) const;
 };
 

@@ -94,10 +94,11 @@ std::vector<std::int64_t> stamps(Raw& r, std::vector<std::string>* notes) {
   return r.time;
 }
 
-void check_value(const std::string& file, const std::string& field, double v, std::int64_t stamp) {
+void check_value(const std::string& file, const Raw& r, const std::string& part, int axis, double v, std::int64_t stamp) {
   if (std::isfinite(v) && std::abs(v) <= kMaxMagnitude) return;
-  throw DataError({file, 0, field}, (std::isfinite(v) ? "value beyond 1e100" : "non-finite value") + std::string(" at stamp ") +
-                                        std::to_string(stamp) + " ns");
+  throw DataError({file, 0, r.topic->name + "." + part + "." + "xyz"[axis]},
+                  (std::isfinite(v) ? "value beyond 1e100" : "non-finite value") + std::string(" at stamp ") +
+                      std::to_string(stamp) + " ns");
 }
 
 void add_sensor(const std::string& file, const Raw& r, imu::Sensor sensor, const std::vector<std::int64_t>& time,
@@ -119,7 +120,7 @@ void add_sensor(const std::string& file, const Raw& r, imu::Sensor sensor, const
   for (const auto i : order) {
     s.time.push_back(time[i]);
     for (int a = 0; a < 3; ++a) {
-      check_value(file, r.topic->name + "." + part + "." + "xyz"[a], values[i][static_cast<std::size_t>(a)], time[i]);
+      check_value(file, r, part, a, values[i][static_cast<std::size_t>(a)], time[i]);
       s.axes[static_cast<std::size_t>(a)].push_back(values[i][static_cast<std::size_t>(a)]);
     }
   }

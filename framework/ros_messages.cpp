@@ -14,7 +14,7 @@ constexpr std::size_t kCovarianceSize = 9;
 // A bounds-checked cursor over one serialized message.
 class Cursor {
  public:
-  Cursor(std::string_view bytes, Encoding encoding, const Location& where, const std::string& what)
+  Cursor(std::string_view bytes, Encoding encoding, const Location& where, const Describe& what)
       : bytes_(bytes), where_(where), what_(what) {
     if (encoding == Encoding::Ros1) return;
     if (bytes.size() < kEncapsulationSize) fail(0, "shorter than the 4-byte CDR encapsulation header");
@@ -76,12 +76,12 @@ class Cursor {
   }
 
   [[noreturn]] void fail(std::size_t at, const std::string& message) const {
-    throw DataError(where_, what_ + ": byte " + std::to_string(at) + " of the message: " + message);
+    throw DataError(where_, what_() + ": byte " + std::to_string(at) + " of the message: " + message);
   }
 
   std::string_view bytes_;
   const Location& where_;
-  const std::string& what_;
+  const Describe& what_;
   bool big_endian_ = false;
   std::size_t max_align_ = 1;  // ROS 1: packed
   std::size_t body_ = 0;
@@ -123,7 +123,7 @@ std::string_view ros1_md5(MessageType type) {
   return {};
 }
 
-Imu decode_imu(std::string_view bytes, Encoding encoding, const Location& where, const std::string& what) {
+Imu decode_imu(std::string_view bytes, Encoding encoding, const Location& where, const Describe& what) {
   Cursor in(bytes, encoding, where, what);
   Imu m;
   m.stamp_ns = header(in, encoding);
@@ -139,7 +139,7 @@ Imu decode_imu(std::string_view bytes, Encoding encoding, const Location& where,
 }
 
 Temperature decode_temperature(std::string_view bytes, MessageType type, Encoding encoding, const Location& where,
-                               const std::string& what) {
+                               const Describe& what) {
   Cursor in(bytes, encoding, where, what);
   Temperature m;
   switch (type) {
@@ -150,7 +150,7 @@ Temperature decode_temperature(std::string_view bytes, MessageType type, Encodin
       break;
     case MessageType::Float32: m.degc = in.f32(); break;
     case MessageType::Float64: m.degc = in.f64(); break;
-    case MessageType::Imu: throw DataError(where, what + ": an Imu message is not a temperature");
+    case MessageType::Imu: throw DataError(where, what() + ": an Imu message is not a temperature");
   }
   in.finish();
   return m;

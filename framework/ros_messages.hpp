@@ -23,12 +23,14 @@
 //
 // Contract: every read is checked against the bytes that remain; a message shorter than its type,
 // one longer than its type by more than the CDR trailing alignment (3 bytes; 0 for ROS 1), a
-// string longer than the message, a nanosecond field of 10^9 or more: DataError at `where` with
-// `what` (the topic and message) and the byte offset in the message. Never a read past the end.
+// string longer than the message, a nanosecond field of 10^9 or more: DataError at `where` (file,
+// topic) with what `what()` says (the message's place in the bag, asked only for the error) and
+// the byte offset in the message. Never a read past the end.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -60,9 +62,11 @@ struct Temperature {
   double degc = 0.0;
 };
 
-Imu decode_imu(std::string_view bytes, Encoding encoding, const Location& where, const std::string& what);
+using Describe = std::function<std::string()>;  // the message's place, for an error's text
+
+Imu decode_imu(std::string_view bytes, Encoding encoding, const Location& where, const Describe& what);
 // `type` is Temperature, Float32 or Float64.
 Temperature decode_temperature(std::string_view bytes, MessageType type, Encoding encoding, const Location& where,
-                               const std::string& what);
+                               const Describe& what);
 
 }  // namespace driftlab::ros

@@ -37,7 +37,7 @@ void read_mcap(const std::filesystem::path& path, const Wanted& wanted, const Vi
         return wanted(t);
       },
       [&](const mcap::Message& m) {
-        visit({&by_channel.at(m.channel->id), static_cast<std::int64_t>(m.log_time), m.data, m.place.text()});
+        visit({&by_channel.at(m.channel->id), static_cast<std::int64_t>(m.log_time), m.data, [&m] { return m.place.text(); }});
       });
   bag.container = "MCAP (profile " + (f.profile.empty() ? std::string("none") : f.profile) + ", " +
                   describe_compression(f.chunk_compression) + (f.has_summary ? ", summary" : ", no summary") + ")";
@@ -116,7 +116,7 @@ void read_directory(const std::filesystem::path& dir, const Wanted& wanted, cons
     throw DataError({metadata_file, 0, "relative_file_paths"}, "lists no files");
 
   const Visitor unpacked = [&](const Message& m) {
-    const std::string data = decompress(codec, m.data, std::nullopt, {bag.file, 0, m.topic->name}, m.where);
+    const std::string data = decompress(codec, m.data, std::nullopt, {bag.file, 0, m.topic->name}, m.where());
     visit({m.topic, m.time_ns, data, m.where});
   };
   for (const auto& p : paths) {
@@ -130,9 +130,9 @@ void read_directory(const std::filesystem::path& dir, const Wanted& wanted, cons
                           " (" + file.string() + ")");
     Bag part;
     part.file = file.string();
+    const std::string name = file.filename().string();
     const Visitor each = [&](const Message& m) {
-      Message named = m;
-      named.where = file.filename().string() + ": " + m.where;
+      const Message named{m.topic, m.time_ns, m.data, [&m, &name] { return name + ": " + m.where(); }};
       per_message ? unpacked(named) : visit(named);
     };
     read_file(file, *format, wanted, each, part);

@@ -63,7 +63,9 @@ struct Message {
   const Topic* topic = nullptr;
   std::int64_t time_ns = 0;  // the container's message time (receive / log time)
   std::string_view data;     // serialized message, valid during the visit only
-  std::string where;         // "byte N", "row N", "message N" (with the file for a directory)
+  // "byte N", "row N", "message N" (after the file's name in a directory): built only when asked,
+  // valid during the visit.
+  std::function<std::string()> where;
 };
 using Visitor = std::function<void(const Message&)>;
 // Whose messages to visit: asked once per topic as its container declares it (name, type, encoding

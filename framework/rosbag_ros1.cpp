@@ -4,6 +4,7 @@
 #include <rosbag/view.h>
 
 #include <map>
+#include <optional>
 
 #include "framework/error.hpp"
 #include "framework/rosbag_containers.hpp"
@@ -15,7 +16,7 @@ extern "C" __attribute__((visibility("default"))) void driftlab_read_ros1(const 
                                                                           const Wanted& wanted, const Visitor& visit,
                                                                           Bag& out) {
   const std::string file = path.string();
-  std::string where = "its index";
+  std::optional<std::uint64_t> message;  // being read; none: the index
   try {
     ::rosbag::Bag bag(file, ::rosbag::bagmode::Read);
     out.container = "ROS 1 bag v" + std::to_string(bag.getMajorVersion()) + "." + std::to_string(bag.getMinorVersion());
@@ -45,19 +46,21 @@ extern "C" __attribute__((visibility("default"))) void driftlab_read_ros1(const 
     if (!present.empty()) {
       ::rosbag::View view(bag, ::rosbag::TopicQuery(present));
       std::string buffer;
-      std::uint64_t index = 0;
+      message = 0;
       for (const ::rosbag::MessageInstance& m : view) {
-        where = "message " + std::to_string(index++) + " in time order";
         buffer.resize(m.size());
         ros::serialization::OStream stream(reinterpret_cast<std::uint8_t*>(buffer.data()), static_cast<std::uint32_t>(buffer.size()));
         m.write(stream);
-        visit({&by_topic.at(m.getTopic()), static_cast<std::int64_t>(m.getTime().toNSec()), buffer, where});
+        const std::uint64_t index = (*message)++;
+        visit({&by_topic.at(m.getTopic()), static_cast<std::int64_t>(m.getTime().toNSec()), buffer,
+               [index] { return "message " + std::to_string(index) + " in time order"; }});
       }
     }
     for (auto& [name, t] : by_topic) out.topics.push_back(std::move(t));
   } catch (const DataError&) {
     throw;
   } catch (const std::exception& e) {
+    const std::string where = message ? "message " + std::to_string(*message) + " in time order" : "its index";
     throw DataError({file, 0, ""}, "reading " + where + ": " + e.what() + " (librosbag-storage)");
   }
 }

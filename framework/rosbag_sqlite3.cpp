@@ -120,8 +120,9 @@ void read_sqlite3(const std::filesystem::path& path, const Wanted& wanted, const
       const Topic& t = by_id.at(sqlite3_column_int64(s.get(), 0));
       const auto* data = static_cast<const char*>(sqlite3_column_blob(s.get(), 2));
       const auto size = static_cast<std::size_t>(sqlite3_column_bytes(s.get(), 2));
+      const std::int64_t row = sqlite3_column_int64(s.get(), 3);
       visit({&t, sqlite3_column_int64(s.get(), 1), std::string_view(data ? data : "", size),
-             "row " + std::to_string(sqlite3_column_int64(s.get(), 3))});
+             [row] { return "row " + std::to_string(row); }});
     }
   }
   for (auto& [id, t] : by_id) bag.topics.push_back(std::move(t));

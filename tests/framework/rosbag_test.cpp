@@ -203,16 +203,17 @@ TEST(McapBadInput, StatisticsThatDisagreeWithTheDataAreADataError) {
 
 TEST(RosMessages, EncapsulationsOtherThanPlainCdrAndShortMessagesAreDataErrors) {
   const Location where{"x.mcap", 0, "/imu"};
-  EXPECT_THAT(data_error([&] { ros::decode_imu(std::string("\x00\x02\x00\x00", 4), ros::Encoding::Cdr, where, "/imu row 3"); }),
+  const ros::Describe m = [] { return std::string("m"); };
+  EXPECT_THAT(data_error([&] { ros::decode_imu(std::string("\x00\x02\x00\x00", 4), ros::Encoding::Cdr, where, [] { return std::string("/imu row 3"); }); }),
               AllOf(HasSubstr("x.mcap: /imu: /imu row 3: byte 0 of the message: CDR encapsulation 0x0002 is not read")));
-  EXPECT_THAT(data_error([&] { ros::decode_imu(std::string("\x00\x01\x00\x00\x01\x00\x00\x00", 8), ros::Encoding::Cdr, where, "m"); }),
+  EXPECT_THAT(data_error([&] { ros::decode_imu(std::string("\x00\x01\x00\x00\x01\x00\x00\x00", 8), ros::Encoding::Cdr, where, m); }),
               HasSubstr("byte 8 of the message: message ends after 8 bytes"));
-  EXPECT_THAT(data_error([&] { ros::decode_temperature(std::string(9, '\0'), ros::MessageType::Float64, ros::Encoding::Ros1, where, "m"); }),
+  EXPECT_THAT(data_error([&] { ros::decode_temperature(std::string(9, '\0'), ros::MessageType::Float64, ros::Encoding::Ros1, where, m); }),
               HasSubstr("1 bytes after the end of the message's fields"));
   std::string huge_string("\x00\x01\x00\x00\x01\x00\x00\x00\x02\x00\x00\x00\xff\xff\xff\x7f", 16);
-  EXPECT_THAT(data_error([&] { ros::decode_imu(huge_string, ros::Encoding::Cdr, where, "m"); }),
+  EXPECT_THAT(data_error([&] { ros::decode_imu(huge_string, ros::Encoding::Cdr, where, m); }),
               HasSubstr("string of 2147483647 bytes, but 0 remain"));
-  EXPECT_EQ(ros::decode_temperature(std::string("\x00\x00\x80\x3f", 4), ros::MessageType::Float32, ros::Encoding::Ros1, where, "m").degc, 1.0);
+  EXPECT_EQ(ros::decode_temperature(std::string("\x00\x00\x80\x3f", 4), ros::MessageType::Float32, ros::Encoding::Ros1, where, m).degc, 1.0);
 }
 
 // ---- rosbag2 sqlite3 and directories -----------------------------------------------------------

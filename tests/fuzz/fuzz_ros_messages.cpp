@@ -25,12 +25,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const ros::Encoding encoding = (data[0] & 4) ? ros::Encoding::Ros1 : ros::Encoding::Cdr;
   const std::string_view bytes(reinterpret_cast<const char*>(data + 1), size - 1);
   const Location where{"fuzz", 0, "/topic"};
+  const ros::Describe what = [] { return std::string("message"); };
   try {
     if (type == ros::MessageType::Imu) {
-      const auto m = ros::decode_imu(bytes, encoding, where, "message");
+      const auto m = ros::decode_imu(bytes, encoding, where, what);
       require(m.stamp_ns < 0 || m.stamp_ns % 1000000000 < 1000000000, "stamp nanoseconds");
     } else {
-      const auto m = ros::decode_temperature(bytes, type, encoding, where, "message");
+      const auto m = ros::decode_temperature(bytes, type, encoding, where, what);
       require(m.stamp_ns.has_value() == (type == ros::MessageType::Temperature), "a stamp where the type has none, or none where it has one");
     }
   } catch (const DataError&) {
