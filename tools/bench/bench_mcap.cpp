@@ -4,8 +4,9 @@
 // message counted, none decoded), 1 makes the IMU record (framework/ros_imu.hpp: the messages
 // decoded from CDR, repaired, assembled), 2 the same on imu_uncompressed_chunks.mcap (189 kB).
 // Throughput in MB/s of file (bytes_per_second). Measured on this project's 2-core AMD EPYC VM
-// (Release, median of 5, CPU time): 178 MB/s, 134 MB/s, 709 MB/s; a 1-GB zstd bag of IMU topics so
-// takes about 8 s, one of mostly other topics (counted, not decoded) about 6 s. Run:
+// (Release, median of 5, CPU time): 178 MB/s, 134 MB/s, 709 MB/s. A 995-MB MCAP (zstd chunks, 41
+// min of that IMU at 50 Hz and 4 920 messages of 200 kB of random bytes on another topic, written
+// by @mcap/core) took 1.2 s and 77 MB of memory for `driftlab log info` and `log export`. Run:
 //   DRIFTLAB_BENCH_SIGNALS=DIR build/tools/bench/driftlab-bench --benchmark_filter=BM_ReadMcap
 #include <benchmark/benchmark.h>
 
