@@ -70,10 +70,14 @@ std::vector<std::size_t> repaired_order(const std::vector<std::int64_t>& time, c
   return kept;
 }
 
+bool usable_value(double v) { return std::isfinite(v) && std::abs(v) <= kMaxMagnitude; }
+
+std::string unusable_value(double v) { return std::isfinite(v) ? "value beyond 1e100" : "non-finite value"; }
+
 void check_temperature(std::vector<double>& values, const std::string& file, const std::string& field,
                        const std::string& label, std::vector<std::string>* notes) {
   const auto missing = static_cast<std::size_t>(
-      std::count_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v) || std::abs(v) > kMaxMagnitude; }));
+      std::count_if(values.begin(), values.end(), [](double v) { return !usable_value(v); }));
   if (missing == 0) return;
   if (missing < values.size())
     throw DataError({file, 0, field}, std::to_string(missing) + " of " + std::to_string(values.size()) +

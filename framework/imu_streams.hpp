@@ -68,7 +68,12 @@ struct TemperatureStream {
 std::vector<std::size_t> repaired_order(const std::vector<std::int64_t>& time, const std::string& label,
                                         std::vector<std::string>* notes);
 
-// A temperature series as logged: every value finite (and within kMaxMagnitude) keeps it; NaN
+// A value a log holds is usable when finite and within kMaxMagnitude (csv.hpp); else
+// unusable_value says why ("non-finite value", "value beyond 1e100") for the reader's DataError.
+bool usable_value(double v);
+std::string unusable_value(double v);
+
+// A temperature series as logged: every value usable keeps it; NaN
 // throughout (a sensor without a thermometer) empties it, with a note naming `label`; NaN only in
 // part is a DataError at `field`.
 void check_temperature(std::vector<double>& values, const std::string& file, const std::string& field,

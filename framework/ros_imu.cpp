@@ -2,11 +2,9 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cmath>
 #include <map>
 #include <optional>
 
-#include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/ros_messages.hpp"
 
@@ -95,9 +93,9 @@ std::vector<std::int64_t> stamps(Raw& r, std::vector<std::string>* notes) {
 }
 
 void check_value(const std::string& file, const Raw& r, const std::string& part, int axis, double v, std::int64_t stamp) {
-  if (std::isfinite(v) && std::abs(v) <= kMaxMagnitude) return;
+  if (imu::usable_value(v)) return;
   throw DataError({file, 0, r.topic->name + "." + part + "." + "xyz"[axis]},
-                  (std::isfinite(v) ? "value beyond 1e100" : "non-finite value") + std::string(" at stamp ") +
+                  imu::unusable_value(v) + " at stamp " +
                       std::to_string(stamp) + " ns");
 }
 

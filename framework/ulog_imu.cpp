@@ -2,10 +2,8 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
 #include <optional>
 
-#include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
 #include "framework/imu_streams.hpp"
@@ -66,10 +64,9 @@ std::vector<double> pick(const Log& log, const Stream& s, const std::vector<doub
   std::vector<double> out(raw.message.size());
   for (std::size_t i = 0; i < out.size(); ++i) {
     out[i] = values[raw.message[i]];
-    if (!std::isfinite(out[i]) || std::abs(out[i]) > kMaxMagnitude)
+    if (!imu::usable_value(out[i]))
       fail(log, s.source + "." + field,
-           (std::isfinite(out[i]) ? "value beyond 1e100" : "non-finite value") + std::string(" at time stamp ") +
-               std::to_string(raw.time_us[i]) + " us (" + s.label + ")");
+           imu::unusable_value(out[i]) + " at time stamp " + std::to_string(raw.time_us[i]) + " us (" + s.label + ")");
   }
   return out;
 }
