@@ -110,7 +110,7 @@ std::map<int, Instance> instances(const Log& log) {
   return out;
 }
 
-void set_device_id(const Log& log, imu::Stream& s, std::vector<std::string>* notes) {
+void set_device_id(const Log& log, imu::SensorStream& s, std::vector<std::string>* notes) {
   const auto id = device_id(log, s.sensor, s.instance);
   if (!id) return;
   s.device_id = std::to_string(*id);
@@ -120,7 +120,7 @@ void set_device_id(const Log& log, imu::Stream& s, std::vector<std::string>* not
 }
 
 // Removes the firmware's INS_TCAL correction from the gyro and accel streams of one instance.
-void remove_tcal(const Log& log, int instance, const std::string& label, imu::Stream& gyro, imu::Stream& accel,
+void remove_tcal(const Log& log, int instance, const std::string& label, imu::SensorStream& gyro, imu::SensorStream& accel,
                  std::vector<std::string>* notes) {
   if (instance >= kParameterInstances) return;
   const std::string n = std::to_string(instance + 1);
@@ -142,7 +142,7 @@ void remove_tcal(const Log& log, int instance, const std::string& label, imu::St
     return note(std::string("the correction is not removed: AHRS_ORIENTATION is ") + value +
                 " and the correction lives in the sensor frame (board rotations are not implemented); values as logged");
   }
-  for (imu::Stream* s : {&gyro, &accel})
+  for (imu::SensorStream* s : {&gyro, &accel})
     for (int a = 0; a < 3; ++a)
       for (std::size_t i = 0; i < s->axes[a].size(); ++i) {
         double& v = s->axes[a][i];
@@ -150,7 +150,7 @@ void remove_tcal(const Log& log, int instance, const std::string& label, imu::St
         if (!std::isfinite(v) || std::abs(v) > kMaxMagnitude)
           fail(log, "INS_TCAL" + n, label + ": removing the firmware's temperature correction gives " +
                                         (std::isfinite(v) ? "a value beyond 1e100" : "a non-finite value") + " at time stamp " +
-                                        std::to_string(s->time_us[i]) + " us: are the INS_TCAL" + n + " parameters corrupt?");
+                                        std::to_string(s->time[i]) + " us: are the INS_TCAL" + n + " parameters corrupt?");
       }
   char range[96];
   std::snprintf(range, sizeof range, "TMIN %g, TMAX %g degC", tcal->tmin, tcal->tmax);
@@ -230,19 +230,19 @@ TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector
     fail(log, "IMU", "no IMU messages in the log (" + std::to_string(log.messages) + " messages of " +
                          std::to_string(log.types.size()) + " types read)" + no_imu_detail(log));
 
-  std::vector<imu::Stream> all;
+  std::vector<imu::SensorStream> all;
   for (const auto& [id, in] : by_instance) {
     const MessageType& t = *in.type;
     if (!t.timed) fail(log, t.name + ".TimeUS", "message type '" + t.name + "' has no TimeUS column");
     imu::SampleOrder order;
     for (const auto i : in.messages) {
-      order.time_us.push_back(imu::time_stamp(log.file, in.source, static_cast<double>(t.time_us[i])));
+      order.time_us.push_back(imu::time_stamp_us(log.file, in.source, static_cast<double>(t.time_us[i])));
       order.message.push_back(i);
     }
     imu::repair_order(order, in.label, notes);
-    imu::Stream gyro{imu::Sensor::Gyro, id, in.label, in.source, order.time_us, {}, {}, {}};
-    if (t.has_column("T")) gyro.temperature = imu::temperature(log.file, gyro, t.column("T"), order, notes);
-    imu::Stream accel = gyro;
+    imu::SensorStream gyro{imu::Sensor::Gyro, id, in.label, in.source, order.time_us, {}, {}, {}};
+    if (t.has_column("T")) gyro.temperature = imu::pick_temperature(log.file, gyro, t.column("T"), order, notes);
+    imu::SensorStream accel = gyro;
     accel.sensor = imu::Sensor::Accel;
     gyro.label += " gyro";
     accel.label += " accel";
@@ -258,7 +258,7 @@ TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector
     all.push_back(std::move(gyro));
     all.push_back(std::move(accel));
   }
-  return imu::assemble(log.file, std::move(all), selection, notes);
+  return imu::assemble(std::move(all), {}, selection, imu::kMicrosecondsPerSecond, log.file, notes);
 }
 
 TimeSeries read_imu(const std::filesystem::path& path, const LogSelection& selection, std::vector<std::string>* notes) {

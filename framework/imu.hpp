@@ -30,6 +30,8 @@ namespace driftlab::imu {
 enum class Sensor { Gyro, Accel };
 std::string to_string(Sensor sensor);  // "gyro", "accel"
 
+inline constexpr int kMaxInstance = 99;  // the role names' last instance: gyro99_x, temperature99
+
 struct ChannelId {
   Sensor sensor = Sensor::Gyro;
   char axis = 'z';  // 'x', 'y', 'z'

@@ -8,14 +8,14 @@
 #include "framework/dataflash_imu.hpp"
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
+#include "framework/ros_imu.hpp"
+#include "framework/rosbag.hpp"
 #include "framework/signal.hpp"
 #include "framework/ulog.hpp"
 #include "framework/ulog_imu.hpp"
 
 namespace driftlab {
 namespace {
-
-constexpr int kMaxInstance = 99;  // the IMU role names' last instance (imu.hpp)
 
 std::string role_list(const TimeSeries& record) {
   std::string out;
@@ -46,7 +46,7 @@ TimeSeries mapped_record(const TimeSeries& imu_record, const CsvReadOptions& opt
     copy.role = m.role;
     record.set_channel(std::move(copy));
   }
-  for (int instance = 0; instance <= kMaxInstance; ++instance)
+  for (int instance = 0; instance <= imu::kMaxInstance; ++instance)
     if (!imu_record.device_id(instance).empty()) record.set_device_id(instance, imu_record.device_id(instance));
   return record;
 }
@@ -64,15 +64,15 @@ void check_gaps(const TimeSeries& record, double max_gap_factor, const std::stri
                                              " x median, see --max-gap; 0 allows gaps)");
 }
 
-using ImuReader = TimeSeries (*)(const std::filesystem::path&, const LogSelection&, std::vector<std::string>*);
+using LogReader = TimeSeries (*)(const std::filesystem::path&, const LogSelection&, std::vector<std::string>*);
 
-TimeSeries read_log_record(ImuReader read_imu, const std::filesystem::path& path, const CsvReadOptions& options,
+TimeSeries read_log_record(LogReader reader, const std::filesystem::path& path, const CsvReadOptions& options,
                            const LogSelection& selection, std::vector<std::string>* notes) {
   const std::string file = path.string();
   if (options.sample_rate_hz > 0.0)
     throw ConfigError({file, 0, "--fs"}, "a log carries its own time stamps; --fs is for CSV files without a time column");
   if (!std::isfinite(options.max_gap_factor)) throw ConfigError({file, 0, "--max-gap"}, "must be a finite number");
-  const TimeSeries imu_record = read_imu(path, selection, notes);
+  const TimeSeries imu_record = reader(path, selection, notes);
   TimeSeries record = options.columns.empty() ? imu_record : mapped_record(imu_record, options, file);
   for (const auto& r : options.required_roles)
     if (!record.has(r))
@@ -92,7 +92,7 @@ RecordFormat sniff_record_format(const std::filesystem::path& path) {
   // A file that cannot be read goes to the CSV reader, whose errors name it as before.
   if (ulog::has_magic(head)) return RecordFormat::Ulog;
   if (dataflash::has_magic(head)) return RecordFormat::DataFlash;
-  return RecordFormat::Csv;
+  return rosbag::sniff(path) ? RecordFormat::RosBag : RecordFormat::Csv;
 }
 
 TimeSeries read_record(const std::filesystem::path& path, const CsvReadOptions& options, const LogSelection& selection,
@@ -100,6 +100,7 @@ TimeSeries read_record(const std::filesystem::path& path, const CsvReadOptions& 
   switch (sniff_record_format(path)) {
     case RecordFormat::Ulog: return read_log_record(ulog::read_imu, path, options, selection, notes);
     case RecordFormat::DataFlash: return read_log_record(dataflash::read_imu, path, options, selection, notes);
+    case RecordFormat::RosBag: return read_log_record(ros::read_imu, path, options, selection, notes);
     case RecordFormat::Csv: break;
   }
   return read_csv(path, options);

@@ -10,6 +10,7 @@ namespace {
 
 constexpr std::int32_t kRelativeTimestampInvalid = 0x7fffffff;  // PX4's RELATIVE_TIMESTAMP_INVALID
 constexpr char kAxes[3] = {'x', 'y', 'z'};
+using Stream = imu::SensorStream;
 
 [[noreturn]] void fail(const Log& log, const std::string& field, const std::string& message) {
   throw DataError({log.file, 0, field}, message);
@@ -33,10 +34,10 @@ const std::vector<double>& field(const Log& log, const Topic& t, const std::stri
 std::string device_text(double id) { return std::to_string(static_cast<std::uint64_t>(id)); }
 
 // sensor_gyro / sensor_accel, one stream per multi_id.
-void sensor_streams(const Log& log, const std::string& topic, imu::Sensor sensor, std::vector<imu::Stream>& out,
+void sensor_streams(const Log& log, const std::string& topic, imu::Sensor sensor, std::vector<Stream>& out,
                     std::vector<std::string>* notes) {
   for (const auto* t : log.instances(topic)) {
-    imu::Stream s;
+    Stream s;
     s.sensor = sensor;
     s.instance = t->multi_id;
     s.label = topic + " multi_id " + std::to_string(t->multi_id);
@@ -44,16 +45,16 @@ void sensor_streams(const Log& log, const std::string& topic, imu::Sensor sensor
     imu::SampleOrder raw;
     const std::vector<double>* sample_time = t->has_column("timestamp_sample") ? &t->column("timestamp_sample") : nullptr;
     for (std::size_t i = 0; i < t->timestamp_us.size(); ++i) {
-      raw.time_us.push_back(imu::time_stamp(log.file, s.source, sample_time ? (*sample_time)[i] : static_cast<double>(t->timestamp_us[i])));
+      raw.time_us.push_back(imu::time_stamp_us(log.file, s.source, sample_time ? (*sample_time)[i] : static_cast<double>(t->timestamp_us[i])));
       raw.message.push_back(i);
     }
     imu::repair_order(raw, s.label, notes);
-    s.time_us = raw.time_us;
+    s.time = raw.time_us;
     for (int a = 0; a < 3; ++a) {
       const std::string axis(1, kAxes[a]);
       s.axes[a] = imu::pick(log.file, s, field(log, *t, axis), raw, axis);
     }
-    if (t->has_column("temperature")) s.temperature = imu::temperature(log.file, s, t->column("temperature"), raw, notes);
+    if (t->has_column("temperature")) s.temperature = imu::pick_temperature(log.file, s, t->column("temperature"), raw, notes);
     if (t->has_column("device_id") && !raw.message.empty()) {
       const auto& ids = t->column("device_id");
       s.device_id = device_text(ids[raw.message.front()]);
@@ -69,19 +70,19 @@ void sensor_streams(const Log& log, const std::string& topic, imu::Sensor sensor
 }
 
 // sensor_combined multi_id 0: a gyro stream and an accelerometer stream.
-void combined_streams(const Log& log, std::vector<imu::Stream>& out, std::vector<std::string>* notes) {
+void combined_streams(const Log& log, std::vector<Stream>& out, std::vector<std::string>* notes) {
   const Topic* t = log.find("sensor_combined", 0);
   if (!t) return;
   const std::string label = "sensor_combined multi_id 0";
   {
-    imu::Stream s{imu::Sensor::Gyro, 0, label + " gyro", "sensor_combined[0]", {}, {}, {}, {}};
+    Stream s{imu::Sensor::Gyro, 0, label + " gyro", "sensor_combined[0]", {}, {}, {}, {}};
     imu::SampleOrder raw;
     for (std::size_t i = 0; i < t->timestamp_us.size(); ++i) {
-      raw.time_us.push_back(imu::time_stamp(log.file, s.source, static_cast<double>(t->timestamp_us[i])));
+      raw.time_us.push_back(imu::time_stamp_us(log.file, s.source, static_cast<double>(t->timestamp_us[i])));
       raw.message.push_back(i);
     }
     imu::repair_order(raw, s.label, notes);
-    s.time_us = raw.time_us;
+    s.time = raw.time_us;
     for (int a = 0; a < 3; ++a) {
       const std::string name = "gyro_rad[" + std::to_string(a) + "]";
       s.axes[a] = imu::pick(log.file, s, field(log, *t, name), raw, name);
@@ -89,7 +90,7 @@ void combined_streams(const Log& log, std::vector<imu::Stream>& out, std::vector
     out.push_back(std::move(s));
   }
   {
-    imu::Stream s{imu::Sensor::Accel, 0, label + " accelerometer", "sensor_combined[0]", {}, {}, {}, {}};
+    Stream s{imu::Sensor::Accel, 0, label + " accelerometer", "sensor_combined[0]", {}, {}, {}, {}};
     imu::SampleOrder raw;
     const auto& relative = field(log, *t, "accelerometer_timestamp_relative");
     std::size_t invalid = 0;
@@ -98,13 +99,13 @@ void combined_streams(const Log& log, std::vector<imu::Stream>& out, std::vector
         ++invalid;
         continue;
       }
-      raw.time_us.push_back(imu::time_stamp(log.file, s.source, static_cast<double>(t->timestamp_us[i]) + relative[i]));
+      raw.time_us.push_back(imu::time_stamp_us(log.file, s.source, static_cast<double>(t->timestamp_us[i]) + relative[i]));
       raw.message.push_back(i);
     }
     if (notes && invalid > 0)
       notes->push_back(s.label + ": " + std::to_string(invalid) + " samples with an invalid relative time stamp left out");
     imu::repair_order(raw, s.label, notes);
-    s.time_us = raw.time_us;
+    s.time = raw.time_us;
     for (int a = 0; a < 3; ++a) {
       const std::string name = "accelerometer_m_s2[" + std::to_string(a) + "]";
       s.axes[a] = imu::pick(log.file, s, field(log, *t, name), raw, name);
@@ -122,6 +123,7 @@ const std::vector<std::string>& imu_topics() {
 }
 
 TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector<std::string>* notes) {
+  if (!selection.sensor.empty()) imu::parse_selection(selection.sensor, "--sensor");  // reported before the topics
   std::string topic = selection.topic;
   if (topic.empty()) {
     const bool has_sensor_topics = !log.instances("sensor_gyro").empty() || !log.instances("sensor_accel").empty();
@@ -138,12 +140,12 @@ TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector
     fail(log, "--topic", "topic '" + topic + "' is not in the log (IMU topics it has: " + imu_topic_list(log) + ")");
   }
 
-  std::vector<imu::Stream> all;
+  std::vector<Stream> all;
   if (topic == "sensor" || topic == "sensor_gyro") sensor_streams(log, "sensor_gyro", imu::Sensor::Gyro, all, notes);
   if (topic == "sensor" || topic == "sensor_accel") sensor_streams(log, "sensor_accel", imu::Sensor::Accel, all, notes);
   if (topic == "sensor_combined") combined_streams(log, all, notes);
 
-  return imu::assemble(log.file, std::move(all), selection, notes);
+  return imu::assemble(std::move(all), {}, selection, imu::kMicrosecondsPerSecond, log.file, notes);
 }
 
 TimeSeries read_imu(const std::filesystem::path& path, const LogSelection& selection, std::vector<std::string>* notes) {

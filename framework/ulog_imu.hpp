@@ -13,12 +13,18 @@
 // vehicle_imu (integrated delta angles) and sensor_gyro_fifo (packed int16 samples with a scale)
 // are not read: they need integration / unpacking that these topics do not.
 //
-// Time base, repairs and the errors they share with the other log readers: framework/imu_streams.hpp
-// (the lowest selected gyro instance is the time base, every other stream is interpolated onto it;
-// out-of-order samples sorted, repeated time stamps dropped, each with a note). The device id is
-// decimal, as PX4's CAL_GYROn_ID parameters show it.
-// Errors of this adapter (DataError naming the file and topic): a requested topic or instance not in
-// the log; the shared ones of imu_streams.hpp.
+// Time base, interpolation, the temperature and device id of an instance, and the repairs of time
+// order: framework/imu_streams.hpp (shared by every log reader); the time stamps are
+// timestamp_sample (us; else timestamp). A temperature channel per instance comes from its gyro
+// (the accel's when no gyro is selected); the device id likewise (decimal, as PX4's CAL_GYROn_ID
+// parameters show it).
+//
+// Repairs, each with a note: samples out of time order are sorted and repeated time stamps dropped
+// (imu_streams.hpp); a temperature that is NaN throughout leaves the channel out. Errors
+// (DataError naming the file and topic): a requested topic or instance not in the log, a stream
+// with fewer than 2 samples, streams that do not overlap in time, a non-finite value or one beyond
+// kMaxMagnitude (csv.hpp), a temperature NaN only in part, an instance above 99 (the role names
+// stop there), a time stamp beyond 2^53 us.
 #pragma once
 
 #include <filesystem>

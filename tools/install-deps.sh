@@ -14,6 +14,10 @@ packages=(
   libpagmo-dev libdlib-dev   # optimizer/pagmo, regressor/svr
   clang libclang-rt-14-dev   # libFuzzer harnesses of tests/fuzz (ASan + UBSan runtimes)
   pybind11-dev python3-pybind11 python3-dev python3-pytest   # the Python module (python/) and its tests
+  # ROS bag readers (framework/rosbag.hpp); python3-rosbag and python3-sensor-msgs write the ROS 1
+  # bags of the tests (an independent writer), sqlite3 gives the reference counts of .db3 fixtures.
+  librosbag-storage-dev libsqlite3-dev libzstd-dev liblz4-dev
+  python3-rosbag python3-sensor-msgs sqlite3
 )
 # The MRPT bridge (tools/mrpt): libmrpt-obs-dev alone pulls the obs, bayes, poses, math, io and
 # serialization modules (~170 MB); mrpt-apps gives rawlog-edit, which the bridge's tests use.

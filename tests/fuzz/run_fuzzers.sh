@@ -2,7 +2,8 @@
 # Builds and runs the libFuzzer harnesses of tests/fuzz (clang, ASan + UBSan).
 #   tests/fuzz/run_fuzzers.sh build FUZZ_BUILD_DIR            configure + build (clang++-14 or clang++)
 #   tests/fuzz/run_fuzzers.sh run FUZZ_BUILD_DIR NAME SECONDS   a random campaign of fuzz_NAME
-#                                                                (csv, pipeline, device, calibration, ulog, dataflash)
+#                                                                (csv, pipeline, device, calibration, ulog,
+#                                                                dataflash, mcap, ros_messages)
 #   tests/fuzz/run_fuzzers.sh check FUZZ_BUILD_DIR NAME RUNS     a reproducible run: seed 1, RUNS
 #                                                                inputs, from the seed corpus only
 # ctest runs `build` once and `check` for each harness with DRIFTLAB_FUZZ_RUNS inputs: the same
@@ -35,7 +36,7 @@ build)
   cmake --build "$build_dir" -j "${JOBS:-2}" --target fuzzers
   ;;
 run|check)
-  name=${3:?harness name: csv, pipeline, device, calibration, ulog or dataflash}
+  name=${3:?harness name: csv, pipeline, device, calibration, ulog, dataflash, mcap or ros_messages}
   budget=${4:-60}
   exe="$build_dir/tests/fuzz/fuzz_$name"
   [[ -x "$exe" ]] || { echo "run_fuzzers.sh: $exe not built (run: run_fuzzers.sh build $build_dir)" >&2; exit 1; }

@@ -101,7 +101,7 @@ TEST_F(LogCli, BadLogsExitWithThreeNamingFileAndOffset) {
   write(dir_ / "record.csv", "t_s,rate_dps\n0,1\n0.1,1\n");
   const auto csv = run_driftlab("log info " + p("record.csv"));
   EXPECT_EQ(csv.exit_code, 3);
-  EXPECT_THAT(csv.err, HasSubstr("not a PX4 ULog"));
+  EXPECT_THAT(csv.err, HasSubstr("not a log driftlab reads"));
 }
 
 TEST(LogCliPyulog, InfoOnEachFixture) {

@@ -16,9 +16,11 @@ namespace driftlab::cli {
 
 void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, bool repeatable) {
   auto* opt = cmd->add_option("--data", data.paths,
-                              repeatable ? "input record(s): CSV, PX4 ULog (.ulg) or ArduPilot DataFlash (.bin); repeat "
-                                           "to combine several runs of one IMU (CSV columns: see --column)"
-                                         : "input record: CSV, PX4 ULog (.ulg) or ArduPilot DataFlash (.bin)");
+                              repeatable ? "input record(s): CSV, PX4 ULog (.ulg), ArduPilot DataFlash (.bin) or ROS bag "
+                                           "(.bag, .db3, .mcap, rosbag2 directory); repeat to combine several runs of one "
+                                           "IMU (CSV columns: see --column)"
+                                         : "input record: CSV, PX4 ULog (.ulg), ArduPilot DataFlash (.bin) or ROS bag (.bag, "
+                                           ".db3, .mcap, rosbag2 directory)");
   opt->required();
   if (!repeatable) opt->expected(1);
   cmd->add_option("--column", data.columns,

@@ -71,9 +71,10 @@ CLI::Validator whole_number(double lo, double hi) {
 
 void add_data_options(CLI::App* command, DataOptions& data, const std::string& column_help) {
   command->add_option("--data", data.path,
-                      "input record: CSV (header row; default columns t_s, rate_dps, temp_c), a PX4 ULog (.ulg) or an "
-                      "ArduPilot DataFlash log (.bin), recognised by content; for a log name the channel to analyse, "
-                      "e.g. --column rate=gyro_z for the z gyro in rad/s");
+                      "input record: CSV (header row; default columns t_s, rate_dps, temp_c), a PX4 ULog (.ulg), an "
+                      "ArduPilot DataFlash log (.bin) or a ROS bag (ROS 1 .bag, ROS 2 .db3 / .mcap or its directory), "
+                      "recognised by content; for a log name the channel to analyse, e.g. --column rate=gyro_z for the "
+                      "z gyro in rad/s");
   command->add_option("--column", data.columns, column_help);
   add_sampling_options(command, data.sample_rate_hz, data.max_gap_factor);
   add_log_selection_options(command, data.log);
@@ -81,11 +82,14 @@ void add_data_options(CLI::App* command, DataOptions& data, const std::string& c
 
 void add_log_selection_options(CLI::App* command, LogSelection& selection) {
   command->add_option("--topic", selection.topic,
-                      "log topic to read the IMU from: PX4 ULog sensor_gyro, sensor_accel or sensor_combined (default: "
-                      "sensor_gyro + sensor_accel when the log has them, else sensor_combined); ArduPilot DataFlash: IMU");
+                      "log topic to read the IMU from. ULog: sensor_gyro, sensor_accel or sensor_combined (default: "
+                      "sensor_gyro + sensor_accel when the log has them, else sensor_combined). DataFlash: IMU. Bags: "
+                      "comma-separated sensor_msgs/Imu topics (instances 0, 1, ... in this order) and temperature "
+                      "topics paired with them (default: every Imu topic, by name, with the temperature topics of "
+                      "their namespaces)");
   command->add_option("--instance", selection.instance,
-                      "log IMU instance (PX4 multi_id, ArduPilot IMU's I) to read; its gyro is the time base (default: every instance, "
-                      "on the time base of the first gyro)")
+                      "log IMU instance (PX4 multi_id, ArduPilot IMU's I; bags: Imu topic number) to read; its gyro is "
+                      "the time base (default: every instance, on the time base of the first gyro)")
       ->check(CLI::Range(0, 255));
   command->add_option("--sensor", selection.sensor,
                       "log channels to read: gyro, accel, gyro1, gyro_z, ... comma-separated (default: all)");
@@ -106,10 +110,10 @@ CsvColumn export_column(const Channel& c) {
 }  // namespace
 
 std::vector<CsvColumn> imu_record_columns(const TimeSeries& record) {
-  constexpr int kMaxInstance = 99;  // the IMU role names' last instance (imu.hpp)
+
   std::vector<CsvColumn> columns{{"t_s", record.time(), "s"}};
   for (const auto& c : record.channels()) columns.push_back(export_column(c));
-  for (int instance = 0; instance <= kMaxInstance; ++instance) {
+  for (int instance = 0; instance <= imu::kMaxInstance; ++instance) {
     const auto& id = record.device_id(instance);
     if (id.empty()) continue;
     columns.push_back({instance ? "device_id" + std::to_string(instance) : "device_id",

@@ -3,10 +3,10 @@
 // ArduPilot DataFlash: message types with counts, rates and time spans, skipped garbage, unknown
 // types and a cut-off end, IMU instances with device ids and temperature spans, the INS_TCAL*
 // temperature-calibration parameters and whether the record has the firmware's correction removed,
-// TCLR (calibration learning) messages.
+// TCLR (calibration learning) messages. ROS bags: tools/driftlab/bag_info.hpp.
 // `driftlab log export FILE --out x.csv`: its IMU record (framework/ulog_imu.hpp,
-// framework/dataflash_imu.hpp) as CSV, in column names the CSV reader recognises: t_s, gyro_x_rad_s,
-// accel1_z_m_s2, temp_c, temp1_c, device_id.
+// framework/dataflash_imu.hpp, framework/ros_imu.hpp) as CSV, in column names the CSV reader
+// recognises: t_s, gyro_x_rad_s, accel1_z_m_s2, temp_c, temp1_c, device_id.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -22,6 +22,7 @@
 #include "framework/record_reader.hpp"
 #include "framework/ulog.hpp"
 #include "framework/ulog_imu.hpp"
+#include "tools/driftlab/bag_info.hpp"
 #include "tools/driftlab/cli.hpp"
 
 namespace driftlab::cli {
@@ -29,15 +30,16 @@ namespace {
 
 constexpr double kSecondsPerMicrosecond = 1e-6;
 constexpr std::size_t kInfoValueChars = 60;  // longer info values are cut in the listing
-constexpr int kMaxInstance = 99;
 
 RecordFormat require_log(const std::string& path) {
   std::error_code ec;
+  const auto format = sniff_record_format(path);
+  if (format == RecordFormat::RosBag) return format;  // a file, or a rosbag2 directory
   if (!std::filesystem::is_regular_file(path, ec)) throw DataError({path, 0, ""}, "not a readable file (missing, or a directory)");
-  const RecordFormat format = sniff_record_format(path);
   if (format == RecordFormat::Csv)
-    throw DataError({path, 0, ""}, "not a PX4 ULog (it does not start with 'ULog' 0x01 0x12 0x35) nor an ArduPilot "
-                                   "DataFlash log (0xA3 0x95 0x80); CSV records are read by the other commands directly");
+    throw DataError({path, 0, ""}, "not a log driftlab reads (a PX4 ULog, an ArduPilot DataFlash log, a ROS 1 bag, a "
+                                   "ROS 2 bag (.db3, .mcap, or its directory)); CSV records are read by the other "
+                                   "commands directly");
   return format;
 }
 
@@ -135,7 +137,7 @@ void ulog_info(const std::string& path) {
   const auto gyros = log.instances("sensor_gyro"), accels = log.instances("sensor_accel");
   if (!gyros.empty() || !accels.empty()) {
     std::cout << "IMU instances (sensor_gyro / sensor_accel, temperature in degC):\n";
-    for (int instance = 0; instance <= kMaxInstance; ++instance) {
+    for (int instance = 0; instance <= imu::kMaxInstance; ++instance) {
       const auto* g = log.find("sensor_gyro", instance);
       const auto* a = log.find("sensor_accel", instance);
       if (!g && !a) continue;
@@ -168,7 +170,7 @@ void dataflash_imu_lines(const dataflash::Log& log) {
   const bool by_column = imu && imu->has_column("I");
   const char* old_names[] = {"IMU", "IMU2", "IMU3"};
   bool any = false;
-  for (int instance = 0; instance <= kMaxInstance; ++instance) {
+  for (int instance = 0; instance <= imu::kMaxInstance; ++instance) {
     const dataflash::MessageType* t = by_column ? imu : (instance < 3 ? log.find(old_names[instance]) : nullptr);
     if (!t || t->count == 0) continue;
     std::vector<std::size_t> rows;
@@ -287,10 +289,12 @@ void dataflash_info(const std::string& path) {
 }
 
 void info_command(const std::string& path) {
-  if (require_log(path) == RecordFormat::Ulog)
-    ulog_info(path);
-  else
-    dataflash_info(path);
+  switch (require_log(path)) {
+    case RecordFormat::Ulog: return ulog_info(path);
+    case RecordFormat::DataFlash: return dataflash_info(path);
+    case RecordFormat::RosBag: return print_bag_info(path, std::cout);
+    case RecordFormat::Csv: break;  // refused by require_log
+  }
 }
 
 struct ExportOptions {
@@ -316,23 +320,26 @@ void export_command(const ExportOptions& o) {
 }  // namespace
 
 void add_log_command(CLI::App& app, CommandEnv&) {
-  auto* log = app.add_subcommand(
-      "log", "read flight-controller logs (PX4 ULog, ArduPilot DataFlash): list what they hold, export the IMU as CSV");
+  auto* log = app.add_subcommand("log", "read the logs IMUs are recorded in (PX4 ULog, ArduPilot DataFlash, ROS 1 and "
+                                        "ROS 2 bags): list what they hold, export the IMU as CSV");
   log->require_subcommand(1);
 
   auto path = std::make_shared<std::string>();
   auto* info = log->add_subcommand(
-      "info", "list a log: topics or message types (messages, rate in Hz, time span in s since boot), IMU instances "
-              "(device id, temperature span in degC); ULog: system info, dropouts (ms), parameters; DataFlash: skipped "
-              "bytes, INS_TCAL* temperature calibration, TCLR");
-  info->add_option("file", *path, "PX4 ULog or ArduPilot DataFlash (.bin) file")->required();
+      "info", "list a log: topics or message types (messages, rate in Hz, time span in s), IMU instances (device id, "
+              "temperature span in degC); ULog: system info, dropouts (ms), parameters; DataFlash: skipped bytes, "
+              "INS_TCAL* temperature calibration, TCLR; bags: topic types, the temperature topics of each Imu topic");
+  info->add_option("file", *path, "PX4 ULog, ArduPilot DataFlash (.bin), ROS 1 bag, ROS 2 bag (.db3, .mcap or its "
+                                  "directory)")->required();
   info->callback([path] { info_command(*path); });
 
   auto o = std::make_shared<ExportOptions>();
   auto* exp = log->add_subcommand(
-      "export", "write a log's IMU record as CSV: t_s (s since boot), gyro*_rad_s (rad/s), accel*_m_s2 (m/s^2), "
-                "temp*_c (degC), device_id*; other streams interpolated onto the first gyro's time stamps");
-  exp->add_option("file", o->path, "PX4 ULog or ArduPilot DataFlash (.bin) file")->required();
+      "export", "write a log's IMU record as CSV: t_s (ULog, DataFlash: s since boot; bags: header stamps, s since the "
+                "epoch), gyro*_rad_s (rad/s), accel*_m_s2 (m/s^2), temp*_c (degC), device_id*; other streams "
+                "interpolated onto the first gyro's time stamps");
+  exp->add_option("file", o->path, "PX4 ULog, ArduPilot DataFlash (.bin), ROS 1 bag, ROS 2 bag (.db3, .mcap or its "
+                                   "directory)")->required();
   exp->add_option("--out", o->out, "output CSV (written atomically)")->required();
   add_log_selection_options(exp, o->log);
   exp->callback([o] { export_command(*o); });
