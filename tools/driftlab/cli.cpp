@@ -15,6 +15,7 @@
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
 #include "framework/record_reader.hpp"
+#include "tools/driftlab/version.hpp"
 
 namespace driftlab::cli {
 
@@ -175,6 +176,38 @@ ReportFiles plan_report_files(OutputSet& outputs, const std::filesystem::path& d
   outputs.plan(files.json, option);
   outputs.plan(files.html, option);
   return files;
+}
+
+int run(int argc, char** argv, const std::vector<AddCommand>& commands) {
+  CLI::App app{"driftlab: MEMS gyroscope error modelling and temperature-drift compensation", "driftlab"};
+  app.set_version_flag("--version", std::string("driftlab ") + kVersion);
+  app.require_subcommand(1);
+  CommandEnv env;
+  app.add_option("--plugin-path", env.plugin_dirs,
+                 "directory of external plugin libraries (*.so); repeatable; also $DRIFTLAB_PLUGIN_PATH")
+      ->check(CLI::ExistingDirectory);
+  app.add_flag("--quiet,-q", env.quiet, "no progress output on stderr");
+  app.add_option("--threads", env.threads, "worker threads (results do not depend on it)")
+      ->check(CLI::Range(1u, 256u))
+      ->capture_default_str();
+  for (const auto add : commands) add(app, env);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitUsage;
+  } catch (const ConfigError& e) {
+    std::cerr << "driftlab: configuration error:\n" << e.what() << "\n";
+    return kExitUsage;
+  } catch (const DataError& e) {
+    std::cerr << "driftlab: bad input data: " << e.what() << "\n";
+    return kExitData;
+  } catch (const std::exception& e) {
+    std::cerr << "driftlab: failed: " << e.what() << "\n";
+    return kExitFailure;
+  }
+  return kExitOk;
 }
 
 }  // namespace driftlab::cli

@@ -1,7 +1,7 @@
 // Shared pieces of the `driftlab` command line: global options, the registry, record loading with
 // --data/--column/--fs/--max-gap, output-path checks and progress on stderr.
 // Each subcommand lives in cmd_<name>.cpp and exposes add_<name>_command(app, env).
-// Errors are thrown (ConfigError -> exit 2, DataError -> exit 3, others -> exit 1); main() maps them.
+// Errors are thrown (ConfigError -> exit 2, DataError -> exit 3, others -> exit 1); run() maps them.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -35,6 +35,13 @@ struct CommandEnv {
  private:
   std::unique_ptr<Registry> registry_;
 };
+
+using AddCommand = void (*)(CLI::App& app, CommandEnv& env);
+
+// The `driftlab` command line: the global options (--plugin-path, --quiet, --threads, --version),
+// the given subcommands, and errors mapped to exit codes. Its main() (main.cpp) and that of
+// driftlab-mrpt (mrpt_main.cpp, the commands that load MRPT) both call it, so both parse alike.
+int run(int argc, char** argv, const std::vector<AddCommand>& commands);
 
 struct DataOptions {
   std::string path;

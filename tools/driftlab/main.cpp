@@ -1,9 +1,6 @@
-// The `driftlab` command: subcommands are added by cmd_<name>.cpp files.
-#include <iostream>
-
-#include "framework/error.hpp"
+// The `driftlab` command: subcommands are added by cmd_<name>.cpp files. `mrpt` and `nav` run in
+// driftlab-mrpt (mrpt_main.cpp; cmd_mrpt_forward.cpp), so that no other command loads MRPT.
 #include "tools/driftlab/cli.hpp"
-#include "tools/driftlab/version.hpp"
 
 namespace driftlab::cli {
 void add_plugins_command(CLI::App& app, CommandEnv& env);
@@ -25,48 +22,8 @@ void add_log_command(CLI::App& app, CommandEnv& env);
 
 int main(int argc, char** argv) {
   using namespace driftlab::cli;
-  CLI::App app{"driftlab: MEMS gyroscope error modelling and temperature-drift compensation"};
-  app.set_version_flag("--version", std::string("driftlab ") + driftlab::kVersion);
-  app.require_subcommand(1);
-  CommandEnv env;
-  app.add_option("--plugin-path", env.plugin_dirs,
-                 "directory of external plugin libraries (*.so); repeatable; also $DRIFTLAB_PLUGIN_PATH")
-      ->check(CLI::ExistingDirectory);
-  app.add_flag("--quiet,-q", env.quiet, "no progress output on stderr");
-  app.add_option("--threads", env.threads, "worker threads (results do not depend on it)")
-      ->check(CLI::Range(1u, 256u))
-      ->capture_default_str();
-
-  add_plugins_command(app, env);
-  add_run_command(app, env);
-  add_devices_command(app, env);
-  add_simulate_command(app, env);
-  add_entropy_command(app, env);
-  add_allan_command(app, env);
-  add_decompose_command(app, env);
-  add_discrepancy_command(app, env);
-  add_mrpt_command(app, env);
-  add_nav_command(app, env);
-  add_calibrate_command(app, env);
-  add_compensate_command(app, env);
-  add_export_command(app, env);
-  add_compare_command(app, env);
-  add_log_command(app, env);
-
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
-    return code == 0 ? kExitOk : kExitUsage;
-  } catch (const driftlab::ConfigError& e) {
-    std::cerr << "driftlab: configuration error:\n" << e.what() << "\n";
-    return kExitUsage;
-  } catch (const driftlab::DataError& e) {
-    std::cerr << "driftlab: bad input data: " << e.what() << "\n";
-    return kExitData;
-  } catch (const std::exception& e) {
-    std::cerr << "driftlab: failed: " << e.what() << "\n";
-    return kExitFailure;
-  }
-  return kExitOk;
+  return run(argc, argv,
+             {add_plugins_command, add_run_command, add_devices_command, add_simulate_command, add_entropy_command,
+              add_allan_command, add_decompose_command, add_discrepancy_command, add_mrpt_command, add_nav_command,
+              add_calibrate_command, add_compensate_command, add_export_command, add_compare_command, add_log_command});
 }
