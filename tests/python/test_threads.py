@@ -48,7 +48,9 @@ def other_thread_progress(call):
 
 def test_the_measurement_tells_a_held_gil_from_a_released_one():
     values = RNG.standard_normal(500_000).tolist()
-    assert other_thread_progress(lambda: sorted(values)) < 0.02  # list.sort holds the GIL throughout
+    # list.sort holds the GIL throughout: about 0 (0.06 measured on a machine loaded 3x over its cores),
+    # well apart from the 0.2 the kernels below must exceed
+    assert other_thread_progress(lambda: sorted(values)) < 0.1
     assert other_thread_progress(lambda: time.sleep(0.2)) > 0.5
 
 
