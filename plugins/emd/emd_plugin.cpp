@@ -19,9 +19,10 @@ enum class Method { Emd, Eemd, Ceemdan };
 
 emd::SiftConfig sift_config(const ParamValues& p) {
   const std::string& rule = p.text("stop_rule");
-  return {.stop_rule = rule == "s_number"    ? emd::StopRule::SNumber
-                       : rule == "cauchy_sd" ? emd::StopRule::CauchySd
-                                             : emd::StopRule::FixedSifts,
+  return {.stop_rule = rule == "s_number"          ? emd::StopRule::SNumber
+                       : rule == "s_number_steady" ? emd::StopRule::SNumberSteady
+                       : rule == "cauchy_sd"       ? emd::StopRule::CauchySd
+                                                   : emd::StopRule::FixedSifts,
           .s_number = static_cast<int>(p.integer("s_number")),
           .sd_threshold = p.real("sd_threshold"),
           .fixed_sifts = static_cast<int>(p.integer("fixed_sifts")),
@@ -81,11 +82,12 @@ class EmdDecomposer final : public Decomposer {
 
 std::vector<ParamSpec> sift_params(const std::string& max_imfs_doc) {
   return {
-      param::choice("stop_rule", "s_number", {"s_number", "cauchy_sd", "fixed_sifts"},
+      param::choice("stop_rule", "s_number", {"s_number", "s_number_steady", "cauchy_sd", "fixed_sifts"},
                     "when sifting one IMF stops: s_number (Huang 2003, S consecutive sifts with "
-                    "#extrema and #zero crossings differing by <= 1), cauchy_sd (Huang 1998 eq. 5.5, "
-                    "aggregated SD < sd_threshold), fixed_sifts (exactly fixed_sifts)"),
-      param::integer("s_number", 4, "1", "S for stop_rule s_number").at_least(1),
+                    "#extrema and #zero crossings differing by <= 1), s_number_steady (libeemd's rule: "
+                    "also the counts changing by <= 1 in total from the sift before), cauchy_sd (Huang "
+                    "1998 eq. 5.5, aggregated SD < sd_threshold), fixed_sifts (exactly fixed_sifts)"),
+      param::integer("s_number", 4, "1", "S for stop_rules s_number and s_number_steady").at_least(1),
       param::real("sd_threshold", 0.2, "1",
                   "threshold for stop_rule cauchy_sd: sum (h_prev - h)^2 / sum h_prev^2")
           .greater_than(0),

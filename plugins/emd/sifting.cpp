@@ -37,6 +37,14 @@ long Sifter::sift(double* h, Index n) {
         s_run = std::abs(e.max.count + e.min.count - e.zero_crossings) <= 1 ? s_run + 1 : 0;
         if (s_run >= config_.s_number) return sifts;
         break;
+      case StopRule::SNumberSteady: {
+        const ExtremaSet& before = sets_[1 - current_];
+        const Index change = std::abs(e.max.count - before.max.count) + std::abs(e.min.count - before.min.count) +
+                             std::abs(e.zero_crossings - before.zero_crossings);
+        s_run = change <= 1 && std::abs(e.max.count + e.min.count - e.zero_crossings) <= 1 ? s_run + 1 : 0;
+        if (s_run >= config_.s_number) return sifts;
+        break;
+      }
       case StopRule::CauchySd:
         if (!(change_ratio >= config_.sd_threshold)) return sifts;
         break;

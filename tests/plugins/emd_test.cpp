@@ -6,6 +6,9 @@
 #include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -713,6 +716,60 @@ TEST(EmdPlugins, ReportANonFiniteSampleAsADataError) {
   x[3] = std::nan("");
   RunContext ctx;
   EXPECT_THROW(decomposer->decompose(x, ctx), DataError);
+}
+
+// Rows of a numeric CSV with a header line, the first `skip` columns left out.
+std::vector<std::vector<double>> read_numeric_csv(const std::string& path, std::size_t skip) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::vector<double>> rows;
+  while (std::getline(in, line)) {
+    std::stringstream fields(line);
+    std::vector<double> row;
+    for (std::string field; std::getline(fields, field, ',');) row.push_back(std::stod(field));
+    rows.emplace_back(row.begin() + static_cast<std::ptrdiff_t>(skip), row.end());
+  }
+  return rows;
+}
+
+TEST(Emd, TheSteadySNumberRuleWithLinearEndsGivesLibeemdsImfs) {
+  // tests/data/emd/README.md: libeemd 1.4.1's EMD (S_number 4, 50 sifts) of a 1000-sample record.
+  const std::string dir = std::string(DRIFTLAB_TEST_DATA) + "/emd/";
+  const auto record = read_numeric_csv(dir + "gyro_N1000.csv", 1);
+  const auto libeemd = read_numeric_csv(dir + "emd_libeemd_N1000_imfs.csv", 1);
+  ASSERT_EQ(record.size(), 1000u);
+  ASSERT_EQ(libeemd.size(), 1000u);
+  Eigen::VectorXd x(1000);
+  for (Eigen::Index i = 0; i < x.size(); ++i) x[i] = record[static_cast<std::size_t>(i)][0];
+  const auto column = [&](std::size_t k) {
+    Eigen::VectorXd c(x.size());
+    for (Eigen::Index i = 0; i < x.size(); ++i) c[i] = libeemd[static_cast<std::size_t>(i)][k];
+    return c;
+  };
+  const std::size_t residual = libeemd.front().size() - 1;
+  constexpr double kPrinted = 1e-9;  // relative; the reference is printed with 11 significant digits
+
+  emd::EmdConfig steady;
+  steady.sift.stop_rule = emd::StopRule::SNumberSteady;
+  steady.sift.end_policy = emd::EndPolicy::Linear;
+  const auto r = emd::emd(x, steady);
+  ASSERT_GE(r.imfs.cols(), 6);
+  for (Eigen::Index k = 0; k < r.imfs.cols(); ++k) {
+    const Eigen::VectorXd theirs = column(static_cast<std::size_t>(k));
+    EXPECT_LT((r.imfs.col(k) - theirs).cwiseAbs().maxCoeff(), kPrinted * theirs.cwiseAbs().maxCoeff()) << "IMF " << k;
+  }
+  // libeemd sifts on while it has rows left (here once more, a residue with one minimum and no
+  // maximum); driftlab stops there (a single bump is the trend): its residue is libeemd's last rows.
+  Eigen::VectorXd rest = Eigen::VectorXd::Zero(x.size());
+  for (auto k = static_cast<std::size_t>(r.imfs.cols()); k <= residual; ++k) rest += column(k);
+  EXPECT_LT((r.residue - rest).cwiseAbs().maxCoeff(), kPrinted * rest.cwiseAbs().maxCoeff());
+
+  // Huang 2003's rule (the default) stops earlier on the same record: the IMFs differ.
+  emd::EmdConfig plain = steady;
+  plain.sift.stop_rule = emd::StopRule::SNumber;
+  const auto p = emd::emd(x, plain);
+  EXPECT_GT((p.imfs.col(0) - column(0)).cwiseAbs().maxCoeff(), 1e-3 * column(0).cwiseAbs().maxCoeff());
 }
 
 }  // namespace
