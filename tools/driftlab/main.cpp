@@ -21,6 +21,7 @@ void add_compensate_command(CLI::App& app, CommandEnv& env);
 void add_export_command(CLI::App& app, CommandEnv& env);
 void add_compare_command(CLI::App& app, CommandEnv& env);
 void add_log_command(CLI::App& app, CommandEnv& env);
+void add_fleet_command(CLI::App& app, CommandEnv& env);
 }  // namespace driftlab::cli
 
 int main(int argc, char** argv) {
@@ -52,6 +53,7 @@ int main(int argc, char** argv) {
   add_export_command(app, env);
   add_compare_command(app, env);
   add_log_command(app, env);
+  add_fleet_command(app, env);
 
   try {
     app.parse(argc, argv);
