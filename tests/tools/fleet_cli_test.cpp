@@ -121,6 +121,26 @@ TEST_F(FleetCli, OneAndTwoWorkersWriteIdenticalUnitFoldersAndReports) {
     EXPECT_EQ(read_text(kDir / "w1" / f), read_text(kDir / "w2" / f)) << f;
 }
 
+TEST_F(FleetCli, TwoShardsAndAMergeGiveTheSingleRunsFoldersAndReport) {
+  const fs::path out = kDir / "shards";
+  for (const char* shard : {"1/2", "2/2"}) {
+    const auto r = run_driftlab("fleet --manifest " + (kSim / "manifest.csv").string() + " --out " + out.string() +
+                                " --channels gyro --shard " + shard);
+    EXPECT_NE(r.exit_code, 2) << r.err;
+    EXPECT_THAT(r.out, HasSubstr("shard " + std::string(shard) + ": 10 units"));
+    EXPECT_FALSE(fs::exists(out / "report.json"));
+  }
+  const auto m = run_driftlab("fleet merge --manifest " + (kSim / "manifest.csv").string() + " --out " + out.string());
+  EXPECT_EQ(m.exit_code, one_->exit_code) << m.err;
+  for (const auto& e : fs::recursive_directory_iterator(kDir / "w1" / "units")) {
+    if (e.is_regular_file()) {
+      EXPECT_EQ(read_text(e.path()), read_text(out / fs::relative(e.path(), kDir / "w1"))) << e.path();
+    }
+  }
+  for (const char* f : {"report.json", "units.csv"})
+    EXPECT_EQ(read_text(kDir / "w1" / f), read_text(out / f)) << f;
+}
+
 TEST_F(FleetCli, ARerunSkipsFinishedUnitsAndRedoesOnlyADeletedOne) {
   const fs::path out = kDir / "rerun";
   fs::copy(kDir / "w2", out, fs::copy_options::recursive);
@@ -174,6 +194,15 @@ TEST(FleetManifest, ABadManifestIsRefusedNamingLineAndColumn) {
   const auto r = run_fleet(kDir / "bad", 1, m);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, ::testing::AllOf(HasSubstr("bad_manifest.csv:1"), HasSubstr("gyro.bogus_max")));
+}
+
+TEST(FleetManifest, MergeRefusesAUnitWhoseShardHasNotRun) {
+  const fs::path m = kDir / "unrun_manifest.csv";
+  std::ofstream(m) << "unit,data\nlate,late.csv\n";
+  fs::create_directories(kDir / "unrun" / "units");  // the shards' output directory, without this unit
+  const auto r = run_driftlab("fleet merge --manifest " + m.string() + " --out " + (kDir / "unrun").string());
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_THAT(r.err, HasSubstr("unit late has not run"));
 }
 
 TEST(FleetManifest, AMissingLogIsThatUnitsFailure) {

@@ -1,6 +1,8 @@
-// `driftlab fleet`: calibrates every unit of a manifest (tools/driftlab/fleet_manifest below) with
-// the calibrate code path (calibration_cli.hpp), one unit per work item of a worker pool, each
-// unit's results written atomically into OUT/units/<id>/, then the fleet report (fleet_report.hpp).
+// `driftlab fleet`: calibrates every unit of a manifest (read_manifest below) with the calibrate
+// code path (calibration_cli.hpp), one unit per work item of a worker pool, each unit's results
+// written atomically into OUT/units/<id>/, then the fleet report (fleet_report.hpp).
+// `--shard i/N` runs every N-th unit and no report (one task of a scheduler job array);
+// `driftlab fleet merge` writes the report from the unit folders once every shard has run.
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -33,6 +35,7 @@ struct FleetOptions {
   std::string extrapolation = "clamp";
   CalibrationDataOptions data;  // --column, --channels, --axis, --fs, --max-gap, log selection
   bool strict = false, force = false;
+  std::string shard;  // "i/N": only the manifest's units i, i + N, ... (1-based i); no report
 };
 
 // One manifest row: the unit, its records (relative paths are relative to the manifest's folder)
@@ -242,28 +245,23 @@ std::string run_unit(const ManifestUnit& u, const FleetOptions& o, const fs::pat
                       "): " + status["reason"].get<std::string>();
 }
 
-void fleet_command(const FleetOptions& o) {
-  const auto units = read_manifest(o.manifest);
+// The fleet report from the units' status files (fleet_report.hpp), its summary on stdout; throws
+// Error (exit 1) when a unit failed or is outside spec.
+void report_command(const std::vector<ManifestUnit>& units, const FleetOptions& o) {
   const fs::path out(o.out);
-  make_output_directory(out / "units", "--out");
   OutputSet report_files({o.manifest});
   for (const char* name : {"report.json", "units.csv", "report.html"}) report_files.plan(out / name, "--out");
-
-  std::mutex console;
-  parallel_for(units.size(), o.workers, [&](std::size_t i) {
-    const std::string line = run_unit(units[i], o, out / "units" / units[i].id);
-    const std::lock_guard<std::mutex> lock(console);
-    std::cout << line << "\n" << std::flush;
-  });
-
   std::vector<UnitSummary> summaries;
   for (const auto& u : units) {
-    summaries.push_back(read_unit_summary(out / "units" / u.id / "status.json"));
+    const fs::path status = out / "units" / u.id / "status.json";
+    if (!fs::exists(status))
+      throw DataError({status.string(), 0, u.id}, "unit " + u.id + " has not run (no status): run its shard first");
+    summaries.push_back(read_unit_summary(status));
     summaries.back().limits = u.limits;
   }
   const auto outliers = find_outliers(summaries);
-  write_fleet_report(summaries, outliers, out,
-                     "driftlab fleet --manifest " + o.manifest + " --model " + o.model, report_files);
+  write_fleet_report(summaries, outliers, out, "driftlab fleet --manifest " + o.manifest + " --model " + o.model,
+                     report_files);
   report_files.commit();
 
   std::size_t failed = 0, outside = 0;
@@ -279,6 +277,41 @@ void fleet_command(const FleetOptions& o) {
                 std::to_string(outside) + " are outside spec (see " + (out / "report.json").string() + ")");
 }
 
+// "i/N" (1 <= i <= N) -> {i - 1, N}; ConfigError naming --shard otherwise.
+std::pair<std::size_t, std::size_t> parse_shard(const std::string& text) {
+  unsigned long i = 0, n = 0;
+  char extra = 0;
+  if (std::sscanf(text.c_str(), "%lu/%lu%c", &i, &n, &extra) != 2 || i < 1 || n < 1 || i > n)
+    throw ConfigError({"", 0, "--shard"}, "expected i/N with 1 <= i <= N (e.g. 2/8), got '" + text + "'");
+  return {i - 1, n};
+}
+
+void fleet_command(const FleetOptions& o) {
+  if (o.manifest.empty() || o.out.empty())
+    throw ConfigError({"", 0, o.manifest.empty() ? "--manifest" : "--out"}, "driftlab fleet needs --manifest and --out");
+  const auto units = read_manifest(o.manifest);
+  const fs::path out(o.out);
+  make_output_directory(out / "units", "--out");
+  // A shard runs the units i, i + N, i + 2N, ... of the manifest (0-based i), and no report.
+  const auto [first, step] = o.shard.empty() ? std::pair<std::size_t, std::size_t>{0, 1} : parse_shard(o.shard);
+  std::vector<std::size_t> mine;
+  for (std::size_t i = first; i < units.size(); i += step) mine.push_back(i);
+
+  std::mutex console;
+  parallel_for(mine.size(), o.workers, [&](std::size_t k) {
+    const auto& u = units[mine[k]];
+    const std::string line = run_unit(u, o, out / "units" / u.id);
+    const std::lock_guard<std::mutex> lock(console);
+    std::cout << line << "\n" << std::flush;
+  });
+  if (o.shard.empty()) return report_command(units, o);
+  std::size_t failed = 0;
+  for (const std::size_t i : mine) failed += read_unit_summary(out / "units" / units[i].id / "status.json").status != "passed";
+  std::cout << "shard " << o.shard << ": " << mine.size() << " units, " << failed
+            << " failed; `driftlab fleet merge` writes the report once every shard has run\n";
+  if (failed > 0) throw Error(std::to_string(failed) + " of the shard's " + std::to_string(mine.size()) + " units failed");
+}
+
 }  // namespace
 
 void add_fleet_command(CLI::App& app, CommandEnv&) {
@@ -288,9 +321,8 @@ void add_fleet_command(CLI::App& app, CommandEnv&) {
                "fleet report with outliers and spec yield; exit 1 when a unit failed or is outside spec");
   cmd->add_option("--manifest", o->manifest,
                   "CSV: unit,data[,<channels>.<figure>_max ...]; data = record paths separated by ';' (relative to "
-                  "the manifest)")
-      ->required();
-  cmd->add_option("--out", o->out, "output directory (units/<id>/, report.json, units.csv, report.html)")->required();
+                  "the manifest)");
+  cmd->add_option("--out", o->out, "output directory (units/<id>/, report.json, units.csv, report.html)");
   cmd->add_option("--workers", o->workers, "units calibrated at once (results do not depend on it)")
       ->check(CLI::Range(1u, 256u))
       ->capture_default_str();
@@ -302,8 +334,23 @@ void add_fleet_command(CLI::App& app, CommandEnv&) {
       ->capture_default_str();
   cmd->add_flag("--strict", o->strict, "as calibrate --strict: quality-gate warnings fail the unit");
   cmd->add_flag("--force", o->force, "as calibrate --force: keep a model whose held-out error exceeds the raw one");
+  cmd->add_option("--shard", o->shard,
+                  "i/N: calibrate only the manifest's units i, i + N, ... (a scheduler job array's task), without "
+                  "the report; `driftlab fleet merge` writes it");
   add_calibration_channel_options(cmd, o->data);
-  cmd->callback([o] { fleet_command(*o); });
+  auto m = std::make_shared<FleetOptions>();
+  auto* merge = cmd->add_subcommand(
+      "merge", "write the fleet report (report.json, units.csv, report.html) from the unit folders the shards wrote");
+  merge->add_option("--manifest", m->manifest, "the manifest the shards ran")->required();
+  merge->add_option("--out", m->out, "the shards' output directory")->required();
+  merge->add_option("--model", m->model, "as the shards' --model (named in the report)")
+      ->check(CLI::IsMember({"poly", "physical", "rbf"}))
+      ->capture_default_str();
+  merge->callback([m] { report_command(read_manifest(m->manifest), *m); });
+  cmd->require_subcommand(0, 1);
+  cmd->callback([o, merge] {
+    if (!merge->parsed()) fleet_command(*o);
+  });
 }
 
 }  // namespace driftlab::cli
