@@ -5,6 +5,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/types.h>
+#include <unistd.h>
+
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -158,6 +163,40 @@ TEST_F(FleetCli, ARerunSkipsFinishedUnitsAndRedoesOnlyADeletedOne) {
   for (const char* f : {"model.json", "status.json"})
     EXPECT_EQ(read_text(out / "units" / normal / f), read_text(kDir / "w1" / "units" / normal / f));
   EXPECT_EQ(read_text(out / "report.json"), read_text(kDir / "w1" / "report.json"));
+}
+
+std::size_t finished_units(const fs::path& out) {
+  std::size_t n = 0;
+  if (!fs::exists(out / "units")) return 0;
+  for (const auto& e : fs::directory_iterator(out / "units")) n += fs::exists(e.path() / "status.json");
+  return n;
+}
+
+TEST_F(FleetCli, ARunKilledMidwayIsCompletedByARerunThatKeepsItsFinishedUnits) {
+  const fs::path out = kDir / "killed", pid_file = kDir / "killed.pid";
+  std::system((std::string(DRIFTLAB_EXE) + " fleet --manifest " + (kSim / "manifest.csv").string() + " --out " +
+               out.string() + " --workers 1 --channels gyro >/dev/null 2>&1 & echo $! > " + pid_file.string())
+                  .c_str());
+  const pid_t pid = std::stoi(read_text(pid_file));
+  // Wait (polling) until a few units have finished, then SIGKILL the whole run.
+  while (finished_units(out) < 3 && ::kill(pid, 0) == 0) ::usleep(20000);
+  ASSERT_EQ(::kill(pid, SIGKILL), 0) << "the run ended before it could be killed";
+  while (::kill(pid, 0) == 0) ::usleep(20000);
+  const std::size_t finished = finished_units(out);
+  ASSERT_LT(finished, static_cast<std::size_t>(kUnits));
+  const auto r = run_fleet(out, 2);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  std::size_t skipped = 0;
+  for (std::size_t p = r.out.find("skipped"); p != std::string::npos; p = r.out.find("skipped", p + 1)) ++skipped;
+  EXPECT_EQ(skipped, finished) << r.out;
+  for (const auto& e : fs::recursive_directory_iterator(kDir / "w1" / "units")) {
+    if (e.is_regular_file()) {
+      EXPECT_EQ(read_text(e.path()), read_text(out / fs::relative(e.path(), kDir / "w1"))) << e.path();
+    }
+  }
+  std::size_t files = 0;
+  for (const auto& e : fs::recursive_directory_iterator(out / "units")) files += e.is_regular_file();
+  EXPECT_EQ(files, 4u * (kUnits - 1) + 1u) << "a staged file of the killed unit was left behind";
 }
 
 TEST_F(FleetCli, SpecLimitsFromTheManifestGiveTheYieldWithoutRedoingUnits) {
