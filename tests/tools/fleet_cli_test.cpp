@@ -146,6 +146,24 @@ TEST_F(FleetCli, TwoShardsAndAMergeGiveTheSingleRunsFoldersAndReport) {
     EXPECT_EQ(read_text(kDir / "w1" / f), read_text(out / f)) << f;
 }
 
+TEST_F(FleetCli, ThreeMpiRanksGiveTheSingleRunsFoldersAndReport) {
+  if (!DRIFTLAB_HAVE_MPI) GTEST_SKIP() << "built without MPI (DRIFTLAB_WITH_MPI)";
+  const fs::path out = kDir / "mpi";
+  // Open MPI refuses to run as root unless told; the tests run as root in the project's container.
+  const auto r = testing_cli::run_driftlab(
+      "fleet --manifest " + (kSim / "manifest.csv").string() + " --out " + out.string() + " --channels gyro",
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe -np 3");
+  EXPECT_NE(r.exit_code, 0) << "a unit failed: rank 0 exits 1";
+  EXPECT_THAT(r.out, HasSubstr(std::to_string(kUnits) + " units: " + std::to_string(kUnits - 1) + " calibrated, 1 failed")) << r.err;
+  for (const auto& e : fs::recursive_directory_iterator(kDir / "w1" / "units")) {
+    if (e.is_regular_file()) {
+      EXPECT_EQ(read_text(e.path()), read_text(out / fs::relative(e.path(), kDir / "w1"))) << e.path();
+    }
+  }
+  for (const char* f : {"report.json", "units.csv"})
+    EXPECT_EQ(read_text(kDir / "w1" / f), read_text(out / f)) << f;
+}
+
 TEST_F(FleetCli, ARerunSkipsFinishedUnitsAndRedoesOnlyADeletedOne) {
   const fs::path out = kDir / "rerun";
   fs::copy(kDir / "w2", out, fs::copy_options::recursive);

@@ -3,6 +3,7 @@
 // written atomically into OUT/units/<id>/, then the fleet report (fleet_report.hpp).
 // `--shard i/N` runs every N-th unit and no report (one task of a scheduler job array);
 // `driftlab fleet merge` writes the report from the unit folders once every shard has run.
+// Started by mpirun as several ranks, the units are dealt over the ranks instead (fleet_mpi.hpp).
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -20,6 +21,7 @@
 #include "models/calibration/exports.hpp"
 #include "tools/driftlab/calibration_cli.hpp"
 #include "tools/driftlab/cli.hpp"
+#include "tools/driftlab/fleet_mpi.hpp"
 #include "tools/driftlab/fleet_report.hpp"
 #include "tools/driftlab/version.hpp"
 
@@ -297,13 +299,17 @@ void fleet_command(const FleetOptions& o) {
   std::vector<std::size_t> mine;
   for (std::size_t i = first; i < units.size(); i += step) mine.push_back(i);
 
-  std::mutex console;
-  parallel_for(mine.size(), o.workers, [&](std::size_t k) {
-    const auto& u = units[mine[k]];
-    const std::string line = run_unit(u, o, out / "units" / u.id);
-    const std::lock_guard<std::mutex> lock(console);
-    std::cout << line << "\n" << std::flush;
-  });
+  const auto run = [&](std::size_t k) { return run_unit(units[mine[k]], o, out / "units" / units[mine[k]].id); };
+  if (const auto master = run_over_mpi(mine.size(), run)) {
+    if (!*master) return;  // an MPI worker rank: rank 0 writes the report
+  } else {
+    std::mutex console;
+    parallel_for(mine.size(), o.workers, [&](std::size_t k) {
+      const std::string line = run(k);
+      const std::lock_guard<std::mutex> lock(console);
+      std::cout << line << "\n" << std::flush;
+    });
+  }
   if (o.shard.empty()) return report_command(units, o);
   std::size_t failed = 0;
   for (const std::size_t i : mine) failed += read_unit_summary(out / "units" / units[i].id / "status.json").status != "passed";
