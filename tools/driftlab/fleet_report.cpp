@@ -282,7 +282,12 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
     all.rows.push_back({units[i].unit, units[i].status,
                         std::string(units[i].status == "passed" && spec[i].empty() ? "yes" : "no"), f, v});
   }
+  HtmlTable figures{"Figures of a channel", {"figure", "gyro key", "accelerometer key"}, {},
+                    "gyro figures in deg/h, accelerometer figures in mg, as each key's suffix says"};
+  for (const auto& f : kFigures)
+    figures.rows.push_back({std::string(f.doc), figure_key(f, imu::Sensor::Gyro), figure_key(f, imu::Sensor::Accel)});
   html.section("Failures").table(failed).section("Outliers").table(flagged).section("Units").table(all);
+  html.section("Figures").table(figures);
   files.write(out / "report.html", html.html());
 }
 
