@@ -1,6 +1,7 @@
-// The core `driftlab` executable starts without MRPT: its whole shared-library closure (as the
-// dynamic loader resolves it) holds no MRPT, OpenCV, GDAL or assimp library; `driftlab mrpt` and
-// `driftlab nav` still work, through driftlab-mrpt (tools/driftlab/cmd_mrpt_forward.cpp).
+// The core `driftlab` executable starts without MRPT and MPI: its whole shared-library closure (as
+// the dynamic loader resolves it) holds no MRPT, OpenCV, GDAL, assimp or MPI library; `driftlab mrpt`
+// and `driftlab nav` still work, through driftlab-mrpt (tools/driftlab/cmd_mrpt_forward.cpp), and
+// `mpirun ... driftlab fleet` loads the MPI engine then (fleet_cli_test).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -19,7 +20,7 @@ TEST(Startup, TheCoreExecutablesLibraryClosureHasNoMrptNorWhatItPullsIn) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("libdriftlab_framework"));  // the loader did list the closure
   EXPECT_THAT(r.out, AllOf(Not(HasSubstr("libmrpt")), Not(HasSubstr("libopencv")), Not(HasSubstr("libgdal")),
-                           Not(HasSubstr("libassimp"))));
+                           Not(HasSubstr("libassimp")), Not(HasSubstr("libmpi"))));
 }
 
 #if DRIFTLAB_HAVE_MRPT

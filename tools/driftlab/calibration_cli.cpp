@@ -1,5 +1,6 @@
 #include "tools/driftlab/calibration_cli.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -10,6 +11,7 @@
 #include "framework/error.hpp"
 #include "framework/time_series.hpp"
 #include "framework/units.hpp"
+#include "models/calibration/oven_run.hpp"
 #include "tools/driftlab/cli.hpp"
 
 namespace driftlab::cli {
@@ -23,6 +25,13 @@ void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, b
                                            ".db3, .mcap, rosbag2 directory)");
   opt->required();
   if (!repeatable) opt->expected(1);
+  add_calibration_channel_options(cmd, data);
+  if (repeatable)
+    cmd->add_flag("--same-device", data.same_device,
+                  "the --data records are one device even though their device ids or bias levels differ");
+}
+
+void add_calibration_channel_options(CLI::App* cmd, CalibrationDataOptions& data) {
   cmd->add_option("--column", data.columns,
                   "column mapping role=column:unit (repeatable). Roles: gyro_x..gyro_z, accel_x..accel_z (gyro1_x, "
                   "accel2_z for instances 1, 2), temperature (temperature1, ...), true_gyro_x (reference input), "
@@ -34,9 +43,6 @@ void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, b
   cmd->add_option("--axis", data.axis, "axis of a single-axis 'rate' column (an IMU column names its own axis)")
       ->check(CLI::IsMember({"x", "y", "z"}))
       ->capture_default_str();
-  if (repeatable)
-    cmd->add_flag("--same-device", data.same_device,
-                  "the --data records are one device even though their device ids or bias levels differ");
   add_sampling_options(cmd, data.sample_rate_hz, data.max_gap_factor);
   add_log_selection_options(cmd, data.log);
 }
@@ -158,6 +164,60 @@ std::vector<ChannelRecords> load_channel_records(const std::vector<std::string>&
     out.push_back(std::move(cr));
   }
   return out;
+}
+
+std::vector<calibration::Finding> run_quality_gate(const std::vector<ChannelRecords>& channels, double bin_s, bool strict,
+                                                  std::ostream* print) {
+  std::vector<calibration::Finding> all;
+  std::vector<std::string> seen_temperatures;
+  for (const auto& ch : channels) {
+    if (std::find(seen_temperatures.begin(), seen_temperatures.end(), ch.temperature_column) != seen_temperatures.end())
+      continue;
+    seen_temperatures.push_back(ch.temperature_column);
+    std::vector<calibration::OvenRun> runs;
+    for (const auto& r : ch.records) runs.push_back(calibration::analyse_oven_run(r.name, r.time_s, r.temp_c, bin_s));
+    for (auto f : calibration::quality_gate(runs)) {
+      f.message = ch.temperature_column + ": " + f.message;
+      if (print) *print << "quality gate " << calibration::to_string(f.severity) << " [" << f.code << "] " << f.message << "\n";
+      all.push_back(std::move(f));
+    }
+  }
+  for (const auto& f : all) {
+    if (f.severity == calibration::Finding::Severity::Error ||
+        (strict && f.severity == calibration::Finding::Severity::Warning))
+      throw DataError({channels.front().records.front().name, 0, "temperature"},
+                      "quality gate" + std::string(strict ? " (--strict)" : "") + ": " + f.message);
+  }
+  return all;
+}
+
+calibration::ChannelCalibration fit_channel(const ChannelRecords& ch, const std::vector<calibration::Record>& records,
+                                            const calibration::FitOptions& f) {
+  calibration::ChannelCalibration c;
+  c.id = ch.id;
+  c.role = ch.role;
+  c.column = ch.column;
+  c.read_unit = ch.read_unit;
+  c.temperature_column = ch.temperature_column;
+  c.device_id = ch.device_id;
+  c.offset_observable = ch.id.sensor == imu::Sensor::Gyro || ch.has_truth;
+  c.model = calibration::fit_calibration(records, f);
+  if (!c.offset_observable) {
+    c.model.bias_rad_s[0] = 0.0;
+    if (!c.model.bias_sigma_rad_s.empty()) c.model.bias_sigma_rad_s[0] = 0.0;
+  }
+  return c;
+}
+
+void check_holdout_error(const calibration::ImuCalibration& model) {
+  for (const auto& ch : model.channels) {
+    const auto& fit = ch.model.fit;
+    if (fit.holdout_rms_rad_s > fit.uncompensated_rms_rad_s)
+      throw DataError({ch.model.fit.records.empty() ? "" : ch.model.fit.records.front(), 0, ch.column},
+                      "the fitted model's held-out error (" + std::to_string(fit.holdout_rms_rad_s) + " " + ch.unit() +
+                          ") exceeds the uncompensated error (" + std::to_string(fit.uncompensated_rms_rad_s) +
+                          "): not written (--force writes it)");
+  }
 }
 
 calibration::ModelKind model_kind_option(const std::string& text) {

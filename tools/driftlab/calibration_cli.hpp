@@ -13,6 +13,7 @@
 #include "framework/time_series.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "models/calibration/fit.hpp"
+#include "models/calibration/oven_run.hpp"
 
 namespace driftlab::cli {
 
@@ -28,6 +29,10 @@ struct CalibrationDataOptions {
 };
 
 void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, bool repeatable);
+// The options of add_calibration_data_options but --data and --same-device (--column, --channels,
+// --axis, --fs, --max-gap, --topic, --instance, --sensor), for a command whose records are listed
+// elsewhere (`driftlab fleet`: in a manifest).
+void add_calibration_channel_options(CLI::App* cmd, CalibrationDataOptions& data);
 
 // One channel to calibrate: its identity, where it comes from, and one calibration::Record per file
 // (signal in the channel's internal unit, its instance's temperature, the truth when the file has it).
@@ -47,6 +52,22 @@ struct ChannelRecords {
 // device ids differ, or a channel's bias disagrees beyond what one device's noise explains; see
 // calibration::largest_disagreement) without --same-device.
 std::vector<ChannelRecords> load_channel_records(const std::vector<std::string>& paths, const CalibrationDataOptions& data);
+
+// The oven-run quality gate (models/calibration/oven_run.hpp) over each temperature the channels are
+// fitted against (one per instance); each finding's message starts with its temperature column and
+// is printed to `print` (when not null) as it is found. Throws DataError naming the first record on
+// an error finding, and under `strict` on a warning.
+std::vector<calibration::Finding> run_quality_gate(const std::vector<ChannelRecords>& channels, double bin_s, bool strict,
+                                                  std::ostream* print);
+
+// The model of one channel: the fit, with the constant term of an accelerometer without a
+// reference set to 0 (a static record holds gravity along the axis, which is no bias).
+calibration::ChannelCalibration fit_channel(const ChannelRecords& ch, const std::vector<calibration::Record>& records,
+                                            const calibration::FitOptions& f);
+
+// Throws DataError naming the first channel whose held-out error exceeds its uncompensated error:
+// such a model is written only on request (calibrate --force).
+void check_holdout_error(const calibration::ImuCalibration& model);
 
 calibration::ModelKind model_kind_option(const std::string& text);  // ConfigError naming --model
 calibration::Extrapolation extrapolation_option(const std::string& text);  // ConfigError naming --extrapolation

@@ -53,52 +53,6 @@ TimeSeries as_time_series(const calibration::Record& r) {
   return ts;
 }
 
-// The model of one channel: the fit, with the constant term of an accelerometer without a
-// reference set to 0 (a static record holds gravity along the axis, which is no bias).
-calibration::ChannelCalibration fit_channel(const ChannelRecords& ch, const std::vector<calibration::Record>& records,
-                                            const calibration::FitOptions& f) {
-  calibration::ChannelCalibration c;
-  c.id = ch.id;
-  c.role = ch.role;
-  c.column = ch.column;
-  c.read_unit = ch.read_unit;
-  c.temperature_column = ch.temperature_column;
-  c.device_id = ch.device_id;
-  c.offset_observable = ch.id.sensor == imu::Sensor::Gyro || ch.has_truth;
-  c.model = calibration::fit_calibration(records, f);
-  if (!c.offset_observable) {
-    c.model.bias_rad_s[0] = 0.0;
-    if (!c.model.bias_sigma_rad_s.empty()) c.model.bias_sigma_rad_s[0] = 0.0;
-  }
-  return c;
-}
-
-// The quality gate over each temperature the channels are fitted against (one per instance),
-// printed once per finding; errors, and warnings under --strict, stop the command (exit 3).
-std::vector<calibration::Finding> run_quality_gate(const std::vector<ChannelRecords>& channels, double bin_s, bool strict) {
-  std::vector<calibration::Finding> all;
-  std::vector<std::string> seen_temperatures;
-  for (const auto& ch : channels) {
-    if (std::find(seen_temperatures.begin(), seen_temperatures.end(), ch.temperature_column) != seen_temperatures.end())
-      continue;
-    seen_temperatures.push_back(ch.temperature_column);
-    std::vector<calibration::OvenRun> runs;
-    for (const auto& r : ch.records) runs.push_back(calibration::analyse_oven_run(r.name, r.time_s, r.temp_c, bin_s));
-    for (auto f : calibration::quality_gate(runs)) {
-      f.message = ch.temperature_column + ": " + f.message;
-      std::cout << "quality gate " << calibration::to_string(f.severity) << " [" << f.code << "] " << f.message << "\n";
-      all.push_back(std::move(f));
-    }
-  }
-  for (const auto& f : all) {
-    if (f.severity == calibration::Finding::Severity::Error ||
-        (strict && f.severity == calibration::Finding::Severity::Warning))
-      throw DataError({channels.front().records.front().name, 0, "temperature"},
-                      "quality gate" + std::string(strict ? " (--strict)" : "") + ": " + f.message);
-  }
-  return all;
-}
-
 // The records of `channels` that match `ch` (by role), for held-out scoring.
 std::vector<calibration::Record> matching(const std::vector<ChannelRecords>& channels, const ChannelRecords& ch) {
   for (const auto& c : channels)
@@ -195,7 +149,7 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
     throw ConfigError({"", 0, "--train-until"}, "--train-until splits a single --data record");
   }
   auto channels = load_channel_records(o.data.paths, o.data);
-  const auto gate = run_quality_gate(channels, o.fit.bin_s, o.strict);
+  const auto gate = run_quality_gate(channels, o.fit.bin_s, o.strict, &std::cout);
   // --report scores the gyro channels (its figures are in deg/h): one gyro channel writes
   // DIR/report.{json,html}, several write DIR/<channel>/report.{json,html}.
   std::vector<std::optional<ReportFiles>> report_files(channels.size());
@@ -241,14 +195,7 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
     model.channels[c] = fit_channel(channels[c], fitted[c], fit_options(o, env, channels[c].role));
   });
   model.validate();
-  for (const auto& ch : model.channels) {
-    const auto& fit = ch.model.fit;
-    if (!o.force && fit.holdout_rms_rad_s > fit.uncompensated_rms_rad_s)
-      throw DataError({ch.model.fit.records.empty() ? "" : ch.model.fit.records.front(), 0, ch.column},
-                      "the fitted model's held-out error (" + std::to_string(fit.holdout_rms_rad_s) + " " + ch.unit() +
-                          ") exceeds the uncompensated error (" + std::to_string(fit.uncompensated_rms_rad_s) +
-                          "): not written (--force writes it)");
-  }
+  if (!o.force) check_holdout_error(model);
   files.write(o.out, calibration::to_json_text(model));
   for (std::size_t c = 0; c < channels.size(); ++c)
     if (report_files[c]) report_channel(o, env, channels[c], fitted[c], held_out[c], model.channels[c], gate, *report_files[c], files);

@@ -1,17 +1,24 @@
 // `driftlab simulate`: run a device file through the oven simulator and write a CSV record:
 // a single-axis gyro as t_s, rate_dps, temp_c, true_rate_dps, systematic_dps, die_temp_c,
-// drive_freq_hz; a whole IMU (an `imu:` device file) as the columns of imu_columns below.
+// drive_freq_hz; a whole IMU (an `imu:` device file) as the columns of imu_columns below; with
+// --fleet, a fleet of such IMUs (simulate_fleet below).
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 
+#include <nlohmann/json.hpp>
+
 #include "devices/device_file.hpp"
+#include "devices/fleet_simulator.hpp"
 #include "devices/imu_simulator.hpp"
 #include "devices/simulator.hpp"
+#include "framework/atomic_file.hpp"
 #include "framework/csv.hpp"
+#include "framework/error.hpp"
 #include "framework/effect_catalogue.hpp"
 #include "framework/output_set.hpp"
+#include "framework/parallel.hpp"
 #include "framework/resources.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
@@ -26,6 +33,7 @@ struct SimulateOptions {
   double fs = 100.0;
   double duration = 0.0;
   std::uint64_t seed = 1;
+  std::size_t fleet = 0;  // > 0: that many units into the directory --out (simulate_fleet)
 };
 
 // A column in `unit`, snapped to the output's resolution (internal units; 0 = none) as k / steps
@@ -95,6 +103,80 @@ std::vector<CsvColumn> imu_columns(const devices::ImuDefinition& imu, const devi
   return columns;
 }
 
+// `--fleet N`: N units of a whole-IMU device (devices/fleet_simulator.hpp: spread and planted
+// faults) into DIR: <unit>.csv each, manifest.csv (unit,data) for `driftlab fleet`, and key.json,
+// the answer key (per unit its seed, device ids, planted fault and the finding expected of it).
+void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::DeviceDefinition& device,
+                    const std::filesystem::path& device_path, const devices::SimulationProfile& profile) {
+  if (!device.imu)
+    throw ConfigError({device_path.string(), 0, "imu"},
+                      "--fleet simulates a whole-IMU device file (an imu: section, e.g. devices/imu3.yaml)");
+  const std::filesystem::path dir(o.out);
+  make_output_directory(dir, "--out");
+  const devices::FleetSpread spread;
+  const auto fleet = devices::plan_fleet(*device.imu, o.fleet, o.seed, spread);
+  devices::SimulationOptions options;
+  options.sample_rate_hz = o.fs;
+  if (o.duration > 0.0) options.duration_s = o.duration;
+  const double samples = std::floor(options.duration_s.value_or(profile.duration_s()) * o.fs) + 1.0;
+  char what[96];
+  std::snprintf(what, sizeof what, "%.3g samples (--fs x --duration) at %.0f bytes each, %u at once", samples,
+                800.0 * static_cast<double>(device.imu->instances.size()), env.threads);
+  check_memory_estimate(samples * 800.0 * static_cast<double>(device.imu->instances.size()) * env.threads,
+                        {"", 0, "--fs, --duration"}, what);
+  // Each unit is its own item (its own seed and file): the files do not depend on --threads.
+  parallel_for(fleet.size(), env.threads, [&](std::size_t u) {
+    const auto& unit = fleet[u];
+    std::string text =
+        format_csv(imu_columns(unit.imu, devices::simulate_unit(unit, profile, options)), unit.id + ".csv");
+    if (unit.fault == devices::FaultKind::Truncated)
+      text.resize(static_cast<std::size_t>(devices::kTruncatedFraction * static_cast<double>(text.size())));
+    write_file_atomically(dir / (unit.id + ".csv"), text);
+  });
+  std::string manifest = "unit,data\n";
+  nlohmann::json units = nlohmann::json::array();
+  for (const auto& unit : fleet) {
+    manifest += unit.id + "," + unit.id + ".csv\n";
+    nlohmann::json ids = nlohmann::json::array();
+    for (const auto& i : unit.imu.instances) ids.push_back(*i.device_id);
+    nlohmann::json entry = {{"unit", unit.id}, {"data", unit.id + ".csv"}, {"seed", unit.seed}, {"device_ids", ids},
+                            {"fault", nullptr}};
+    if (unit.fault) {
+      const auto expected = devices::expected_finding(*unit.fault);
+      entry["fault"] = {{"kind", devices::to_string(*unit.fault)},
+                        {"description", devices::describe(*unit.fault)},
+                        {"expected", {{"channel", expected.channel}, {"figure", expected.figure}}}};
+    }
+    units.push_back(std::move(entry));
+  }
+  const nlohmann::json key = {
+      {"format", "driftlab-fleet-key/1"},
+      {"device", device_path.string()},
+      {"profile", profile.source},
+      {"sample_rate_hz", o.fs},
+      {"seed", o.seed},
+      {"spread",
+       {{"distribution", "each parameter x (1 + sigma z), z ~ N(0, 1) per unit and parameter; noise terms and time "
+                         "constants at least 0"},
+        {"bias_polynomial_sigma", spread.bias},
+        {"scale_factor_polynomial_sigma", spread.scale_factor},
+        {"noise_terms_sigma", spread.noise},
+        {"time_constants_sigma", spread.time_constant}}},
+      {"units", units}};
+  OutputSet outputs({device_path});
+  outputs.plan(dir / "manifest.csv", "--out");
+  outputs.plan(dir / "key.json", "--out");
+  outputs.write(dir / "manifest.csv", manifest);
+  outputs.write(dir / "key.json", key.dump(2) + "\n");
+  outputs.commit();
+  std::cout << dir.string() << ": " << fleet.size() << " units of " << device.name << " (" << samples
+            << " samples each at " << o.fs << " Hz, profile " << profile.source << ", seed " << o.seed
+            << "), manifest.csv, key.json; planted:";
+  for (const auto& unit : fleet)
+    if (unit.fault) std::cout << " " << unit.id << " " << devices::to_string(*unit.fault);
+  std::cout << "\n";
+}
+
 void simulate_command(const SimulateOptions& o, CommandEnv& env) {
   const auto device_path = resolve_device_file(o.device, o.devices_dir);
   auto device = devices::load_device_file(device_path);
@@ -103,6 +185,7 @@ void simulate_command(const SimulateOptions& o, CommandEnv& env) {
                                                " (" + device_path.string() + ") is a whole IMU");
   for (const auto& effect : o.effects) devices::apply_effect_option(effect, device.error_model.effects);
   const auto profile = o.profile == "oven" ? devices::default_oven_profile() : devices::load_profile_file(o.profile);
+  if (o.fleet > 0) return simulate_fleet(o, env, device, device_path, profile);
   OutputSet outputs({device_path, o.profile == "oven" ? std::filesystem::path() : std::filesystem::path(o.profile)});
   outputs.plan(o.out, "--out");
 
@@ -167,7 +250,12 @@ void add_simulate_command(CLI::App& app, CommandEnv& env) {
       ->capture_default_str();
   cmd->add_option("--effect", options->effects, effect_help());
   cmd->add_option("--devices-dir", options->devices_dir, "directory of device files");
-  cmd->add_option("--out", options->out, "output CSV (written atomically)")->required();
+  cmd->add_option("--fleet", options->fleet,
+                  "simulate this many units of a whole-IMU device, spread unit to unit, with planted faults (a "
+                  "hysteresis, a bias step, a noisy instance, a truncated log): --out is then a directory that "
+                  "receives <unit>.csv, manifest.csv and key.json (the answer key)")
+      ->check(whole_number(1, 100000));
+  cmd->add_option("--out", options->out, "output CSV (written atomically); with --fleet, a directory")->required();
   cmd->callback([options, &env] { simulate_command(*options, env); });
 }
 

@@ -18,6 +18,7 @@ void add_compensate_command(CLI::App& app, CommandEnv& env);
 void add_export_command(CLI::App& app, CommandEnv& env);
 void add_compare_command(CLI::App& app, CommandEnv& env);
 void add_log_command(CLI::App& app, CommandEnv& env);
+void add_fleet_command(CLI::App& app, CommandEnv& env);
 }  // namespace driftlab::cli
 
 int main(int argc, char** argv) {
@@ -25,5 +26,6 @@ int main(int argc, char** argv) {
   return run(argc, argv,
              {add_plugins_command, add_run_command, add_devices_command, add_simulate_command, add_entropy_command,
               add_allan_command, add_decompose_command, add_discrepancy_command, add_mrpt_command, add_nav_command,
-              add_calibrate_command, add_compensate_command, add_export_command, add_compare_command, add_log_command});
+              add_calibrate_command, add_compensate_command, add_export_command, add_compare_command, add_log_command,
+              add_fleet_command});
 }

@@ -1,0 +1,291 @@
+// Fleet calibration end to end (issue 24): a simulated fleet of imu3 units with planted faults
+// (`driftlab simulate --fleet`), calibrated by `driftlab fleet` with one and with two workers, scored
+// against the answer key; a rerun resumes; a truncated log is a recorded failure; `calibrate`
+// refuses two units given as one device.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/types.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "tests/tools/cli_harness.hpp"
+
+namespace driftlab {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using testing_cli::read_text;
+using testing_cli::run_driftlab;
+
+// 20 units at 1 Hz over the default oven profile (4.5 h, 16 200 samples per unit), gyro channels
+// only: small enough for a test, long enough for the quality gate and the hysteresis term.
+constexpr int kUnits = 20;
+// Issue 24 allows 2 false flags among 192 normal units; the robust z cut of 3.5 over about 30
+// figures per unit makes a false flag among 16 normal units possible, 2 unlikely.
+constexpr std::size_t kMaxFalselyFlagged = 2;
+
+const fs::path kDir = testing_cli::scratch_dir("fleet_cli");
+const fs::path kSim = kDir / "sim";
+
+nlohmann::json read_json(const fs::path& p) { return nlohmann::json::parse(read_text(p)); }
+
+testing_cli::CliResult run_fleet(const fs::path& out, int workers, const fs::path& manifest = kSim / "manifest.csv") {
+  return run_driftlab("fleet --manifest " + manifest.string() + " --out " + out.string() + " --workers " +
+                      std::to_string(workers) + " --channels gyro");
+}
+
+class FleetCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const auto s = run_driftlab("simulate --fleet " + std::to_string(kUnits) +
+                                " --device imu3 --fs 1 --seed 7 --out " + kSim.string());
+    ASSERT_EQ(s.exit_code, 0) << s.err;
+    one_ = new testing_cli::CliResult(run_fleet(kDir / "w1", 1));
+    two_ = new testing_cli::CliResult(run_fleet(kDir / "w2", 2));
+  }
+  static void TearDownTestSuite() {
+    delete one_;
+    delete two_;
+  }
+  static testing_cli::CliResult* one_;
+  static testing_cli::CliResult* two_;
+};
+testing_cli::CliResult* FleetCli::one_ = nullptr;
+testing_cli::CliResult* FleetCli::two_ = nullptr;
+
+std::string planted(const nlohmann::json& key, const std::string& kind) {
+  for (const auto& u : key["units"])
+    if (!u["fault"].is_null() && u["fault"]["kind"] == kind) return u["unit"];
+  return "";
+}
+
+TEST_F(FleetCli, EveryPlantedFaultIsFlaggedWithItsReasonAndFewNormalUnitsAre) {
+  const auto key = read_json(kSim / "key.json");
+  const auto report = read_json(kDir / "w1" / "report.json");
+  std::set<std::string> faulty, flagged;
+  for (const auto& u : key["units"]) {
+    if (u["fault"].is_null()) continue;
+    faulty.insert(u["unit"]);
+    const auto& expected = u["fault"]["expected"];
+    if (expected["figure"] == "failed") continue;
+    bool found = false;
+    for (const auto& o : report["outliers"])
+      found = found || (o["unit"] == u["unit"] && o["channel"] == expected["channel"] &&
+                        o["figure"].get<std::string>().rfind(expected["figure"].get<std::string>() + "_", 0) == 0);
+    EXPECT_TRUE(found) << u["unit"] << " (" << u["fault"]["description"] << ") is not flagged on " << expected;
+  }
+  for (const auto& o : report["outliers"])
+    if (!faulty.count(o["unit"])) flagged.insert(o["unit"]);
+  EXPECT_LE(flagged.size(), kMaxFalselyFlagged) << report["outliers"].dump(1);
+}
+
+TEST_F(FleetCli, TheTruncatedLogIsARecordedFailureAndTheBatchCompletes) {
+  EXPECT_EQ(one_->exit_code, 1) << one_->err;
+  const auto key = read_json(kSim / "key.json");
+  const std::string truncated = planted(key, "truncated");
+  const auto report = read_json(kDir / "w1" / "report.json");
+  EXPECT_EQ(report["units"], kUnits);
+  EXPECT_EQ(report["passed"], kUnits - 1);
+  ASSERT_EQ(report["failures"].size(), 1u);
+  EXPECT_EQ(report["failures"][0]["unit"], truncated);
+  EXPECT_EQ(report["failures"][0]["exit_class"], 3);
+  EXPECT_THAT(report["failures"][0]["reason"].get<std::string>(), HasSubstr(truncated + ".csv"));
+  const auto status = read_json(kDir / "w1" / "units" / truncated / "status.json");
+  EXPECT_EQ(status["status"], "failed");
+  EXPECT_FALSE(fs::exists(kDir / "w1" / "units" / truncated / "model.json"));
+  for (const auto& u : key["units"]) {
+    if (u["unit"] == truncated) continue;
+    for (const char* f : {"model.json", "px4.params", "ardupilot.params", "status.json"})
+      EXPECT_TRUE(fs::exists(kDir / "w1" / "units" / u["unit"].get<std::string>() / f)) << u["unit"] << " " << f;
+  }
+  EXPECT_TRUE(fs::exists(kDir / "w1" / "units.csv"));
+  EXPECT_TRUE(fs::exists(kDir / "w1" / "report.html"));
+}
+
+TEST_F(FleetCli, OneAndTwoWorkersWriteIdenticalUnitFoldersAndReports) {
+  EXPECT_EQ(two_->exit_code, one_->exit_code) << two_->err;
+  std::size_t files = 0;
+  for (const auto& e : fs::recursive_directory_iterator(kDir / "w1" / "units")) {
+    if (!e.is_regular_file()) continue;
+    const auto other = kDir / "w2" / fs::relative(e.path(), kDir / "w1");
+    EXPECT_EQ(read_text(e.path()), read_text(other)) << e.path();
+    ++files;
+  }
+  EXPECT_EQ(files, 4u * (kUnits - 1) + 1u);
+  for (const char* f : {"report.json", "units.csv"})
+    EXPECT_EQ(read_text(kDir / "w1" / f), read_text(kDir / "w2" / f)) << f;
+}
+
+TEST_F(FleetCli, TwoShardsAndAMergeGiveTheSingleRunsFoldersAndReport) {
+  const fs::path out = kDir / "shards";
+  for (const char* shard : {"1/2", "2/2"}) {
+    const auto r = run_driftlab("fleet --manifest " + (kSim / "manifest.csv").string() + " --out " + out.string() +
+                                " --channels gyro --shard " + shard);
+    EXPECT_NE(r.exit_code, 2) << r.err;
+    EXPECT_THAT(r.out, HasSubstr("shard " + std::string(shard) + ": 10 units"));
+    EXPECT_FALSE(fs::exists(out / "report.json"));
+  }
+  const auto m = run_driftlab("fleet merge --manifest " + (kSim / "manifest.csv").string() + " --out " + out.string());
+  EXPECT_EQ(m.exit_code, one_->exit_code) << m.err;
+  for (const auto& e : fs::recursive_directory_iterator(kDir / "w1" / "units")) {
+    if (e.is_regular_file()) {
+      EXPECT_EQ(read_text(e.path()), read_text(out / fs::relative(e.path(), kDir / "w1"))) << e.path();
+    }
+  }
+  for (const char* f : {"report.json", "units.csv"})
+    EXPECT_EQ(read_text(kDir / "w1" / f), read_text(out / f)) << f;
+}
+
+TEST_F(FleetCli, ThreeMpiRanksGiveTheSingleRunsFoldersAndReport) {
+  if (!DRIFTLAB_HAVE_MPI) GTEST_SKIP() << "built without MPI (DRIFTLAB_WITH_MPI)";
+  const fs::path out = kDir / "mpi";
+  // Open MPI refuses to run as root unless told; the tests run as root in the project's container.
+  const auto r = testing_cli::run_driftlab(
+      "fleet --manifest " + (kSim / "manifest.csv").string() + " --out " + out.string() + " --channels gyro",
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe -np 3");
+  EXPECT_NE(r.exit_code, 0) << "a unit failed: rank 0 exits 1";
+  EXPECT_THAT(r.out, HasSubstr(std::to_string(kUnits) + " units: " + std::to_string(kUnits - 1) + " calibrated, 1 failed")) << r.err;
+  for (const auto& e : fs::recursive_directory_iterator(kDir / "w1" / "units")) {
+    if (e.is_regular_file()) {
+      EXPECT_EQ(read_text(e.path()), read_text(out / fs::relative(e.path(), kDir / "w1"))) << e.path();
+    }
+  }
+  for (const char* f : {"report.json", "units.csv"})
+    EXPECT_EQ(read_text(kDir / "w1" / f), read_text(out / f)) << f;
+}
+
+TEST_F(FleetCli, ARerunSkipsFinishedUnitsAndRedoesOnlyADeletedOne) {
+  const fs::path out = kDir / "rerun";
+  fs::copy(kDir / "w2", out, fs::copy_options::recursive);
+  std::string normal;
+  const auto key = read_json(kSim / "key.json");
+  for (const auto& u : key["units"])
+    if (normal.empty() && u["fault"].is_null()) normal = u["unit"];
+  fs::remove_all(out / "units" / normal);
+  const auto r = run_fleet(out, 2);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  std::size_t skipped = 0;
+  for (std::size_t p = r.out.find("skipped"); p != std::string::npos; p = r.out.find("skipped", p + 1)) ++skipped;
+  EXPECT_EQ(skipped, kUnits - 1u) << r.out;
+  EXPECT_THAT(r.out, HasSubstr(normal + ": passed"));
+  for (const char* f : {"model.json", "status.json"})
+    EXPECT_EQ(read_text(out / "units" / normal / f), read_text(kDir / "w1" / "units" / normal / f));
+  EXPECT_EQ(read_text(out / "report.json"), read_text(kDir / "w1" / "report.json"));
+}
+
+std::size_t finished_units(const fs::path& out) {
+  std::size_t n = 0;
+  if (!fs::exists(out / "units")) return 0;
+  for (const auto& e : fs::directory_iterator(out / "units")) n += fs::exists(e.path() / "status.json");
+  return n;
+}
+
+TEST_F(FleetCli, ARunKilledMidwayIsCompletedByARerunThatKeepsItsFinishedUnits) {
+  const fs::path out = kDir / "killed", pid_file = kDir / "killed.pid";
+  std::system((std::string(DRIFTLAB_EXE) + " fleet --manifest " + (kSim / "manifest.csv").string() + " --out " +
+               out.string() + " --workers 1 --channels gyro >/dev/null 2>&1 & echo $! > " + pid_file.string())
+                  .c_str());
+  const pid_t pid = std::stoi(read_text(pid_file));
+  // Wait (polling) until a few units have finished, then SIGKILL the whole run.
+  while (finished_units(out) < 3 && ::kill(pid, 0) == 0) ::usleep(20000);
+  ASSERT_EQ(::kill(pid, SIGKILL), 0) << "the run ended before it could be killed";
+  while (::kill(pid, 0) == 0) ::usleep(20000);
+  const std::size_t finished = finished_units(out);
+  ASSERT_LT(finished, static_cast<std::size_t>(kUnits));
+  const auto r = run_fleet(out, 2);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  std::size_t skipped = 0;
+  for (std::size_t p = r.out.find("skipped"); p != std::string::npos; p = r.out.find("skipped", p + 1)) ++skipped;
+  EXPECT_EQ(skipped, finished) << r.out;
+  for (const auto& e : fs::recursive_directory_iterator(kDir / "w1" / "units")) {
+    if (e.is_regular_file()) {
+      EXPECT_EQ(read_text(e.path()), read_text(out / fs::relative(e.path(), kDir / "w1"))) << e.path();
+    }
+  }
+  std::size_t files = 0;
+  for (const auto& e : fs::recursive_directory_iterator(out / "units")) files += e.is_regular_file();
+  EXPECT_EQ(files, 4u * (kUnits - 1) + 1u) << "a staged file of the killed unit was left behind";
+}
+
+TEST_F(FleetCli, SpecLimitsFromTheManifestGiveTheYieldWithoutRedoingUnits) {
+  // The same units with a held-out limit that only the worst gyro channels exceed: limits are
+  // scored in the report, not in the units, so every unit is skipped.
+  const auto report = read_json(kDir / "w1" / "report.json");
+  std::string manifest = "unit,data,gyro.holdout_dph_max\n";
+  const auto key = read_json(kSim / "key.json");
+  for (const auto& u : key["units"])
+    manifest += u["unit"].get<std::string>() + "," + (kSim / u["data"].get<std::string>()).string() + "," +
+                (u["unit"] == "unit001" ? "0.001" : "") + "\n";
+  const fs::path m = kDir / "spec_manifest.csv";
+  std::ofstream(m) << manifest;
+  const fs::path out = kDir / "spec";
+  fs::copy(kDir / "w1", out, fs::copy_options::recursive);
+  const auto r = run_fleet(out, 1, m);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  const auto spec = read_json(out / "report.json");
+  const int expected_within = report["passed"].get<int>() - (read_json(out / "units" / "unit001" / "status.json")["status"] == "passed");
+  EXPECT_EQ(spec["within_spec"], expected_within);
+  EXPECT_DOUBLE_EQ(spec["yield"].get<double>(), expected_within / static_cast<double>(kUnits));
+  for (const auto& u : spec["unit_results"]) {
+    if (u["unit"] == "unit001" && u["status"] == "passed") {
+      EXPECT_THAT(u["spec_violations"].dump(), HasSubstr("gyro.holdout_dph_max"));
+    }
+  }
+}
+
+// Without the fleet above (ctest runs each test in its own process, and these need none of it).
+
+TEST(FleetManifest, ABadManifestIsRefusedNamingLineAndColumn) {
+  const fs::path m = kDir / "bad_manifest.csv";
+  std::ofstream(m) << "unit,data,gyro.bogus_max\nu1,x.csv,1\n";
+  const auto r = run_fleet(kDir / "bad", 1, m);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, ::testing::AllOf(HasSubstr("bad_manifest.csv:1"), HasSubstr("gyro.bogus_max")));
+}
+
+TEST(FleetManifest, MergeRefusesAUnitWhoseShardHasNotRun) {
+  const fs::path m = kDir / "unrun_manifest.csv";
+  std::ofstream(m) << "unit,data\nlate,late.csv\n";
+  fs::create_directories(kDir / "unrun" / "units");  // the shards' output directory, without this unit
+  const auto r = run_driftlab("fleet merge --manifest " + m.string() + " --out " + (kDir / "unrun").string());
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_THAT(r.err, HasSubstr("unit late has not run"));
+}
+
+TEST(FleetManifest, AMissingLogIsThatUnitsFailure) {
+  const fs::path m = kDir / "missing_manifest.csv";
+  std::ofstream(m) << "unit,data\nghost,does_not_exist.csv\n";
+  const auto r = run_fleet(kDir / "missing", 1, m);
+  EXPECT_EQ(r.exit_code, 1);
+  const auto status = read_json(kDir / "missing" / "units" / "ghost" / "status.json");
+  EXPECT_EQ(status["status"], "failed");
+  EXPECT_THAT(status["reason"].get<std::string>(), HasSubstr("does_not_exist.csv"));
+}
+
+TEST(FleetCalibrate, CalibrateRefusesTwoUnitsGivenAsOneDevice) {
+  const fs::path sim = kDir / "small";
+  const auto s = run_driftlab("simulate --fleet 6 --device imu3 --fs 1 --duration 1200 --seed 3 --out " + sim.string());
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  std::vector<std::string> normal;
+  const auto key = read_json(sim / "key.json");
+  for (const auto& u : key["units"])
+    if (u["fault"].is_null()) normal.push_back((sim / u["data"].get<std::string>()).string());
+  ASSERT_GE(normal.size(), 2u);
+  const auto r = run_driftlab("calibrate --data " + normal[0] + " --data " + normal[1] + " --channels gyro --out " +
+                              (kDir / "two.json").string());
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_THAT(r.err, HasSubstr("two devices"));
+}
+
+}  // namespace
+}  // namespace driftlab

@@ -1,0 +1,362 @@
+// `driftlab fleet`: calibrates every unit of a manifest (read_manifest below) with the calibrate
+// code path (calibration_cli.hpp), one unit per work item of a worker pool, each unit's results
+// written atomically into OUT/units/<id>/, then the fleet report (fleet_report.hpp).
+// `--shard i/N` runs every N-th unit and no report (one task of a scheduler job array);
+// `driftlab fleet merge` writes the report from the unit folders once every shard has run.
+// Started by mpirun as several ranks, the units are dealt over the ranks instead (fleet_mpi.hpp).
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "framework/error.hpp"
+#include "framework/parallel.hpp"
+#include "models/calibration/exports.hpp"
+#include "tools/driftlab/calibration_cli.hpp"
+#include "tools/driftlab/cli.hpp"
+#include "tools/driftlab/fleet_mpi.hpp"
+#include "tools/driftlab/fleet_report.hpp"
+#include "tools/driftlab/version.hpp"
+
+namespace driftlab::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct FleetOptions {
+  std::string manifest, out;
+  unsigned workers = 1;
+  std::string model = "physical";
+  std::string extrapolation = "clamp";
+  CalibrationDataOptions data;  // --column, --channels, --axis, --fs, --max-gap, log selection
+  bool strict = false, force = false;
+  std::string shard;  // "i/N": only the manifest's units i, i + N, ... (1-based i); no report
+};
+
+// One manifest row: the unit, its records (relative paths are relative to the manifest's folder)
+// and its spec limits.
+struct ManifestUnit {
+  std::string id;
+  std::vector<std::string> data;
+  std::vector<SpecLimit> limits;
+};
+
+std::vector<std::string> split(const std::string& text, char sep) {
+  std::vector<std::string> out;
+  std::string cell;
+  std::istringstream in(text);
+  while (std::getline(in, cell, sep)) out.push_back(cell);
+  if (!text.empty() && text.back() == sep) out.emplace_back();
+  return out;
+}
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  const auto e = s.find_last_not_of(" \t\r");
+  return b == std::string::npos ? "" : s.substr(b, e - b + 1);
+}
+
+bool valid_unit_id(const std::string& id) {
+  if (id.empty() || id == "." || id == ".." || id.size() > 128) return false;
+  for (char c : id)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.') return false;
+  return true;
+}
+
+// Manifest CSV: a header with `unit` and `data` and any spec-limit columns
+// ("<channels>.<figure key>_max", fleet_report.hpp); one row per unit; `data` holds one or more
+// record paths separated by ';'. Blank lines and lines starting with '#' are skipped. No quoting.
+std::vector<ManifestUnit> read_manifest(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError({path.string(), 0, ""}, "cannot open the manifest");
+  const fs::path base = path.parent_path();
+  std::string line;
+  int number = 0;
+  std::vector<std::string> header;
+  int unit_col = -1, data_col = -1;
+  std::vector<std::pair<int, SpecLimit>> limit_cols;
+  std::vector<ManifestUnit> units;
+  std::set<std::string> seen;
+  while (std::getline(in, line)) {
+    ++number;
+    if (trim(line).empty() || trim(line)[0] == '#') continue;
+    auto cells = split(line, ',');
+    for (auto& c : cells) c = trim(c);
+    if (header.empty()) {
+      header = cells;
+      for (int c = 0; c < static_cast<int>(header.size()); ++c) {
+        if (header[c] == "unit") unit_col = c;
+        else if (header[c] == "data") data_col = c;
+        else limit_cols.emplace_back(c, parse_spec_column(header[c], {path.string(), number, header[c]}));
+      }
+      if (unit_col < 0 || data_col < 0)
+        throw ConfigError({path.string(), number, unit_col < 0 ? "unit" : "data"},
+                          "the manifest header needs the columns unit and data");
+      continue;
+    }
+    if (cells.size() != header.size())
+      throw ConfigError({path.string(), number, ""}, "row has " + std::to_string(cells.size()) + " cells, the header " +
+                                                         std::to_string(header.size()));
+    ManifestUnit u;
+    u.id = cells[unit_col];
+    if (!valid_unit_id(u.id))
+      throw ConfigError({path.string(), number, "unit"},
+                        "unit id '" + u.id + "' must be 1-128 characters of A-Z a-z 0-9 _ - . (it names a folder)");
+    if (!seen.insert(u.id).second)
+      throw ConfigError({path.string(), number, "unit"}, "unit '" + u.id + "' appears twice");
+    for (const auto& p : split(cells[data_col], ';')) {
+      const std::string t = trim(p);
+      if (t.empty()) continue;
+      u.data.push_back(fs::path(t).is_absolute() ? t : (base / t).string());
+    }
+    if (u.data.empty()) throw ConfigError({path.string(), number, "data"}, "unit '" + u.id + "' has no record");
+    for (const auto& [c, limit] : limit_cols) {
+      if (cells[c].empty()) continue;
+      SpecLimit l = limit;
+      char* end = nullptr;
+      l.max = std::strtod(cells[c].c_str(), &end);
+      if (end == cells[c].c_str() || *end != '\0' || !std::isfinite(l.max) || l.max < 0)
+        throw ConfigError({path.string(), number, header[c]}, "'" + cells[c] + "' is no finite limit >= 0");
+      u.limits.push_back(std::move(l));
+    }
+    units.push_back(std::move(u));
+  }
+  if (units.empty()) throw ConfigError({path.string(), number, ""}, "the manifest lists no unit");
+  return units;
+}
+
+// FNV-1a, 64 bit: the fingerprint of a unit's inputs and options (not a security hash).
+struct Fnv1a {
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  void add(std::string_view bytes) {
+    for (unsigned char c : bytes) h = (h ^ c) * 0x100000001b3ULL;
+  }
+  std::string hex() const {
+    char text[20];
+    std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
+    return text;
+  }
+};
+
+// What a unit's results depend on: the driftlab version, every option that reaches the fit, and
+// each record's path and bytes (a missing record hashes as missing).
+std::string input_hash(const ManifestUnit& u, const FleetOptions& o) {
+  Fnv1a f;
+  std::ostringstream opts;
+  opts.precision(17);
+  opts << "driftlab-fleet-unit/1 " << kVersion << "\nmodel " << o.model << "\nextrapolation " << o.extrapolation
+       << "\nstrict " << o.strict << "\nforce " << o.force << "\nchannels " << o.data.channels << "\naxis "
+       << o.data.axis << "\nfs " << o.data.sample_rate_hz << "\nmax_gap " << o.data.max_gap_factor << "\ntopic "
+       << o.data.log.topic << "\ninstance " << o.data.log.instance << "\nsensor " << o.data.log.sensor << "\n";
+  for (const auto& c : o.data.columns) opts << "column " << c << "\n";
+  f.add(opts.str());
+  std::vector<char> buffer(1 << 20);
+  for (const auto& p : u.data) {
+    f.add("record " + p + "\n");
+    std::ifstream in(p, std::ios::binary);
+    if (!in) {
+      f.add("missing\n");
+      continue;
+    }
+    while (in.read(buffer.data(), static_cast<std::streamsize>(buffer.size())) || in.gcount() > 0)
+      f.add(std::string_view(buffer.data(), static_cast<std::size_t>(in.gcount())));
+  }
+  return f.hex();
+}
+
+std::string recorded_hash(const fs::path& status_json) {
+  std::ifstream in(status_json);
+  if (!in) return "";
+  try {
+    nlohmann::json j;
+    in >> j;
+    return j.at("input_hash").get<std::string>();
+  } catch (const nlohmann::json::exception&) {
+    return "";
+  }
+}
+
+// Runs one unit: the calibrate path (records, quality gate, fit of every channel, held-out check),
+// the exports, and its status; a failure is recorded, never thrown. Returns the console line.
+std::string run_unit(const ManifestUnit& u, const FleetOptions& o, const fs::path& dir) {
+  const std::string hash = input_hash(u, o);
+  if (recorded_hash(dir / "status.json") == hash) return u.id + ": skipped (finished with the same inputs and options)";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  nlohmann::json status = {{"format", "driftlab-fleet-unit/1"}, {"unit", u.id}, {"input_hash", hash}, {"data", u.data}};
+  calibration::ImuCalibration model;
+  std::vector<calibration::ExportResult> exports;
+  nlohmann::json gate = nlohmann::json::array(), figures = nlohmann::json::object();
+  auto fail = [&](int exit_class, const std::string& reason) {
+    status["status"] = "failed";
+    status["exit_class"] = exit_class;
+    status["reason"] = reason;
+  };
+  try {
+    const auto channels = load_channel_records(u.data, o.data);
+    for (const auto& f : run_quality_gate(channels, calibration::FitOptions{}.bin_s, o.strict, nullptr))
+      gate.push_back({{"severity", calibration::to_string(f.severity)}, {"code", f.code}, {"message", f.message}});
+    calibration::FitOptions fit;
+    fit.kind = model_kind_option(o.model);
+    fit.extrapolation = extrapolation_option(o.extrapolation);
+    model.device = u.id;
+    for (const auto& ch : channels) model.channels.push_back(fit_channel(ch, ch.records, fit));
+    model.validate();
+    if (!o.force) check_holdout_error(model);
+    exports = {calibration::export_px4_params(model), calibration::export_ardupilot_params(model)};
+    for (const auto& ch : model.channels) figures[ch.id.role()] = channel_figures(ch);
+    status["status"] = "passed";
+    status["exit_class"] = 0;
+    status["reason"] = "";
+  } catch (const ConfigError& e) {
+    fail(kExitUsage, e.what());
+  } catch (const DataError& e) {
+    fail(kExitData, e.what());
+  } catch (const std::exception& e) {
+    fail(kExitFailure, e.what());
+  }
+  status["quality_gate"] = gate;
+  status["figures"] = figures;
+  nlohmann::json notes = nlohmann::json::array();
+  for (const auto& e : exports)
+    for (const auto& n : e.notes) notes.push_back(n);
+  status["export_notes"] = notes;
+
+  OutputSet files({u.data.begin(), u.data.end()});
+  const bool passed = status["status"] == "passed";
+  if (passed) {
+    files.plan(dir / "model.json", "model.json");
+    files.plan(dir / "px4.params", "px4.params");
+    files.plan(dir / "ardupilot.params", "ardupilot.params");
+    files.write(dir / "model.json", calibration::to_json_text(model));
+    files.write(dir / "px4.params", exports[0].text);
+    files.write(dir / "ardupilot.params", exports[1].text);
+  }
+  files.plan(dir / "status.json", "status.json");  // last: a unit is finished once it is in place
+  files.write(dir / "status.json", status.dump(2) + "\n");
+  files.commit();
+  return passed ? u.id + ": passed (" + std::to_string(model.channels.size()) + " channels)"
+                : u.id + ": failed (exit class " + std::to_string(status["exit_class"].get<int>()) +
+                      "): " + status["reason"].get<std::string>();
+}
+
+// The fleet report from the units' status files (fleet_report.hpp), its summary on stdout; throws
+// Error (exit 1) when a unit failed or is outside spec.
+void report_command(const std::vector<ManifestUnit>& units, const FleetOptions& o) {
+  const fs::path out(o.out);
+  OutputSet report_files({o.manifest});
+  for (const char* name : {"report.json", "units.csv", "report.html"}) report_files.plan(out / name, "--out");
+  std::vector<UnitSummary> summaries;
+  for (const auto& u : units) {
+    const fs::path status = out / "units" / u.id / "status.json";
+    if (!fs::exists(status))
+      throw DataError({status.string(), 0, u.id}, "unit " + u.id + " has not run (no status): run its shard first");
+    summaries.push_back(read_unit_summary(status));
+    summaries.back().limits = u.limits;
+  }
+  const auto outliers = find_outliers(summaries);
+  write_fleet_report(summaries, outliers, out, "driftlab fleet --manifest " + o.manifest + " --model " + o.model,
+                     report_files);
+  report_files.commit();
+
+  std::size_t failed = 0, outside = 0;
+  for (const auto& s : summaries) {
+    failed += s.status != "passed";
+    outside += s.status == "passed" && !spec_violations(s).empty();
+  }
+  for (const auto& x : outliers) std::cout << "outlier " << x.unit << ": " << x.text << "\n";
+  std::cout << units.size() << " units: " << units.size() - failed << " calibrated, " << failed << " failed, "
+            << outside << " outside spec; wrote " << (out / "report.json").string() << ", units.csv, report.html\n";
+  if (failed + outside > 0)
+    throw Error(std::to_string(failed) + " of " + std::to_string(units.size()) + " units failed and " +
+                std::to_string(outside) + " are outside spec (see " + (out / "report.json").string() + ")");
+}
+
+// "i/N" (1 <= i <= N) -> {i - 1, N}; ConfigError naming --shard otherwise.
+std::pair<std::size_t, std::size_t> parse_shard(const std::string& text) {
+  unsigned long i = 0, n = 0;
+  char extra = 0;
+  if (std::sscanf(text.c_str(), "%lu/%lu%c", &i, &n, &extra) != 2 || i < 1 || n < 1 || i > n)
+    throw ConfigError({"", 0, "--shard"}, "expected i/N with 1 <= i <= N (e.g. 2/8), got '" + text + "'");
+  return {i - 1, n};
+}
+
+void fleet_command(const FleetOptions& o) {
+  if (o.manifest.empty() || o.out.empty())
+    throw ConfigError({"", 0, o.manifest.empty() ? "--manifest" : "--out"}, "driftlab fleet needs --manifest and --out");
+  const auto units = read_manifest(o.manifest);
+  const fs::path out(o.out);
+  make_output_directory(out / "units", "--out");
+  // A shard runs the units i, i + N, i + 2N, ... of the manifest (0-based i), and no report.
+  const auto [first, step] = o.shard.empty() ? std::pair<std::size_t, std::size_t>{0, 1} : parse_shard(o.shard);
+  std::vector<std::size_t> mine;
+  for (std::size_t i = first; i < units.size(); i += step) mine.push_back(i);
+
+  const auto run = [&](std::size_t k) { return run_unit(units[mine[k]], o, out / "units" / units[mine[k]].id); };
+  if (const auto master = run_over_mpi(mine.size(), run)) {
+    if (!*master) return;  // an MPI worker rank: rank 0 writes the report
+  } else {
+    std::mutex console;
+    parallel_for(mine.size(), o.workers, [&](std::size_t k) {
+      const std::string line = run(k);
+      const std::lock_guard<std::mutex> lock(console);
+      std::cout << line << "\n" << std::flush;
+    });
+  }
+  if (o.shard.empty()) return report_command(units, o);
+  std::size_t failed = 0;
+  for (const std::size_t i : mine) failed += read_unit_summary(out / "units" / units[i].id / "status.json").status != "passed";
+  std::cout << "shard " << o.shard << ": " << mine.size() << " units, " << failed
+            << " failed; `driftlab fleet merge` writes the report once every shard has run\n";
+  if (failed > 0) throw Error(std::to_string(failed) + " of the shard's " + std::to_string(mine.size()) + " units failed");
+}
+
+}  // namespace
+
+void add_fleet_command(CLI::App& app, CommandEnv&) {
+  auto o = std::make_shared<FleetOptions>();
+  auto* cmd = app.add_subcommand(
+      "fleet", "calibrate every unit of a manifest (as calibrate does), each into OUT/units/<id>/, resumable, then a "
+               "fleet report with outliers and spec yield; exit 1 when a unit failed or is outside spec");
+  cmd->add_option("--manifest", o->manifest,
+                  "CSV: unit,data[,<channels>.<figure>_max ...]; data = record paths separated by ';' (relative to "
+                  "the manifest)");
+  cmd->add_option("--out", o->out, "output directory (units/<id>/, report.json, units.csv, report.html)");
+  cmd->add_option("--workers", o->workers, "units calibrated at once (results do not depend on it)")
+      ->check(CLI::Range(1u, 256u))
+      ->capture_default_str();
+  cmd->add_option("--model", o->model, "as calibrate --model")
+      ->check(CLI::IsMember({"poly", "physical", "rbf"}))
+      ->capture_default_str();
+  cmd->add_option("--extrapolation", o->extrapolation, "as calibrate --extrapolation")
+      ->check(CLI::IsMember({"clamp", "linear", "evaluate"}))
+      ->capture_default_str();
+  cmd->add_flag("--strict", o->strict, "as calibrate --strict: quality-gate warnings fail the unit");
+  cmd->add_flag("--force", o->force, "as calibrate --force: keep a model whose held-out error exceeds the raw one");
+  cmd->add_option("--shard", o->shard,
+                  "i/N: calibrate only the manifest's units i, i + N, ... (a scheduler job array's task), without "
+                  "the report; `driftlab fleet merge` writes it");
+  add_calibration_channel_options(cmd, o->data);
+  auto m = std::make_shared<FleetOptions>();
+  auto* merge = cmd->add_subcommand(
+      "merge", "write the fleet report (report.json, units.csv, report.html) from the unit folders the shards wrote");
+  merge->add_option("--manifest", m->manifest, "the manifest the shards ran")->required();
+  merge->add_option("--out", m->out, "the shards' output directory")->required();
+  merge->add_option("--model", m->model, "as the shards' --model (named in the report)")
+      ->check(CLI::IsMember({"poly", "physical", "rbf"}))
+      ->capture_default_str();
+  merge->callback([m] { report_command(read_manifest(m->manifest), *m); });
+  cmd->require_subcommand(0, 1);
+  cmd->callback([o, merge] {
+    if (!merge->parsed()) fleet_command(*o);
+  });
+}
+
+}  // namespace driftlab::cli
