@@ -18,6 +18,7 @@ packages=(
   # bags of the tests (an independent writer), sqlite3 gives the reference counts of .db3 fixtures.
   librosbag-storage-dev libsqlite3-dev libzstd-dev liblz4-dev
   python3-rosbag python3-sensor-msgs sqlite3
+  libboost-mpi-dev openmpi-bin   # the fleet's MPI engine (tools/driftlab/fleet_mpi.hpp) and its mpirun test
 )
 # The MRPT bridge (tools/mrpt): libmrpt-obs-dev alone pulls the obs, bayes, poses, math, io and
 # serialization modules (~170 MB); mrpt-apps gives rawlog-edit, which the bridge's tests use.
