@@ -23,6 +23,8 @@
 #include "framework/units.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "models/calibration/exports.hpp"
+#include "models/calibration/fit.hpp"
+#include "models/calibration/oven_run.hpp"
 #include "python/src/bindings.hpp"
 #include "python/src/convert.hpp"
 
@@ -194,6 +196,65 @@ py::list channel_list(const CalibrationModel& m) {
   return out;
 }
 
+struct Calibration {
+  CalibrationModel model;
+  py::list gate;  // the oven-run quality gate's findings: dicts of severity, code, message
+};
+
+// One gyro channel's model from its oven runs, as `driftlab calibrate` fits it (fit_calibration,
+// with the quality gate of oven_run.hpp reported, not enforced).
+Calibration calibrate(const py::list& runs, const std::string& model, const std::string& extrapolation,
+                      double reference_temp_c, double bin_s, std::size_t blocks, std::uint64_t seed, char axis) {
+  calibration::FitOptions options;
+  const auto kind = calibration::parse_model_kind(model);
+  if (!kind) throw ConfigError({"", 0, "model"}, "'" + model + "': expected poly, physical or rbf");
+  const auto policy = calibration::parse_extrapolation(extrapolation);
+  if (!policy) throw ConfigError({"", 0, "extrapolation"}, "'" + extrapolation + "': expected clamp, linear or evaluate");
+  options.kind = *kind;
+  options.extrapolation = *policy;
+  options.reference_temp_c = reference_temp_c;
+  options.bin_s = bin_s;
+  options.holdout_blocks = blocks;
+  options.seed = seed;
+  std::vector<calibration::Record> records;
+  for (const auto& item : runs) {
+    const auto run = item.cast<py::dict>();
+    calibration::Record r;
+    r.name = run.contains("name") ? run["name"].cast<std::string>() : "run " + std::to_string(records.size() + 1);
+    for (const char* key : {"time_s", "rate_rad_s", "temp_c"})
+      if (!run.contains(key)) throw DataError({r.name, 0, key}, std::string("a run needs '") + key + "'");
+    r.time_s = vector_view(run["time_s"].cast<InputArray>(), "time_s");
+    r.rate_rad_s = vector_view(run["rate_rad_s"].cast<InputArray>(), "rate_rad_s");
+    r.temp_c = vector_view(run["temp_c"].cast<InputArray>(), "temp_c");
+    if (run.contains("true_rate_rad_s")) r.true_rate_rad_s = vector_view(run["true_rate_rad_s"].cast<InputArray>(), "true_rate_rad_s");
+    if (r.rate_rad_s.size() != r.time_s.size() || r.temp_c.size() != r.time_s.size() ||
+        (r.true_rate_rad_s.size() > 0 && r.true_rate_rad_s.size() != r.time_s.size()))
+      throw DataError({r.name, 0, "time_s"}, "the run's arrays differ in length");
+    records.push_back(std::move(r));
+  }
+  if (records.empty()) throw ConfigError({"", 0, "runs"}, "no run given");
+  std::vector<calibration::Finding> findings;
+  calibration::CalibrationModel fitted;
+  {
+    py::gil_scoped_release release;
+    std::vector<calibration::OvenRun> oven;
+    for (const auto& r : records) oven.push_back(calibration::analyse_oven_run(r.name, r.time_s, r.temp_c, options.bin_s));
+    findings = calibration::quality_gate(oven);
+    fitted = calibration::fit_calibration(records, options);
+  }
+  py::list gate;
+  for (const auto& f : findings) {
+    py::dict d;
+    d["severity"] = calibration::to_string(f.severity);
+    d["code"] = f.code;
+    d["message"] = f.message;
+    gate.append(d);
+  }
+  return {CalibrationModel{std::make_shared<const calibration::ImuCalibration>(
+              calibration::single_axis(std::move(fitted), axis))},
+          gate};
+}
+
 py::tuple export_model(const CalibrationModel& m, const std::string& format, bool strict) {
   calibration::ExportOptions options;
   options.strict = strict;
@@ -332,6 +393,31 @@ die_temp_c, chamber_temp_c, and drive_frequency_hz when the device has that chan
       .def("__repr__", [](const CalibrationModel& c) {
         return "<driftlab.CalibrationModel " + std::to_string(c.model->channels.size()) + " channel(s)>";
       });
+  py::class_<Calibration>(m, "Calibration", "What calibrate() fitted: the model and the oven-run quality gate")
+      .def_readonly("model", &Calibration::model, "the CalibrationModel (one gyro channel)")
+      .def_readonly("gate", &Calibration::gate,
+                    "the quality gate's findings (models/calibration/oven_run.hpp): dicts of severity "
+                    "('note', 'warning', 'error'), code and message; the CLI refuses a run with an error")
+      .def("__repr__", [](const Calibration& c) {
+        return "<driftlab.Calibration " + calibration::to_string(c.model.model->channels.front().model.kind) + ", " +
+               std::to_string(py::len(c.gate)) + " gate finding(s)>";
+      });
+  m.def("calibrate", &calibrate, py::arg("runs"), py::arg("model") = "physical", py::arg("extrapolation") = "clamp",
+        py::arg("reference_temp_c") = 25.0, py::arg("bin_s") = 10.0, py::arg("blocks") = 8, py::arg("seed") = 1,
+        py::arg("axis") = 'z',
+        R"(Fits one gyro channel's temperature-calibration model to its oven runs, as `driftlab calibrate`
+does for each channel (models/calibration/fit.hpp: the order and the history terms -- lag, dT/dt,
+hysteresis -- kept only when determinable from the runs, significant and better on held-out time blocks
+and, with several runs or legs, on held-out runs or legs; the RBF part likewise).
+
+runs: a list of dicts, one per oven run of the same unit: time_s (s, increasing), rate_rad_s (rad/s),
+  temp_c (degC), optionally true_rate_rad_s (a rate table's rate; a scale factor is then fitted) and name.
+model: 'physical' (default), 'poly' or 'rbf': the richest kind allowed. extrapolation: 'clamp',
+  'linear' or 'evaluate' outside the fitted temperature range. reference_temp_c: T0, degC.
+bin_s: fitting bins, s. blocks: held-out time blocks per run. seed: the RBF tuning's. axis: the
+  channel's label in the model ('x', 'y', 'z').
+Returns Calibration: .model (CalibrationModel: compensate, to_json, export) and .gate (the
+quality gate's findings, reported here, not enforced).)");
   m.def("load_calibration", [](const std::filesystem::path& path) {
     return CalibrationModel{std::make_shared<const calibration::ImuCalibration>(calibration::read_calibration(path))};
   }, py::arg("path"), "Reads a calibration model file (driftlab-calibration/2, or /1 as one gyro channel).");

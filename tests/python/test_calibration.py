@@ -72,3 +72,28 @@ def test_errors(oven, tmp_path):
         model.compensate([1.0, 0.0], [0.0, 0.0], [20.0, 20.0])  # time going backwards
     with pytest.raises(driftlab.ConfigError, match="expected c-header"):
         model.export("xml")
+
+
+def test_calibrate_fits_what_driftlab_calibrate_fits(oven):
+    record = driftlab.read_record(oven / "fit.csv")
+    run = {"time_s": record.time_s, "rate_rad_s": record.channels["rate"], "temp_c": record.channels["temperature"],
+           "name": "fit.csv"}
+    if "true_rate" in record.channels:
+        run["true_rate_rad_s"] = record.channels["true_rate"]
+    fitted = driftlab.calibrate([run], model="physical")
+    ours = json.loads(fitted.model.to_json())["channels"][0]["model"]
+    theirs = json.loads((oven / "model.json").read_text())["channels"][0]["model"]
+    assert ours["kind"] == theirs["kind"]
+    assert ours["bias"] == theirs["bias"]
+    assert [f["code"] for f in fitted.gate] == []  # the simulated oven run passes the quality gate
+
+
+def test_calibrate_reports_the_quality_gate_and_refuses_bad_runs():
+    t = np.arange(0, 3600.0, 1.0)
+    flat = {"time_s": t, "rate_rad_s": np.zeros_like(t), "temp_c": np.full_like(t, 25.0)}
+    with pytest.raises(driftlab.Error):
+        driftlab.calibrate([flat])  # no temperature span: nothing to fit
+    with pytest.raises(driftlab.ConfigError, match="poly, physical or rbf"):
+        driftlab.calibrate([flat], model="cubic")
+    with pytest.raises(driftlab.DataError, match="rate_rad_s"):
+        driftlab.calibrate([{"time_s": t, "temp_c": t}])
