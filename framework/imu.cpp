@@ -5,6 +5,7 @@
 #include <regex>
 
 #include "framework/error.hpp"
+#include "framework/units.hpp"
 
 namespace driftlab::imu {
 namespace {
@@ -45,6 +46,10 @@ std::string with_instance(std::string_view stem, int instance) {
 }  // namespace
 
 std::string to_string(Sensor sensor) { return sensor == Sensor::Gyro ? "gyro" : "accel"; }
+
+DisplayUnit display_unit(Sensor sensor) {
+  return sensor == Sensor::Gyro ? DisplayUnit{kDphPerRadPerSec, "deg/h"} : DisplayUnit{1e3 / kStandardGravity, "mg"};
+}
 
 std::string internal_unit(Sensor sensor) { return sensor == Sensor::Gyro ? "rad/s" : "m/s^2"; }
 

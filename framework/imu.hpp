@@ -30,6 +30,14 @@ namespace driftlab::imu {
 enum class Sensor { Gyro, Accel };
 std::string to_string(Sensor sensor);  // "gyro", "accel"
 
+// The unit biases and residuals of a sensor are shown in (gyro deg/h, accelerometer mg) and the
+// factor from its internal unit (rad/s, m/s^2) to it.
+struct DisplayUnit {
+  double per_internal;
+  const char* name;
+};
+DisplayUnit display_unit(Sensor sensor);
+
 inline constexpr int kMaxInstance = 99;  // the role names' last instance: gyro99_x, temperature99
 
 struct ChannelId {

@@ -150,11 +150,10 @@ std::vector<ChannelRecords> load_channel_records(const std::vector<std::string>&
     if (!data.same_device && cr.records.size() > 1) {
       const auto d = calibration::largest_disagreement(cr.records);
       if (d.ratio > calibration::kSameDeviceRatio) {
-        const bool gyro = cr.id.sensor == imu::Sensor::Gyro;
+        const auto shown = imu::display_unit(cr.id.sensor);
         char text[160];
         std::snprintf(text, sizeof text, "%.4g %s (%.3g times the noise of their 60-s means)",
-                      d.difference_rms * (gyro ? kDphPerRadPerSec : 1e3 / kStandardGravity), gyro ? "deg/h" : "mg",
-                      d.ratio);
+                      d.difference_rms * shown.per_internal, shown.name, d.ratio);
         throw ConfigError({d.second, 0, cr.role},
                           "the " + cr.role + " bias of this record and of " + d.first + " differ by " + text +
                               ": they look like two devices, which are not calibrated as one (give --same-device "
@@ -232,9 +231,7 @@ calibration::Extrapolation extrapolation_option(const std::string& text) {
 
 void print_model_summary(std::ostream& out, const calibration::ChannelCalibration& channel) {
   const auto& m = channel.model;
-  const bool gyro = channel.id.sensor == imu::Sensor::Gyro;
-  const double display = gyro ? kDphPerRadPerSec : 1e3 / kStandardGravity;
-  const char* display_unit = gyro ? "deg/h" : "mg";
+  const auto [display, display_unit] = imu::display_unit(channel.id.sensor);
   const std::string unit = channel.unit();
   char line[256];
   out << channel.id.role() << " (column " << channel.column << ", temperature " << channel.temperature_column

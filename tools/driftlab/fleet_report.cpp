@@ -76,8 +76,7 @@ std::string figure_key(const FigureDef& figure, imu::Sensor sensor) {
 
 std::map<std::string, double> channel_figures(const calibration::ChannelCalibration& channel) {
   const auto& m = channel.model;
-  const bool gyro = channel.id.sensor == imu::Sensor::Gyro;
-  const double display = gyro ? kDphPerRadPerSec : 1e3 / kStandardGravity;
+  const double display = imu::display_unit(channel.id.sensor).per_internal;
   const imu::Sensor s = channel.id.sensor;
   return {
       {figure_key(kFigures[0], s), m.bias_rad_s.empty() ? 0.0 : m.bias_rad_s[0] * display},
