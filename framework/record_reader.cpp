@@ -8,6 +8,7 @@
 #include "framework/dataflash_imu.hpp"
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
+#include "framework/regular_file.hpp"
 #include "framework/signal.hpp"
 #include "framework/ulog.hpp"
 #include "framework/ulog_imu.hpp"
@@ -85,6 +86,8 @@ TimeSeries read_log_record(ImuReader read_imu, const std::filesystem::path& path
 }  // namespace
 
 RecordFormat sniff_record_format(const std::filesystem::path& path) {
+  // A file that is not a regular one (a FIFO would block here) goes to the CSV reader, which refuses it.
+  if (!non_regular_kind(path).empty()) return RecordFormat::Csv;
   std::ifstream in(path, std::ios::binary);
   char first[std::max(ulog::kMagicSize, dataflash::kMagicSize)] = {};
   in.read(first, sizeof first);

@@ -2,11 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "framework/error.hpp"
+#include "framework/regular_file.hpp"
 #include "framework/signal.hpp"
 #include "framework/units.hpp"
 #include "plugins/polynomial/polynomial.hpp"
@@ -412,15 +411,10 @@ std::string to_json_text(const ImuCalibration& imu_model) {
 
 ImuCalibration read_calibration(const std::filesystem::path& path) {
   const Reader r(path.string());
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) r.fail("", "cannot open the calibration model file (not a regular file)");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) r.fail("", "cannot open the calibration model file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
+  const std::string text = read_config_text(path, "calibration model file");
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(buffer.str());
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {  // syntax, and numbers beyond double (out_of_range)
     r.fail("", std::string("not valid JSON: ") + e.what());
   }

@@ -20,6 +20,7 @@
 #include "framework/imu.hpp"
 #include "framework/output_set.hpp"
 #include "framework/record_reader.hpp"
+#include "framework/regular_file.hpp"
 #include "framework/ulog.hpp"
 #include "framework/ulog_imu.hpp"
 #include "tools/driftlab/cli.hpp"
@@ -32,8 +33,7 @@ constexpr std::size_t kInfoValueChars = 60;  // longer info values are cut in th
 constexpr int kMaxInstance = 99;
 
 RecordFormat require_log(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw DataError({path, 0, ""}, "not a readable file (missing, or a directory)");
+  check_data_input(path);
   const RecordFormat format = sniff_record_format(path);
   if (format == RecordFormat::Csv)
     throw DataError({path, 0, ""}, "not a PX4 ULog (it does not start with 'ULog' 0x01 0x12 0x35) nor an ArduPilot "
