@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -164,6 +165,53 @@ TEST_F(Hostile, ASmallTextFormatAboveItsSizeLimitIsRefusedUnread) {
     const auto r = run_driftlab(command, "timeout 20");
     EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
     EXPECT_THAT(r.err, HasSubstr("has 67108865 bytes; expected at most 64 MiB")) << command;
+  }
+}
+
+TEST_F(Hostile, CalibrateOnARateThatIgnoresAMovingTruthWritesNoModel) {
+  write(dir_ / "zero.csv", oven_rows(/*zero_rate=*/true, /*truth=*/true));
+  const auto r = run_driftlab("calibrate --data " + p("zero.csv") + " --bin 10 --out " + p("m.json"));
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_THAT(r.err, HasSubstr(p("zero.csv") + ": scale_factor.polynomial_per_k_j: the calibration records give a "
+                                               "model that is not physical: the scale factor is "));
+  EXPECT_THAT(r.err, HasSubstr("expected 0.1 to 10 over the valid range"));  // it was 0 (2e-15)
+  EXPECT_FALSE(fs::exists(p("m.json")));
+  // The same record with a rate that follows the truth calibrates.
+  write(dir_ / "moving.csv", oven_rows(false, true));
+  const auto ok = run_driftlab("calibrate --data " + p("moving.csv") + " --bin 10 --out " + p("m.json"));
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+}
+
+TEST_F(Hostile, AnUnphysicalModelIsRefusedByEveryReaderWithFileAndKey) {
+  make_model();
+  std::string text = read_text(p("model.json"));
+  const auto at = text.find("\"reference_temp_c\": ");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, text.find(',', at) - at, "\"reference_temp_c\": 1e300");
+  write(dir_ / "hot.json", text);
+  const std::string expected = p("hot.json") + ": channels[0].model.reference_temp_c: expected a temperature within";
+  for (const auto& command : {"compensate --data " + p("oven.csv") + " --model " + p("hot.json") + " --out " + p("c.csv"),
+                              "export --model " + p("hot.json") + " --format ardupilot --out " + p("x.parm")}) {
+    const auto r = run_driftlab(command);
+    EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr(expected)) << command;
+    EXPECT_FALSE(fs::exists(p("c.csv")) || fs::exists(p("x.parm"))) << command;
+  }
+}
+
+TEST_F(Hostile, FirmwareExportsWriteOnlyRealThirtyTwoValues) {
+  make_model();
+  // A finite bias of 1e300 rad/s (a valid model: finite everywhere) is no REAL32 parameter.
+  const std::string text = std::regex_replace(read_text(p("model.json")),
+                                              std::regex("(\"polynomial_rad_s_per_k_i\": \\[\\s*)[^,\\]\\s]+"), "$011e300");
+  ASSERT_NE(text.find("1e300"), std::string::npos);
+  write(dir_ / "big.json", text);
+  for (const auto& format : {"px4", "ardupilot"}) {
+    const std::string command = "export --model " + p("big.json") + " --format " + format + " --out " + p("x.params");
+    const auto r = run_driftlab(command);
+    EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr("is not a finite REAL32 number")) << command;
+    EXPECT_FALSE(fs::exists(p("x.params"))) << command;
   }
 }
 
