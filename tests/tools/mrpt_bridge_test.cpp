@@ -509,8 +509,8 @@ TEST(MrptBridge, TruncatedAndMalformedRawlogsNameTheFileAndTheObjectIndex) {
 #if DRIFTLAB_HAVE_MRPT
 namespace {
 
-// The serialized bytes of one IMU observation (a plain rawlog of one object).
-std::string serialized(const mrpt::obs::CObservationIMU& obs) {
+// The serialized bytes of one object (a plain rawlog of one object).
+std::string serialized(const mrpt::serialization::CSerializable& obs) {
   mrpt::io::CMemoryStream memory;
   auto archive = mrpt::serialization::archiveFrom(memory);
   archive << obs;
@@ -582,6 +582,24 @@ TEST(MrptBridge, HostileRawlogsInputsAndOutputsAreRefusedWithTheFileNamed) {
   EXPECT_NE(r.err.find("object 1: IMU time stamp"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("before the MRPT clock's epoch"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "t.csv"));
+  // A sensory frame claiming 2^31 - 1 observations: MRPT allocated them (gigabytes) before failing.
+  {
+    mrpt::obs::CSensoryFrame frame;
+    frame.insert(mrpt::obs::CObservationIMU::Create(obs));
+    std::string bytes = serialized(frame);
+    const auto name = bytes.find("CSensoryFrame");
+    ASSERT_NE(name, std::string::npos);
+    const auto count = bytes.find(std::string("\x01\x00\x00\x00", 4), name);
+    ASSERT_NE(count, std::string::npos);
+    bytes.replace(count, 4, std::string("\xff\xff\xff\x7f", 4));
+    std::ofstream(dir / "count.rawlog", std::ios::binary) << early << bytes;
+  }
+  const auto count = run_driftlab("mrpt info " + (dir / "count.rawlog").string(), "timeout 20");
+  EXPECT_EQ(count.exit_code, 3) << count.err;
+  EXPECT_NE(count.err.find((dir / "count.rawlog").string() + ": object 1: not a valid MRPT object (malformed rawlog): "
+                                                              "std::bad_alloc"),
+            std::string::npos)
+      << count.err;
   // A start time that is not a time.
   const auto nan_start = run_driftlab("mrpt export " + (dir / "in.csv").string() + " --start-unix nan --out " +
                                       (dir / "nan.rawlog").string());
@@ -591,7 +609,8 @@ TEST(MrptBridge, HostileRawlogsInputsAndOutputsAreRefusedWithTheFileNamed) {
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
   std::sort(left.begin(), left.end());
-  EXPECT_EQ(left, (std::vector<std::string>{"fifo", "flag.rawlog", "in.csv", "in.rawlog", "ticks.rawlog"}));
+  EXPECT_EQ(left,
+            (std::vector<std::string>{"count.rawlog", "fifo", "flag.rawlog", "in.csv", "in.rawlog", "ticks.rawlog"}));
   fs::remove_all(dir);
 #endif
 }

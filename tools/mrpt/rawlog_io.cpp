@@ -10,7 +10,9 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -18,9 +20,14 @@
 #include <set>
 #include <sstream>
 
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include "framework/error.hpp"
 #include "framework/output_set.hpp"
 #include "framework/regular_file.hpp"
+#include "framework/resources.hpp"
 
 namespace driftlab::mrpt_bridge {
 namespace {
@@ -166,6 +173,81 @@ class ObjectReader {
   std::size_t index_ = 0, count_ = 0;
 };
 
+// MRPT's deserializer trusts the file: a malformed object can crash it (a null dereference) and a
+// length field can make it allocate gigabytes before anything fails. So a rawlog is first read
+// whole in a child process, with its address space limited to what it holds now plus
+// kDeserializeBytes, reporting the index of each object it starts and, when the read fails, the
+// message. A crash there, or a failed read (running out of that memory: std::bad_alloc), becomes a
+// DataError naming the object; only a file that passed is read here.
+constexpr double kDeserializeBytes = 1024.0 * 1024.0 * 1024.0;  // for one object at a time
+
+void read_in_child_first(const fs::path& path) {
+  int pipe_fds[2];
+  if (::pipe(pipe_fds) != 0) return;  // no guard available: read as before
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(pipe_fds[0]);
+    ::close(pipe_fds[1]);
+    return;
+  }
+  constexpr std::uint64_t kMessage = ~std::uint64_t{0};  // then the text of the child's DataError
+  if (pid == 0) {  // the child: no destructors, no atexit handlers, no stdio flush (_exit)
+    ::close(pipe_fds[0]);
+    long pages = 0;
+    if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+      if (std::fscanf(f, "%ld", &pages) != 1) pages = 0;
+      std::fclose(f);
+    }
+    const double now = static_cast<double>(pages) * static_cast<double>(::sysconf(_SC_PAGESIZE));
+    const auto limit = static_cast<rlim_t>(now + std::min(kDeserializeBytes, memory_limit_bytes()));
+    const rlimit as{limit, limit};
+    ::setrlimit(RLIMIT_AS, &as);
+    try {
+      ObjectReader reader(path);
+      for (;;) {
+        const std::uint64_t index = reader.count();
+        if (::write(pipe_fds[1], &index, sizeof index) != sizeof index) ::_exit(0);
+        if (!reader.next()) break;
+      }
+    } catch (const DataError& e) {  // ObjectReader's, for every failure (std::bad_alloc included): sent after kMessage
+      const std::uint64_t marker = kMessage;
+      const std::string text = e.what();
+      if (::write(pipe_fds[1], &marker, sizeof marker) == sizeof marker)
+        for (std::size_t done = 0; done < text.size();) {
+          const auto n = ::write(pipe_fds[1], text.data() + done, text.size() - done);
+          if (n <= 0) break;
+          done += static_cast<std::size_t>(n);
+        }
+    } catch (...) {  // anything else: the read here reports it
+    }
+    ::_exit(0);
+  }
+  ::close(pipe_fds[1]);
+  std::uint64_t index = 0, last = 0;
+  std::string message;
+  while (::read(pipe_fds[0], &index, sizeof index) == sizeof index) {
+    if (index != kMessage) {
+      last = index;
+      continue;
+    }
+    char buffer[4096];
+    for (ssize_t n; (n = ::read(pipe_fds[0], buffer, sizeof buffer)) > 0;) message.append(buffer, static_cast<std::size_t>(n));
+    break;
+  }
+  ::close(pipe_fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  const std::string object = "object " + std::to_string(last) + ": ";
+  if (WIFSIGNALED(status))
+    throw data_error(path, object + "MRPT's deserializer crashed on this object (signal " +
+                               std::to_string(WTERMSIG(status)) + "): not a valid MRPT object (malformed rawlog)");
+  if (!message.empty()) {  // the child's DataError (ObjectReader names the object), without "file: "
+    const std::string prefix = path.string() + ": ";
+    throw data_error(path, message.rfind(prefix, 0) == 0 ? message.substr(prefix.size()) : message);
+  }
+}
+
 // Writes a gzip'ed rawlog through an OutputSet of one file (framework/output_set.hpp): the checks
 // of every output, its hidden temporary file, nothing left behind unless committed.
 class RawlogWriter {
@@ -219,6 +301,8 @@ struct Walker {
 
   template <class OnObs, class OnAct, class OnObject>
   void walk(const fs::path& path, OnObs&& on_observation, OnAct&& on_action, OnObject&& on_object) {
+    check_data_input(path);
+    read_in_child_first(path);
     ObjectReader reader(path);
     while (auto object = reader.next()) {
       const std::size_t k = reader.index();

@@ -5,7 +5,11 @@
 //   - actions/sensory-frame: CActionCollection, CSensoryFrame, CActionCollection, ...
 //   - observations-only:     CObservation, CObservation, ...
 // Every top-level object is numbered from 0 in file order; errors name the file and that index
-// ("object 12"), plus the observation's position inside a sensory frame where it applies.
+// ("object 12"), plus the observation's position inside a sensory frame where it applies. MRPT's
+// deserializer trusts the file, so every reader below first reads the rawlog in a child process
+// whose address space is limited (1 GiB beyond what it holds): a crash inside MRPT or a length
+// field that would allocate gigabytes is a DataError naming the object, not a crash or a
+// runaway allocation of this process (the file is read twice).
 // Files are read through CFileGZInputStream (gzip'ed or plain) and written gzip'ed.
 //
 // CSV columns (SI, unit in the name; DESIGN.md §5): t_s (s since the first IMU observation),
