@@ -308,13 +308,18 @@ class Reader {
   static std::string join(const std::string& path, const std::string& key) {
     return path.empty() ? key : path + "." + key;
   }
-  // m.validate()'s problems, each naming this file and the key under `path`.
-  void validate(const CalibrationModel& m, const std::string& path) const {
+  // m.validate()'s problems, each naming this file and the key under `path`; validate() spells
+  // the keys of a gyro ("rad_s"), `value_key` is the channel's ("m_s2" for an accelerometer).
+  void validate(const CalibrationModel& m, const std::string& path, const std::string& value_key) const {
     try {
       m.validate();
     } catch (const ConfigError& e) {
       std::vector<Diagnostic> problems = e.problems();
-      for (auto& d : problems) d.where = {file_, 0, join(path, d.where.field)};
+      for (auto& d : problems) {
+        std::string key = d.where.field;
+        if (const auto at = key.find("rad_s"); at != std::string::npos) key.replace(at, 5, value_key);
+        d.where = {file_, 0, join(path, key)};
+      }
       throw ConfigError(std::move(problems));
     }
   }
@@ -470,7 +475,7 @@ CalibrationModel read_model_body(const Reader& r, const nlohmann::json& j, const
       m.fit.scale_factor_fitted = h->get<bool>();
     }
   }
-  r.validate(m, at);
+  r.validate(m, at, u.value);
   return m;
 }
 

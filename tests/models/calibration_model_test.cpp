@@ -187,6 +187,12 @@ TEST(CalibrationModelJson, ARepeatedKeyAFifoAndAnUnphysicalModelAreRefusedWithFi
   EXPECT_NE(n.find("bad.json: channels[0].model.scale_factor.polynomial_per_k_j: the scale factor is -1"),
             std::string::npos)
       << n;
+  ImuCalibration accel = testing::one_channel(testing::example_polynomial_model({1e-3, 1e307, 1e307}),
+                                              {imu::Sensor::Accel, 'z', 0});
+  const std::string a = error_of(to_json_text(accel));  // the key as the accelerometer's file spells it
+  EXPECT_NE(a.find("bad.json: channels[0].model.bias.polynomial_m_s2_per_k_i: the bias is not finite"),
+            std::string::npos)
+      << a;
   const auto fifo = scratch("model_fifo.json");
   std::filesystem::remove(fifo);
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
