@@ -53,6 +53,7 @@ class Hostile : public ::testing::Test {
     dir_ = scratch_dir(std::string("hostile_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     write(dir_ / "oven.csv", oven_rows());
   }
+  void TearDown() override { fs::remove_all(dir_); }  // FIFOs and device nodes do not stay behind
   std::string p(const std::string& name) const { return (dir_ / name).string(); }
   void make_fifo(const std::string& name) const { ASSERT_EQ(::mkfifo(p(name).c_str(), 0600), 0); }
   // A calibration model of oven.csv.
