@@ -1,11 +1,10 @@
 #include "devices/simulator.hpp"
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 #include "devices/systematic_rate.hpp"
 #include "devices/yaml_fields.hpp"
+#include "framework/regular_file.hpp"
 #include "framework/signal.hpp"
 #include "framework/units.hpp"
 
@@ -138,11 +137,7 @@ SimulationProfile parse_profile(const std::string& yaml_text, const std::string&
 }
 
 SimulationProfile load_profile_file(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ConfigError({path.string(), 0, ""}, "cannot open profile file");
-  std::ostringstream content;
-  content << in.rdbuf();
-  return parse_profile(content.str(), path.string());
+  return parse_profile(read_config_text(path, "profile file"), path.string());
 }
 
 TimeSeries SimulationRecord::to_time_series() const {

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "framework/regular_file.hpp"
 #include "framework/yaml_io.hpp"
 
 namespace driftlab::devices {
@@ -147,11 +148,7 @@ YAML::Node parse_yaml_text(const std::string& text, const std::string& file) {
 }
 
 YAML::Node load_yaml_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ConfigError({path, 0, ""}, "cannot open file");
-  std::ostringstream content;
-  content << in.rdbuf();
-  return parse_yaml_text(content.str(), path);
+  return parse_yaml_text(read_config_text(path, "device file"), path);
 }
 
 }  // namespace driftlab::devices

@@ -4,6 +4,7 @@
 #include <system_error>
 
 #include "framework/error.hpp"
+#include "framework/regular_file.hpp"
 
 namespace driftlab::binary {
 namespace {
@@ -16,11 +17,7 @@ Input::Input(std::string_view memory, std::string file)
     : memory_(memory), file_name_(std::move(file)), size_(memory.size()) {}
 
 Input::Input(const std::filesystem::path& path, std::string file, std::size_t max_take) : file_name_(std::move(file)) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    throw DataError({file_name_, 0, ""}, "not a readable file (missing, or a directory)");
-  size_ = std::filesystem::file_size(path, ec);
-  if (ec) throw DataError({file_name_, 0, ""}, "cannot read the file size: " + ec.message());
+  size_ = check_data_input(path);
   file_ = std::fopen(path.c_str(), "rb");
   if (!file_) throw DataError({file_name_, 0, ""}, "cannot open the file");
   block_.resize(kBlockSize + max_take);

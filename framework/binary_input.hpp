@@ -45,7 +45,7 @@ class Input {
  public:
   // Bytes in memory; `file` names them in errors.
   Input(std::string_view memory, std::string file);
-  // A file: DataError when it is missing, a directory, or cannot be opened.
+  // A file: DataError when it is missing, not a regular file (check_data_input) or cannot be opened.
   Input(const std::filesystem::path& path, std::string file, std::size_t max_take);
   ~Input();
   Input(const Input&) = delete;

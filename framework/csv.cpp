@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <optional>
 #include <string_view>
 #include <unordered_map>
@@ -14,6 +13,7 @@
 #include "framework/atomic_file.hpp"
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
+#include "framework/regular_file.hpp"
 #include "framework/resources.hpp"
 #include "framework/signal.hpp"
 #include "framework/units.hpp"
@@ -302,12 +302,9 @@ std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& hea
 }
 
 std::string read_text_file(const std::filesystem::path& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    throw DataError({path.string(), 0, ""}, "file does not exist or is not a regular file");
+  const auto size = check_data_input(path);
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) throw DataError({path.string(), 0, ""}, std::string("cannot open: ") + std::strerror(errno));
-  const auto size = std::filesystem::file_size(path);
   // The text and the parsed values of every column: at most about three times the file size.
   check_memory_estimate(3.0 * static_cast<double>(size), {path.string(), 0, ""},
                         "reading a " + std::to_string(size >> 20) + " MB file");

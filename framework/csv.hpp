@@ -96,8 +96,8 @@ std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& hea
                                         const std::string& file, int header_line);
 
 TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& options = {});
-// The whole text of an input file, with read_csv's checks (a regular file; enough memory for it and
-// its parsed columns); DataError naming the file otherwise.
+// The whole text of an input file, with read_csv's checks (a regular file, check_data_input in
+// regular_file.hpp; enough memory for it and its parsed columns); DataError naming the file otherwise.
 std::string read_text_file(const std::filesystem::path& path);
 // The same on text already in memory; `file` names it in messages.
 TimeSeries parse_csv(const std::string& text, const std::string& file, const CsvReadOptions& options = {});

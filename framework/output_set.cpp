@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "framework/error.hpp"
+#include "framework/regular_file.hpp"
 
 namespace driftlab {
 namespace {
@@ -24,6 +25,13 @@ bool same_file(const fs::path& a, const fs::path& b) {
 }
 
 std::string errno_text() { return std::strerror(errno); }
+
+// ConfigError when `path` exists and is not a regular file: a rename would replace it.
+void refuse_non_regular(const fs::path& path, const Location& where) {
+  const std::string kind = non_regular_kind(path);
+  if (!kind.empty())
+    throw ConfigError(where, "is " + kind + "; outputs are written only as regular files, choose another path");
+}
 
 }  // namespace
 
@@ -46,11 +54,11 @@ void OutputSet::plan(const fs::path& path, const std::string& option) {
     if (!in.empty() && same_file(path, in))
       throw ConfigError(where, "would overwrite the input " + in.string() +
                                    "; inputs are never overwritten, choose another path");
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) throw ConfigError(where, "is a directory; expected a file path");
+  refuse_non_regular(path, where);
   if (path.filename().empty() || path.filename() == "." || path.filename() == "..")
     throw ConfigError(where, "expected a file path");
   const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  std::error_code ec;
   if (!fs::is_directory(dir, ec))
     throw ConfigError(where, "output directory " + dir.string() + " does not exist");
   std::string temp = (dir / ("." + path.filename().string() + ".tmp-XXXXXX")).string();
@@ -64,6 +72,20 @@ bool OutputSet::planned(const fs::path& path) const {
   for (const auto& e : entries_)
     if (e.path == path) return true;
   return false;
+}
+
+void OutputSet::make_directory(const fs::path& dir, const std::string& option) {
+  const Location where{dir.string(), 0, option};
+  std::vector<fs::path> missing;  // innermost first
+  std::error_code ec;
+  for (fs::path p = dir; !p.empty() && !fs::exists(fs::symlink_status(p, ec)); p = p.parent_path()) {
+    missing.push_back(p);
+    if (p == p.parent_path()) break;
+  }
+  fs::create_directories(dir, ec);
+  if (!fs::is_directory(dir))
+    throw ConfigError(where, "cannot create the directory" + (ec ? ": " + ec.message() : std::string()));
+  created_dirs_.insert(created_dirs_.end(), missing.rbegin(), missing.rend());
 }
 
 OutputSet::Entry& OutputSet::entry(const fs::path& path) {
@@ -119,6 +141,7 @@ fs::path OutputSet::stage_path(const fs::path& path) {
 void OutputSet::commit() {
   for (const auto& e : entries_)
     if (!e.written) throw std::logic_error("OutputSet: output " + e.path.string() + " was planned but not written");
+  for (const auto& e : entries_) refuse_non_regular(e.path, {e.path.string(), 0, e.option});  // made since plan()
   // Keep a hard link to every file that will be replaced, so a failed rename can be undone.
   std::vector<std::string> backups(entries_.size());
   std::error_code ec;
@@ -154,6 +177,8 @@ void OutputSet::commit() {
 
 void OutputSet::discard() noexcept {
   for (const auto& e : entries_) std::remove(e.temp.c_str());
+  std::error_code ec;
+  for (auto d = created_dirs_.rbegin(); d != created_dirs_.rend(); ++d) fs::remove(*d, ec);  // only when empty
 }
 
 }  // namespace driftlab

@@ -10,12 +10,17 @@
 //   outputs.commit();                                  // renames every staged file into place
 //
 // plan() refuses (ConfigError, exit 2) a path that is an input, that another option of the same
-// command already names, that is a directory, or whose directory is missing or not writable; it
-// creates the temporary file right away, so a path that cannot be written fails before any work.
-// commit() requires every planned output to have been written, then renames them all; if one
-// rename fails, the ones already renamed are put back (an earlier file of that name is restored).
-// An OutputSet destroyed without commit() (an exception on the way) removes its temporary files:
-// a failed command leaves no output behind.
+// command already names, that exists and is not a regular file (a directory, FIFO, socket or
+// device node, also through a symbolic link: outputs are regular files, always, and a rename
+// would replace the node), or whose directory is missing or not writable; it creates the
+// temporary file right away, so a path that cannot be written fails before any work. Temporary
+// files are hidden, next to their output: ".NAME.tmp-XXXXXX" (mkstemp), the one naming scheme of
+// every writer (a killed run leaves only such hidden files, never a partial file under NAME).
+// commit() checks the paths again, requires every planned output to have been written, then
+// renames them all; if one rename fails, the ones already renamed are put back (an earlier file of
+// that name is restored). An OutputSet destroyed without commit() (an exception on the way)
+// removes its temporary files and the directories make_directory() created: a failed command
+// leaves nothing new behind.
 #pragma once
 
 #include <filesystem>
@@ -39,6 +44,10 @@ class OutputSet {
   // Checks and reserves one output; `option` names it in messages ("--json"). Empty path: no-op.
   void plan(const std::filesystem::path& path, const std::string& option);
   bool planned(const std::filesystem::path& path) const;
+  // Creates the directory `dir` (and missing parents) for outputs of this command; `option` names
+  // it in messages. ConfigError when it cannot be created or exists as something else. The levels
+  // it creates are removed again (when empty) unless the set is committed.
+  void make_directory(const std::filesystem::path& dir, const std::string& option);
 
   // Stage the content of a planned output (throws std::logic_error when the path was not planned).
   void write(const std::filesystem::path& path, std::string_view content);
@@ -67,6 +76,7 @@ class OutputSet {
 
   std::vector<std::filesystem::path> inputs_;
   std::vector<Entry> entries_;
+  std::vector<std::filesystem::path> created_dirs_;  // by make_directory(), outermost first
   bool committed_ = false;
 };
 

@@ -2,14 +2,13 @@
 
 #include <algorithm>
 #include <chrono>
-#include <fstream>
 #include <regex>
 #include <set>
-#include <sstream>
 
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
+#include "framework/regular_file.hpp"
 #include "framework/yaml_io.hpp"
 
 namespace driftlab {
@@ -354,11 +353,7 @@ Pipeline parse_pipeline(const std::string& yaml_text, const std::string& file_la
 }
 
 Pipeline load_pipeline(const std::filesystem::path& path, const Registry& registry) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError({path.string(), 0, ""}, "cannot read the pipeline file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return parse_pipeline(buffer.str(), path.string(), registry);
+  return parse_pipeline(read_config_text(path, "pipeline file"), path.string(), registry);
 }
 
 std::string effective_pipeline_yaml(const Pipeline& pipeline, const Registry& registry) {

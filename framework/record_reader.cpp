@@ -8,6 +8,7 @@
 #include "framework/dataflash_imu.hpp"
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
+#include "framework/regular_file.hpp"
 #include "framework/ros_imu.hpp"
 #include "framework/rosbag.hpp"
 #include "framework/signal.hpp"
@@ -85,6 +86,12 @@ TimeSeries read_log_record(LogReader reader, const std::filesystem::path& path, 
 }  // namespace
 
 RecordFormat sniff_record_format(const std::filesystem::path& path) {
+  // A rosbag2 directory is a bag; any other path that is not a regular file (a FIFO would block
+  // here) goes to the CSV reader, which refuses it.
+  if (!non_regular_kind(path).empty()) {
+    std::error_code ec;
+    return std::filesystem::is_directory(path, ec) && rosbag::sniff(path) ? RecordFormat::RosBag : RecordFormat::Csv;
+  }
   std::ifstream in(path, std::ios::binary);
   char first[std::max(ulog::kMagicSize, dataflash::kMagicSize)] = {};
   in.read(first, sizeof first);

@@ -2,11 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
+#include <cstdio>
 #include <nlohmann/json.hpp>
-#include <sstream>
+#include <set>
 
 #include "framework/error.hpp"
+#include "framework/regular_file.hpp"
 #include "framework/signal.hpp"
 #include "framework/units.hpp"
 #include "plugins/polynomial/polynomial.hpp"
@@ -77,31 +78,69 @@ double CalibrationModel::scale_factor(double temp_c) const {
   return 1.0 + horner(scale_factor_per_k, tc - reference_temp_c);
 }
 
+namespace {
+
+std::string number_text(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", x);
+  return buf;
+}
+
+}  // namespace
+
 void CalibrationModel::validate() const {
   std::vector<Diagnostic> problems;
   const auto bad = [&](const std::string& key, const std::string& message) {
     problems.push_back({{"", 0, key}, message});
   };
+  const auto finite = [](const std::vector<double>& v) {
+    return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+  };
+  const auto temperature = [](double t) { return t >= kMinTemperatureC && t <= kMaxTemperatureC; };
+  const std::string temperatures = "[" + number_text(kMinTemperatureC) + ", " + number_text(kMaxTemperatureC) + "] degC";
   if (bias_rad_s.empty()) bad("bias.polynomial_rad_s_per_k_i", "needs at least one coefficient");
+  if (bias_rad_s.size() > kMaxPolynomialTerms || scale_factor_per_k.size() > kMaxPolynomialTerms) {
+    bad(bias_rad_s.size() > kMaxPolynomialTerms ? "bias.polynomial_rad_s_per_k_i" : "scale_factor.polynomial_per_k_j",
+        "expected at most " + std::to_string(kMaxPolynomialTerms) + " coefficients");
+  }
   if (!bias_sigma_rad_s.empty() && bias_sigma_rad_s.size() != bias_rad_s.size()) {
     bad("bias.sigma_rad_s_per_k_i", "needs one value per coefficient");
   }
-  if (!(std::isfinite(valid_min_c) && std::isfinite(valid_max_c) && valid_min_c <= valid_max_c)) {
-    bad("valid_range_c", "needs [min, max] with min <= max");
+  if (!(temperature(valid_min_c) && temperature(valid_max_c) && valid_min_c <= valid_max_c)) {
+    bad("valid_range_c", "needs [min, max] with min <= max, both within " + temperatures);
   }
-  if (!(lag_tau_s >= 0)) bad("physical.lag_tau_s", "must be >= 0 s");
-  if (!(derivative_tau_s > 0)) bad("physical.derivative_tau_s", "must be > 0 s");
-  if (!(hysteresis_width_k >= 0)) bad("physical.hysteresis_width_k", "must be >= 0 K");
-  for (double c : bias_rad_s) {
-    if (!std::isfinite(c)) bad("bias.polynomial_rad_s_per_k_i", "non-finite coefficient");
-  }
+  if (!temperature(reference_temp_c)) bad("reference_temp_c", "expected a temperature within " + temperatures);
+  if (!(lag_tau_s >= 0 && std::isfinite(lag_tau_s))) bad("physical.lag_tau_s", "must be finite and >= 0 s");
+  if (!(derivative_tau_s > 0 && std::isfinite(derivative_tau_s))) bad("physical.derivative_tau_s", "must be finite and > 0 s");
+  if (!(hysteresis_width_k >= 0 && std::isfinite(hysteresis_width_k))) bad("physical.hysteresis_width_k", "must be finite and >= 0 K");
+  if (!finite(bias_rad_s)) bad("bias.polynomial_rad_s_per_k_i", "non-finite coefficient");
+  if (!finite(bias_sigma_rad_s)) bad("bias.sigma_rad_s_per_k_i", "non-finite value");
+  if (!finite(scale_factor_per_k)) bad("scale_factor.polynomial_per_k_j", "non-finite coefficient");
+  if (!finite({temperature_rate_rad_s_per_k_s, temperature_rate_sigma, hysteresis_rad_s, hysteresis_sigma_rad_s}))
+    bad("physical", "non-finite coefficient");
+  if (!finite({noise.arw_rad_sqrt_s, noise.bias_instability_rad_s, noise.rate_random_walk_rad_s_sqrt_s,
+               noise.sample_rate_hz}) ||
+      std::min({noise.arw_rad_sqrt_s, noise.bias_instability_rad_s, noise.rate_random_walk_rad_s_sqrt_s,
+                noise.sample_rate_hz}) < 0)
+    bad("noise", "noise terms and sample_rate_hz must be finite and >= 0");
   if (rbf) {
     if (rbf->mean.size() != 3 || rbf->scale.size() != 3) bad("rbf.mean", "needs 3 values (and rbf.scale too)");
     if (rbf->centres.cols() != 3) bad("rbf.centres", "needs rows of 3 values");
+    if (static_cast<std::size_t>(rbf->centres.rows()) > kMaxRbfCentres)
+      bad("rbf.centres", "expected at most " + std::to_string(kMaxRbfCentres) + " centres");
     if (static_cast<std::size_t>(rbf->centres.rows()) != rbf->weights_rad_s.size()) {
       bad("rbf.weights_rad_s", "needs one weight per centre");
     }
-    if (!(rbf->sigma > 0)) bad("rbf.sigma", "must be > 0");
+    if (!(rbf->sigma >= kMinRbfSigma && rbf->sigma <= kMaxRbfSigma))
+      bad("rbf.sigma", "expected a width within [" + number_text(kMinRbfSigma) + ", " + number_text(kMaxRbfSigma) +
+                           "] (standardized units)");
+    if (!finite(rbf->mean) || !std::all_of(rbf->scale.begin(), rbf->scale.end(), [](double x) { return x > 0 && std::isfinite(x); }))
+      bad("rbf.scale", "mean and scale must be finite, scale > 0");
+    if (!rbf->centres.allFinite() || !finite(rbf->weights_rad_s) || !std::isfinite(rbf->bias_rad_s))
+      bad("rbf.weights_rad_s", "centres, weights and bias must be finite");
+    double bound = std::abs(rbf->bias_rad_s);  // |rbf(x)| <= |bias| + sum |w_k|
+    for (double w : rbf->weights_rad_s) bound += std::abs(w);
+    if (!std::isfinite(bound)) bad("rbf.weights_rad_s", "the network's output overflows (|bias| + sum |w| is not finite)");
     if (!rbf->input_min.empty() || !rbf->input_max.empty()) {
       if (rbf->input_min.size() != 3 || rbf->input_max.size() != 3) {
         bad("rbf.input_min", "needs 3 values (and rbf.input_max too), or neither");
@@ -110,6 +149,30 @@ void CalibrationModel::validate() const {
           if (!(rbf->input_min[static_cast<std::size_t>(k)] <= rbf->input_max[static_cast<std::size_t>(k)]))
             bad("rbf.input_max", "each value must be >= the matching rbf.input_min");
         }
+      }
+    }
+  }
+  if (problems.empty()) {  // the evaluation, on a grid over the range (and beyond it where the policy evaluates)
+    constexpr int kGrid = 1000;
+    const double margin = extrapolation == Extrapolation::Clamp ? 0.0 : kExtrapolationMarginK;
+    const double lo = valid_min_c - margin, hi = valid_max_c + margin;
+    for (int i = 0; i <= kGrid; ++i) {
+      const double t = lo + (hi - lo) * i / kGrid;
+      if (!std::isfinite(polynomial_bias_rad_s(t))) {
+        bad("bias.polynomial_rad_s_per_k_i", "the bias is not finite at " + number_text(t) +
+                                                 " degC; expected a finite bias over the valid range" +
+                                                 (margin > 0 ? " and " + number_text(margin) + " K beyond it (extrapolation " + to_string(extrapolation) + ")" : std::string()));
+        break;
+      }
+    }
+    for (int i = 0; i <= kGrid; ++i) {
+      const double t = valid_min_c + (valid_max_c - valid_min_c) * i / kGrid;
+      const double sf = scale_factor(t);
+      if (!(sf >= kMinScaleFactor && sf <= kMaxScaleFactor)) {
+        bad("scale_factor.polynomial_per_k_j", "the scale factor is " + number_text(sf) + " at " + number_text(t) +
+                                                   " degC; expected " + number_text(kMinScaleFactor) + " to " +
+                                                   number_text(kMaxScaleFactor) + " over the valid range");
+        break;
       }
     }
   }
@@ -245,11 +308,69 @@ class Reader {
   static std::string join(const std::string& path, const std::string& key) {
     return path.empty() ? key : path + "." + key;
   }
+  // m.validate()'s problems, each naming this file and the key under `path`; validate() spells
+  // the keys of a gyro ("rad_s"), `value_key` is the channel's ("m_s2" for an accelerometer).
+  void validate(const CalibrationModel& m, const std::string& path, const std::string& value_key) const {
+    try {
+      m.validate();
+    } catch (const ConfigError& e) {
+      std::vector<Diagnostic> problems = e.problems();
+      for (auto& d : problems) {
+        std::string key = d.where.field;
+        if (const auto at = key.find("rad_s"); at != std::string::npos) key.replace(at, 5, value_key);
+        d.where = {file_, 0, join(path, key)};
+      }
+      throw ConfigError(std::move(problems));
+    }
+  }
 
  private:
   std::string file_;
 };
 
+
+// The JSON text of a model file; a key repeated in one object is refused (ConfigError naming the file
+// and the key path), as the YAML readers refuse one: nlohmann::json would silently keep the last.
+nlohmann::json parse_unique_keys(const Reader& r, const std::string& text) {
+  struct Frame {
+    bool object;
+    std::string path;  // key path of this object or array ("channels[0].model")
+    std::set<std::string> keys;
+    std::string last_key;
+    std::size_t next = 0;  // arrays: index of the next element
+  };
+  std::vector<Frame> stack;
+  const auto child_path = [&]() -> std::string {
+    if (stack.empty()) return "";
+    Frame& top = stack.back();
+    if (top.object) return Reader::join(top.path, top.last_key);
+    return top.path + "[" + std::to_string(top.next++) + "]";
+  };
+  using Event = nlohmann::json::parse_event_t;
+  return nlohmann::json::parse(text, [&](int, Event event, nlohmann::json& parsed) {
+    switch (event) {
+      case Event::object_start:
+      case Event::array_start: {
+        std::string path = child_path();
+        stack.push_back({event == Event::object_start, std::move(path), {}, {}, 0});
+        break;
+      }
+      case Event::object_end:
+      case Event::array_end: stack.pop_back(); break;
+      case Event::key: {
+        Frame& top = stack.back();
+        top.last_key = parsed.get<std::string>();
+        if (!top.keys.insert(top.last_key).second)
+          r.fail(Reader::join(top.path, top.last_key), "the key appears twice in one object; expected each key once");
+        break;
+      }
+      case Event::value:
+        if (!stack.empty() && !stack.back().object) ++stack.back().next;
+        break;
+    }
+    return true;
+  });
+}
 
 // The model of one channel from `j` (the v1 file's top level, or a v2 channel's "model");
 // `at` is the key path of `j` in messages ("" or "channels[2].model").
@@ -354,6 +475,7 @@ CalibrationModel read_model_body(const Reader& r, const nlohmann::json& j, const
       m.fit.scale_factor_fitted = h->get<bool>();
     }
   }
+  r.validate(m, at, u.value);
   return m;
 }
 
@@ -374,8 +496,10 @@ void ImuCalibration::validate() const {
     try {
       channels[i].model.validate();
     } catch (const ConfigError& e) {
-      throw ConfigError({"", 0, "channels[" + std::to_string(i) + "] (" + channels[i].id.role() + ")"},
-                        e.problems().front().message);
+      std::vector<Diagnostic> problems = e.problems();
+      for (auto& d : problems)
+        d.where.field = "channels[" + std::to_string(i) + "] (" + channels[i].id.role() + ") model." + d.where.field;
+      throw ConfigError(std::move(problems));
     }
   }
 }
@@ -412,15 +536,10 @@ std::string to_json_text(const ImuCalibration& imu_model) {
 
 ImuCalibration read_calibration(const std::filesystem::path& path) {
   const Reader r(path.string());
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) r.fail("", "cannot open the calibration model file (not a regular file)");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) r.fail("", "cannot open the calibration model file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
+  const std::string text = read_config_text(path, "calibration model file");
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(buffer.str());
+    j = parse_unique_keys(r, text);
   } catch (const nlohmann::json::exception& e) {  // syntax, and numbers beyond double (out_of_range)
     r.fail("", std::string("not valid JSON: ") + e.what());
   }

@@ -37,8 +37,18 @@
 //   evaluate  the polynomial is evaluated as is (scale factor and RBF clamp)
 // Either way last_extrapolated() says so, and `driftlab compensate` writes it per row.
 //
-// Errors: read_calibration_model throws ConfigError naming the file and the JSON key (a missing
-// file, bad JSON, wrong format tag, missing or mistyped key, inconsistent sizes);
+// Validation (CalibrationModel::validate, issue 28): a model is checked as physics, not only as
+// syntax, by the same rules where calibrate writes it and where compensate / export / mrpt / nav
+// read it: temperatures within [kMinTemperatureC, kMaxTemperatureC]; at most kMaxPolynomialTerms
+// bias and scale-factor coefficients and kMaxRbfCentres RBF centres; every number finite; the
+// scale factor within [kMinScaleFactor, kMaxScaleFactor] over the valid range (positive: it
+// divides); the bias finite over the valid range and, under the linear or evaluate policy, over
+// kExtrapolationMarginK beyond it; the RBF width within [kMinRbfSigma, kMaxRbfSigma].
+//
+// Errors: read_calibration throws ConfigError naming the file and the JSON key (a missing
+// file, one that is not a regular file or larger than kMaxTextInputBytes, bad JSON, wrong format
+// tag, a key repeated in one object, missing or mistyped key, inconsistent sizes, a model
+// validate() refuses);
 // CausalCompensator::step throws DataError on a non-increasing time stamp or a non-finite input.
 #pragma once
 
@@ -55,6 +65,15 @@ namespace driftlab::calibration {
 
 inline constexpr const char* kFormat = "driftlab-calibration/1";     // single-axis gyro (read only)
 inline constexpr const char* kImuFormat = "driftlab-calibration/2";  // whole IMU
+
+// The bounds validate() checks (see above).
+inline constexpr double kMinTemperatureC = -273.15, kMaxTemperatureC = 1000.0;  // T0 and the valid range, degC
+inline constexpr std::size_t kMaxPolynomialTerms = 16;  // bias and scale-factor coefficients, each
+inline constexpr std::size_t kMaxRbfCentres = 10000;
+inline constexpr double kMinRbfSigma = 1e-3, kMaxRbfSigma = 1e3;  // standardized units
+// 1 + sum_j k_j dT^j: a MEMS scale error is percent-sized; 0 or below would divide by 0 or flip the sign.
+inline constexpr double kMinScaleFactor = 0.1, kMaxScaleFactor = 10.0;
+inline constexpr double kExtrapolationMarginK = 50.0;  // beyond the valid range, where a policy evaluates
 
 enum class ModelKind { Polynomial, Physical, Rbf };
 std::string to_string(ModelKind kind);  // "poly", "physical", "rbf"
@@ -133,7 +152,8 @@ struct CalibrationModel {
   double polynomial_bias_rad_s(double temp_c) const;
   // Scale factor sf at T (clamped to the valid range); 1 without a scale-factor model.
   double scale_factor(double temp_c) const;
-  // Throws ConfigError (no file) when the model is inconsistent (empty polynomial, bad range, ...).
+  // Throws ConfigError (no file; field = the JSON key of the channel's model) with every problem
+  // found: inconsistent (empty polynomial, bad range, ...) or not physical (the rules above).
   void validate() const;
 };
 

@@ -102,6 +102,9 @@ std::vector<double> firmware_cubic(const ChannelCalibration& c, double t_ref, co
   auto cubic = cubic_about(m, t_ref, cubic_error);
   ChannelLoss loss{c.id, 0.0, unrepresentable_terms(m, c.id.sensor)};
   if (!m.scale_factor_per_k.empty()) loss.dropped.push_back("scale-factor model (" + format + " carries offsets only)");
+  if (m.extrapolation != Extrapolation::Clamp)
+    loss.dropped.push_back("the '" + to_string(m.extrapolation) + "' extrapolation outside the valid range (" + format +
+                           " clamps the temperature to [TMIN, TMAX])");
   // Held at the block's edges where the channel's own range extends beyond them.
   double clip_error = 0.0;
   if (block.tmin_c > m.valid_min_c || block.tmax_c < m.valid_max_c) {
@@ -134,10 +137,6 @@ std::vector<double> firmware_cubic(const ChannelCalibration& c, double t_ref, co
          "): up to " + with_unit(clip_error, c.id.sensor));
   }
   for (const auto& d : loss.dropped) note("dropped (not representable in " + format + "): " + d);
-  if (m.extrapolation != Extrapolation::Clamp) {
-    note(format + " clamps the temperature to [TMIN, TMAX]; the model's policy '" + to_string(m.extrapolation) +
-         "' outside its range is not carried");
-  }
   r.losses.push_back(std::move(loss));
   return cubic;
 }

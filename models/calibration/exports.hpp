@@ -46,7 +46,7 @@
 // PX4 and ArduPilot hold, per channel, a cubic in temperature with one [TMIN, TMAX] per block (PX4:
 // sensor and instance; ArduPilot: instance, gyro and accelerometer together): the intersection of the
 // block's valid ranges. A channel they cannot represent (order > 3, lag, dT/dt, hysteresis, RBF terms,
-// a scale factor, a valid range wider than the block's) is exported as the least-squares cubic in T
+// a scale factor, the linear or evaluate extrapolation policy, a valid range wider than the block's) is exported as the least-squares cubic in T
 // over its valid range (201 points) of the model's polynomial part, and the export states per channel
 // the approximation's maximum error and every dropped term (ExportResult::losses and comments in the
 // file); with `strict` it is refused (ConfigError naming the channel) instead. Every value written is

@@ -590,7 +590,13 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
                          " rad/s) by " + std::to_string(static_cast<int>(100 * kTransferMargin)) + " %";
     }
   }
-  m.validate();
+  try {  // the records' model must be physical (e.g. a rate that ignores a moving true rate gives sf 0)
+    m.validate();
+  } catch (const ConfigError& e) {
+    const Diagnostic& first = e.problems().front();
+    throw DataError({records.front().name, 0, first.where.field},
+                    "the calibration records give a model that is not physical: " + first.message);
+  }
 
   // Allan noise terms of the compensated calibration residual (first record), for the Kalman stage
   // and the Kalibr export.

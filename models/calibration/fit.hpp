@@ -79,8 +79,9 @@ struct FitOptions {
   std::function<void(const std::string&, double)> progress = [](const std::string&, double) {};
 };
 
-// Throws DataError (naming the record) for records too short for the bins and blocks, and
-// ConfigError for inconsistent options.
+// Throws DataError (naming the record) for records too short for the bins and blocks or giving a
+// model CalibrationModel::validate() refuses (a scale factor of 0, ...), and ConfigError for
+// inconsistent options.
 CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOptions& options);
 
 // The PX4/ArduPilot thermal calibration practice, the one home of every "PX4-style" figure (the

@@ -487,7 +487,7 @@ TEST(DataflashBadInput, NotADataflashFileOrNoCompleteMessageIsADataError) {
               AllOf(HasSubstr("x.csv"), HasSubstr("byte 0"), HasSubstr("not an ArduPilot DataFlash log")));
   EXPECT_THAT(error_of([] { dataflash::parse(Writer().bytes().substr(0, 50), "cut.bin"); }),
               AllOf(HasSubstr("byte 0"), HasSubstr("ends before its first message is complete")));
-  EXPECT_THAT(error_of([] { dataflash::read("/no/such/log.bin"); }), HasSubstr("not a readable file"));
+  EXPECT_THAT(error_of([] { dataflash::read("/no/such/log.bin"); }), HasSubstr("does not exist"));
 }
 
 TEST(DataflashBadInput, MissingImuUnknownTypesAndBadSelectionsAreNamed) {

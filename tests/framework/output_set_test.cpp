@@ -3,6 +3,10 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <sys/un.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -29,6 +33,13 @@ std::string text_of(const fs::path& p) {
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+void write_via_output_set(const fs::path& path) {
+  OutputSet outputs;
+  outputs.plan(path, "--out");
+  outputs.write(path, "text\n");
+  outputs.commit();
 }
 
 std::size_t files_in(const fs::path& dir) {
@@ -90,6 +101,88 @@ TEST(OutputSet, RefusesBadPathsBeforeAnyWork) {
     fs::permissions(dir / "ro", fs::perms::owner_read | fs::perms::owner_exec);
     refused(dir / "ro" / "x.json", "cannot write to the output directory");
   }
+}
+
+TEST(OutputSet, RefusesAnExistingPathThatIsNotARegularFileAndLeavesItAsItWas) {
+  const auto dir = fresh_dir("nodes");
+  ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0600), 0);
+  fs::create_symlink(dir / "fifo", dir / "link_to_fifo");
+  const int sock = ::socket(AF_UNIX, SOCK_STREAM, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  const std::string sock_path = (dir / "sock").string();
+  ASSERT_LT(sock_path.size(), sizeof addr.sun_path);
+  std::copy(sock_path.begin(), sock_path.end(), addr.sun_path);
+  ASSERT_EQ(::bind(sock, reinterpret_cast<const sockaddr*>(&addr), sizeof addr), 0);
+  // A character device with /dev/null's numbers, made here (never the system's own /dev/null).
+  const bool device = ::mknod((dir / "null").c_str(), S_IFCHR | 0666, ::makedev(1, 3)) == 0;
+  if (!device) EXPECT_NE(::geteuid(), 0u) << "root can make a device node";
+  const auto refused = [&](const fs::path& path, const std::string& kind) {
+    try {
+      write_via_output_set(path);
+      ADD_FAILURE() << path << " was accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_THAT(e.what(), HasSubstr(path.string())) << path;
+      EXPECT_THAT(e.what(), HasSubstr("is " + kind + "; outputs are written only as regular files")) << path;
+    }
+  };
+  refused(dir / "fifo", "a FIFO (named pipe)");
+  refused(dir / "link_to_fifo", "a FIFO (named pipe)");
+  refused(dir / "sock", "a socket");
+  if (device) refused(dir / "null", "a character device");
+  ::close(sock);
+  EXPECT_TRUE(fs::is_fifo(fs::symlink_status(dir / "fifo")));
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir / "link_to_fifo")));
+  EXPECT_TRUE(fs::is_socket(fs::symlink_status(dir / "sock")));
+  if (device) EXPECT_TRUE(fs::is_character_file(fs::symlink_status(dir / "null")));
+  EXPECT_EQ(files_in(dir), 0u) << "no temporary file is left";
+}
+
+TEST(OutputSet, CommitRefusesANodeMadeAfterPlanning) {
+  const auto dir = fresh_dir("late_fifo");
+  {
+    OutputSet outputs;
+    outputs.plan(dir / "out.csv", "--out");
+    outputs.write(dir / "out.csv", "t_s\n");
+    ASSERT_EQ(::mkfifo((dir / "out.csv").c_str(), 0600), 0);
+    EXPECT_THROW(outputs.commit(), ConfigError);
+  }
+  EXPECT_TRUE(fs::is_fifo(fs::symlink_status(dir / "out.csv")));
+  EXPECT_EQ(files_in(dir), 0u);
+}
+
+TEST(OutputSet, DirectoriesMadeForAFailedCommandAreRemovedAndOnlyThose) {
+  const auto dir = fresh_dir("dirs");
+  fs::create_directories(dir / "existing");
+  {
+    OutputSet outputs;
+    outputs.make_directory(dir / "existing", "--report");
+    outputs.make_directory(dir / "new" / "deeper", "--out");
+    outputs.plan(dir / "new" / "deeper" / "report.json", "--out");
+    EXPECT_TRUE(fs::is_directory(dir / "new" / "deeper"));
+  }  // not committed: the command failed
+  EXPECT_FALSE(fs::exists(dir / "new"));
+  EXPECT_TRUE(fs::is_directory(dir / "existing")) << "a directory that was there stays";
+  {
+    OutputSet outputs;
+    outputs.make_directory(dir / "kept", "--out");
+    outputs.plan(dir / "kept" / "a.txt", "--out");
+    outputs.write(dir / "kept" / "a.txt", "a");
+    outputs.commit();
+  }
+  EXPECT_EQ(text_of(dir / "kept" / "a.txt"), "a");
+  std::ofstream(dir / "file") << "x";
+  OutputSet outputs;
+  EXPECT_THROW(outputs.make_directory(dir / "file", "--out"), ConfigError);
+}
+
+TEST(OutputSet, TemporaryFilesAreHiddenNextToTheirOutput) {
+  const auto dir = fresh_dir("hidden");
+  OutputSet outputs;
+  outputs.plan(dir / "o.rawlog", "--out");
+  const fs::path temp = outputs.stage_path(dir / "o.rawlog");
+  EXPECT_EQ(temp.parent_path(), dir);
+  EXPECT_EQ(temp.filename().string().rfind(".o.rawlog.tmp-", 0), 0u) << temp;
 }
 
 TEST(OutputSet, CommitRequiresEveryPlannedOutputToBeWritten) {

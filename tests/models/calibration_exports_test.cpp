@@ -388,7 +388,20 @@ TEST(CalibrationExports, StrictRefusesNamingTheChannelAndTheDefaultStatesWhatIsD
   EXPECT_NE(r.text.find("# NOTE: gyro1_x: dropped (not representable in PX4 TC_G1_*): hysteresis"), std::string::npos)
       << r.text;
   EXPECT_NE(r.text.find("# NOTE: gyro1_x: dropped (not representable in PX4 TC_G1_*): scale-factor"), std::string::npos);
-  EXPECT_EQ(loss_of(r, {Sensor::Gyro, 'x', 1}).dropped.size(), 5u) << "lag, dT/dt, hysteresis, RBF, scale factor";
+  EXPECT_EQ(loss_of(r, {Sensor::Gyro, 'x', 1}).dropped.size(), 6u)
+      << "lag, dT/dt, hysteresis, RBF, scale factor, linear extrapolation";
+  // A cubic under the linear policy is exact inside the range but not outside it: strict refuses it.
+  ImuCalibration linear = two_instance_imu();
+  linear.channels = {linear.channels[2]};  // gyro_z: a line, one channel to its block
+  EXPECT_NO_THROW(export_px4_params(linear, {.strict = true}));
+  linear.channels[0].model.extrapolation = Extrapolation::Linear;
+  try {
+    export_px4_params(linear, {.strict = true});
+    ADD_FAILURE() << "the linear policy was exported as exact";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("the 'linear' extrapolation outside the valid range"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(CalibrationExports, ValuesThatAreNoFiniteReal32AreRefusedNamingChannelAndParameter) {

@@ -1,6 +1,7 @@
 #include "models/calibration/calibration_model.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <nlohmann/json.hpp>
 
@@ -124,6 +125,85 @@ TEST(CalibrationModelJson, BadFilesNameTheFileAndTheKey) {
   std::string wrong_role = good;
   wrong_role = std::regex_replace(wrong_role, std::regex("\"role\": \"gyro_z\""), "\"role\": \"gyro_y\"");
   EXPECT_NE(error_of(wrong_role).find("channels[0].role"), std::string::npos) << error_of(wrong_role);
+}
+
+// The hostile models of issue 28: each passed validate() and gave inf/nan on every compensated row.
+TEST(CalibrationModelValidation, ModelsAreCheckedAsPhysicsNotOnlyAsSyntax) {
+  const auto refused = [](const CalibrationModel& m, const std::string& key, const std::string& expected) {
+    try {
+      m.validate();
+      ADD_FAILURE() << key << ": accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(key + ": "), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  };
+  EXPECT_NO_THROW(full_model().validate());
+  CalibrationModel m = poly_model();
+  m.scale_factor_per_k = {-2.0};  // sf = -1
+  refused(m, "scale_factor.polynomial_per_k_j", "expected 0.1 to 10 over the valid range");
+  m.scale_factor_per_k = {0.0, 0.1};  // sf = 1 + 0.1 (T - 25): 0 at 15 degC, inside [-10, 50]
+  refused(m, "scale_factor.polynomial_per_k_j", "the scale factor is");
+  m.scale_factor_per_k = {-1.0};  // what calibrate wrote for an all-zero rate with a moving truth
+  refused(m, "scale_factor.polynomial_per_k_j", "the scale factor is 0");
+  m = poly_model();
+  m.reference_temp_c = 1e300;
+  refused(m, "reference_temp_c", "expected a temperature within [-273.15, 1000] degC");
+  m = poly_model();
+  m.bias_rad_s.assign(100000, 1e-3);
+  m.bias_sigma_rad_s.clear();
+  refused(m, "bias.polynomial_rad_s_per_k_i", "expected at most 16 coefficients");
+  m = testing::example_polynomial_model({1e-3, 1e307, 1e307}, -10.0, 50.0);  // finite coefficients, an infinite bias
+  refused(m, "bias.polynomial_rad_s_per_k_i", "the bias is not finite");
+  m = testing::example_polynomial_model({1e-3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1e282}, -10.0, 50.0);
+  m.bias_sigma_rad_s.clear();
+  EXPECT_NO_THROW(m.validate()) << "finite over the range when clamped: 1e282 * 35^15 ~ 1e305";
+  m.extrapolation = Extrapolation::Evaluate;
+  refused(m, "bias.polynomial_rad_s_per_k_i", "and 50 K beyond it (extrapolation evaluate)");
+  m = full_model();
+  m.rbf->sigma = 1e-200;
+  refused(m, "rbf.sigma", "expected a width within [0.001, 1000]");
+  m = full_model();
+  m.rbf->weights_rad_s = {1e308, 1e308, 1e308};
+  refused(m, "rbf.weights_rad_s", "overflows");
+  m = full_model();
+  m.noise.sample_rate_hz = -1.0;
+  refused(m, "noise", "must be finite and >= 0");
+}
+
+TEST(CalibrationModelJson, ARepeatedKeyAFifoAndAnUnphysicalModelAreRefusedWithFileAndKey) {
+  const std::string good = to_json_text(testing::one_channel(poly_model()));
+  std::string repeated = good;
+  repeated.replace(repeated.find("\"kind\""), 6, "\"kind\": \"rbf\", \"kind\"");
+  const std::string r = error_of(repeated);
+  EXPECT_NE(r.find("bad.json: channels[0].model.kind: the key appears twice in one object"), std::string::npos) << r;
+  std::string nested = good;  // repeated inside a list element
+  nested.replace(nested.find("\"axis\""), 6, "\"axis\": \"x\", \"axis\"");
+  EXPECT_NE(error_of(nested).find("channels[0].axis: the key appears twice"), std::string::npos) << error_of(nested);
+  std::string negative_sf = good;
+  negative_sf = std::regex_replace(negative_sf, std::regex("\"polynomial_per_k_j\": \\[\\]"),
+                                   "\"polynomial_per_k_j\": [-2.0]");
+  const std::string n = error_of(negative_sf);
+  EXPECT_NE(n.find("bad.json: channels[0].model.scale_factor.polynomial_per_k_j: the scale factor is -1"),
+            std::string::npos)
+      << n;
+  ImuCalibration accel = testing::one_channel(testing::example_polynomial_model({1e-3, 1e307, 1e307}),
+                                              {imu::Sensor::Accel, 'z', 0});
+  const std::string a = error_of(to_json_text(accel));  // the key as the accelerometer's file spells it
+  EXPECT_NE(a.find("bad.json: channels[0].model.bias.polynomial_m_s2_per_k_i: the bias is not finite"),
+            std::string::npos)
+      << a;
+  const auto fifo = scratch("model_fifo.json");
+  std::filesystem::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  try {
+    read_calibration(fifo);  // blocked forever before
+    ADD_FAILURE() << "a FIFO was read";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(fifo.string() + ": cannot read the calibration model file: it is a FIFO"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(CausalCompensator, SubtractsThePolynomialAndFlagsAndClampsOutsideTheRange) {

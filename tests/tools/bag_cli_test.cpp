@@ -121,7 +121,7 @@ TEST(BagCli, BadBagsExitWithThreeNamingFileAndPlace) {
   EXPECT_THAT(topic.err, HasSubstr("topic '/imu' is not in the bag (IMU topics it has: /imu/data)"));
   const auto not_a_bag = run_driftlab("log info " + (dir / "empty_dir").string());
   EXPECT_EQ(not_a_bag.exit_code, 3);
-  EXPECT_THAT(not_a_bag.err, HasSubstr("not a readable file"));
+  EXPECT_THAT(not_a_bag.err, HasSubstr("is a directory; expected a regular file"));
 }
 
 }  // namespace

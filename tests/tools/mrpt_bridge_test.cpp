@@ -1,6 +1,7 @@
 // The MRPT bridge (issue 14): rawlog round trips, rawlog-edit reading our exports, compensation of a
 // rawlog, the navigation EKF and bad rawlogs. Built always; without MRPT every test is skipped.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -8,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <regex>
 #include <sstream>
@@ -20,6 +22,7 @@
 #include <zlib.h>
 
 #include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/io/CMemoryStream.h>
 #include <mrpt/obs/CObservationIMU.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
@@ -503,6 +506,115 @@ TEST(MrptBridge, TruncatedAndMalformedRawlogsNameTheFileAndTheObjectIndex) {
 #endif
 }
 
+#if DRIFTLAB_HAVE_MRPT
+namespace {
+
+// The serialized bytes of one object (a plain rawlog of one object).
+std::string serialized(const mrpt::serialization::CSerializable& obs) {
+  mrpt::io::CMemoryStream memory;
+  auto archive = mrpt::serialization::archiveFrom(memory);
+  archive << obs;
+  const auto* data = static_cast<const char*>(memory.getRawBufferData());
+  return std::string(data, data + memory.getTotalBytesCount());
+}
+
+}  // namespace
+#endif
+
+// Issue 28: what a hostile user feeds the bridge ends with exit 2 or 3 and the file named.
+TEST(MrptBridge, HostileRawlogsInputsAndOutputsAreRefusedWithTheFileNamed) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  const auto dir = scratch_dir("mrpt_hostile");
+  export_test_rawlog(dir, 5, false);
+  const fs::path fifo = dir / "fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  // An output that is a FIFO is not replaced; an input that is one is not opened ("timeout": it
+  // would block forever).
+  for (const auto& command : {"mrpt export " + (dir / "in.csv").string() + " --out " + fifo.string(),
+                              "mrpt import " + (dir / "in.rawlog").string() + " --out " + fifo.string()}) {
+    const auto r = run_driftlab(command);
+    EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
+    EXPECT_NE(r.err.find(fifo.string() + ": --out: is a FIFO (named pipe); outputs are written only as regular files"),
+              std::string::npos)
+        << r.err;
+  }
+  EXPECT_TRUE(fs::is_fifo(fs::symlink_status(fifo)));
+  for (const auto& command : {"mrpt export " + fifo.string() + " --out " + (dir / "x.rawlog").string(),
+                              "mrpt info " + fifo.string()}) {
+    const auto r = run_driftlab(command, "timeout 20");
+    EXPECT_EQ(r.exit_code, 3) << command << "\n" << r.err;
+    EXPECT_NE(r.err.find(fifo.string() + ": is a FIFO (named pipe); expected a regular file"), std::string::npos) << r.err;
+  }
+  // A presence flag stored as a byte other than 0/1: found as the one byte that differs when a flag is set.
+  mrpt::obs::CObservationIMU obs;
+  obs.sensorLabel = "GYRO";
+  obs.timestamp = mrpt::Clock::time_point(mrpt::Clock::duration(133000000000000000LL));
+  obs.set(mrpt::obs::IMU_WZ, 0.01);
+  obs.set(mrpt::obs::IMU_TEMPERATURE, 20.0);
+  const std::string plain = serialized(obs);
+  obs.dataIsPresent[mrpt::obs::IMU_YAW] = true;
+  const std::string flagged = serialized(obs);
+  ASSERT_EQ(plain.size(), flagged.size());
+  std::size_t differing = 0, at = 0;
+  for (std::size_t i = 0; i < plain.size(); ++i)
+    if (plain[i] != flagged[i]) ++differing, at = i;
+  ASSERT_EQ(differing, 1u);
+  std::string bad = plain;
+  bad[at] = 2;
+  std::ofstream(dir / "flag.rawlog", std::ios::binary) << plain << bad;
+  try {
+    import_rawlog(dir / "flag.rawlog");
+    ADD_FAILURE() << "a presence flag of 2 was accepted";
+  } catch (const driftlab::DataError& e) {
+    EXPECT_NE(std::string(e.what()).find((dir / "flag.rawlog").string() + ": object 1: the presence flag of IMU field " +
+                                         std::to_string(mrpt::obs::IMU_YAW) + " is byte 2; expected 0 or 1"),
+              std::string::npos)
+        << e.what();
+  }
+  // A time stamp before MRPT's epoch: tick differences would overflow (t_s decreased, exit 0).
+  obs.dataIsPresent[mrpt::obs::IMU_YAW] = false;
+  const std::string early = serialized(obs);
+  obs.timestamp = mrpt::Clock::time_point(mrpt::Clock::duration(std::numeric_limits<std::int64_t>::min() + 5));
+  std::ofstream(dir / "ticks.rawlog", std::ios::binary) << early << serialized(obs);
+  const auto r = run_driftlab("mrpt import " + (dir / "ticks.rawlog").string() + " --out " + (dir / "t.csv").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("object 1: IMU time stamp"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("before the MRPT clock's epoch"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "t.csv"));
+  // A sensory frame claiming 2^31 - 1 observations: MRPT allocated them (gigabytes) before failing.
+  {
+    mrpt::obs::CSensoryFrame frame;
+    frame.insert(mrpt::obs::CObservationIMU::Create(obs));
+    std::string bytes = serialized(frame);
+    const auto name = bytes.find("CSensoryFrame");
+    ASSERT_NE(name, std::string::npos);
+    const auto count = bytes.find(std::string("\x01\x00\x00\x00", 4), name);
+    ASSERT_NE(count, std::string::npos);
+    bytes.replace(count, 4, std::string("\xff\xff\xff\x7f", 4));
+    std::ofstream(dir / "count.rawlog", std::ios::binary) << early << bytes;
+  }
+  const auto count = run_driftlab("mrpt info " + (dir / "count.rawlog").string(), "timeout 20");
+  EXPECT_EQ(count.exit_code, 3) << count.err;
+  EXPECT_NE(count.err.find((dir / "count.rawlog").string() + ": object 1: not a valid MRPT object (malformed rawlog): "
+                                                              "std::bad_alloc"),
+            std::string::npos)
+      << count.err;
+  // A start time that is not a time.
+  const auto nan_start = run_driftlab("mrpt export " + (dir / "in.csv").string() + " --start-unix nan --out " +
+                                      (dir / "nan.rawlog").string());
+  EXPECT_EQ(nan_start.exit_code, 2) << nan_start.err;
+  EXPECT_NE(nan_start.err.find("outside MRPT's clock"), std::string::npos) << nan_start.err;
+  // Nothing but the inputs and the fixtures is left: no temporary file, visible or hidden.
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
+  std::sort(left.begin(), left.end());
+  EXPECT_EQ(left,
+            (std::vector<std::string>{"count.rawlog", "fifo", "flag.rawlog", "in.csv", "in.rawlog", "ticks.rawlog"}));
+  fs::remove_all(dir);
+#endif
+}
+
 TEST(MrptBridge, SeveralImuSensorsNeedALabelChoice) {
   SKIP_WITHOUT_MRPT();
 #if DRIFTLAB_HAVE_MRPT
@@ -731,6 +843,7 @@ TEST(MrptNav, ARecordNeedsOdometryATemperatureAndAModel) {
                               (dir / "model.json").string() + " --out " + (dir / "out").string());
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_NE(r.err.find("nav needs odometry"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out")) << "the output directory made for the failed run is removed";
   const auto no_model = run_driftlab("nav --rawlog " + (dir / "in.rawlog").string() + " --out " + (dir / "out").string());
   EXPECT_EQ(no_model.exit_code, 2) << no_model.err;
   EXPECT_NE(no_model.err.find("--model"), std::string::npos) << no_model.err;

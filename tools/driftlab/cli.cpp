@@ -163,15 +163,8 @@ void check_output(const std::string& output, const std::vector<std::string>& inp
   check.plan(output, "--out");
 }
 
-void make_output_directory(const std::filesystem::path& dir, const std::string& option) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (!std::filesystem::is_directory(dir))
-    throw ConfigError({dir.string(), 0, option}, "cannot create the directory" + (ec ? ": " + ec.message() : std::string()));
-}
-
 ReportFiles plan_report_files(OutputSet& outputs, const std::filesystem::path& dir, const std::string& option) {
-  make_output_directory(dir, option);
+  outputs.make_directory(dir, option);
   ReportFiles files{dir / "report.json", dir / "report.html"};
   outputs.plan(files.json, option);
   outputs.plan(files.html, option);

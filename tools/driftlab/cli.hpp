@@ -85,8 +85,8 @@ std::string primary_role(const DataOptions& data);
 // Unit a channel is written back in: the unit it was read in when known ("deg/s" for rates).
 std::string display_unit(const TimeSeries& record, const std::string& role, const DataOptions& data);
 
-// Throws ConfigError when `output` could not be planned as an output (an input, a directory, a
-// missing or unwritable directory; see OutputSet::plan). For a command with one output written by
+// Throws ConfigError when `output` could not be planned as an output (an input, an existing path
+// that is not a regular file, a missing or unwritable directory; see OutputSet::plan). For a command with one output written by
 // a library that writes atomically itself; commands with several outputs use an OutputSet
 // (framework/output_set.hpp), which also commits them together.
 void check_output(const std::string& output, const std::vector<std::string>& inputs);
@@ -96,11 +96,9 @@ void check_output(const std::string& output, const std::vector<std::string>& inp
 struct ReportFiles {
   std::filesystem::path json, html;
 };
-// Creates `dir` when missing and plans both report files in `outputs` under `option`. Throws
-// ConfigError (exit 2) when `dir` cannot be created or a report file cannot be planned.
+// Creates `dir` when missing (OutputSet::make_directory: removed again when the command fails) and
+// plans both report files in `outputs` under `option`. Throws ConfigError (exit 2) when `dir`
+// cannot be created or a report file cannot be planned.
 ReportFiles plan_report_files(OutputSet& outputs, const std::filesystem::path& dir, const std::string& option);
-// Creates the output directory `dir` (option `option`) when missing. Throws ConfigError (exit 2)
-// when it cannot be created or exists and is not a directory.
-void make_output_directory(const std::filesystem::path& dir, const std::string& option);
 
 }  // namespace driftlab::cli

@@ -4,9 +4,7 @@
 // Outputs: report.json and report.html (discrepancy_report.hpp), series.csv
 // (t_s, measured_dps, model_initial_dps, model_final_dps).
 #include <algorithm>
-#include <fstream>
 #include <iostream>
-#include <sstream>
 #include <map>
 #include <memory>
 
@@ -16,6 +14,7 @@
 #include "framework/effect_catalogue.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
+#include "framework/regular_file.hpp"
 #include "framework/sampling.hpp"
 #include "framework/output_set.hpp"
 #include "framework/params_io.hpp"
@@ -134,12 +133,9 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
       for (const auto& p : step.parameters) e.values.push_back({p.key, p.unit, p.values});
       named.push_back(std::move(e));
     }
-    std::ifstream in(device_path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
     outputs.write(o.update_device,
                           devices::add_effects_to_device_text(
-                              text.str(), o.update_device, named,
+                              read_config_text(device_path, "device file"), o.update_device, named,
                               "effects named by `driftlab discrepancy` on " + o.data.path));
   }
   outputs.commit();

@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "framework/error.hpp"
+#include "framework/output_set.hpp"
 #include "framework/parallel.hpp"
 #include "models/calibration/exports.hpp"
 #include "tools/driftlab/calibration_cli.hpp"
@@ -293,7 +294,12 @@ void fleet_command(const FleetOptions& o) {
     throw ConfigError({"", 0, o.manifest.empty() ? "--manifest" : "--out"}, "driftlab fleet needs --manifest and --out");
   const auto units = read_manifest(o.manifest);
   const fs::path out(o.out);
-  make_output_directory(out / "units", "--out");
+  // The directory stays when a unit fails: units are written (and resumed) one by one.
+  {
+    OutputSet directory;
+    directory.make_directory(out / "units", "--out");
+    directory.commit();
+  }
   // A shard runs the units i, i + N, i + 2N, ... of the manifest (0-based i), and no report.
   const auto [first, step] = o.shard.empty() ? std::pair<std::size_t, std::size_t>{0, 1} : parse_shard(o.shard);
   std::vector<std::size_t> mine;

@@ -20,6 +20,7 @@
 #include "framework/imu.hpp"
 #include "framework/output_set.hpp"
 #include "framework/record_reader.hpp"
+#include "framework/regular_file.hpp"
 #include "framework/ulog.hpp"
 #include "framework/ulog_imu.hpp"
 #include "tools/driftlab/bag_info.hpp"
@@ -32,10 +33,9 @@ constexpr double kSecondsPerMicrosecond = 1e-6;
 constexpr std::size_t kInfoValueChars = 60;  // longer info values are cut in the listing
 
 RecordFormat require_log(const std::string& path) {
-  std::error_code ec;
-  const auto format = sniff_record_format(path);
+  const RecordFormat format = sniff_record_format(path);
   if (format == RecordFormat::RosBag) return format;  // a file, or a rosbag2 directory
-  if (!std::filesystem::is_regular_file(path, ec)) throw DataError({path, 0, ""}, "not a readable file (missing, or a directory)");
+  check_data_input(path);
   if (format == RecordFormat::Csv)
     throw DataError({path, 0, ""}, "not a log driftlab reads (a PX4 ULog, an ArduPilot DataFlash log, a ROS 1 bag, a "
                                    "ROS 2 bag (.db3, .mcap, or its directory)); CSV records are read by the other "

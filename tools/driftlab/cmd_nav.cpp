@@ -200,9 +200,9 @@ void simulated_nav(const NavOptions& o, CommandEnv& env) {
     throw ConfigError(Location{scenario_path.string(), 0, "fixes.period_s"},
                       "--fixes needs a scenario with position fixes (fixes.period_s > 0)");
   const fs::path out(o.out);
-  make_output_directory(out, "--out");
   // Every output planned before the drive is simulated, committed together at the end.
   OutputSet outputs({device_path, scenario_path, o.model});
+  outputs.make_directory(out, "--out");
   for (const auto* name : {"summary.json", "trajectory.csv", "errors.csv", "nav.svg", "nav_info.json"})
     outputs.plan(out / name, name);
   if (!o.no_rawlog) outputs.plan(out / "drive.rawlog", "drive.rawlog");
@@ -334,8 +334,8 @@ void record_nav(const NavOptions& o, CommandEnv& env) {
     throw ConfigError({o.model, 0, "channels"},
                       "nav needs the model of the yaw gyro (" + yaw_id.role() + "), which this model lacks");
   const fs::path out(o.out);
-  make_output_directory(out, "--out");
   OutputSet outputs({source, o.model});
+  outputs.make_directory(out, "--out");
   for (const auto* name : {"summary.json", "trajectory.csv", "errors.csv", "nav.svg", "nav_info.json"})
     outputs.plan(out / name, name);
 

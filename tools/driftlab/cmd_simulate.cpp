@@ -112,7 +112,12 @@ void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::De
     throw ConfigError({device_path.string(), 0, "imu"},
                       "--fleet simulates a whole-IMU device file (an imu: section, e.g. devices/imu3.yaml)");
   const std::filesystem::path dir(o.out);
-  make_output_directory(dir, "--out");
+  // The directory stays: each unit file is written atomically on its own.
+  {
+    OutputSet directory;
+    directory.make_directory(dir, "--out");
+    directory.commit();
+  }
   const devices::FleetSpread spread;
   const auto fleet = devices::plan_fleet(*device.imu, o.fleet, o.seed, spread);
   devices::SimulationOptions options;

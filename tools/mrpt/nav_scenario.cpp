@@ -1,11 +1,10 @@
 #include "tools/mrpt/nav_scenario.hpp"
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 #include "devices/yaml_fields.hpp"
 #include "framework/error.hpp"
+#include "framework/regular_file.hpp"
 #include "models/error_model/error_model.hpp"
 #include "framework/units.hpp"
 
@@ -56,11 +55,7 @@ NavScenario parse_nav_scenario(const std::string& yaml_text, const std::string& 
 }
 
 NavScenario load_nav_scenario(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ConfigError(Location{path.string(), 0, ""}, "cannot read the scenario file");
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_nav_scenario(text.str(), path.string());
+  return parse_nav_scenario(read_config_text(path, "scenario file"), path.string());
 }
 
 DriveRecord simulate_drive(const devices::DeviceDefinition& device, const NavScenario& scenario) {

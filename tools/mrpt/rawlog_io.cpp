@@ -10,16 +10,24 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <optional>
 #include <set>
 #include <sstream>
+
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
-#include "framework/atomic_file.hpp"
 #include "framework/error.hpp"
+#include "framework/output_set.hpp"
+#include "framework/regular_file.hpp"
+#include "framework/resources.hpp"
 
 namespace driftlab::mrpt_bridge {
 namespace {
@@ -50,7 +58,7 @@ std::string innermost_message(const std::string& text) {
 class PeekStream : public mrpt::io::CStream {
  public:
   explicit PeekStream(const fs::path& path) {
-    if (!fs::exists(path)) throw data_error(path, "no such rawlog file");
+    check_data_input(path);
     if (!file_.open(path.string())) throw data_error(path, "cannot open the rawlog file");
   }
   bool at_end() {
@@ -81,7 +89,53 @@ class PeekStream : public mrpt::io::CStream {
   std::optional<std::uint8_t> pending_;
 };
 
-// Reads the top-level objects of a rawlog one at a time.
+std::string index_text(std::size_t object, int in_frame) {
+  return "object " + std::to_string(object) +
+         (in_frame >= 0 ? " (observation " + std::to_string(in_frame) + " of its sensory frame)" : "") + ": ";
+}
+
+std::int64_t ticks_of(const mrpt::Clock::time_point& t) { return t.time_since_epoch().count(); }
+
+// The byte MRPT's deserializer stored in a bool: reading a bool holding anything but 0 or 1 is
+// undefined behaviour, so a flag is looked at as a byte before it is used.
+unsigned bool_byte(const bool& flag) {
+  unsigned char byte = 0;
+  std::memcpy(&byte, &flag, 1);
+  return byte;
+}
+
+// What the bridge reads of a deserialized object, checked before it is used (issue 28): every
+// presence flag of an IMU observation and the flags of an odometry action are 0 or 1, and IMU time
+// stamps are not before MRPT's clock epoch (1601; 100-ns ticks >= 0, so the difference of two never
+// overflows). DataError naming the file and the object otherwise.
+void check_object(const mrpt::serialization::CSerializable::Ptr& object, const fs::path& path, std::size_t k) {
+  const auto check_observation = [&](const mrpt::obs::CObservation::Ptr& obs, int j) {
+    const auto imu = std::dynamic_pointer_cast<CObservationIMU>(obs);
+    if (!imu) return;
+    for (std::size_t f = 0; f < imu->dataIsPresent.size(); ++f)
+      if (const unsigned b = bool_byte(imu->dataIsPresent[f]); b > 1)
+        throw data_error(path, index_text(k, j) + "the presence flag of IMU field " + std::to_string(f) + " is byte " +
+                                   std::to_string(b) + "; expected 0 or 1 (malformed rawlog)");
+    if (ticks_of(imu->timestamp) < 0)
+      throw data_error(path, index_text(k, j) + "IMU time stamp " + std::to_string(ticks_of(imu->timestamp)) +
+                                 " is before the MRPT clock's epoch (1601-01-01; expected 100-ns ticks >= 0)");
+  };
+  if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(object)) {
+    int j = 0;
+    for (const auto& obs : *sf) check_observation(obs, j++);
+  } else if (auto acts = std::dynamic_pointer_cast<mrpt::obs::CActionCollection>(object)) {
+    for (std::size_t a = 0; a < acts->size(); ++a)
+      if (auto odo = std::dynamic_pointer_cast<mrpt::obs::CActionRobotMovement2D>(acts->get(a)))
+        for (const bool* flag : {&odo->hasVelocities, &odo->hasEncodersInfo})
+          if (const unsigned b = bool_byte(*flag); b > 1)
+            throw data_error(path, index_text(k, -1) + "an odometry flag of action " + std::to_string(a) + " is byte " +
+                                       std::to_string(b) + "; expected 0 or 1 (malformed rawlog)");
+  } else if (auto obs = std::dynamic_pointer_cast<mrpt::obs::CObservation>(object)) {
+    check_observation(obs, -1);
+  }
+}
+
+// Reads the top-level objects of a rawlog one at a time, each checked (check_object).
 class ObjectReader {
  public:
   explicit ObjectReader(const fs::path& path) : path_(path), stream_(path) {}
@@ -96,6 +150,7 @@ class ObjectReader {
       auto archive = mrpt::serialization::archiveFrom(stream_);
       auto object = archive.ReadObject();
       if (!object) throw data_error(path_, where() + "a null object");
+      check_object(object, path_, index_);
       return object;
     } catch (const DataError&) {
       throw;
@@ -118,21 +173,89 @@ class ObjectReader {
   std::size_t index_ = 0, count_ = 0;
 };
 
-// Writes a gzip'ed rawlog to a temporary file in the target directory and renames it into place.
-class AtomicRawlogWriter {
- public:
-  explicit AtomicRawlogWriter(const fs::path& path)
-      : path_(path), temp_(path.string() + ".tmp" + std::to_string(::getpid())) {
-    if (!path.parent_path().empty() && !fs::is_directory(path.parent_path()))
-      throw data_error(path, "the output directory does not exist");
-    if (!out_.open(temp_.string())) throw data_error(path, "cannot write the rawlog (temporary file " + temp_.string() + ")");
+// MRPT's deserializer trusts the file: a malformed object can crash it (a null dereference) and a
+// length field can make it allocate gigabytes before anything fails. So a rawlog is first read
+// whole in a child process, with its address space limited to what it holds now plus
+// kDeserializeBytes, reporting the index of each object it starts and, when the read fails, the
+// message. A crash there, or a failed read (running out of that memory: std::bad_alloc), becomes a
+// DataError naming the object; only a file that passed is read here.
+constexpr double kDeserializeBytes = 1024.0 * 1024.0 * 1024.0;  // for one object at a time
+
+void read_in_child_first(const fs::path& path) {
+  int pipe_fds[2];
+  if (::pipe(pipe_fds) != 0) return;  // no guard available: read as before
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(pipe_fds[0]);
+    ::close(pipe_fds[1]);
+    return;
   }
-  ~AtomicRawlogWriter() {
-    if (!committed_) {
-      out_.close();
-      std::error_code ec;
-      fs::remove(temp_, ec);
+  constexpr std::uint64_t kMessage = ~std::uint64_t{0};  // then the text of the child's DataError
+  if (pid == 0) {  // the child: no destructors, no atexit handlers, no stdio flush (_exit)
+    ::close(pipe_fds[0]);
+    long pages = 0;
+    if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+      if (std::fscanf(f, "%ld", &pages) != 1) pages = 0;
+      std::fclose(f);
     }
+    const double now = static_cast<double>(pages) * static_cast<double>(::sysconf(_SC_PAGESIZE));
+    const auto limit = static_cast<rlim_t>(now + std::min(kDeserializeBytes, memory_limit_bytes()));
+    const rlimit as{limit, limit};
+    ::setrlimit(RLIMIT_AS, &as);
+    try {
+      ObjectReader reader(path);
+      for (;;) {
+        const std::uint64_t index = reader.count();
+        if (::write(pipe_fds[1], &index, sizeof index) != sizeof index) ::_exit(0);
+        if (!reader.next()) break;
+      }
+    } catch (const DataError& e) {  // ObjectReader's, for every failure (std::bad_alloc included): sent after kMessage
+      const std::uint64_t marker = kMessage;
+      const std::string text = e.what();
+      if (::write(pipe_fds[1], &marker, sizeof marker) == sizeof marker)
+        for (std::size_t done = 0; done < text.size();) {
+          const auto n = ::write(pipe_fds[1], text.data() + done, text.size() - done);
+          if (n <= 0) break;
+          done += static_cast<std::size_t>(n);
+        }
+    } catch (...) {  // anything else: the read here reports it
+    }
+    ::_exit(0);
+  }
+  ::close(pipe_fds[1]);
+  std::uint64_t index = 0, last = 0;
+  std::string message;
+  while (::read(pipe_fds[0], &index, sizeof index) == sizeof index) {
+    if (index != kMessage) {
+      last = index;
+      continue;
+    }
+    char buffer[4096];
+    for (ssize_t n; (n = ::read(pipe_fds[0], buffer, sizeof buffer)) > 0;) message.append(buffer, static_cast<std::size_t>(n));
+    break;
+  }
+  ::close(pipe_fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  const std::string object = "object " + std::to_string(last) + ": ";
+  if (WIFSIGNALED(status))
+    throw data_error(path, object + "MRPT's deserializer crashed on this object (signal " +
+                               std::to_string(WTERMSIG(status)) + "): not a valid MRPT object (malformed rawlog)");
+  if (!message.empty()) {  // the child's DataError (ObjectReader names the object), without "file: "
+    const std::string prefix = path.string() + ": ";
+    throw data_error(path, message.rfind(prefix, 0) == 0 ? message.substr(prefix.size()) : message);
+  }
+}
+
+// Writes a gzip'ed rawlog through an OutputSet of one file (framework/output_set.hpp): the checks
+// of every output, its hidden temporary file, nothing left behind unless committed.
+class RawlogWriter {
+ public:
+  RawlogWriter(const fs::path& path, std::vector<fs::path> inputs) : output_(std::move(inputs)) {
+    output_.plan(path, "");
+    const fs::path temp = output_.stage_path(path);
+    if (!out_.open(temp.string())) throw data_error(path, "cannot write the rawlog (temporary file " + temp.string() + ")");
   }
   void write(const mrpt::serialization::CSerializable& object) {
     auto archive = mrpt::serialization::archiveFrom(out_);
@@ -140,19 +263,13 @@ class AtomicRawlogWriter {
   }
   void commit() {
     out_.close();
-    std::error_code ec;
-    fs::rename(temp_, path_, ec);
-    if (ec) throw data_error(path_, "cannot rename the temporary rawlog into place: " + ec.message());
-    committed_ = true;
+    output_.commit();
   }
 
  private:
-  fs::path path_, temp_;
+  OutputSet output_;  // declared first: destroyed after the stream is closed
   mrpt::io::CFileGZOutputStream out_;
-  bool committed_ = false;
 };
-
-std::int64_t ticks_of(const mrpt::Clock::time_point& t) { return t.time_since_epoch().count(); }
 
 mrpt::Clock::time_point time_point_of(double start_unix_s, double t_s) {
   const auto start = static_cast<std::int64_t>(std::llround(start_unix_s * kTicksPerSecond)) + kUnixEpochTicks;
@@ -170,11 +287,6 @@ struct Collected {
   double pending_speed = 0.0;
 };
 
-std::string index_text(std::size_t object, int in_frame) {
-  return "object " + std::to_string(object) +
-         (in_frame >= 0 ? " (observation " + std::to_string(in_frame) + " of its sensory frame)" : "") + ": ";
-}
-
 std::string field_name(int field) {
   for (const auto& c : imu_columns())
     if (c.field == field) return c.column;
@@ -189,6 +301,8 @@ struct Walker {
 
   template <class OnObs, class OnAct, class OnObject>
   void walk(const fs::path& path, OnObs&& on_observation, OnAct&& on_action, OnObject&& on_object) {
+    check_data_input(path);
+    read_in_child_first(path);
     ObjectReader reader(path);
     while (auto object = reader.next()) {
       const std::size_t k = reader.index();
@@ -308,6 +422,7 @@ const Eigen::VectorXd& ImuTable::values(const std::string& column) const {
 
 ImuTable read_imu_csv(const fs::path& path) {
   // The header decides the mapping: every column must be one the bridge knows.
+  check_data_input(path);
   std::ifstream in(path);
   if (!in) throw DataError(Location{path.string(), 0, ""}, "cannot open the CSV file");
   std::string header;
@@ -463,13 +578,20 @@ ImuTable import_rawlog(const fs::path& path, const std::string& sensor_label, Ra
 void export_rawlog(const ImuTable& table, const fs::path& path) {
   const Eigen::Index n = table.time_s.size();
   if (n == 0) throw data_error(path, "nothing to export: the IMU record is empty");
+  constexpr double kMaxTicks = 4e18;  // 100-ns ticks since 1601: about year 14 000, well inside int64
+  for (const double t : {table.start_unix_s + table.time_s[0], table.start_unix_s + table.time_s[n - 1]})
+    if (!(t * kTicksPerSecond + static_cast<double>(kUnixEpochTicks) >= 0.0 &&
+          t * kTicksPerSecond + static_cast<double>(kUnixEpochTicks) <= kMaxTicks))
+      throw ConfigError(Location{path.string(), 0, "--start-unix"},
+                        "the time stamps (start Unix time plus t_s) fall outside MRPT's clock; expected finite "
+                        "times from 1601 to about year 14000");
   std::vector<std::pair<mrpt::obs::TIMUDataIndex, const Eigen::VectorXd*>> fields;
   for (const auto& col : imu_columns())
     if (table.has(col.column)) fields.emplace_back(static_cast<mrpt::obs::TIMUDataIndex>(col.field), &table.values(col.column));
   const bool odometry = table.has_odometry();
   const bool speed = table.has("odom_speed_mps");
 
-  AtomicRawlogWriter writer(path);
+  RawlogWriter writer(path, {});
   mrpt::obs::CActionRobotMovement2D::TMotionModelOptions motion;  // MRPT's default Gaussian model
   for (Eigen::Index i = 0; i < n; ++i) {
     auto obs = CObservationIMU::Create();
@@ -524,7 +646,7 @@ std::string imu_field_name(int field) {
 
 CompensateStats compensate_rawlog(const fs::path& in, const fs::path& out,
                                   const std::vector<FieldCorrection>& corrections, const std::string& sensor_label) {
-  ensure_not_an_input(out, {in});
+  RawlogWriter writer(out, {in});  // checked (and its temporary file made) before the input is read
   if (corrections.empty()) throw ConfigError(Location{in.string(), 0, ""}, "nothing to compensate: no field correction given");
   std::set<int> corrected;
   for (const auto& c : corrections)
@@ -568,7 +690,6 @@ CompensateStats compensate_rawlog(const fs::path& in, const fs::path& out,
     ++result.compensated;
   };
 
-  AtomicRawlogWriter writer(out);
   ObjectReader reader(in);
   while (auto object = reader.next()) {
     const std::size_t k = reader.index();

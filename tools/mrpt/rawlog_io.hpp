@@ -5,7 +5,11 @@
 //   - actions/sensory-frame: CActionCollection, CSensoryFrame, CActionCollection, ...
 //   - observations-only:     CObservation, CObservation, ...
 // Every top-level object is numbered from 0 in file order; errors name the file and that index
-// ("object 12"), plus the observation's position inside a sensory frame where it applies.
+// ("object 12"), plus the observation's position inside a sensory frame where it applies. MRPT's
+// deserializer trusts the file, so every reader below first reads the rawlog in a child process
+// whose address space is limited (1 GiB beyond what it holds): a crash inside MRPT or a length
+// field that would allocate gigabytes is a DataError naming the object, not a crash or a
+// runaway allocation of this process (the file is read twice).
 // Files are read through CFileGZInputStream (gzip'ed or plain) and written gzip'ed.
 //
 // CSV columns (SI, unit in the name; DESIGN.md §5): t_s (s since the first IMU observation),
@@ -78,15 +82,17 @@ void write_imu_csv(const ImuTable& table, const std::filesystem::path& path);
 
 // IMU observations of a rawlog (of `sensor_label`, or of the only IMU label present; more than one
 // label without a choice is a ConfigError listing them). Throws DataError naming file and object
-// index on a malformed or truncated file, an IMU observation without IMU_WZ, or one lacking a field
-// the first one has. `stats` (optional) receives counts of the whole file.
+// index on a malformed or truncated file (also: a presence or odometry flag byte other than 0/1, an
+// IMU time stamp before MRPT's 1601 epoch), an IMU observation without IMU_WZ, or one lacking a
+// field the first one has; a path that is not a regular file is refused before it is opened. `stats` (optional) receives counts of the whole file.
 ImuTable import_rawlog(const std::filesystem::path& path, const std::string& sensor_label = "",
                        RawlogStats* stats = nullptr);
 
 // Writes CObservationIMU objects (IMU_WZ rad/s, IMU_TEMPERATURE degC, the other columns present,
 // sensor label, time stamps); with odometry columns, as action/observation pairs (a
 // CActionCollection holding a CActionRobotMovement2D, then a CSensoryFrame with the IMU
-// observation), else observations-only. Written to a temporary file and renamed into place.
+// observation), else observations-only. Written through an OutputSet (output_set.hpp). ConfigError
+// when the time stamps (start_unix_s + t_s) fall outside MRPT's clock (before 1601 or not finite).
 void export_rawlog(const ImuTable& table, const std::filesystem::path& path);
 
 // Counts of a rawlog (reads the whole file; DataError as import_rawlog).

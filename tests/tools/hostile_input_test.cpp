@@ -1,0 +1,220 @@
+// Hostile input on the newer surfaces (issue 28), the commands without MRPT (the rawlog and nav
+// cases are in mrpt_bridge_test): outputs are regular files, always; inputs are checked before they
+// are read; models are validated as physics. Every case ends with exit 2 or 3, a message naming the
+// file and what was expected, and nothing new left behind. FIFOs and device nodes are made in the
+// scratch directory (never the system's /dev/null).
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "tests/tools/cli_harness.hpp"
+
+namespace driftlab {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using namespace testing_cli;
+
+void write(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+// 600 samples at 1 Hz: rate (deg/s) with a temperature trend, temperature ramping 20 -> 50 degC.
+std::string oven_rows(bool zero_rate = false, bool truth = false) {
+  std::string text = std::string("t_s,rate_dps,temp_c") + (truth ? ",true_rate_dps" : "") + "\n";
+  char line[200];
+  for (int i = 0; i < 600; ++i) {
+    const double temp = 20.0 + 0.05 * i;
+    const double true_rate = truth ? 10.0 * std::sin(0.05 * i) : 0.0;
+    const double rate = zero_rate ? 0.0 : true_rate + 0.01 + 2e-4 * (temp - 20.0) + 1e-4 * std::sin(7.3 * i * i);
+    if (truth) std::snprintf(line, sizeof line, "%d,%.9f,%.6f,%.9f\n", i, rate, temp, true_rate);
+    else std::snprintf(line, sizeof line, "%d,%.9f,%.6f\n", i, rate, temp);
+    text += line;
+  }
+  return text;
+}
+
+class Hostile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = scratch_dir(std::string("hostile_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    write(dir_ / "oven.csv", oven_rows());
+  }
+  void TearDown() override { fs::remove_all(dir_); }  // FIFOs and device nodes do not stay behind
+  std::string p(const std::string& name) const { return (dir_ / name).string(); }
+  void make_fifo(const std::string& name) const { ASSERT_EQ(::mkfifo(p(name).c_str(), 0600), 0); }
+  // A calibration model of oven.csv.
+  void make_model() const {
+    const auto r = run_driftlab("calibrate --data " + p("oven.csv") + " --bin 10 --out " + p("model.json"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  // Every entry of the scratch directory, for "nothing new is left".
+  std::vector<std::string> entries() const {
+    std::vector<std::string> out;
+    for (const auto& e : fs::recursive_directory_iterator(dir_)) out.push_back(e.path().string());
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+  fs::path dir_;
+};
+
+TEST_F(Hostile, AnOutputThatIsAFifoOrADeviceNodeIsRefusedAndLeftAsItWas) {
+  make_model();
+  make_fifo("fifo");
+  fs::create_symlink(p("fifo"), p("link"));
+  // A character device with /dev/null's numbers, made here: the command must not replace it.
+  const bool device = ::mknod(p("null").c_str(), S_IFCHR | 0666, ::makedev(1, 3)) == 0;
+  std::vector<std::string> targets{"fifo", "link"};
+  if (device) targets.push_back("null");
+  for (const auto& target : targets) {
+    const std::string out = p(target);
+    const std::vector<std::string> commands{
+        "allan --data " + p("oven.csv") + " --out " + out,
+        "allan --data " + p("oven.csv") + " --out " + p("a.csv") + " --json " + out,
+        "compensate --data " + p("oven.csv") + " --model " + p("model.json") + " --out " + out,
+        "calibrate --data " + p("oven.csv") + " --bin 10 --out " + out,
+        "export --model " + p("model.json") + " --format px4 --out " + out,
+        "simulate --device fmvmg --duration 10 --out " + out,
+    };
+    const auto before = entries();
+    for (const auto& command : commands) {
+      const auto r = run_driftlab(command, "DRIFTLAB_DEVICES_DIR=" + std::string(DRIFTLAB_SOURCE_DIR) + "/devices");
+      EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
+      EXPECT_THAT(r.err, HasSubstr(out + ":")) << command;
+      EXPECT_THAT(r.err, HasSubstr("outputs are written only as regular files")) << command;
+      EXPECT_EQ(entries(), before) << command;
+    }
+  }
+  EXPECT_TRUE(fs::is_fifo(fs::symlink_status(p("fifo"))));
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(p("link"))));
+  if (device) EXPECT_TRUE(fs::is_character_file(fs::symlink_status(p("null"))));
+}
+
+TEST_F(Hostile, DirectoriesMadeForAFailedRunAreRemoved) {
+  write(dir_ / "smooth.yaml", R"(format: driftlab-pipeline/1
+inputs: {rate: rate}
+steps:
+  - name: smooth
+    plugin: filter/kalman
+    inputs: {signal: rate}
+outputs: {smoothed: smooth.signal}
+)");
+  write(dir_ / "nan.csv", "t_s,rate_dps,temp_c\n0,0.1,20\n1,nan,20\n2,0.1,20\n");
+  const auto before = entries();
+  // The data fails after the output directory was made.
+  const std::vector<std::string> commands{
+      "calibrate --data " + p("nan.csv") + " --bin 1 --out " + p("m.json") + " --report " + p("new/report"),
+      "compare --data " + p("nan.csv") + " --pipeline " + p("smooth.yaml") + " --out " + p("new/compare"),
+      "run --pipeline " + p("smooth.yaml") + " --data " + p("nan.csv") + " --out " + p("new/run"),
+  };
+  for (const auto& command : commands) {
+    const auto r = run_driftlab(command);
+    EXPECT_EQ(r.exit_code, 3) << command << "\n" << r.err;
+    EXPECT_EQ(entries(), before) << command << "\n" << r.err;
+  }
+}
+
+TEST_F(Hostile, InputsThatAreNotRegularFilesAreRefusedBeforeTheyAreRead) {
+  make_model();
+  make_fifo("fifo");
+  const std::string fifo = p("fifo");
+  // "timeout": a reader that opens the FIFO blocks forever (no writer); the test must still end.
+  const std::vector<std::tuple<std::string, int, std::string>> cases{
+      {"compensate --data " + p("oven.csv") + " --model " + fifo + " --out " + p("c.csv"), 2,
+       "cannot read the calibration model file: it is a FIFO (named pipe); expected a regular file"},
+      {"export --model " + fifo + " --format px4 --out " + p("x.params"), 2, "cannot read the calibration model file"},
+      {"run --pipeline " + fifo + " --data " + p("oven.csv") + " --out " + p("run"), 2,
+       "cannot read the pipeline file: it is a FIFO"},
+      {"compare --data " + p("oven.csv") + " --pipeline " + fifo + " --out " + p("cmp"), 2,
+       "cannot read the pipeline file: it is a FIFO"},
+      {"simulate --device " + fifo + " --duration 10 --out " + p("s.csv"), 2, "cannot read the device file: it is a FIFO"},
+      {"allan --data " + fifo + " --out " + p("a.csv"), 3, "is a FIFO (named pipe); expected a regular file"},
+      {"calibrate --data " + fifo + " --bin 10 --out " + p("m.json"), 3, "is a FIFO (named pipe); expected a regular file"},
+      {"log info " + fifo, 3, "is a FIFO (named pipe); expected a regular file"},
+  };
+  const auto before = entries();
+  for (const auto& [command, code, message] : cases) {
+    const auto r = run_driftlab(command, "timeout 20");
+    EXPECT_EQ(r.exit_code, code) << command << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr(fifo)) << command;
+    EXPECT_THAT(r.err, HasSubstr(message)) << command;
+    EXPECT_EQ(entries(), before) << command;
+  }
+}
+
+TEST_F(Hostile, ASmallTextFormatAboveItsSizeLimitIsRefusedUnread) {
+  std::ofstream(p("huge.json")) << "{";
+  fs::resize_file(p("huge.json"), (std::uintmax_t{64} << 20) + 1);  // sparse: no disk used
+  std::ofstream(p("huge.yaml")) << "#";
+  fs::resize_file(p("huge.yaml"), (std::uintmax_t{64} << 20) + 1);
+  for (const auto& command :
+       {"compensate --data " + p("oven.csv") + " --model " + p("huge.json") + " --out " + p("c.csv"),
+        "run --pipeline " + p("huge.yaml") + " --data " + p("oven.csv") + " --out " + p("run")}) {
+    const auto r = run_driftlab(command, "timeout 20");
+    EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr("has 67108865 bytes; expected at most 64 MiB")) << command;
+  }
+}
+
+TEST_F(Hostile, CalibrateOnARateThatIgnoresAMovingTruthWritesNoModel) {
+  write(dir_ / "zero.csv", oven_rows(/*zero_rate=*/true, /*truth=*/true));
+  const auto r = run_driftlab("calibrate --data " + p("zero.csv") + " --bin 10 --out " + p("m.json"));
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_THAT(r.err, HasSubstr(p("zero.csv") + ": scale_factor.polynomial_per_k_j: the calibration records give a "
+                                               "model that is not physical: the scale factor is "));
+  EXPECT_THAT(r.err, HasSubstr("expected 0.1 to 10 over the valid range"));  // it was 0 (2e-15)
+  EXPECT_FALSE(fs::exists(p("m.json")));
+  // The same record with a rate that follows the truth calibrates.
+  write(dir_ / "moving.csv", oven_rows(false, true));
+  const auto ok = run_driftlab("calibrate --data " + p("moving.csv") + " --bin 10 --out " + p("m.json"));
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+}
+
+TEST_F(Hostile, AnUnphysicalModelIsRefusedByEveryReaderWithFileAndKey) {
+  make_model();
+  std::string text = read_text(p("model.json"));
+  const auto at = text.find("\"reference_temp_c\": ");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, text.find(',', at) - at, "\"reference_temp_c\": 1e300");
+  write(dir_ / "hot.json", text);
+  const std::string expected = p("hot.json") + ": channels[0].model.reference_temp_c: expected a temperature within";
+  for (const auto& command : {"compensate --data " + p("oven.csv") + " --model " + p("hot.json") + " --out " + p("c.csv"),
+                              "export --model " + p("hot.json") + " --format ardupilot --out " + p("x.parm")}) {
+    const auto r = run_driftlab(command);
+    EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr(expected)) << command;
+    EXPECT_FALSE(fs::exists(p("c.csv")) || fs::exists(p("x.parm"))) << command;
+  }
+}
+
+TEST_F(Hostile, FirmwareExportsWriteOnlyRealThirtyTwoValues) {
+  make_model();
+  // A finite bias of 1e300 rad/s (a valid model: finite everywhere) is no REAL32 parameter.
+  const std::string text = std::regex_replace(read_text(p("model.json")),
+                                              std::regex("(\"polynomial_rad_s_per_k_i\": \\[\\s*)[^,\\]\\s]+"), "$011e300");
+  ASSERT_NE(text.find("1e300"), std::string::npos);
+  write(dir_ / "big.json", text);
+  for (const auto& format : {"px4", "ardupilot"}) {
+    const std::string command = "export --model " + p("big.json") + " --format " + format + " --out " + p("x.params");
+    const auto r = run_driftlab(command);
+    EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr("is not a finite REAL32 number")) << command;
+    EXPECT_FALSE(fs::exists(p("x.params"))) << command;
+  }
+}
+
+}  // namespace
+}  // namespace driftlab
