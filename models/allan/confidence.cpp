@@ -321,6 +321,8 @@ std::vector<Estimate> estimate(Kind kind, const Eigen::Ref<const Eigen::VectorXd
   for (const auto& d : devs) {
     Estimate e{d.m, d.tau, d.dev, 0.0, 0.0, d.terms, 0, 0.0};
     e.alpha = identify_noise(angle, d.m, kind, input).alpha;
+    for (const auto& shorter : out)
+      if (shorter.m < d.m) e.alpha = std::min(e.alpha, shorter.alpha);
     e.edf = equivalent_dof(kind, e.alpha, n, d.m);
     const Interval bounds = chi_square_interval(d.dev, e.edf, confidence);
     e.dev_lo = bounds.lo;
