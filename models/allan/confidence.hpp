@@ -116,4 +116,16 @@ std::vector<Estimate> estimate(Kind kind, const Eigen::Ref<const Eigen::VectorXd
                                double tau0, InputType input, std::span<const std::size_t> factors,
                                double confidence = kDefaultConfidence);
 
+// The same for a record of bursts (framework/sampling.hpp), each burst's angle integrated on its own
+// and spaced tau0 like the others. No difference spans a gap: at each factor the kind's squared
+// differences of every burst long enough for a term are summed and divided by their total number,
+// sigma^2 = sum_b T_b sigma_b^2 / sum_b T_b (T_b the terms of burst b), which is the one-record
+// estimator with the differences across gaps left out. The noise type at each factor is the median
+// of the types identified on those bursts (then held from rising with tau as above); the bursts are
+// taken as independent, so their chi-square variables add: edf = sum_b edf(kind, alpha, n_b, m).
+// `terms` is sum_b T_b. Throws DataError when no burst has a term at a factor.
+std::vector<Estimate> estimate_bursts(Kind kind, std::span<const Eigen::VectorXd> angles, double tau0,
+                                      InputType input, std::span<const std::size_t> factors,
+                                      double confidence = kDefaultConfidence);
+
 }  // namespace driftlab::allan

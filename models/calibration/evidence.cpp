@@ -10,8 +10,7 @@ std::optional<AllanFigures> allan_figures(const Eigen::VectorXd& error, double f
   try {
     const auto a = allan::analyze_rate(error, fs, {.fit_terms = false});
     AllanFigures f;
-    f.bias_instability_rad_s = a.bias_instability.value;
-    f.min_adev_tau_s = a.bias_instability.tau_s;
+    f.bias_instability = a.bias_instability;
     f.arw_rad_sqrt_s = a.arw_rad_sqrt_s;
     return f;
   } catch (const Error&) {
