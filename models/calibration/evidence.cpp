@@ -30,6 +30,12 @@ std::optional<FittedNoise> fit_noise(const Eigen::VectorXd& error, double fs) {
     out.bias_instability_rad_s = fit[allan::Term::B].value;
     out.rate_random_walk_rad_s_sqrt_s = fit[allan::Term::K].value;
     out.rate_random_walk_sigma = fit[allan::Term::K].sigma;
+    const auto bound = [&](allan::Term t) {
+      return fit[t].resolved ? std::nullopt : std::optional<double>(fit[t].high);
+    };
+    out.arw_upper = bound(allan::Term::N);
+    out.bias_instability_upper = bound(allan::Term::B);
+    out.rate_random_walk_upper = bound(allan::Term::K);
     return out;
   } catch (const Error&) {
     return std::nullopt;

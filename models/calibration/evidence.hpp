@@ -23,11 +23,13 @@ struct AllanFigures {
 std::optional<AllanFigures> allan_figures(const Eigen::VectorXd& error_rad_s, double sample_rate_hz);
 
 // N and K (rate random walk) fitted to the Allan curve (IEEE-952 five-term fit), for the model's
-// noise terms (Kalman stage, Kalibr export). Empty when the fit is impossible.
+// noise terms (Kalman stage, Kalibr export). Empty when the fit is impossible. A term the fit does
+// not resolve (allan::TermEstimate::resolved) has its bound in *_upper (models/allan/noise_fit.hpp).
 struct FittedNoise {
   double arw_rad_sqrt_s = 0.0, arw_sigma = 0.0;
   double bias_instability_rad_s = 0.0;
   double rate_random_walk_rad_s_sqrt_s = 0.0, rate_random_walk_sigma = 0.0;
+  std::optional<double> arw_upper, bias_instability_upper, rate_random_walk_upper;  // not resolved: value < this
 };
 std::optional<FittedNoise> fit_noise(const Eigen::VectorXd& error_rad_s, double sample_rate_hz);
 
