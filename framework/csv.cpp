@@ -15,7 +15,7 @@
 #include "framework/imu.hpp"
 #include "framework/regular_file.hpp"
 #include "framework/resources.hpp"
-#include "framework/signal.hpp"
+#include "framework/sampling.hpp"
 #include "framework/units.hpp"
 
 namespace driftlab {
@@ -401,16 +401,17 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
                             std::to_string(line_of_row[i - 1]) +
                             " is below 1 ns (a sample rate above 1 GHz; its rates and deviations would overflow)");
     }
-    if (options.max_gap_factor > 0.0 && rows > 2) {
-      const double median = signal::median_step(Eigen::Map<const Eigen::VectorXd>(tv.data(), static_cast<Eigen::Index>(rows)));
-      const double limit = options.max_gap_factor * median;
-      for (std::size_t i = 1; i < rows; ++i)
-        if (tv[i] - tv[i - 1] > limit)
-          throw DataError({file, line_of_row[i], time_mapping->column},
-                          "gap of " + std::to_string(tv[i] - tv[i - 1]) + " s after line " +
-                              std::to_string(line_of_row[i - 1]) + " (median step " + std::to_string(median) +
-                              " s; allowed up to " + std::to_string(options.max_gap_factor) +
-                              " x median, see --max-gap)");
+    if (options.max_gap_factor > 0.0) {
+      const auto facts = sampling::facts_of(Eigen::Map<const Eigen::VectorXd>(tv.data(), static_cast<Eigen::Index>(rows)),
+                                            options.max_gap_factor);
+      if (!facts.evenly_sampled()) {
+        const auto i = static_cast<std::size_t>(facts.first_gap_index);
+        throw DataError({file, line_of_row[i + 1], time_mapping->column},
+                        "gap of " + std::to_string(facts.first_gap_s) + " s after line " +
+                            std::to_string(line_of_row[i]) + " (median step " + std::to_string(facts.median_step_s) +
+                            " s; allowed up to " + std::to_string(options.max_gap_factor) +
+                            " x median, see --max-gap)");
+      }
     }
   } else {
     for (std::size_t i = 0; i < rows; ++i) time[static_cast<Eigen::Index>(i)] = static_cast<double>(i) / options.sample_rate_hz;

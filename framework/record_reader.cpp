@@ -11,6 +11,7 @@
 #include "framework/regular_file.hpp"
 #include "framework/ros_imu.hpp"
 #include "framework/rosbag.hpp"
+#include "framework/sampling.hpp"
 #include "framework/signal.hpp"
 #include "framework/ulog.hpp"
 #include "framework/ulog_imu.hpp"
@@ -53,16 +54,13 @@ TimeSeries mapped_record(const TimeSeries& imu_record, const CsvReadOptions& opt
 }
 
 void check_gaps(const TimeSeries& record, double max_gap_factor, const std::string& file) {
-  const auto& t = record.time();
-  if (max_gap_factor <= 0.0 || t.size() <= 2) return;
-  const double median = signal::median_step(t);
-  const double limit = max_gap_factor * median;
-  for (Eigen::Index i = 1; i < t.size(); ++i)
-    if (t[i] - t[i - 1] > limit)
-      throw DataError({file, 0, "time"}, "gap of " + std::to_string(t[i] - t[i - 1]) + " s after t = " +
-                                             std::to_string(t[i - 1]) + " s (median step " + std::to_string(median) +
-                                             " s; allowed up to " + std::to_string(max_gap_factor) +
-                                             " x median, see --max-gap; 0 allows gaps)");
+  if (max_gap_factor <= 0.0) return;
+  const auto facts = sampling::facts_of(record.time(), max_gap_factor);
+  if (!facts.evenly_sampled())
+    throw DataError({file, 0, "time"}, "gap of " + std::to_string(facts.first_gap_s) + " s after t = " +
+                                           std::to_string(facts.first_gap_time_s) + " s (median step " +
+                                           std::to_string(facts.median_step_s) + " s; allowed up to " +
+                                           std::to_string(max_gap_factor) + " x median, see --max-gap; 0 reads gaps)");
 }
 
 using LogReader = TimeSeries (*)(const std::filesystem::path&, const LogSelection&, std::vector<std::string>*);

@@ -18,7 +18,8 @@
 //                   sample_rate_hz > 0 is a ConfigError (a log carries its own time stamps).
 //   required_roles  each must be present (DataError naming the channels the log has).
 //   max_gap_factor  a time step of the record above factor x its median step is a DataError (0
-//                   allows gaps; flight logs with dropouts need it).
+//                   reads gaps as they are; flight logs with dropouts need it. The analyses that
+//                   assume even sampling still find the gaps: framework/sampling.hpp).
 #pragma once
 
 #include <filesystem>

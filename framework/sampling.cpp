@@ -1,11 +1,20 @@
 #include "framework/sampling.hpp"
 
 #include <algorithm>
-#include <vector>
+#include <cstdio>
 
 #include "framework/signal.hpp"
 
 namespace driftlab::sampling {
+namespace {
+
+std::string number(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", x);
+  return text;
+}
+
+}  // namespace
 
 double mean_rate_hz(const Eigen::VectorXd& time_s) {
   const Eigen::Index n = time_s.size();
@@ -17,7 +26,9 @@ double mean_rate_hz(const Eigen::VectorXd& time_s) {
 Facts facts_of(const Eigen::VectorXd& time_s, double gap_factor) {
   Facts f;
   f.samples = time_s.size();
+  f.gap_factor = gap_factor;
   f.mean_rate_hz = mean_rate_hz(time_s);
+  if (time_s.size() > 0) f.segments.push_back({0, time_s.size()});
   if (time_s.size() < 2) return f;
   f.median_step_s = signal::median_step(time_s);
   if (time_s.size() < 3) return f;
@@ -25,8 +36,14 @@ Facts facts_of(const Eigen::VectorXd& time_s, double gap_factor) {
   std::vector<double> starts{time_s[0]};
   for (Eigen::Index k = 0; k + 1 < time_s.size(); ++k) {
     if (time_s[k + 1] - time_s[k] <= limit) continue;
-    if (f.gaps++ == 0) f.first_gap_time_s = time_s[k];
+    if (f.gaps++ == 0) {
+      f.first_gap_time_s = time_s[k];
+      f.first_gap_index = k;
+      f.first_gap_s = time_s[k + 1] - time_s[k];
+    }
     starts.push_back(time_s[k + 1]);
+    f.segments.back().samples = k + 1 - f.segments.back().first;
+    f.segments.push_back({k + 1, time_s.size() - (k + 1)});
   }
   for (std::size_t i = 1; i < starts.size(); ++i) {
     const double period = starts[i] - starts[i - 1];
@@ -34,6 +51,50 @@ Facts facts_of(const Eigen::VectorXd& time_s, double gap_factor) {
     f.longest_period_s = std::max(f.longest_period_s, period);
   }
   return f;
+}
+
+double rate_within_segments_hz(const Eigen::VectorXd& time_s, const Facts& facts) {
+  double span = 0.0, steps = 0.0;
+  for (const auto& s : facts.segments) {
+    if (s.samples < 2) continue;
+    span += time_s[s.first + s.samples - 1] - time_s[s.first];
+    steps += static_cast<double>(s.samples - 1);
+  }
+  return span > 0.0 ? steps / span : 0.0;
+}
+
+std::string describe(const Facts& facts, const Eigen::VectorXd& time_s) {
+  const double fs = rate_within_segments_hz(time_s, facts);
+  switch (facts.layout()) {
+    case Layout::Even: return "evenly sampled at " + number(fs) + " Hz";
+    case Layout::RegularBursts: {
+      Eigen::Index fewest = facts.segments.front().samples, most = fewest;
+      for (const auto& s : facts.segments) {
+        fewest = std::min(fewest, s.samples);
+        most = std::max(most, s.samples);
+      }
+      const std::string count = fewest == most ? std::to_string(fewest) : std::to_string(fewest) + " .. " + std::to_string(most);
+      return std::to_string(facts.segments.size()) + " regular bursts of " + count + " samples at " + number(fs) +
+             " Hz, one every " + number(facts.shortest_period_s) + " .. " + number(facts.longest_period_s) + " s";
+    }
+    case Layout::Irregular: break;
+  }
+  if (facts.gaps == 1) return "irregular: one gap, no regular bursts";
+  return "irregular: " + std::to_string(facts.gaps) + " gaps, not at a regular period (" + number(facts.shortest_period_s) +
+         " .. " + number(facts.longest_period_s) + " s from one segment's start to the next)";
+}
+
+DataError uneven_sampling_error(const Facts& facts, const Eigen::VectorXd& time_s, const std::string& file,
+                                std::string_view analysis, std::string_view hint) {
+  std::string message = std::string(analysis) + " assumes even sampling, and this record has " +
+                        std::to_string(facts.gaps) + " gap(s) (steps longer than " + number(facts.gap_factor) +
+                        " x the median step of " + number(facts.median_step_s) + " s, see --max-gap): the first of " +
+                        number(facts.first_gap_s) + " s after t = " + number(facts.first_gap_time_s) + " s (sample " +
+                        std::to_string(facts.first_gap_index + 1) + "). The record is " + describe(facts, time_s) +
+                        ". Resample it onto an even grid with a stated method (e.g. linear interpolation) and give " +
+                        "that file, split it at its gaps, or analyse the segments one by one";
+  if (!hint.empty()) message += " (" + std::string(hint) + ")";
+  return DataError({file, 0, "time"}, message + ".");
 }
 
 }  // namespace driftlab::sampling

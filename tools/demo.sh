@@ -22,7 +22,8 @@ echo "== 2/2 compensate and score: models/pipelines/li2023.yaml ($threads thread
 cat <<EOF
 
 Reading the table: B is the flat floor of the overlapping Allan deviation / 0.664 (IEEE 952), read beyond
-each output's correlation time; N is read at tau = 1 s and is only comparable at equal noise bandwidth
+each output's correlation time, a value only where the deviation has a floor (otherwise the bound '< x':
+the deviation still falls at the longest tau); N is read at tau = 1 s and is only comparable at equal noise bandwidth
 (bandwidth). Residual drift: rms of 60-s block means of output - true rate. The paper's last row owes its
 N = 0.97 to the Kalman filter's narrow bandwidth; ours states the bandwidth instead. "intrinsic floor":
 the same analysis of measured - true systematic rate, the gyro's own noise. px4_polynomial: third-order

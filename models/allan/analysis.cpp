@@ -28,17 +28,34 @@ double arw_at_one_second(const std::vector<Estimate>& curve) {
 }
 
 FloorReading flat_floor(const std::vector<Estimate>& curve, double min_tau_s) {
-  const Estimate* best = nullptr;
-  for (const auto& e : curve) {
-    if (e.tau + 1e-12 < min_tau_s) continue;
-    if (best == nullptr || e.dev < best->dev) best = &e;
+  std::size_t best = curve.size();
+  for (std::size_t i = 0; i < curve.size(); ++i) {
+    if (curve[i].tau + 1e-12 < min_tau_s) continue;
+    if (best == curve.size() || curve[i].dev < curve[best].dev) best = i;
   }
-  if (best == nullptr) {
+  if (best == curve.size()) {
     throw DataError({"", 0, "tau"}, "no averaging time at or beyond the output's correlation time (" +
                                         std::to_string(min_tau_s) + " s): the record is too short");
   }
-  return {best->dev / kFlickerFloorFactor, best->dev_lo / kFlickerFloorFactor, best->dev_hi / kFlickerFloorFactor,
-          best->tau};
+  const Estimate& e = curve[best];
+  const auto rising_or_flat = [&](const Estimate& neighbour) { return neighbour.dev_hi >= e.dev_lo; };
+  const bool resolved =
+      best > 0 && best + 1 < curve.size() && rising_or_flat(curve[best - 1]) && rising_or_flat(curve[best + 1]);
+  return {resolved, e.dev / kFlickerFloorFactor, e.dev_lo / kFlickerFloorFactor, e.dev_hi / kFlickerFloorFactor,
+          e.tau, curve.back().tau};
+}
+
+// The readings and the fit of a curve already estimated.
+void read_curve(Analysis& a, const AnalysisOptions& options) {
+  a.bias_instability = flat_floor(a.curve, options.min_tau_s);
+  a.arw_rad_sqrt_s = arw_at_one_second(a.curve);
+  if (options.fit_terms) {
+    try {
+      a.fit = fit_noise_terms(a.curve);
+    } catch (const DataError&) {
+      a.fit.reset();
+    }
+  }
 }
 
 }  // namespace
@@ -57,15 +74,30 @@ Analysis analyze_angle(const Eigen::Ref<const Eigen::VectorXd>& angle, double ta
   a.sample_rate_hz = 1.0 / tau0;
   a.samples = n - 1;
   a.curve = estimate(Kind::Oadev, angle, tau0, InputType::Rate, factors, options.confidence);
-  a.bias_instability = flat_floor(a.curve, options.min_tau_s);
-  a.arw_rad_sqrt_s = arw_at_one_second(a.curve);
-  if (options.fit_terms) {
-    try {
-      a.fit = fit_noise_terms(a.curve);
-    } catch (const DataError&) {
-      a.fit.reset();
-    }
+  read_curve(a, options);
+  return a;
+}
+
+Analysis analyze_segments(const Eigen::Ref<const Eigen::VectorXd>& rate, std::span<const sampling::Segment> segments,
+                          double sample_rate_hz, const AnalysisOptions& options) {
+  const double tau0 = 1.0 / sample_rate_hz;
+  std::vector<Eigen::VectorXd> angles;
+  std::vector<std::size_t> lengths;
+  Analysis a;
+  a.sample_rate_hz = sample_rate_hz;
+  for (const auto& s : segments) {
+    angles.push_back(angle_from_rate(Eigen::Ref<const Eigen::VectorXd>(rate.segment(s.first, s.samples)), tau0));
+    lengths.push_back(static_cast<std::size_t>(s.samples) + 1);
+    a.samples += static_cast<std::size_t>(s.samples);
   }
+  a.segments = segments.size();
+  if (lengths.empty()) throw DataError({"", 0, "rate"}, "an Allan analysis needs at least 9 samples per burst");
+  const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
+  std::nth_element(lengths.begin(), middle, lengths.end());
+  if (*middle < 10) throw DataError({"", 0, "rate"}, "an Allan analysis needs at least 9 samples per burst");
+  const auto factors = averaging_factors(TauGrid{}, Kind::Oadev, *middle, tau0);
+  a.curve = estimate_bursts(Kind::Oadev, angles, tau0, InputType::Rate, factors, options.confidence);
+  read_curve(a, options);
   return a;
 }
 

@@ -10,6 +10,7 @@
 #include <limits>
 #include <numbers>
 #include <string>
+#include <vector>
 
 namespace driftlab::allan {
 namespace {
@@ -147,6 +148,13 @@ double binomial(int n, int k) {
   double r = 1.0;
   for (int i = 1; i <= k; ++i) r = r * (n - k + i) / i;
   return r;
+}
+
+// The noise type at factor m, at most the type found at any shorter factor (see the header).
+int held_from_rising(int alpha, std::size_t m, const std::vector<Estimate>& shorter) {
+  for (const auto& e : shorter)
+    if (e.m < m) alpha = std::min(alpha, e.alpha);
+  return alpha;
 }
 
 }  // namespace
@@ -320,9 +328,44 @@ std::vector<Estimate> estimate(Kind kind, const Eigen::Ref<const Eigen::VectorXd
   out.reserve(devs.size());
   for (const auto& d : devs) {
     Estimate e{d.m, d.tau, d.dev, 0.0, 0.0, d.terms, 0, 0.0};
-    e.alpha = identify_noise(angle, d.m, kind, input).alpha;
+    e.alpha = held_from_rising(identify_noise(angle, d.m, kind, input).alpha, d.m, out);
     e.edf = equivalent_dof(kind, e.alpha, n, d.m);
     const Interval bounds = chi_square_interval(d.dev, e.edf, confidence);
+    e.dev_lo = bounds.lo;
+    e.dev_hi = bounds.hi;
+    out.push_back(e);
+  }
+  return out;
+}
+
+std::vector<Estimate> estimate_bursts(Kind kind, std::span<const Eigen::VectorXd> angles, double tau0,
+                                      InputType input, std::span<const std::size_t> factors, double confidence) {
+  std::vector<Estimate> out;
+  out.reserve(factors.size());
+  for (const std::size_t m : factors) {
+    const std::array<std::size_t, 1> factor{m};
+    double sum = 0.0;  // sum over bursts of terms x variance
+    std::size_t terms = 0;
+    std::vector<int> alphas;
+    std::vector<std::size_t> lengths;
+    for (const auto& angle : angles) {
+      const auto n = static_cast<std::size_t>(angle.size());
+      if (n < 2 * m + 1 || term_count(kind, n, m) == 0) continue;
+      const Deviation d = deviations(kind, angle, tau0, factor)[0];
+      sum += static_cast<double>(d.terms) * d.dev * d.dev;
+      terms += d.terms;
+      alphas.push_back(identify_noise(angle, m, kind, input).alpha);
+      lengths.push_back(n);
+    }
+    if (terms == 0) {
+      throw DataError({}, "no burst is long enough for averaging factor " + std::to_string(m));
+    }
+    const auto middle = alphas.begin() + static_cast<std::ptrdiff_t>(alphas.size() / 2);
+    std::nth_element(alphas.begin(), middle, alphas.end());
+    Estimate e{m, static_cast<double>(m) * tau0, std::sqrt(sum / static_cast<double>(terms)), 0.0, 0.0, terms, 0, 0.0};
+    e.alpha = held_from_rising(*middle, m, out);
+    for (const std::size_t n : lengths) e.edf += equivalent_dof(kind, e.alpha, n, m);
+    const Interval bounds = chi_square_interval(e.dev, e.edf, confidence);
     e.dev_lo = bounds.lo;
     e.dev_hi = bounds.hi;
     out.push_back(e);

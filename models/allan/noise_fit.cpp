@@ -4,6 +4,7 @@
 
 #include <Eigen/Cholesky>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -153,9 +154,11 @@ NoiseFit fit_noise_terms(std::span<const Estimate> curve) {
       const auto k = static_cast<Eigen::Index>(index++);
       const double c = fits[best].c(k);
       const double sigma_c = std::sqrt(fits[best].covariance(k, k) * result.scale);
-      term = {std::sqrt(c), sigma_c / (2.0 * std::sqrt(c)), true};
+      term = {std::sqrt(c), sigma_c / (2.0 * std::sqrt(c)), true, c > sigma_c, std::sqrt(std::max(c - sigma_c, 0.0)),
+              std::sqrt(c + sigma_c)};
     } else {
-      term = {0.0, std::sqrt(coefficient_sigma(fits, best, t, result.scale)), false};
+      const double sigma_c = coefficient_sigma(fits, best, t, result.scale);
+      term = {0.0, std::sqrt(sigma_c), false, false, 0.0, std::sqrt(sigma_c)};
     }
   }
   return result;

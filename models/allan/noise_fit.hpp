@@ -19,6 +19,12 @@
 // interval weights optimistic). A term's value is sqrt(c) with sigma = sigma_c / (2 sqrt(c)); a term
 // the fit sets to zero has value 0 and sigma = sqrt(sigma_c) of the fit that includes it, the level
 // it could have at one sigma.
+// Resolution: a term is resolved when the fit keeps it and its coefficient lies more than one sigma
+// above zero (c > sigma_c, i.e. value > 2 sigma); its one-sigma interval is
+// [sqrt(max(c - sigma_c, 0)), sqrt(c + sigma_c)]. An unresolved term is reported only as the bound
+// value < high = sqrt(c + sigma_c) (sqrt(sigma_c) for a term set to zero), never as a value: a kept
+// K of 27 +- 86 deg/h/sqrt(h) is "K < 91", and a term set to zero is not "0". chi2 / dof says how well
+// the five terms describe the curve (much above 1: the curve holds something else, e.g. a bump).
 //
 // Unit conversions (exact): 1 rad = 180/pi deg, 1 s = 1/3600 h, 1/sqrt(s) = 60/sqrt(h).
 //   Q  deg            = Q[rad]            * 180/pi
@@ -51,6 +57,9 @@ struct TermEstimate {
   double value = 0.0;   // SI (see above)
   double sigma = 0.0;
   bool fitted = false;  // false: the constrained fit set this term to zero
+  bool resolved = false;  // fitted and c > sigma_c (see above)
+  double low = 0.0;     // one-sigma interval of the value; an unresolved term is only "< high"
+  double high = 0.0;
 };
 
 struct NoiseFit {
@@ -59,6 +68,7 @@ struct NoiseFit {
   std::size_t points = 0;
   std::size_t dof = 0;        // points - kept terms
   double scale = 1.0;         // factor applied to the covariance, max(1, chi2/dof)
+  double reduced_chi2() const { return dof > 0 ? chi2 / static_cast<double>(dof) : 0.0; }  // chi2/dof (0: no dof)
 
   const TermEstimate& operator[](Term t) const { return terms[static_cast<std::size_t>(t)]; }
   // Allan deviation of one term at tau (rad/s), and of the whole fitted model.

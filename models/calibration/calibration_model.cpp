@@ -243,6 +243,11 @@ nlohmann::json model_body(const CalibrationModel& m, imu::Sensor sensor) {
                 {u.instability, m.noise.bias_instability_rad_s},
                 {u.random_walk, m.noise.rate_random_walk_rad_s_sqrt_s},
                 {"sample_rate_hz", m.noise.sample_rate_hz}};
+  nlohmann::json unresolved = nlohmann::json::object();
+  for (const auto& [key, upper] : {std::pair{u.white, m.noise.arw_upper}, std::pair{u.instability, m.noise.bias_instability_upper},
+                                   std::pair{u.random_walk, m.noise.rate_random_walk_upper}})
+    if (upper) unresolved[key] = *upper;
+  if (!unresolved.empty()) j["noise"]["unresolved_upper"] = unresolved;
   j["fit"] = {{"records", m.fit.records},
               {"samples", m.fit.samples},
               {"bin_s", m.fit.bin_s},
@@ -454,6 +459,12 @@ CalibrationModel read_model_body(const Reader& r, const nlohmann::json& j, const
     m.noise.bias_instability_rad_s = r.number_or(*n, na, u.instability, 0.0);
     m.noise.rate_random_walk_rad_s_sqrt_s = r.number_or(*n, na, u.random_walk, 0.0);
     m.noise.sample_rate_hz = r.number_or(*n, na, "sample_rate_hz", 0.0);
+    if (const auto* un = r.optional(*n, "unresolved_upper")) {
+      const std::string ua = na + ".unresolved_upper";
+      for (auto [key, upper] : {std::pair{u.white, &m.noise.arw_upper}, std::pair{u.instability, &m.noise.bias_instability_upper},
+                                std::pair{u.random_walk, &m.noise.rate_random_walk_upper}})
+        if (r.optional(*un, key)) *upper = r.number_or(*un, ua, key, 0.0);
+    }
   }
   if (const auto* f = r.optional(j, "fit")) {
     const std::string fa = key("fit");

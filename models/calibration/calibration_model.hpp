@@ -100,11 +100,16 @@ struct RbfTerm {
 
 // Allan noise terms of the compensated calibration residual (IEEE-952 names), for the Kalman stage
 // and the Kalibr export. 0 = not estimated.
+// A term the residual's Allan curve did not resolve (models/allan/noise_fit.hpp: set to 0 by the
+// fit, or within one sigma of 0) has its bound in *_upper: its value above is then the fit's (0 when
+// set to 0) and means nothing, and no export writes it as measured. The model file lists them under
+// noise.unresolved_upper; a file without that entry (written before it existed) has none.
 struct NoiseTerms {
   double arw_rad_sqrt_s = 0.0;                 // N, rad/s/sqrt(Hz) = rad/sqrt(s)
   double bias_instability_rad_s = 0.0;         // B, rad/s
   double rate_random_walk_rad_s_sqrt_s = 0.0;  // K, rad/s^2/sqrt(Hz) = rad/s/sqrt(s)
   double sample_rate_hz = 0.0;                 // of the calibration records
+  std::optional<double> arw_upper, bias_instability_upper, rate_random_walk_upper;  // not resolved: value < this
 };
 
 // How the model was obtained and how well it did on data it was not fitted to.

@@ -10,8 +10,7 @@ std::optional<AllanFigures> allan_figures(const Eigen::VectorXd& error, double f
   try {
     const auto a = allan::analyze_rate(error, fs, {.fit_terms = false});
     AllanFigures f;
-    f.bias_instability_rad_s = a.bias_instability.value;
-    f.min_adev_tau_s = a.bias_instability.tau_s;
+    f.bias_instability = a.bias_instability;
     f.arw_rad_sqrt_s = a.arw_rad_sqrt_s;
     return f;
   } catch (const Error&) {
@@ -31,6 +30,12 @@ std::optional<FittedNoise> fit_noise(const Eigen::VectorXd& error, double fs) {
     out.bias_instability_rad_s = fit[allan::Term::B].value;
     out.rate_random_walk_rad_s_sqrt_s = fit[allan::Term::K].value;
     out.rate_random_walk_sigma = fit[allan::Term::K].sigma;
+    const auto bound = [&](allan::Term t) {
+      return fit[t].resolved ? std::nullopt : std::optional<double>(fit[t].high);
+    };
+    out.arw_upper = bound(allan::Term::N);
+    out.bias_instability_upper = bound(allan::Term::B);
+    out.rate_random_walk_upper = bound(allan::Term::K);
     return out;
   } catch (const Error&) {
     return std::nullopt;

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include "framework/error.hpp"
@@ -407,22 +408,52 @@ ExportResult export_kalibr_imu_yaml(const ImuCalibration& model, const ExportOpt
     }
     rate = fs;
   }
-  // One value per sensor: the largest of the axes that measured it (0 = not measured).
-  const auto largest = [&](const Channels& cs, double NoiseTerms::*term, const std::string& key, const std::string& what) {
-    double v = 0.0;
-    for (const auto* c : cs) v = std::max(v, c->model.noise.*term);
-    if (!(v > 0) || !std::isfinite(v)) {
+  // One value per sensor: the largest of the axes that measured it (0 = not measured). An axis whose
+  // term the records did not resolve counts with its bound; when a bound is the largest, the value is
+  // only a bound: refused, or with kalibr_allow_bounds written and marked as one.
+  struct Written {
+    double value = 0.0;
+    std::string bound_of;  // the axes whose bound it is; empty for a measured value
+  };
+  const auto largest = [&](const Channels& cs, double NoiseTerms::*term, std::optional<double> NoiseTerms::*upper,
+                           const std::string& key, const std::string& what) {
+    Written w;
+    for (const auto* c : cs) {
+      const auto& bound = c->model.noise.*upper;
+      const double v = bound ? *bound : c->model.noise.*term;
+      if (v > w.value) w = {v, bound ? c->id.role() : std::string()};
+    }
+    if (!(w.value > 0) || !std::isfinite(w.value)) {
       throw ConfigError({"", 0, key}, roles(cs) + ": " + what + " is not measured on any axis (0; " +
                                           (term == &NoiseTerms::arw_rad_sqrt_s
                                                ? "recalibrate with driftlab calibrate, which fits it)"
                                                : "the records are too short for the Allan deviation to reach its +1/2 slope)"));
     }
-    return v;
+    if (!w.bound_of.empty() && !o.kalibr_allow_bounds) {
+      throw ConfigError({"", 0, key}, w.bound_of + ": " + what + " is not resolved by the calibration records, only bounded (< " +
+                                          short_num(w.value) + "; its Allan deviation does not show the term within the "
+                                          "record): Kalibr would take the bound as a measured value. Calibrate on longer "
+                                          "records, or allow the bound to be written (marked as one)");
+    }
+    return w;
   };
-  const double accel_n = largest(accel, &NoiseTerms::arw_rad_sqrt_s, "accelerometer_noise_density", "the noise density N");
-  const double accel_k = largest(accel, &NoiseTerms::rate_random_walk_rad_s_sqrt_s, "accelerometer_random_walk", "the random walk K");
-  const double gyro_n = largest(gyro, &NoiseTerms::arw_rad_sqrt_s, "gyroscope_noise_density", "the noise density N");
-  const double gyro_k = largest(gyro, &NoiseTerms::rate_random_walk_rad_s_sqrt_s, "gyroscope_random_walk", "the random walk K");
+  const Written accel_n = largest(accel, &NoiseTerms::arw_rad_sqrt_s, &NoiseTerms::arw_upper, "accelerometer_noise_density", "the noise density N");
+  const Written accel_k = largest(accel, &NoiseTerms::rate_random_walk_rad_s_sqrt_s, &NoiseTerms::rate_random_walk_upper,
+                                  "accelerometer_random_walk", "the random walk K");
+  const Written gyro_n = largest(gyro, &NoiseTerms::arw_rad_sqrt_s, &NoiseTerms::arw_upper, "gyroscope_noise_density", "the noise density N");
+  const Written gyro_k = largest(gyro, &NoiseTerms::rate_random_walk_rad_s_sqrt_s, &NoiseTerms::rate_random_walk_upper,
+                                 "gyroscope_random_walk", "the random walk K");
+  const auto line = [](const std::string& key, const Written& w, const std::string& unit) {
+    return key + ": " + short_num(w.value) + "  # " + unit +
+           (w.bound_of.empty() ? std::string()
+                               : "; UPPER BOUND, not a measured value: not resolved by the calibration records (" +
+                                     w.bound_of + ")") +
+           "\n";
+  };
+  // "N = 1e-4" for a resolved term, "N < 1e-4 (not resolved)" for a bound.
+  const auto term_text = [](const std::string& name, double value, const std::optional<double>& upper) {
+    return upper ? name + " < " + short_num(*upper) + " (not resolved)" : name + " = " + short_num(value);
+  };
   ExportResult r;
   std::ostringstream s;
   s << "# Kalibr IMU noise model from driftlab (" << kImuFormat << ", device \"" << one_line(model.device) << "\", " << which
@@ -430,15 +461,16 @@ ExportResult export_kalibr_imu_yaml(const ImuCalibration& model, const ExportOpt
     << "# Kalibr takes one value per sensor: each is the largest of the axes below (conservative; 0 = not measured).\n";
   for (const auto* c : all) {
     const bool g = c->id.sensor == imu::Sensor::Gyro;
-    s << "#   " << c->id.role() << " (column " << one_line(c->column) << "): N = " << short_num(c->model.noise.arw_rad_sqrt_s)
-      << (g ? " rad/s/sqrt(Hz)" : " m/s^2/sqrt(Hz)") << ", K = " << short_num(c->model.noise.rate_random_walk_rad_s_sqrt_s)
-      << (g ? " rad/s^2/sqrt(Hz)" : " m/s^3/sqrt(Hz)") << ", B = " << short_num(c->model.noise.bias_instability_rad_s)
+    const auto& n = c->model.noise;
+    s << "#   " << c->id.role() << " (column " << one_line(c->column) << "): " << term_text("N", n.arw_rad_sqrt_s, n.arw_upper)
+      << (g ? " rad/s/sqrt(Hz)" : " m/s^2/sqrt(Hz)") << ", " << term_text("K", n.rate_random_walk_rad_s_sqrt_s, n.rate_random_walk_upper)
+      << (g ? " rad/s^2/sqrt(Hz)" : " m/s^3/sqrt(Hz)") << ", " << term_text("B", n.bias_instability_rad_s, n.bias_instability_upper)
       << (g ? " rad/s" : " m/s^2") << " (B is not a Kalibr parameter)\n";
   }
-  s << "accelerometer_noise_density: " << short_num(accel_n) << "  # m/s^2/sqrt(Hz)\n";
-  s << "accelerometer_random_walk: " << short_num(accel_k) << "  # m/s^3/sqrt(Hz)\n";
-  s << "gyroscope_noise_density: " << short_num(gyro_n) << "  # rad/s/sqrt(Hz)\n";
-  s << "gyroscope_random_walk: " << short_num(gyro_k) << "  # rad/s^2/sqrt(Hz)\n";
+  s << line("accelerometer_noise_density", accel_n, "m/s^2/sqrt(Hz)");
+  s << line("accelerometer_random_walk", accel_k, "m/s^3/sqrt(Hz)");
+  s << line("gyroscope_noise_density", gyro_n, "rad/s/sqrt(Hz)");
+  s << line("gyroscope_random_walk", gyro_k, "rad/s^2/sqrt(Hz)");
   s << "rostopic: " << o.kalibr_topic << "\n";
   s << "update_rate: " << short_num(rate) << "  # Hz\n";
   r.text = s.str();

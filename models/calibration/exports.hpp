@@ -40,7 +40,10 @@
 //              accelerometer_random_walk of its accelerometer axes (continuous-time, Kalibr's names);
 //              several axes are combined by taking the largest (the file lists every axis). Refused
 //              (ConfigError) when the instance lacks gyro or accelerometer channels or a term is not
-//              measured (0): no placeholders.
+//              measured (0): no placeholders. A term the records only bound (NoiseTerms::*_upper) counts
+//              with its bound; when that is the largest, the value is refused too, unless
+//              kalibr_allow_bounds: then the bound is written, its line saying "UPPER BOUND, not a
+//              measured value" and naming the axes.
 //   json       the driftlab-calibration/2 file itself: to_json_text (calibration_model.hpp).
 //
 // PX4 and ArduPilot hold, per channel, a cubic in temperature with one [TMIN, TMAX] per block (PX4:
@@ -68,6 +71,7 @@ struct ExportOptions {
   int kalibr_instance = 0;                     // the IMU instance of the Kalibr file
   double kalibr_update_rate_hz = 0.0;          // 0: the channels' noise sample rate
   std::string kalibr_topic = "/imu0";
+  bool kalibr_allow_bounds = false;            // write a noise value the records only bound as that bound, marked
 };
 
 // What the firmware's form drops for one channel.

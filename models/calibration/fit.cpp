@@ -608,7 +608,8 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
     const double rate_hz = sampling::mean_rate_hz(r.time_s);
     o.progress("calibrate: Allan noise terms", 0.0);
     if (const auto n = fit_noise(err, rate_hz)) {
-      m.noise = {n->arw_rad_sqrt_s, n->bias_instability_rad_s, n->rate_random_walk_rad_s_sqrt_s, rate_hz};
+      m.noise = {n->arw_rad_sqrt_s, n->bias_instability_rad_s, n->rate_random_walk_rad_s_sqrt_s, rate_hz,
+                 n->arw_upper, n->bias_instability_upper, n->rate_random_walk_upper};
     }
     o.progress("calibrate: Allan noise terms", 1.0);
   }

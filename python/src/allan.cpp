@@ -120,8 +120,14 @@ void bind_allan(py::module_& m) {
 
   py::class_<BiasInstability>(m, "BiasInstability",
                               "B read as the flat floor of the OADEV: min sigma(tau) / sqrt(2 ln 2 / pi) "
-                              "(IEEE 952 Annex C), with the chi-square interval of that point scaled the same way")
-      .def_property_readonly("value_rad_s", [](const BiasInstability& b) { return b.reading.value; })
+                              "(IEEE 952 Annex C), with the chi-square interval of that point scaled the same way; "
+                              "a B only where resolved (the deviation has a floor there), otherwise B < high_rad_s")
+      .def_property_readonly("resolved", [](const BiasInstability& b) { return b.reading.resolved; },
+                             "True where the minimum is a floor (rising or flat neighbours within the intervals)")
+      .def_property_readonly("longest_tau_s", [](const BiasInstability& b) { return b.reading.longest_tau_s; },
+                             "an unresolved B is bounded within tau <= this")
+      .def_property_readonly("value_rad_s", [](const BiasInstability& b) { return b.reading.value; },
+                             "min sigma / 0.664: B when resolved, otherwise only what the bound comes from")
       .def_property_readonly("low_rad_s", [](const BiasInstability& b) { return b.reading.low; })
       .def_property_readonly("high_rad_s", [](const BiasInstability& b) { return b.reading.high; })
       .def_property_readonly("tau_s", [](const BiasInstability& b) { return b.reading.tau_s; }, "tau of the minimum")
@@ -133,12 +139,18 @@ void bind_allan(py::module_& m) {
   py::class_<NoiseTerm>(m, "NoiseTerm", "One fitted IEEE 952 term: value and 1-sigma in the unit its name states")
       .def_property_readonly("value", [](const NoiseTerm& t) { return t.estimate.value; })
       .def_property_readonly("sigma", [](const NoiseTerm& t) { return t.estimate.sigma; },
-                             "1-sigma; for an unresolved term the level it could have at one sigma")
-      .def_property_readonly("resolved", [](const NoiseTerm& t) { return t.estimate.fitted; },
-                             "False when the constrained fit set the term to 0 (not resolved by the record)")
+                             "1-sigma; for a term set to 0 the level it could have at one sigma")
+      .def_property_readonly("fitted", [](const NoiseTerm& t) { return t.estimate.fitted; },
+                             "False when the constrained fit set the term to 0")
+      .def_property_readonly("resolved", [](const NoiseTerm& t) { return t.estimate.resolved; },
+                             "fitted and its square more than one sigma above 0; otherwise only value < high")
+      .def_property_readonly("low", [](const NoiseTerm& t) { return t.estimate.low; }, "one-sigma interval, low end")
+      .def_property_readonly("high", [](const NoiseTerm& t) { return t.estimate.high; },
+                             "one-sigma interval, high end: the bound of an unresolved term")
       .def("__repr__", [](const NoiseTerm& t) {
-        return "<driftlab.NoiseTerm " + std::to_string(t.estimate.value) + " +- " + std::to_string(t.estimate.sigma) +
-               (t.estimate.fitted ? "" : " (not resolved)") + ">";
+        return t.estimate.resolved ? "<driftlab.NoiseTerm " + std::to_string(t.estimate.value) + " +- " +
+                                         std::to_string(t.estimate.sigma) + ">"
+                                   : "<driftlab.NoiseTerm < " + std::to_string(t.estimate.high) + " (not resolved)>";
       });
 
   py::class_<NoiseTerms>(m, "NoiseTerms",

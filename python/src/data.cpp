@@ -347,7 +347,7 @@ time series, or a log (PX4 ULog, and whatever readers the registry gains), into 
 columns: mappings 'role=column:unit' (e.g. 'rate=gyro_z:rad/s', 'time=timestamp:ms'); empty: the
   default columns (t_s and every unit-suffixed column: rate_dps -> rate, temp_c -> temperature) or,
   for a log, every IMU channel. fs_hz: for a CSV without a time column, t = i / fs_hz.
-max_gap_factor: a time step above this times the median step is a DataError (0 allows gaps).
+max_gap_factor: a time step above this times the median step is a DataError (0 reads gaps as they are).
 topic, instance, sensor: what to take from a log (ignored for CSV). required: roles that must be
 present. Returns Record (time_s, channels, units, sources, sample_rate_hz, notes).)");
 

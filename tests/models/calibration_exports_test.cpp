@@ -290,6 +290,47 @@ TEST(CalibrationExports, KalibrYamlCarriesTheMeasuredNoiseOfOneInstanceLargestAx
   EXPECT_THROW(export_kalibr_imu_yaml(imu, {.kalibr_instance = 2}), ConfigError) << "no such instance";
 }
 
+// A term the calibration records only bound (allan: not resolved) is never written to Kalibr as if
+// measured: when its bound is the largest of the sensor's axes, the export refuses; allowed, it writes
+// the bound and says so on that line. Axes below a measured value change nothing. The bound survives
+// the model file.
+TEST(CalibrationExports, KalibrYamlWritesAnUnresolvedTermOnlyAsAMarkedBound) {
+  ImuCalibration imu = two_instance_imu();
+  for (auto& c : imu.channels)
+    if (c.id == imu::ChannelId{Sensor::Gyro, 'x', 0}) {
+      c.model.noise.rate_random_walk_rad_s_sqrt_s = 0.0;  // the fit set K to 0 ...
+      c.model.noise.rate_random_walk_upper = 1e-3;        // ... and bounds it far above the other axes
+    }
+  try {
+    export_kalibr_imu_yaml(imu);
+    ADD_FAILURE() << "an unresolved K written as a value";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("not resolved"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("gyro_x"), std::string::npos) << e.what();
+  }
+  const auto text = export_kalibr_imu_yaml(imu, {.kalibr_allow_bounds = true}).text;
+  const YAML::Node y = YAML::Load(text);
+  EXPECT_EQ(y["gyroscope_random_walk"].as<double>(), 1e-3);
+  const auto line = text.substr(text.find("gyroscope_random_walk:"));
+  EXPECT_NE(line.substr(0, line.find('\n')).find("UPPER BOUND"), std::string::npos) << text;
+  EXPECT_NE(text.find("K < 0.001 (not resolved)"), std::string::npos) << text;
+  // A bound below another axis' measured value: that value is written, measured, unmarked.
+  for (auto& c : imu.channels)
+    if (c.id == imu::ChannelId{Sensor::Gyro, 'x', 0}) c.model.noise.rate_random_walk_upper = 1e-12;
+  EXPECT_EQ(export_kalibr_imu_yaml(imu).text.find("UPPER BOUND"), std::string::npos);
+  // The model file keeps the bound.
+  const auto dir = std::filesystem::temp_directory_path() / ("driftlab_exports_bound_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "m.json") << to_json_text(imu);
+  const ImuCalibration back = read_calibration(dir / "m.json");
+  std::filesystem::remove_all(dir);
+  for (const auto& c : back.channels) {
+    const bool bounded = c.id == imu::ChannelId{Sensor::Gyro, 'x', 0};
+    EXPECT_EQ(c.model.noise.rate_random_walk_upper.has_value(), bounded) << c.id.role();
+    if (bounded) EXPECT_EQ(*c.model.noise.rate_random_walk_upper, 1e-12);
+  }
+}
+
 std::filesystem::path scratch(const std::string& name) {
   const auto dir = std::filesystem::temp_directory_path() / ("driftlab_exports_" + std::to_string(::getpid()) + "_" + name);
   std::filesystem::create_directories(dir);

@@ -57,13 +57,23 @@ def test_the_curve_and_readings_equal_driftlab_allan_on_the_same_data(cli, tmp_p
                          (a.dev_hi_rad_s, "dev_hi"), (a.n, "n")]:
         assert np.array_equal(ours, expected[theirs]), theirs
     readings = summary["readings"]
-    assert readings["B_flat_floor"]["value"] == a.bias_instability.value_rad_s * driftlab.DEG_H_PER_RAD_S
-    assert readings["B_flat_floor"]["tau_s"] == a.bias_instability.tau_s
+    b = a.bias_instability
+    assert readings["B_flat_floor"]["resolved"] == b.resolved
+    if b.resolved:
+        assert readings["B_flat_floor"]["value"] == b.value_rad_s * driftlab.DEG_H_PER_RAD_S
+    else:
+        assert readings["B_flat_floor"]["value"] is None
+        assert readings["B_flat_floor"]["upper"] == b.high_rad_s * driftlab.DEG_H_PER_RAD_S
+    assert readings["B_flat_floor"]["tau_s"] == b.tau_s
     assert readings["N_at_1s"]["value"] == a.arw_rad_sqrt_s * driftlab.DEG_H_PER_RAD_S
     terms = a.noise_terms
     for key, term in [("N", terms.N_rad_sqrt_s), ("B", terms.B_rad_s), ("K", terms.K_rad_s_sqrt_s)]:
-        assert summary["si"][key]["value"] == term.value
-        assert summary["si"][key]["fitted"] == term.resolved
+        assert summary["si"][key]["resolved"] == term.resolved
+        assert summary["si"][key]["fitted"] == term.fitted
+        if term.resolved:
+            assert summary["si"][key]["value"] == term.value
+        else:
+            assert summary["si"][key]["upper"] == term.high
 
 
 def test_other_rate_units_are_converted_to_rad_s_at_the_boundary(cli, tmp_path):

@@ -76,9 +76,19 @@ TEST(AllanCommand, WritesIntervalsTermsAndAPlotForAWhiteNoiseRecord) {
            {"Q", "deg"}, {"N", "deg/sqrt(h)"}, {"B", "deg/h"}, {"K", "deg/h/sqrt(h)"}, {"R", "deg/h/h"}}) {
     ASSERT_TRUE(summary.contains(key)) << key;
     EXPECT_EQ(summary[key]["unit"], unit);
-    EXPECT_TRUE(summary[key].contains("value"));
-    EXPECT_TRUE(summary[key].contains("sigma"));
+    // A resolved term has a value, sigma and interval; an unresolved one only its bound.
+    const bool resolved = summary[key]["resolved"].get<bool>();
+    EXPECT_EQ(summary[key]["value"].is_null(), !resolved) << key;
+    EXPECT_EQ(summary[key].contains("sigma"), resolved) << key;
+    EXPECT_EQ(summary[key].contains("upper"), !resolved) << key;
   }
+  EXPECT_TRUE(summary["N"]["resolved"].get<bool>());
+  // White noise alone has no floor: B is only a bound, not a value, and the summary says so.
+  EXPECT_FALSE(summary["readings"]["B_flat_floor"]["resolved"].get<bool>());
+  EXPECT_TRUE(summary["readings"]["B_flat_floor"]["value"].is_null());
+  EXPECT_THAT(r.out, HasSubstr("B < "));
+  EXPECT_THAT(r.out, HasSubstr("chi2/dof = "));
+  EXPECT_EQ(summary["sampling"]["layout"], "even");
   constexpr double kRecoveryTolerance = 0.05;  // relative; 2^16 samples of white noise
   EXPECT_NEAR(summary["N"]["value"].get<double>() / 0.5, 1.0, kRecoveryTolerance);
   EXPECT_NEAR(summary["N_density"]["value"].get<double>() / 30.0, 1.0, kRecoveryTolerance);
@@ -132,6 +142,85 @@ TEST(AllanCommand, RejectsBadOptionsAndData) {
   EXPECT_EQ(run_driftlab("allan --data " + csv.string() + " --fs 100 --taus 1e6 --out " + out).exit_code, 2);
   EXPECT_EQ(run_driftlab("allan --data " + csv.string() + " --fs 100 --out " + csv.string()).exit_code, 2);
   EXPECT_EQ(run_driftlab("allan --data " + (dir / "missing.csv").string() + " --fs 100 --out " + out).exit_code, 3);
+}
+
+const std::filesystem::path kReal = std::filesystem::path(DRIFTLAB_SHARED_DATA) / "real";
+const std::filesystem::path kLsm6dsm = kReal / "pan-lsm6dsm-tvac" / "tvac_lsm6dsm_derived.csv";
+const std::filesystem::path kMpu6050 = kReal / "sunsided-mpu6050-static" / "mpu6050_unmoved_x_forward_10min.csv";
+
+// The LSM6DSM thermal-vacuum record: 25 bursts of 5 s at 50 Hz, one every ~5 min. With or without
+// --max-gap 0 (which the README used to pass to read it as one record), never a contiguous reading
+// at the mean rate of 0.85 Hz: the Allan deviation of every burst pooled, tau within a burst.
+TEST(AllanCommand, AnalysesTheLsm6dsmBurstRecordPerBurst) {
+  if (!std::filesystem::exists(kLsm6dsm)) GTEST_SKIP() << "shared data not found: " << kLsm6dsm;
+  const auto dir = scratch_dir("allan_bursts");
+  for (const std::string gap : {"", " --max-gap 0"}) {
+    SCOPED_TRACE("options:" + gap);
+    const auto out = dir / "allan.csv", json = dir / "summary.json";
+    std::filesystem::remove(json);
+    const auto r = run_driftlab("allan --data " + kLsm6dsm.string() +
+                                " --column time=time_s:s --column rate=gyro_x_rad_s:rad/s" + gap + " --out " +
+                                out.string() + " --json " + json.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_THAT(r.out, HasSubstr("25 regular bursts"));
+    EXPECT_THAT(r.out, HasSubstr("per burst"));
+    const auto summary = nlohmann::json::parse(read_text(json));
+    EXPECT_EQ(summary["sampling"]["layout"], "regular_bursts");
+    EXPECT_EQ(summary["sampling"]["bursts"], 25);
+    constexpr double kBurstRateHz = 50.0, kRateTolerance = 0.01;  // relative: time stamps in ms
+    EXPECT_NEAR(summary["sample_rate_hz"].get<double>() / kBurstRateHz, 1.0, kRateTolerance);
+    std::string header;
+    const auto rows = read_csv_rows(out, header);
+    ASSERT_FALSE(rows.empty());
+    constexpr double kBurstS = 5.0;
+    EXPECT_LE(rows.back()[0], kBurstS);  // no tau across a gap
+    // Every burst contributes: at tau0 there are more terms than one burst has samples.
+    EXPECT_GT(rows.front()[4], 24.0 * kBurstS * kBurstRateHz);
+    // A few seconds of data per burst: B is not resolved there.
+    EXPECT_FALSE(summary["readings"]["B_flat_floor"]["resolved"].get<bool>());
+  }
+}
+
+// The MPU6050 record has irregular host time stamps (median step 2 ms, steps up to 0.5 s): not an
+// Allan record as it stands. Exit 3 naming the first gap and the ways out, with --max-gap 0 too.
+TEST(AllanCommand, RefusesTheIrregularMpu6050RecordNamingTheFirstGap) {
+  if (!std::filesystem::exists(kMpu6050)) GTEST_SKIP() << "shared data not found: " << kMpu6050;
+  const auto dir = scratch_dir("allan_irregular");
+  for (const std::string gap : {"", " --max-gap 0"}) {
+    SCOPED_TRACE("options:" + gap);
+    const auto r = run_driftlab("allan --data " + kMpu6050.string() +
+                                " --column time=time_s:s --column rate=gyro_z_dps:deg/s" + gap + " --out " +
+                                (dir / "allan.csv").string());
+    EXPECT_EQ(r.exit_code, 3);
+    EXPECT_THAT(r.err, HasSubstr("assumes even sampling"));
+    EXPECT_THAT(r.err, HasSubstr("the first of"));
+    EXPECT_THAT(r.err, HasSubstr("after t = "));
+    EXPECT_THAT(r.err, HasSubstr("Resample"));
+    EXPECT_THAT(r.err, HasSubstr("split"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "allan.csv"));
+  }
+}
+
+// `driftlab run` decomposes and filters the record as one evenly sampled series: a burst record and
+// an irregular one are refused (exit 3) before any step runs, naming the first gap; for bursts it
+// points to `driftlab allan`.
+TEST(RunCommand, RefusesBurstAndIrregularRecordsNamingTheFirstGap) {
+  if (!std::filesystem::exists(kLsm6dsm) || !std::filesystem::exists(kMpu6050)) GTEST_SKIP() << "shared data not found";
+  const auto dir = scratch_dir("run_gaps");
+  const std::string pipeline = std::string(DRIFTLAB_SOURCE_DIR) + "/models/pipelines/polynomial_baseline.yaml";
+  const auto bursts = run_driftlab("--quiet run --pipeline " + pipeline + " --data " + kLsm6dsm.string() +
+                                   " --column time=time_s:s --column rate=gyro_x_rad_s:rad/s"
+                                   " --column temperature=temp_C_est:degC --max-gap 0 --out " + (dir / "b").string());
+  EXPECT_EQ(bursts.exit_code, 3);
+  EXPECT_THAT(bursts.err, HasSubstr("25 regular bursts"));
+  EXPECT_THAT(bursts.err, HasSubstr("driftlab allan"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "b" / "outputs.csv"));
+  const auto irregular = run_driftlab("--quiet run --pipeline " + pipeline + " --data " + kMpu6050.string() +
+                                      " --column time=time_s:s --column rate=gyro_z_dps:deg/s"
+                                      " --column temperature=temp_C:degC --out " + (dir / "i").string());
+  EXPECT_EQ(irregular.exit_code, 3);
+  EXPECT_THAT(irregular.err, HasSubstr("irregular"));
+  EXPECT_THAT(irregular.err, HasSubstr("Resample"));
 }
 
 }  // namespace

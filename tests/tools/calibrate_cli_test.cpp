@@ -320,8 +320,25 @@ TEST_F(ExportCli, ArduPilotParmCarriesBothImusAtThe35DegreeReference) {
   EXPECT_NE(text.find("INS_GYR2_CALTEMP,35"), std::string::npos);
 }
 
+// The 2-Hz calibration record does not resolve the accelerometers' random walk: the model keeps only
+// its bound (noise.unresolved_upper), the export refuses to write it as a value (exit 2) and, with
+// --allow-bounds, writes it marked as a bound.
 TEST_F(ExportCli, KalibrYamlHoldsTheMeasuredAccelerometerNoiseOfTheChosenInstance) {
-  const std::string text = exported("kalibr", " --instance 0");
+  bool bounded = false;
+  for (const std::string role : {"accel_x", "accel_y", "accel_z"}) {
+    const auto& noise = channel(role)["model"]["noise"];
+    bounded = bounded || (noise.contains("unresolved_upper") &&
+                          noise["unresolved_upper"].contains("acceleration_random_walk_m_s2_sqrt_s"));
+  }
+  ASSERT_TRUE(bounded);
+  const auto refused = run_driftlab("export --model " + dir_ + "/m.json --format kalibr --instance 0 --out " + dir_ +
+                                    "/refused.yaml");
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_NE(refused.err.find("not resolved"), std::string::npos) << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ + "/refused.yaml"));
+  const std::string text = exported("kalibr", " --instance 0 --allow-bounds");
+  const auto walk = text.substr(text.find("accelerometer_random_walk: "));
+  EXPECT_NE(walk.substr(0, walk.find('\n')).find("UPPER BOUND"), std::string::npos) << text;
   double vrw = 0.0;
   for (const std::string role : {"accel_x", "accel_y", "accel_z"}) {
     vrw = std::max(vrw, channel(role)["model"]["noise"]["vrw_m_s_sqrt_s"].get<double>());

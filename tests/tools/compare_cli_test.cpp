@@ -55,11 +55,15 @@ TEST(CompareCli, RunsEveryPipelineOnTheSameRecordAndWritesOneReport) {
   };
   const auto row = stage_row(0);
   ASSERT_FALSE(row.is_null());
-  for (const char* key : {"B_deg_h", "B_ci", "N_deg_h_rtHz", "bandwidth_hz", "residual_drift_deg_h", "seconds"}) {
+  for (const char* key : {"B_resolved", "B_deg_h", "B_upper_deg_h", "B_within_tau_s", "N_deg_h_rtHz", "bandwidth_hz",
+                          "residual_drift_deg_h", "seconds"}) {
     EXPECT_TRUE(row.contains(key)) << key;
   }
+  // B is a value with its interval only where it is resolved; otherwise null beside its bound.
+  EXPECT_EQ(row["B_deg_h"].is_null(), !row["B_resolved"].get<bool>());
+  EXPECT_EQ(row.contains("B_ci"), row["B_resolved"].get<bool>());
   // Same pipeline, same seed, same record: the same scores.
-  EXPECT_EQ(row["B_deg_h"], stage_row(1)["B_deg_h"]);
+  EXPECT_EQ(row["B_upper_deg_h"], stage_row(1)["B_upper_deg_h"]);
   // The polynomial removes the temperature-driven bias: its residual drift is below the record's.
   EXPECT_LT(row["residual_drift_deg_h"].get<double>(), report["original"]["residual_drift_deg_h"].get<double>());
   const std::string html = read_text(dir / "out" / "report.html");

@@ -1,8 +1,13 @@
 // The main job end to end (issue 12): the paper's FMVMG oven run simulated, compensated by
 // models/pipelines/li2023.yaml and scored against the truth, for two seeds and two oven profiles.
 // Claims checked on each record, from report.json:
-//   - every Table 2 row is there, and B does not rise from one stage to the next;
-//   - the final B is at most the paper's 3.589 deg/h and at most 1.5 times the intrinsic floor;
+//   - every Table 2 row is there;
+//   - B is not resolved on the compensated stages nor on the intrinsic floor: the gyro's white noise
+//     (N = 99.6 deg/h/sqrt(Hz)) meets its flicker floor (0.664 x 1 deg/h) only near tau = 22 000 s,
+//     beyond the record's longest tau (3 277 s), so the Allan deviation cannot have a floor there and
+//     B is only a bound (B_deg_h null, B_upper_deg_h given);
+//   - the bound on B does not rise from one stage to the next, and the final stage's bound is below
+//     the paper's 3.589 deg/h (whatever its B, it is below the paper's);
 //   - the residual drift (rms of 60-s block means of output - true rate) falls at least 10x;
 //   - the Allan deviation of (output - true rate) stays within 1.5x of the intrinsic noise's at every
 //     tau (allowing for both intervals);
@@ -24,10 +29,9 @@ using namespace testing_cli;
 const std::string kSource = DRIFTLAB_SOURCE_DIR;
 const std::string kPipeline = kSource + "/models/pipelines/li2023.yaml";
 constexpr double kPaperFinalB = 3.589;       // deg/h, Li et al. 2023 Table 2
-constexpr double kFloorFactor = 1.5;         // issue 12
 constexpr double kMinDriftReduction = 10.0;  // issue 12
-// B of a stage may equal the previous one within the reading's rounding (the Kalman filter leaves
-// the long-tau floor where B is read unchanged); it must never rise by more than this.
+// The bound on B of a stage may equal the previous one within the reading's rounding (the Kalman
+// filter leaves the long-tau deviation where B is read unchanged); it must never rise by more than this.
 constexpr double kMonotoneSlack = 1.005;
 
 struct MainJob {
@@ -61,15 +65,16 @@ void expect_the_papers_claims_hold(const MainJob& job, const std::string& label)
   ASSERT_TRUE(job.report.contains("intrinsic_floor"));
 
   for (std::size_t k = 1; k < stages.size(); ++k) {
-    EXPECT_LE(job.rows.at(stages[k])["B_deg_h"].get<double>(),
-              job.rows.at(stages[k - 1])["B_deg_h"].get<double>() * kMonotoneSlack)
+    const auto& row = job.rows.at(stages[k]);
+    EXPECT_FALSE(row["B_resolved"].get<bool>()) << stages[k] << " at tau " << row["B_tau_s"];
+    EXPECT_TRUE(row["B_deg_h"].is_null()) << stages[k];
+    EXPECT_LE(row["B_upper_deg_h"].get<double>(),
+              job.rows.at(stages[k - 1])["B_upper_deg_h"].get<double>() * kMonotoneSlack)
         << stages[k] << " after " << stages[k - 1];
   }
+  EXPECT_FALSE(job.report["intrinsic_floor"]["B_resolved"].get<bool>());
   const auto& final_row = job.rows.at("rbf_ga_kf");
-  const double final_b = final_row["B_deg_h"];
-  const double floor_b = job.report["intrinsic_floor"]["B_deg_h"];
-  EXPECT_LE(final_b, kPaperFinalB);
-  EXPECT_LE(final_b, kFloorFactor * floor_b);
+  EXPECT_LE(final_row["B_upper_deg_h"].get<double>(), kPaperFinalB);
 
   const double raw_drift = job.rows.at("original")["residual_drift_deg_h"];
   const double final_drift = final_row["residual_drift_deg_h"];

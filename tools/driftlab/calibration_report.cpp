@@ -18,6 +18,8 @@ namespace {
 struct Scored {
   std::string name, description, bandwidth;
   double drift_dph = 0, b_dph = NAN, n_dph_rthz = NAN, extrapolated = 0;
+  bool b_resolved = false;  // b_dph is B; otherwise only the bound B < b_dph (models/allan/analysis.hpp)
+  double b_within_tau_s = 0;
   std::vector<double> block_t, block_mean_dph;
 };
 
@@ -32,7 +34,10 @@ Scored score(const std::string& name, const std::string& description, const cali
   // Allan figures need an evenly sampled record: none for records with gaps (bursts).
   const bool even = facts.evenly_sampled();
   if (const auto a = even ? calibration::allan_figures(error, fs) : std::nullopt) {
-    s.b_dph = a->bias_instability_rad_s * kDphPerRadPerSec;
+    const auto& b = a->bias_instability;
+    s.b_resolved = b.resolved;
+    s.b_dph = (b.resolved ? b.value : b.high) * kDphPerRadPerSec;
+    s.b_within_tau_s = b.longest_tau_s;
     s.n_dph_rthz = a->arw_rad_sqrt_s * kDphPerRadPerSec;
   }
   if (extrapolated) {
@@ -164,14 +169,21 @@ nlohmann::json write_calibration_report(const ReportInput& in, const ReportFiles
       ej["methods"].push_back({{"name", s.name},
                                {"description", s.description},
                                {"residual_drift_dph", s.drift_dph},
-                               {"B_dph", std::isfinite(s.b_dph) ? nlohmann::json(s.b_dph) : nlohmann::json()},
+                               {"B_dph", std::isfinite(s.b_dph) && s.b_resolved ? nlohmann::json(s.b_dph) : nlohmann::json()},
+                               {"B_resolved", s.b_resolved},
+                               {"B_upper_dph", std::isfinite(s.b_dph) && !s.b_resolved ? nlohmann::json(s.b_dph) : nlohmann::json()},
                                {"N_dph_rthz", std::isfinite(s.n_dph_rthz) ? nlohmann::json(s.n_dph_rthz) : nlohmann::json()},
                                {"output_bandwidth", s.bandwidth},
                                {"extrapolated_fraction", s.extrapolated}});
-      t.rows.push_back({s.name, s.drift_dph, s.b_dph, s.n_dph_rthz, s.bandwidth, 100.0 * s.extrapolated});
+      const HtmlCell b = !std::isfinite(s.b_dph) ? HtmlCell(std::string("–"))
+                         : s.b_resolved            ? HtmlCell(s.b_dph)
+                                                   : HtmlCell("< " + format_number(s.b_dph) + " (not resolved within tau ≤ " +
+                                                              format_number(s.b_within_tau_s) + " s)");
+      t.rows.push_back({s.name, s.drift_dph, b, s.n_dph_rthz, s.bandwidth, 100.0 * s.extrapolated});
     }
     t.note = "Residual drift: rms of 60-s block means of (output - true rate). B and N need an evenly sampled "
-             "record (none for burst records). " +
+             "record (none for burst records); B is a value only where the Allan deviation has a floor, otherwise "
+             "the bound '< x'. " +
              (r.systematic_rad_s.size()
                   ? "Intrinsic floor (measured - true systematic rate): " +
                         std::to_string(ej["intrinsic_floor_drift_dph"].get<double>()) + " deg/h."

@@ -149,6 +149,25 @@ TimeSeries load_record(const DataOptions& data, std::vector<std::string> require
   return record;
 }
 
+SampledRecord load_sampled_record(const DataOptions& data, std::vector<std::string> required_roles) {
+  DataOptions with_gaps = data;
+  with_gaps.max_gap_factor = 0.0;
+  SampledRecord r{load_record(with_gaps, std::move(required_roles)), {}};
+  r.facts = sampling::facts_of(r.record.time(), data.max_gap_factor > 0.0 ? data.max_gap_factor : sampling::kGapFactor);
+  return r;
+}
+
+TimeSeries load_evenly_sampled_record(const DataOptions& data, std::vector<std::string> required_roles,
+                                      std::string_view analysis) {
+  auto [record, facts] = load_sampled_record(data, std::move(required_roles));
+  if (!facts.evenly_sampled())
+    throw sampling::uneven_sampling_error(facts, record.time(), data.path, analysis,
+                                          facts.regular_bursts() ? "for these regular bursts, `driftlab allan` gives the "
+                                                                   "noise per burst"
+                                                                 : "");
+  return std::move(record);
+}
+
 std::string display_unit(const TimeSeries& record, const std::string& role, const DataOptions& data) {
   for (const auto& c : data.columns) {
     const auto m = parse_column_mapping(c);

@@ -14,6 +14,7 @@
 #include "framework/output_set.hpp"
 #include "framework/record_reader.hpp"
 #include "framework/registry.hpp"
+#include "framework/sampling.hpp"
 #include "framework/time_series.hpp"
 
 namespace driftlab::cli {
@@ -62,8 +63,9 @@ inline constexpr double kMaxSeed = 9007199254740992.0;  // 2^53: every seed surv
 // the one definition of the two sampling options every record-reading command shares.
 void add_sampling_options(CLI::App* command, double& sample_rate_hz, double& max_gap_factor,
                           const std::string& fs_help = "sample rate in Hz, for files without a time column",
-                          const std::string& gap_help = "largest allowed time step, as a multiple of the median "
-                                                        "step (0 allows gaps)");
+                          const std::string& gap_help = "a time step longer than this multiple of the median step "
+                                                        "is a gap, an error (0 reads gaps; allan, run, compare, "
+                                                        "decompose and entropy still find them at 3x)");
 // Adds --data, --column, --fs and --max-gap, and the log options --topic, --instance and --sensor,
 // to a subcommand.
 void add_data_options(CLI::App* command, DataOptions& data, const std::string& column_help);
@@ -79,6 +81,22 @@ std::vector<CsvColumn> imu_record_columns(const TimeSeries& record);
 // A log has no "rate" channel: single-signal commands name one, `--column rate=gyro_z` (the z gyro
 // of instance 0, rad/s) or `--column gyro1_x`. What a log reader repaired goes to stderr as notes.
 TimeSeries load_record(const DataOptions& data, std::vector<std::string> required_roles = {"rate"});
+// The record of a command that assumes even sampling (allan; through load_evenly_sampled_record run,
+// compare, decompose and entropy), with its sampling facts
+// (framework/sampling.hpp): gaps are read as they are and then classified with --max-gap's factor,
+// the default 3 when --max-gap is 0, so that 0 never makes a gapped record contiguous. What the
+// command does with regular bursts or an irregular record is its own business; none reads across a
+// gap.
+struct SampledRecord {
+  TimeSeries record;
+  sampling::Facts facts;
+};
+SampledRecord load_sampled_record(const DataOptions& data, std::vector<std::string> required_roles = {"rate"});
+// The same for a command that takes only an evenly sampled record (run, compare, decompose, entropy):
+// any gap is the DataError of sampling::uneven_sampling_error, naming the first gap and, for regular
+// bursts, `driftlab allan` (which analyses them per burst). `analysis` names what assumes even sampling.
+TimeSeries load_evenly_sampled_record(const DataOptions& data, std::vector<std::string> required_roles,
+                                      std::string_view analysis);
 // Role analysed by single-signal commands: the role of the first --column that is not `time`
 // (so --column time=t:s --column rate=r:deg/s analyses rate), else "rate".
 std::string primary_role(const DataOptions& data);

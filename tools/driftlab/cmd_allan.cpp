@@ -5,6 +5,7 @@
 // --input angle: the column holds the integrated angle. Angles have no unit of their own in the
 // CSV reader, so the column is mapped with the matching rate unit (deg/s for an angle in deg,
 // rad/s for rad); the deviations then come out in that rate unit.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -15,6 +16,7 @@
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/output_set.hpp"
+#include "framework/sampling.hpp"
 #include "framework/units.hpp"
 #include "models/allan/confidence.hpp"
 #include "models/allan/deviation.hpp"
@@ -50,13 +52,24 @@ std::string generic_unit(allan::Term term, const std::string& u) {
   return u;
 }
 
+// A fitted term with its resolution (models/allan/noise_fit.hpp): an unresolved term has no value,
+// only its bound `upper`.
 nlohmann::json term_json(const allan::TermEstimate& t, double factor, std::string_view unit) {
-  return {{"value", t.value * factor}, {"sigma", t.sigma * factor}, {"unit", std::string(unit)},
-          {"fitted", t.fitted}};
+  nlohmann::json j{{"resolved", t.resolved}, {"fitted", t.fitted}, {"unit", std::string(unit)}};
+  if (t.resolved) {
+    j["value"] = t.value * factor;
+    j["sigma"] = t.sigma * factor;
+    j["interval"] = {t.low * factor, t.high * factor};
+  } else {
+    j["value"] = nullptr;
+    j["upper"] = t.high * factor;
+  }
+  return j;
 }
 
 nlohmann::json summary_json(const AllanOptions& o, const allan::NoiseFit& fit, bool angular,
-                            const std::string& channel_unit, std::size_t samples, double tau0) {
+                            const std::string& channel_unit, std::size_t samples, double tau0,
+                            const nlohmann::json& sampling) {
   nlohmann::json j;
   if (angular) {
     for (const auto& c : allan::kIeee952Units) j[std::string(c.key)] = term_json(fit[c.term], c.factor, c.unit);
@@ -71,14 +84,16 @@ nlohmann::json summary_json(const AllanOptions& o, const allan::NoiseFit& fit, b
       j[std::string(c.key)] = term_json(fit[c.term], 1.0, generic_unit(c.term, channel_unit));
     }
   }
-  j["record_length_s"] = static_cast<double>(samples) * tau0;
+  j["record_length_s"] = static_cast<double>(samples) * tau0;  // sampled time (bursts: their sum)
   j["samples"] = samples;
   j["sample_rate_hz"] = 1.0 / tau0;
+  j["sampling"] = sampling;
   j["input"] = o.input;
   j["kind"] = o.kind;
   j["confidence"] = o.confidence;
   j["fit"] = {{"curve", "oadev"}, {"points", fit.points}, {"dof", fit.dof}, {"chi2", fit.chi2},
-              {"covariance_scale", fit.scale},
+              {"chi2_per_dof", fit.reduced_chi2()}, {"covariance_scale", fit.scale},
+              {"resolved", "kept by the fit and c = term^2 more than one sigma above 0; otherwise only the bound 'upper'"},
               {"model", "sigma^2 = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2"}};
   return j;
 }
@@ -88,8 +103,17 @@ nlohmann::json readings_json(const allan::Analysis& a, bool angular, const std::
   const double f = angular ? kDphPerRadPerSec : 1.0;
   const std::string unit = angular ? "deg/h" : channel_unit;
   const auto& b = a.bias_instability;
-  return {{"B_flat_floor", {{"value", b.value * f}, {"interval", {b.low * f, b.high * f}}, {"tau_s", b.tau_s},
-                            {"unit", unit}, {"how", "min OADEV / 0.664 (IEEE 952 Annex C)"}}},
+  nlohmann::json floor{{"resolved", b.resolved}, {"tau_s", b.tau_s}, {"longest_tau_s", b.longest_tau_s}, {"unit", unit},
+                       {"how", "min OADEV / 0.664 (IEEE 952 Annex C), a value only where the curve has a floor "
+                               "(models/allan/analysis.hpp); otherwise the bound 'upper'"}};
+  if (b.resolved) {
+    floor["value"] = b.value * f;
+    floor["interval"] = {b.low * f, b.high * f};
+  } else {
+    floor["value"] = nullptr;
+    floor["upper"] = b.high * f;
+  }
+  return {{"B_flat_floor", floor},
           {"N_at_1s", {{"value", a.arw_rad_sqrt_s * f}, {"unit", angular ? "deg/h/sqrt(Hz)" : channel_unit + "*sqrt(s)"},
                        {"how", "-1/2 slope line at tau = 1 s"}}}};
 }
@@ -149,20 +173,35 @@ void allan_command(const AllanOptions& o) {
   const auto input = o.input == "angle" ? allan::InputType::Angle : allan::InputType::Rate;
   const allan::TauGrid grid = allan::parse_tau_grid(o.taus);
 
-  const auto record = load_record(o.data);
+  const auto [record, facts] = load_sampled_record(o.data);
+  const bool bursts = facts.layout() == sampling::Layout::RegularBursts;
+  if (facts.layout() == sampling::Layout::Irregular)
+    throw sampling::uneven_sampling_error(facts, record.time(), o.data.path, "an Allan analysis",
+                                          "driftlab allan analyses a record of regular bursts per burst");
   const std::string role = primary_role(o.data);
   const auto& channel = record.channel(role);
   const bool constant_record = (channel.values.array() == channel.values[0]).all();
   const std::string why = constant_record ? " (the record is constant: every deviation is 0, there is no noise to fit)" : "";
-  const double fs = record.sample_rate_hz();
+  const double fs = sampling::rate_within_segments_hz(record.time(), facts);
   if (!(fs > 0.0)) throw DataError({o.data.path, 0, "t_s"}, "cannot derive a sample interval");
   const double tau0 = 1.0 / fs;
-  const Eigen::VectorXd angle =
-      input == allan::InputType::Rate ? allan::angle_from_rate(channel.values, tau0) : channel.values;
-  const auto n = static_cast<std::size_t>(angle.size());
+  // One angle series per burst (one for an evenly sampled record); no difference spans a gap.
+  std::vector<Eigen::VectorXd> angles;
+  std::size_t samples = 0;
+  for (const auto& segment : facts.segments) {
+    const auto values = channel.values.segment(segment.first, segment.samples);
+    angles.push_back(input == allan::InputType::Rate ? allan::angle_from_rate(Eigen::Ref<const Eigen::VectorXd>(values), tau0)
+                                                     : Eigen::VectorXd(values));
+    samples += static_cast<std::size_t>(segment.samples);
+  }
+  std::vector<std::size_t> lengths;
+  for (const auto& a : angles) lengths.push_back(static_cast<std::size_t>(a.size()));
+  std::nth_element(lengths.begin(), lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2), lengths.end());
+  const std::size_t n = lengths[lengths.size() / 2];  // angle samples of the median burst (of the record when even)
 
   const auto factors = allan::averaging_factors(grid, *kind, n, tau0);
-  const auto curve = allan::estimate(*kind, angle, tau0, input, factors, o.confidence);
+  const auto curve = bursts ? allan::estimate_bursts(*kind, angles, tau0, input, factors, o.confidence)
+                            : allan::estimate(*kind, angles.front(), tau0, input, factors, o.confidence);
 
   const std::string unit = display_unit(record, role, o.data);
   const auto display = find_unit(unit);
@@ -183,7 +222,22 @@ void allan_command(const AllanOptions& o) {
 
   std::optional<allan::Analysis> analysis;
   try {
-    analysis = allan::analyze_angle(angle, tau0, {.confidence = o.confidence});
+    if (bursts && input == allan::InputType::Rate) {
+      analysis = allan::analyze_segments(channel.values, facts.segments, fs, {.confidence = o.confidence});
+    } else if (bursts) {  // an angle record: each burst's rate is its angle's differences / tau0
+      Eigen::VectorXd rate(static_cast<Eigen::Index>(samples - angles.size()));
+      std::vector<sampling::Segment> rate_segments;
+      Eigen::Index at = 0;
+      for (const auto& a : angles) {
+        const Eigen::Index k = a.size() - 1;
+        rate.segment(at, k) = (a.tail(k) - a.head(k)) / tau0;
+        rate_segments.push_back({at, k});
+        at += k;
+      }
+      analysis = allan::analyze_segments(rate, rate_segments, fs, {.confidence = o.confidence});
+    } else {
+      analysis = allan::analyze_angle(angles.front(), tau0, {.confidence = o.confidence});
+    }
   } catch (const DataError& e) {
     if (!o.json.empty()) throw DataError({o.data.path, 0, channel.source}, std::string(e.what()) + why);
     std::cerr << "note: no Allan readings: " << e.what() << why << "\n";
@@ -194,9 +248,15 @@ void allan_command(const AllanOptions& o) {
     std::cerr << "note: no noise-term fit: too few Allan points" << why << "\n";
   }
   const bool angular = channel.unit == "rad/s";
-  const std::size_t samples = input == allan::InputType::Rate ? n - 1 : n;
+  const std::string sampled = sampling::describe(facts, record.time());
+  const nlohmann::json sampling_json{
+      {"layout", bursts ? "regular_bursts" : "even"}, {"bursts", bursts ? facts.segments.size() : 1},
+      {"description", sampled},
+      {"how", bursts ? "overlapping Allan variance of every burst pooled (no difference spans a gap), edf of all "
+                       "bursts summed, tau up to the grid of the median burst"
+                     : "one contiguous record"}};
   if (!o.json.empty()) {
-    auto summary = summary_json(o, *fit, angular, channel.unit, samples, tau0);
+    auto summary = summary_json(o, *fit, angular, channel.unit, samples, tau0, sampling_json);
     summary["readings"] = readings_json(*analysis, angular, channel.unit);
     outputs.write(o.json, summary.dump(2) + "\n");
   }
@@ -204,21 +264,39 @@ void allan_command(const AllanOptions& o) {
   outputs.commit();
 
   std::cout << o.kind << " of " << role << ": " << curve.size() << " taus from " << curve.front().tau
-            << " s to " << curve.back().tau << " s, " << samples << " samples at " << fs << " Hz\n";
+            << " s to " << curve.back().tau << " s, " << samples << " samples, " << sampled << "\n";
+  if (bursts)
+    std::cout << "per burst: the " << o.kind << " of every burst pooled (no difference spans a gap), the edf of all "
+              << facts.segments.size() << " bursts summed; tau only up to " << curve.back().tau << " s\n";
   if (analysis && angular) {
     const auto& b = analysis->bias_instability;
-    std::printf("B = %.4g deg/h (flat floor of the OADEV / 0.664, IEEE 952) at tau = %g s, 68.3 %% interval [%.3g, %.3g]\n",
-                b.value * kDphPerRadPerSec, b.tau_s, b.low * kDphPerRadPerSec, b.high * kDphPerRadPerSec);
+    if (b.resolved) {
+      std::printf("B = %.4g deg/h (flat floor of the OADEV / 0.664, IEEE 952) at tau = %g s, 68.3 %% interval [%.3g, %.3g]\n",
+                  b.value * kDphPerRadPerSec, b.tau_s, b.low * kDphPerRadPerSec, b.high * kDphPerRadPerSec);
+    } else {
+      std::printf("B < %.3g deg/h (not resolved within tau <= %g s: the OADEV has no floor there, its minimum is at "
+                  "tau = %g s; 68.3 %% bound)\n",
+                  b.high * kDphPerRadPerSec, b.longest_tau_s, b.tau_s);
+    }
     std::printf("N = %.4g deg/h/sqrt(Hz) (-1/2 slope line at tau = 1 s)\n", analysis->arw_rad_sqrt_s * kDphPerRadPerSec);
     std::fflush(stdout);
   }
   if (fit && angular) {
-    std::cout << "least-squares fit of the five IEEE 952 terms:\n";
+    char head[160];
+    std::snprintf(head, sizeof head, "least-squares fit of the five IEEE 952 terms (chi2/dof = %.3g, %zu points, %zu dof; "
+                  "one-sigma intervals):\n", fit->reduced_chi2(), fit->points, fit->dof);
+    std::cout << head;
     for (const auto& c : allan::kIeee952Units) {
       const auto& t = (*fit)[c.term];
-      char line[160];
-      std::snprintf(line, sizeof line, "%s = %.4g +- %.2g %s%s\n", std::string(c.key).c_str(), t.value * c.factor,
-                    t.sigma * c.factor, std::string(c.unit).c_str(), t.fitted ? "" : "  (not resolved: 0)");
+      const std::string key(c.key), unit(c.unit);
+      char line[200];
+      if (t.resolved) {
+        std::snprintf(line, sizeof line, "%s = %.4g +- %.2g %s [%.3g, %.3g]\n", key.c_str(), t.value * c.factor,
+                      t.sigma * c.factor, unit.c_str(), t.low * c.factor, t.high * c.factor);
+      } else {
+        std::snprintf(line, sizeof line, "%s < %.3g %s  (not resolved%s)\n", key.c_str(), t.high * c.factor, unit.c_str(),
+                      t.fitted ? ": kept by the fit, but within one sigma of 0" : ": set to 0 by the fit");
+      }
       std::cout << line;
     }
   }

@@ -66,10 +66,12 @@ std::string unique_label(const std::string& file, std::set<std::string>& taken) 
 
 std::vector<HtmlCell> row(const std::string& pipeline, const evaluation::StageScore& s, std::optional<double> seconds) {
   const auto& b = s.analysis.bias_instability;
+  const double f = kDphPerRadPerSec;
   return {pipeline,
           s.stage,
-          b.value * kDphPerRadPerSec,
-          "[" + format_number(b.low * kDphPerRadPerSec) + ", " + format_number(b.high * kDphPerRadPerSec) + "]",
+          b.resolved ? HtmlCell(b.value * f) : HtmlCell("< " + format_number(b.high * f)),
+          b.resolved ? "[" + format_number(b.low * f) + ", " + format_number(b.high * f) + "]"
+                     : "not resolved within tau ≤ " + format_number(b.longest_tau_s) + " s",
           s.analysis.arw_rad_sqrt_s * kDphPerRadPerSec,
           s.bandwidth_hz,
           s.residual_drift_rad_s ? HtmlCell(*s.residual_drift_rad_s * kDphPerRadPerSec) : HtmlCell(std::string("–")),
@@ -105,7 +107,8 @@ void compare(const CompareOptions& o, CommandEnv& env) {
   inputs.insert(inputs.end(), o.pipelines.begin(), o.pipelines.end());
   OutputSet files(inputs);  // planned before the data is read, committed together at the end
   const auto [report_json, report_html] = plan_report_files(files, o.out, "--out");
-  const auto record = load_record(o.data, std::vector<std::string>(roles_needed.begin(), roles_needed.end()));
+  const auto record = load_evenly_sampled_record(o.data, std::vector<std::string>(roles_needed.begin(), roles_needed.end()),
+                                                 "A pipeline (its decompositions, filters and Allan scores)");
 
   for (std::size_t i = 0; i < results.size(); ++i) {
     auto& r = results[i];
@@ -131,7 +134,8 @@ void compare(const CompareOptions& o, CommandEnv& env) {
                    "residual drift (°/h)", "run time (s)"},
                   {},
                   "B: flat floor of the overlapping Allan deviation / 0.664 beyond the output's correlation time, "
-                  "with the chi-square interval of that point (68.3 %); N: the -1/2 line at tau = 1 s, comparable "
+                  "with the chi-square interval of that point (68.3 %), where the deviation has a floor; otherwise "
+                  "only the bound '< x' within the taus read; N: the -1/2 line at tau = 1 s, comparable "
                   "only at equal noise bandwidth (one-sided, relative to the record's white level); residual "
                   "drift: rms of 60-s block means of output - true rate (records with a truth column); run time: "
                   "wall-clock seconds until the stage's step finished, on this machine."};

@@ -89,7 +89,7 @@ void decompose_command(const DecomposeOptions& o, CommandEnv& env) {
   auto decomposer = registry.create_as<Decomposer>({o.plugin, params});
   auto classifier = registry.create_as<Classifier>({kClassifier, classifier_params});
 
-  const auto record = load_record(o.data);
+  const auto record = load_evenly_sampled_record(o.data, {role::kRate}, "A decomposition");
   const std::string role = primary_role(o.data);
   const Eigen::VectorXd& x = record.channel(role).values;
   const double fs = record.sample_rate_hz();

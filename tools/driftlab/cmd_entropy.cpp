@@ -27,7 +27,7 @@ std::string number(double value, const char* format) {
 }
 
 void entropy_command(const EntropyOptions& o) {
-  const auto record = load_record(o.data);
+  const auto record = load_evenly_sampled_record(o.data, {role::kRate}, "Sample entropy");
   const std::string role = primary_role(o.data);
   const auto& values = record.channel(role).values;
   const std::span<const double> x(values.data(), static_cast<std::size_t>(values.size()));

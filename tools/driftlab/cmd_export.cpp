@@ -61,6 +61,9 @@ void add_export_command(CLI::App& app, CommandEnv&) {
       ->capture_default_str();
   cmd->add_option("--update-rate", o->e.kalibr_update_rate_hz, "Kalibr update_rate, Hz (default: the model's)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--allow-bounds", o->e.kalibr_allow_bounds,
+                "Kalibr: write a noise term the calibration records did not resolve as its upper bound, marked as one "
+                "in the file (otherwise refused, exit 2)");
   cmd->callback([o] { export_command(*o); });
 }
 

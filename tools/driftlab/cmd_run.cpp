@@ -48,7 +48,7 @@ void run(const RunOptions& o, CommandEnv& env) {
   std::vector<std::string> roles;
   for (const auto& [name, role] : pipeline.inputs)
     if (role != "time") roles.push_back(role);
-  const auto record = load_record(o.data, roles);
+  const auto record = load_evenly_sampled_record(o.data, roles, "A pipeline (its decompositions, filters and Allan scores)");
 
   nlohmann::json report{{"format", "driftlab-run-report/1"},
                         {"driftlab_version", kVersion},

@@ -38,12 +38,29 @@ nlohmann::json curve_json(const allan::Analysis& a) {
 
 nlohmann::json fit_json(const allan::Analysis& a) {
   if (!a.fit) return nullptr;
-  nlohmann::json j{{"label", "least-squares fit of the five IEEE 952 terms (not the paper's reading)"}};
+  nlohmann::json j{{"label", "least-squares fit of the five IEEE 952 terms (not the paper's reading)"},
+                   {"chi2_per_dof", a.fit->reduced_chi2()},
+                   {"dof", a.fit->dof}};
   for (const auto& c : allan::kIeee952Units) {
     const auto& t = (*a.fit)[c.term];
-    j[std::string(c.key)] = {{"value", t.value * c.factor}, {"sigma", t.sigma * c.factor}, {"unit", std::string(c.unit)}};
+    nlohmann::json term{{"resolved", t.resolved}, {"unit", std::string(c.unit)}};
+    if (t.resolved) {
+      term["value"] = t.value * c.factor;
+      term["sigma"] = t.sigma * c.factor;
+      term["interval"] = {t.low * c.factor, t.high * c.factor};
+    } else {
+      term["value"] = nullptr;
+      term["upper"] = t.high * c.factor;
+    }
+    j[std::string(c.key)] = term;
   }
   return j;
+}
+
+std::string number_text(double v, const char* format) {
+  char b[32];
+  std::snprintf(b, sizeof b, format, v);
+  return b;
 }
 
 }  // namespace
@@ -94,6 +111,24 @@ RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const st
   return s;
 }
 
+nlohmann::json b_json(const allan::FloorReading& b) {
+  const double f = kDphPerRadPerSec;
+  nlohmann::json j{{"B_resolved", b.resolved}, {"B_deg_h", nullptr}, {"B_upper_deg_h", b.high * f},
+                   {"B_tau_s", b.tau_s}, {"B_within_tau_s", b.longest_tau_s}};
+  if (b.resolved) {
+    j["B_deg_h"] = b.value * f;
+    j["B_ci"] = {b.low * f, b.high * f};
+  }
+  return j;
+}
+
+std::string b_text(const allan::FloorReading& b) {
+  const double f = kDphPerRadPerSec;
+  if (b.resolved)
+    return number_text(b.value * f, "%.3g") + " [" + number_text(b.low * f, "%.2g") + "," + number_text(b.high * f, "%.2g") + "]";
+  return "< " + number_text(b.high * f, "%.3g") + " (tau<=" + number_text(b.longest_tau_s, "%.0f") + "s)";
+}
+
 nlohmann::json scores_json(const RunScores& s) {
   nlohmann::json j;
   auto& rows = j["table2"] = nlohmann::json::array();
@@ -101,13 +136,11 @@ nlohmann::json scores_json(const RunScores& s) {
   for (const auto& st : s.stages) {
     const auto& a = st.analysis;
     nlohmann::json row{{"stage", st.stage},
-                       {"B_deg_h", a.bias_instability.value * kDphPerRadPerSec},
-                       {"B_ci", {a.bias_instability.low * kDphPerRadPerSec, a.bias_instability.high * kDphPerRadPerSec}},
-                       {"B_tau_s", a.bias_instability.tau_s},
                        {"N_deg_h_rtHz", a.arw_rad_sqrt_s * kDphPerRadPerSec},
                        {"bandwidth_hz", st.bandwidth_hz},
                        {"correlation_time_s", st.correlation_time_s},
                        {"fit", fit_json(a)}};
+    row.update(b_json(a.bias_instability));
     if (st.residual_drift_rad_s) row["residual_drift_deg_h"] = *st.residual_drift_rad_s * kDphPerRadPerSec;
     if (const auto it = s.against_floor.find(st.stage); it != s.against_floor.end()) {
       row["error_vs_floor"] = {{"max_ratio", it->second.max_ratio}, {"tau_of_max_s", it->second.tau_of_max_s},
@@ -122,10 +155,8 @@ nlohmann::json scores_json(const RunScores& s) {
     const auto& a = *s.intrinsic;
     j["intrinsic_floor"] = {
         {"what", "Allan analysis of measured - true systematic rate: the gyro's own noise"},
-        {"B_deg_h", a.bias_instability.value * kDphPerRadPerSec},
-        {"B_ci", {a.bias_instability.low * kDphPerRadPerSec, a.bias_instability.high * kDphPerRadPerSec}},
-        {"B_tau_s", a.bias_instability.tau_s},
         {"N_deg_h_rtHz", a.arw_rad_sqrt_s * kDphPerRadPerSec}};
+    j["intrinsic_floor"].update(b_json(a.bias_instability));
     curves["intrinsic_floor"] = curve_json(a);
   }
   if (s.baseline) {
@@ -145,7 +176,9 @@ nlohmann::json scores_json(const RunScores& s) {
   j["units"] = {{"B", "deg/h"}, {"N", "deg/h/sqrt(Hz)"}, {"bandwidth", "Hz (one-sided equivalent noise bandwidth)"},
                 {"residual_drift", "deg/h, rms of 60-s block means of output - true rate"}, {"allan", "deg/h"}};
   j["readings"] = {{"B", "flat floor of the overlapping Allan deviation / 0.664 (IEEE 952 Annex C), at tau >= the "
-                         "output's correlation time (1 / bandwidth)"},
+                         "output's correlation time (1 / bandwidth); a value only where the deviation has a floor (a "
+                         "minimum with rising or flat neighbours within the intervals), otherwise B_deg_h is null and "
+                         "B_upper_deg_h bounds B within tau <= B_within_tau_s"},
                    {"N", "-1/2 slope line at tau = 1 s"}};
   return j;
 }
@@ -153,8 +186,9 @@ nlohmann::json scores_json(const RunScores& s) {
 std::string table2_text(const RunScores& s) {
   std::string out;
   char line[256];
-  out += "Table 2 (B in deg/h, N in deg/h/sqrt(Hz), noise bandwidth in Hz, residual drift in deg/h)\n";
-  std::snprintf(line, sizeof line, "%-16s %10s %10s  %16s %12s %10s %14s\n", "stage", "paper B", "paper N", "B [68% CI]",
+  out += "Table 2 (B in deg/h, N in deg/h/sqrt(Hz), noise bandwidth in Hz, residual drift in deg/h; B is a value "
+         "[68% CI] only where the Allan deviation has a floor, otherwise a bound '< x' within the taus read)\n";
+  std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", "stage", "paper B", "paper N", "B",
                 "N", "bandwidth", "resid. drift");
   out += line;
   const auto cell = [](std::optional<double> v, const char* fmt) {
@@ -166,10 +200,8 @@ std::string table2_text(const RunScores& s) {
   for (const auto& st : s.stages) {
     const auto* p = paper_row(st.stage);
     const auto& a = st.analysis;
-    const std::string b = cell(a.bias_instability.value * kDphPerRadPerSec, "%.3g") + " [" +
-                          cell(a.bias_instability.low * kDphPerRadPerSec, "%.2g") + "," +
-                          cell(a.bias_instability.high * kDphPerRadPerSec, "%.2g") + "]";
-    std::snprintf(line, sizeof line, "%-16s %10s %10s  %16s %12s %10s %14s\n", st.stage.c_str(),
+    const std::string b = b_text(a.bias_instability);
+    std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", st.stage.c_str(),
                   p ? cell(p->b_deg_h, "%.4g").c_str() : "-", p ? cell(p->n_deg_h_rthz, "%.4g").c_str() : "-", b.c_str(),
                   cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g").c_str(), cell(st.bandwidth_hz, "%.3g").c_str(),
                   st.residual_drift_rad_s ? cell(*st.residual_drift_rad_s * kDphPerRadPerSec, "%.3g").c_str() : "-");
@@ -177,11 +209,8 @@ std::string table2_text(const RunScores& s) {
   }
   if (s.intrinsic) {
     const auto& a = *s.intrinsic;
-    std::snprintf(line, sizeof line, "%-16s %10s %10s  %16s %12s %10s %14s\n", "intrinsic floor", "-", "-",
-                  (cell(a.bias_instability.value * kDphPerRadPerSec, "%.3g") + " [" +
-                   cell(a.bias_instability.low * kDphPerRadPerSec, "%.2g") + "," +
-                   cell(a.bias_instability.high * kDphPerRadPerSec, "%.2g") + "]")
-                      .c_str(),
+    std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", "intrinsic floor", "-", "-",
+                  b_text(a.bias_instability).c_str(),
                   cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g").c_str(), "-", "-");
     out += line;
   }
@@ -350,17 +379,23 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
   html.section("Table 2: Allan figures per stage");
   HtmlTable t;
   t.caption = "The stages of the pipeline beside the paper's Table 2, the intrinsic floor and a PX4-style baseline";
-  t.header = {"stage", "paper B (°/h)", "paper N (°/h/√Hz)", "B (°/h)", "B interval (°/h)", "B read at tau (s)",
+  t.header = {"stage", "paper B (°/h)", "paper N (°/h/√Hz)", "B (°/h)", "B interval (°/h)", "minimum at tau (s)",
               "N (°/h/√Hz)", "noise bandwidth (Hz)", "residual drift (°/h)", "max error / floor"};
+  // B: a value and its interval where the deviation has a floor, otherwise the bound.
+  const auto b_cells = [](const allan::FloorReading& b) -> std::pair<HtmlCell, HtmlCell> {
+    if (b.resolved)
+      return {b.value * kDphPerRadPerSec, fmt(b.low * kDphPerRadPerSec) + " – " + fmt(b.high * kDphPerRadPerSec)};
+    return {"< " + fmt(b.high * kDphPerRadPerSec), "not resolved within tau ≤ " + fmt(b.longest_tau_s, "%.0f") + " s"};
+  };
   for (const auto& st : scores.stages) {
     const auto* p = paper_row(st.stage);
     const auto& a = st.analysis;
+    const auto [b_value, b_interval] = b_cells(a.bias_instability);
     std::vector<HtmlCell> row{st.stage,
                               p ? HtmlCell(p->b_deg_h) : HtmlCell(std::string("–")),
                               p ? HtmlCell(p->n_deg_h_rthz) : HtmlCell(std::string("–")),
-                              a.bias_instability.value * kDphPerRadPerSec,
-                              fmt(a.bias_instability.low * kDphPerRadPerSec) + " – " +
-                                  fmt(a.bias_instability.high * kDphPerRadPerSec),
+                              b_value,
+                              b_interval,
                               a.bias_instability.tau_s,
                               a.arw_rad_sqrt_s * kDphPerRadPerSec,
                               st.bandwidth_hz};
@@ -374,16 +409,16 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
   }
   if (scores.intrinsic) {
     const auto& a = *scores.intrinsic;
-    t.rows.push_back({std::string("intrinsic floor"), std::string("–"), std::string("–"),
-                      a.bias_instability.value * kDphPerRadPerSec,
-                      fmt(a.bias_instability.low * kDphPerRadPerSec) + " – " +
-                          fmt(a.bias_instability.high * kDphPerRadPerSec),
+    const auto [b_value, b_interval] = b_cells(a.bias_instability);
+    t.rows.push_back({std::string("intrinsic floor"), std::string("–"), std::string("–"), b_value, b_interval,
                       a.bias_instability.tau_s, a.arw_rad_sqrt_s * kDphPerRadPerSec, record.sample_rate_hz() / 2.0,
                       std::string("–"), std::string("–")});
   }
   t.note =
       "B: flat floor of the overlapping Allan deviation / 0.664 (IEEE 952 Annex C), read at tau >= the output's "
-      "correlation time (1 / noise bandwidth), with its 68.3 % chi-square interval. N: the -1/2 slope line at "
+      "correlation time (1 / noise bandwidth), with its 68.3 % chi-square interval, where the deviation has a floor "
+      "(a minimum with rising or flat neighbours within the intervals); where it is still falling at the longest "
+      "tau, only the bound '< x' (the upper end of the minimum's interval / 0.664). N: the -1/2 slope line at "
       "tau = 1 s; N is only comparable at equal noise bandwidth (one-sided equivalent bandwidth relative to the "
       "original record's white level). Residual drift: rms of 60-s block means of output - true rate. Max error / "
       "floor: largest ratio over tau of the Allan deviation of (output - true rate) to that of the intrinsic "

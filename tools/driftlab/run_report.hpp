@@ -44,6 +44,14 @@ inline constexpr double kFloorFactor = 1.5;  // "nothing left, nothing added": e
 // is too short for the analysis.
 RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const std::map<std::string, Signal>& outputs);
 
+// B as every report gives it (models/allan/analysis.hpp), deg/h: a value with its 68.3 % interval only
+// where the OADEV has a floor, otherwise the bound. JSON: B_resolved, B_deg_h (null when not resolved),
+// B_ci (resolved only), B_upper_deg_h (the interval's upper end: the bound when not resolved),
+// B_tau_s (the minimum's tau) and B_within_tau_s (the longest tau). Text: "1.75 [1.6,1.9]" or
+// "< 1.89 (tau<=3277s)".
+nlohmann::json b_json(const allan::FloorReading& b);
+std::string b_text(const allan::FloorReading& b);
+
 // report.json's "table2", "intrinsic_floor", "baseline" and "allan" entries.
 nlohmann::json scores_json(const RunScores& scores);
 
