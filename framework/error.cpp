@@ -1,6 +1,7 @@
 #include "framework/error.hpp"
 
 #include <algorithm>
+#include <cstdio>
 
 namespace driftlab {
 namespace {
@@ -15,6 +16,12 @@ std::string join_problems(const std::vector<Diagnostic>& problems) {
 }
 
 }  // namespace
+
+std::string message_number(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", x);
+  return text;
+}
 
 std::string quoted_excerpt(std::string_view text, std::size_t max_chars) {
   static constexpr char kHex[] = "0123456789abcdef";

@@ -27,6 +27,9 @@ struct Diagnostic {
 // non-ASCII bytes escaped as \xNN, so a 2 MB cell or a binary file never floods a terminal.
 std::string quoted_excerpt(std::string_view text, std::size_t max_chars = 80);
 
+// A number as messages print it: 6 significant digits (printf "%.6g": 0.0125, 1e+300, nan).
+std::string message_number(double x);
+
 class Error : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

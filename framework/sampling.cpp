@@ -1,20 +1,10 @@
 #include "framework/sampling.hpp"
 
 #include <algorithm>
-#include <cstdio>
 
 #include "framework/signal.hpp"
 
 namespace driftlab::sampling {
-namespace {
-
-std::string number(double x) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.6g", x);
-  return text;
-}
-
-}  // namespace
 
 double mean_rate_hz(const Eigen::VectorXd& time_s) {
   const Eigen::Index n = time_s.size();
@@ -66,7 +56,7 @@ double rate_within_segments_hz(const Eigen::VectorXd& time_s, const Facts& facts
 std::string describe(const Facts& facts, const Eigen::VectorXd& time_s) {
   const double fs = rate_within_segments_hz(time_s, facts);
   switch (facts.layout()) {
-    case Layout::Even: return "evenly sampled at " + number(fs) + " Hz";
+    case Layout::Even: return "evenly sampled at " + message_number(fs) + " Hz";
     case Layout::RegularBursts: {
       Eigen::Index fewest = facts.segments.front().samples, most = fewest;
       for (const auto& s : facts.segments) {
@@ -74,22 +64,22 @@ std::string describe(const Facts& facts, const Eigen::VectorXd& time_s) {
         most = std::max(most, s.samples);
       }
       const std::string count = fewest == most ? std::to_string(fewest) : std::to_string(fewest) + " .. " + std::to_string(most);
-      return std::to_string(facts.segments.size()) + " regular bursts of " + count + " samples at " + number(fs) +
-             " Hz, one every " + number(facts.shortest_period_s) + " .. " + number(facts.longest_period_s) + " s";
+      return std::to_string(facts.segments.size()) + " regular bursts of " + count + " samples at " + message_number(fs) +
+             " Hz, one every " + message_number(facts.shortest_period_s) + " .. " + message_number(facts.longest_period_s) + " s";
     }
     case Layout::Irregular: break;
   }
   if (facts.gaps == 1) return "irregular: one gap, no regular bursts";
-  return "irregular: " + std::to_string(facts.gaps) + " gaps, not at a regular period (" + number(facts.shortest_period_s) +
-         " .. " + number(facts.longest_period_s) + " s from one segment's start to the next)";
+  return "irregular: " + std::to_string(facts.gaps) + " gaps, not at a regular period (" + message_number(facts.shortest_period_s) +
+         " .. " + message_number(facts.longest_period_s) + " s from one segment's start to the next)";
 }
 
 DataError uneven_sampling_error(const Facts& facts, const Eigen::VectorXd& time_s, const std::string& file,
                                 std::string_view analysis, std::string_view hint) {
   std::string message = std::string(analysis) + " assumes even sampling, and this record has " +
-                        std::to_string(facts.gaps) + " gap(s) (steps longer than " + number(facts.gap_factor) +
-                        " x the median step of " + number(facts.median_step_s) + " s, see --max-gap): the first of " +
-                        number(facts.first_gap_s) + " s after t = " + number(facts.first_gap_time_s) + " s (sample " +
+                        std::to_string(facts.gaps) + " gap(s) (steps longer than " + message_number(facts.gap_factor) +
+                        " x the median step of " + message_number(facts.median_step_s) + " s, see --max-gap): the first of " +
+                        message_number(facts.first_gap_s) + " s after t = " + message_number(facts.first_gap_time_s) + " s (sample " +
                         std::to_string(facts.first_gap_index + 1) + "). The record is " + describe(facts, time_s) +
                         ". Resample it onto an even grid with a stated method (e.g. linear interpolation) and give " +
                         "that file, split it at its gaps, or analyse the segments one by one";

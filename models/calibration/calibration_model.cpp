@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -78,16 +77,6 @@ double CalibrationModel::scale_factor(double temp_c) const {
   return 1.0 + horner(scale_factor_per_k, tc - reference_temp_c);
 }
 
-namespace {
-
-std::string number_text(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", x);
-  return buf;
-}
-
-}  // namespace
-
 void CalibrationModel::validate() const {
   std::vector<Diagnostic> problems;
   const auto bad = [&](const std::string& key, const std::string& message) {
@@ -97,7 +86,7 @@ void CalibrationModel::validate() const {
     return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
   };
   const auto temperature = [](double t) { return t >= kMinTemperatureC && t <= kMaxTemperatureC; };
-  const std::string temperatures = "[" + number_text(kMinTemperatureC) + ", " + number_text(kMaxTemperatureC) + "] degC";
+  const std::string temperatures = "[" + message_number(kMinTemperatureC) + ", " + message_number(kMaxTemperatureC) + "] degC";
   if (bias_rad_s.empty()) bad("bias.polynomial_rad_s_per_k_i", "needs at least one coefficient");
   if (bias_rad_s.size() > kMaxPolynomialTerms || scale_factor_per_k.size() > kMaxPolynomialTerms) {
     bad(bias_rad_s.size() > kMaxPolynomialTerms ? "bias.polynomial_rad_s_per_k_i" : "scale_factor.polynomial_per_k_j",
@@ -132,7 +121,7 @@ void CalibrationModel::validate() const {
       bad("rbf.weights_rad_s", "needs one weight per centre");
     }
     if (!(rbf->sigma >= kMinRbfSigma && rbf->sigma <= kMaxRbfSigma))
-      bad("rbf.sigma", "expected a width within [" + number_text(kMinRbfSigma) + ", " + number_text(kMaxRbfSigma) +
+      bad("rbf.sigma", "expected a width within [" + message_number(kMinRbfSigma) + ", " + message_number(kMaxRbfSigma) +
                            "] (standardized units)");
     if (!finite(rbf->mean) || !std::all_of(rbf->scale.begin(), rbf->scale.end(), [](double x) { return x > 0 && std::isfinite(x); }))
       bad("rbf.scale", "mean and scale must be finite, scale > 0");
@@ -159,9 +148,9 @@ void CalibrationModel::validate() const {
     for (int i = 0; i <= kGrid; ++i) {
       const double t = lo + (hi - lo) * i / kGrid;
       if (!std::isfinite(polynomial_bias_rad_s(t))) {
-        bad("bias.polynomial_rad_s_per_k_i", "the bias is not finite at " + number_text(t) +
+        bad("bias.polynomial_rad_s_per_k_i", "the bias is not finite at " + message_number(t) +
                                                  " degC; expected a finite bias over the valid range" +
-                                                 (margin > 0 ? " and " + number_text(margin) + " K beyond it (extrapolation " + to_string(extrapolation) + ")" : std::string()));
+                                                 (margin > 0 ? " and " + message_number(margin) + " K beyond it (extrapolation " + to_string(extrapolation) + ")" : std::string()));
         break;
       }
     }
@@ -169,9 +158,9 @@ void CalibrationModel::validate() const {
       const double t = valid_min_c + (valid_max_c - valid_min_c) * i / kGrid;
       const double sf = scale_factor(t);
       if (!(sf >= kMinScaleFactor && sf <= kMaxScaleFactor)) {
-        bad("scale_factor.polynomial_per_k_j", "the scale factor is " + number_text(sf) + " at " + number_text(t) +
-                                                   " degC; expected " + number_text(kMinScaleFactor) + " to " +
-                                                   number_text(kMaxScaleFactor) + " over the valid range");
+        bad("scale_factor.polynomial_per_k_j", "the scale factor is " + message_number(sf) + " at " + message_number(t) +
+                                                   " degC; expected " + message_number(kMinScaleFactor) + " to " +
+                                                   message_number(kMaxScaleFactor) + " over the valid range");
         break;
       }
     }
@@ -461,9 +450,9 @@ CalibrationModel read_model_body(const Reader& r, const nlohmann::json& j, const
     m.noise.sample_rate_hz = r.number_or(*n, na, "sample_rate_hz", 0.0);
     if (const auto* un = r.optional(*n, "unresolved_upper")) {
       const std::string ua = na + ".unresolved_upper";
-      for (auto [key, upper] : {std::pair{u.white, &m.noise.arw_upper}, std::pair{u.instability, &m.noise.bias_instability_upper},
+      for (auto [name, upper] : {std::pair{u.white, &m.noise.arw_upper}, std::pair{u.instability, &m.noise.bias_instability_upper},
                                 std::pair{u.random_walk, &m.noise.rate_random_walk_upper}})
-        if (r.optional(*un, key)) *upper = r.number_or(*un, ua, key, 0.0);
+        if (r.optional(*un, name)) *upper = r.number_or(*un, ua, name, 0.0);
     }
   }
   if (const auto* f = r.optional(j, "fit")) {

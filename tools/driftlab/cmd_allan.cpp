@@ -288,13 +288,13 @@ void allan_command(const AllanOptions& o) {
     std::cout << head;
     for (const auto& c : allan::kIeee952Units) {
       const auto& t = (*fit)[c.term];
-      const std::string key(c.key), unit(c.unit);
+      const std::string key(c.key), term_unit(c.unit);
       char line[200];
       if (t.resolved) {
         std::snprintf(line, sizeof line, "%s = %.4g +- %.2g %s [%.3g, %.3g]\n", key.c_str(), t.value * c.factor,
-                      t.sigma * c.factor, unit.c_str(), t.low * c.factor, t.high * c.factor);
+                      t.sigma * c.factor, term_unit.c_str(), t.low * c.factor, t.high * c.factor);
       } else {
-        std::snprintf(line, sizeof line, "%s < %.3g %s  (not resolved%s)\n", key.c_str(), t.high * c.factor, unit.c_str(),
+        std::snprintf(line, sizeof line, "%s < %.3g %s  (not resolved%s)\n", key.c_str(), t.high * c.factor, term_unit.c_str(),
                       t.fitted ? ": kept by the fit, but within one sigma of 0" : ": set to 0 by the fit");
       }
       std::cout << line;

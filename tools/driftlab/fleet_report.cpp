@@ -9,19 +9,15 @@
 
 #include "framework/error.hpp"
 #include "framework/units.hpp"
+#include "plugins/signal/robust.hpp"
 #include "tools/driftlab/html_report.hpp"
 
 namespace driftlab::cli {
 namespace {
 
-constexpr double kMadToSigma = 0.6745;       // Phi^-1(3/4): MAD = 0.6745 sigma for normal data
+using signal::kMadToSigma;                    // Phi^-1(3/4): MAD = 0.6745 sigma for normal data
+using signal::median;
 constexpr double kMeanAdToSigma = 1.253314;  // sqrt(pi/2): mean|x - median| = sigma / 1.2533
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 std::string number(double v) {
   char text[32];
