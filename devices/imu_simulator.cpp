@@ -44,6 +44,9 @@ ImuSimulationRecord simulate_imu(const ImuDefinition& imu, const SimulationProfi
   const Eigen::Index n = r.time_s.size();
   r.chamber_temp_c = profile.chamber_c.sample(r.time_s);
   const Eigen::VectorXd table_rate = profile.true_rate.sample(r.time_s);
+  Eigen::MatrixXd up(n, 3);  // the direction pointing up at each sample, in the IMU's axes
+  for (Eigen::Index k = 0; k < n; ++k)
+    up.row(k) = (profile.orientation ? profile.orientation->up_at(r.time_s[k]) : imu.up).transpose();
 
   for (std::size_t i = 0; i < imu.instances.size(); ++i) {
     const ImuInstance& spec = imu.instances[i];
@@ -52,9 +55,9 @@ ImuSimulationRecord simulate_imu(const ImuDefinition& imu, const SimulationProfi
     out.die_temp_c = signal::first_order_lag(r.time_s, r.chamber_temp_c, spec.die_time_constant_s);
     for (int a = 0; a < 3; ++a) {
       out.gyro[a] = simulate_axis(spec.gyro.axes[a], imu.reference_temp_c, r.time_s, out.die_temp_c,
-                                  table_rate * imu.up[a], fs, source_seed(options.seed, i, a));
+                                  table_rate.cwiseProduct(up.col(a)), fs, source_seed(options.seed, i, a));
       out.accel[a] = simulate_axis(spec.accel.axes[a], imu.reference_temp_c, r.time_s, out.die_temp_c,
-                                   Eigen::VectorXd::Constant(n, imu.gravity_mps2 * imu.up[a]), fs,
+                                   imu.gravity_mps2 * up.col(a), fs,
                                    source_seed(options.seed, i, 3 + a));
     }
     out.temp_c = signal::first_order_lag(r.time_s, out.die_temp_c, spec.sensor_time_constant_s);

@@ -6,8 +6,9 @@
 //   temp           = quantize(T_sensor + white noise, temperature resolution)
 //   per axis a of each sensor (lags as in simulator.hpp, exact for piecewise-linear input):
 //     T_a          = lag(T_die, lag_s)
-//     truth        gyro: W_table(t) up_a (the table turns about 'up'); accel: g up_a (at rest the
-//                  accelerometer reads the specific force, +g along up: z up gives +g on z)
+//     truth        gyro: W_table(t) up_a(t) (the table turns about 'up'); accel: g up_a(t) (at rest
+//                  the accelerometer reads the specific force, +g along up: z up gives +g on z);
+//                  up(t) is the profile's orientation schedule, else the device's up_direction
 //     systematic   = (1 + P_s(T_a - T0)) truth + P_b(T_a - T0)
 //     measured     = systematic + noise          (no clipping, no quantization)
 // Not modelled: Earth rotation, the centripetal acceleration of an off-centre mount, cross-axis
@@ -17,7 +18,7 @@
 // from a seed derived from (options.seed, i, source) alone, so its realization is the same whatever
 // else the file describes (other instances, other axes' noise). Same seed, same record.
 // Cost: O(n (7 + M)) per axis for n samples and M flicker components, single thread; memory 3
-// vectors of n doubles per axis plus 2 per instance.
+// vectors of n doubles per axis plus 2 per instance and 3 for the up direction.
 #pragma once
 
 #include <Eigen/Core>

@@ -18,7 +18,43 @@ double quantize(double value, double resolution) {
   return resolution > 0.0 ? std::round(value / resolution) * resolution : value;
 }
 
+OrientationSchedule read_orientation_section(YamlFields& y, const YAML::Node& node) {
+  const std::string path = "orientation";
+  OrientationSchedule o;
+  if (!y.map(node, path, {"dwell_s", "up_directions"})) return o;
+  o.dwell_s = y.number(node, path, "dwell_s", true, Bounds::positive()).value_or(0.0);
+  const YAML::Node ups = y.child(node, path, "up_directions", true);
+  if (!ups.IsDefined()) return o;
+  const std::string expected = "expected a list of up directions [x, y, z] in the IMU's axes (not all zero)";
+  if (!ups.IsSequence() || ups.size() == 0) {
+    y.problem(ups, path + ".up_directions", expected);
+    return o;
+  }
+  for (std::size_t i = 0; i < ups.size(); ++i) {
+    const std::string p = path + ".up_directions[" + std::to_string(i) + "]";
+    const YAML::Node u = ups[i];
+    Eigen::Vector3d up = Eigen::Vector3d::Zero();
+    bool valid = u.IsSequence() && u.size() == 3;
+    for (std::size_t a = 0; valid && a < 3; ++a) {
+      valid = u[a].IsScalar() && YAML::convert<double>::decode(u[a], up[static_cast<Eigen::Index>(a)]) &&
+              std::isfinite(up[static_cast<Eigen::Index>(a)]);
+    }
+    if (!valid || up.norm() == 0.0) {
+      y.problem(u, p, "expected [x, y, z], finite and not all zero (the direction pointing up, in the IMU's axes)");
+      continue;
+    }
+    o.up_directions.push_back(up.normalized());
+  }
+  return o;
+}
+
 }  // namespace
+
+const Eigen::Vector3d& OrientationSchedule::up_at(double t_s) const {
+  const double position = std::floor(std::max(t_s, 0.0) / dwell_s);
+  const auto n = static_cast<double>(up_directions.size());
+  return up_directions[static_cast<std::size_t>(std::fmod(position, n))];
+}
 
 Profile read_profile_section(YamlFields& y, const YAML::Node& node, const std::string& path,
                              const std::string& unit_suffix, double scale, double fallback_start) {
@@ -123,7 +159,7 @@ SimulationProfile parse_profile(const std::string& yaml_text, const std::string&
   YamlFields y(file, problems);
   SimulationProfile profile;
   profile.source = file;
-  if (y.map(root, "", {"format", "chamber", "rate"})) {
+  if (y.map(root, "", {"format", "chamber", "rate", "orientation"})) {
     if (auto format = y.text(root, "", "format", true); format && *format != "driftlab-profile/1")
       y.problem(y.child(root, "", "format", false), "format",
                 "unsupported format '" + *format + "'; expected driftlab-profile/1");
@@ -131,6 +167,8 @@ SimulationProfile parse_profile(const std::string& yaml_text, const std::string&
       profile.chamber_c = read_profile_section(y, chamber, "chamber", "c", 1.0, 25.0);
     if (const auto rate = y.child(root, "", "rate", false); rate.IsDefined())
       profile.true_rate = read_profile_section(y, rate, "rate", "dps", kRadPerDeg, 0.0);
+    if (const auto orientation = y.child(root, "", "orientation", false); orientation.IsDefined())
+      profile.orientation = read_orientation_section(y, orientation);
   }
   if (!problems.empty()) throw ConfigError(std::move(problems));
   return profile;
@@ -169,6 +207,9 @@ Eigen::VectorXd sample_times(const SimulationProfile& profile, const SimulationO
 SimulationRecord simulate(const DeviceDefinition& device, const SimulationProfile& profile,
                           const SimulationOptions& options) {
   require_single_axis(device);
+  if (profile.orientation)
+    throw ConfigError({profile.source, 0, "orientation"},
+                      "an orientation schedule needs a whole-IMU device (imu:); '" + device.name + "' is a single-axis gyro");
   const double fs = options.sample_rate_hz;
   const error_model::Config& config = device.error_model;
 

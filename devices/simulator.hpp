@@ -61,9 +61,22 @@ class Profile {
   std::vector<double> values_{0.0};
 };
 
+// A multi-position test (e.g. the six-position tumble that makes an accelerometer's scale factor
+// observable): the direction pointing up, in the IMU's axes, cycles through `up_directions`, each
+// held for `dwell_s`, from the first at t = 0 to the end of the run. A change of position is a step:
+// the rotation between positions (its rate, its settling) is not simulated.
+struct OrientationSchedule {
+  std::vector<Eigen::Vector3d> up_directions;  // unit vectors, at least one
+  double dwell_s = 0.0;                        // > 0, s
+
+  const Eigen::Vector3d& up_at(double t_s) const;
+};
+
 struct SimulationProfile {
   Profile chamber_c{25.0};   // degC
   Profile true_rate{0.0};    // rad/s
+  // Whole-IMU devices only: replaces the device's fixed up direction (the table turns about 'up').
+  std::optional<OrientationSchedule> orientation;
   std::string source = "static 25 degC";  // for messages and describe
 
   double duration_s() const { return std::max(chamber_c.duration_s(), true_rate.duration_s()); }
@@ -78,7 +91,9 @@ SimulationProfile default_oven_profile();
 //   format: driftlab-profile/1
 //   chamber: {start_c: -30, segments: [{hold_s: 1800}, {to_c: 60, rate_c_per_min: 1}, {to_c: 20, duration_s: 600}]}
 //   rate:    {start_dps: 0, segments: [{hold_s: 600}, {to_dps: 100, duration_s: 0}, {hold_s: 60}]}
-// Both sections are optional (chamber defaults to 25 degC, rate to 0); a segment is either
+//   orientation: {dwell_s: 300, up_directions: [[0, 0, 1], [0, 0, -1], [1, 0, 0], [-1, 0, 0], ...]}
+// Every section is optional (chamber defaults to 25 degC, rate to 0, orientation to the device's
+// up_direction; orientation needs a whole-IMU device); a segment is either
 // {hold_s} or {to_*, duration_s | rate_*_per_min}. Throws ConfigError with file, line and key.
 SimulationProfile load_profile_file(const std::filesystem::path& path);
 SimulationProfile parse_profile(const std::string& yaml_text, const std::string& file);

@@ -115,6 +115,53 @@ TEST(ImuSimulator, RateTableTurnsAboutTheUpDirection) {
   EXPECT_EQ(gyro[2].truth[5], 0.0);
 }
 
+TEST(ImuSimulator, AnOrientationScheduleCyclesTheUpDirectionThroughGravityAndTheTableRate) {
+  SimulationProfile profile = parse_profile(
+      "format: driftlab-profile/1\n"
+      "rate: {start_dps: 30}\n"
+      "orientation: {dwell_s: 2, up_directions: [[0, 0, 1], [-1, 0, 0], [0, 3, 4]]}\n",
+      "six.yaml");
+  profile.chamber_c = Profile(25.0).hold(20.0);
+  const auto record = simulate_imu(imu3(), profile, options(1.0, 8.0, 1));
+  const double g = kStandardGravity, w = 30.0 * kRadPerDeg;
+  const auto& accel = record.instances[0].accel;
+  const auto& gyro = record.instances[1].gyro;
+  // t = 0, 1: z up; 2, 3: x down; 4, 5: (0, 0.6, 0.8) up; 6, 7: z up again.
+  EXPECT_EQ(accel[2].truth[1], g);
+  EXPECT_EQ(accel[0].truth[1], 0.0);
+  EXPECT_EQ(accel[0].truth[2], -g);
+  EXPECT_EQ(gyro[0].truth[3], -w);
+  EXPECT_EQ(gyro[2].truth[3], 0.0);
+  EXPECT_NEAR(accel[1].truth[4], 0.6 * g, 1e-15);
+  EXPECT_NEAR(gyro[2].truth[5], 0.8 * w, 1e-15);
+  EXPECT_EQ(accel[2].truth[6], g);
+}
+
+TEST(ImuSimulator, ABadOrientationScheduleIsRefusedWithItsLineAndTheSingleAxisSimulatorRefusesOne) {
+  const auto problems_of = [](const std::string& orientation) {
+    try {
+      parse_profile("format: driftlab-profile/1\norientation: " + orientation + "\n", "p.yaml");
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_THAT(problems_of("{dwell_s: 0, up_directions: [[0, 0, 1]]}"), ::testing::HasSubstr("dwell_s"));
+  EXPECT_THAT(problems_of("{dwell_s: 5, up_directions: [[0, 0, 0]]}"),
+              ::testing::AllOf(::testing::HasSubstr("p.yaml:2"), ::testing::HasSubstr("up_directions[0]"),
+                               ::testing::HasSubstr("not all zero")));
+  EXPECT_THAT(problems_of("{dwell_s: 5, up_directions: [[0, 1]]}"), ::testing::HasSubstr("[x, y, z]"));
+  EXPECT_THAT(problems_of("{dwell_s: 5, up_directions: []}"), ::testing::HasSubstr("up_directions"));
+  EXPECT_THAT(problems_of("{dwell_s: 5}"), ::testing::HasSubstr("up_directions"));
+  EXPECT_THAT(problems_of("{dwell_s: 5, up_directions: [[0, 0, 1]], spin: 1}"), ::testing::HasSubstr("spin"));
+
+  SimulationProfile profile = parse_profile(
+      "format: driftlab-profile/1\norientation: {dwell_s: 5, up_directions: [[0, 0, 1]]}\n", "p.yaml");
+  EXPECT_THROW(simulate(load_device_file(std::string(DRIFTLAB_SOURCE_DIR) + "/devices/fmvmg.yaml"), profile,
+                        options(1.0, 10.0, 1)),
+               ConfigError);
+}
+
 TEST(ImuSimulator, InstancesHaveTheirOwnTemperaturesBiasesAndNoise) {
   const auto record = simulate_imu(imu3(), default_oven_profile(), options(1.0, 3600.0, 3));
   const auto& a = record.instances[0];
