@@ -12,6 +12,7 @@ std::optional<AllanFigures> allan_figures(const Eigen::VectorXd& error, double f
     AllanFigures f;
     f.bias_instability = a.bias_instability;
     f.arw_rad_sqrt_s = a.arw_rad_sqrt_s;
+    f.curve = a.curve;
     return f;
   } catch (const Error&) {
     return std::nullopt;

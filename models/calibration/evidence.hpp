@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <optional>
+#include <vector>
 
 #include "models/allan/analysis.hpp"
 
@@ -18,6 +19,7 @@ namespace driftlab::calibration {
 struct AllanFigures {
   allan::FloorReading bias_instability;  // B, rad/s: a value where resolved, otherwise B < high
   double arw_rad_sqrt_s = 0.0;           // N
+  std::vector<allan::Estimate> curve;    // the OADEV they are read from (octave grid, with intervals), rad/s
 };
 // Empty when the record is too short (< 3 s) or not evenly sampled enough for an Allan analysis.
 std::optional<AllanFigures> allan_figures(const Eigen::VectorXd& error_rad_s, double sample_rate_hz);

@@ -1,9 +1,11 @@
 // End to end: `driftlab calibrate` and `driftlab compensate` (batch and streaming).
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -166,7 +168,34 @@ TEST_F(CalibrateCli, TheReportScoresEveryModelOnAHeldOutRunOfAnotherProfile) {
   EXPECT_EQ(names, (std::vector<std::string>{"none", "PX4-style poly", "poly", "physical", "rbf"}));
   const auto& methods = j["evaluations"][0]["methods"];
   EXPECT_LT(methods[3]["residual_drift_dph"].get<double>(), methods[0]["residual_drift_dph"].get<double>());
-  EXPECT_NE(read_text(dir_ + "/report/report.html").find("Held-out record"), std::string::npos);
+  EXPECT_THAT(j["chosen"].get<std::string>(), ::testing::StartsWith("rate: poly (")) << "the model written, and why";
+  EXPECT_TRUE(j["quality_gate"].is_array());
+
+  // The held-out profile has three legs (up to 50 degC, down to -10, back up); every method is scored
+  // on each, and a record's residual drift lies between its legs' (the blocks are the legs' blocks).
+  const auto& legs = j["evaluations"][0]["legs"];
+  std::vector<std::string> directions;
+  for (const auto& leg : legs) directions.push_back(leg["direction"]);
+  EXPECT_EQ(directions, (std::vector<std::string>{"heating", "cooling", "heating"}));
+  for (const auto& m : methods) {
+    const auto by_leg = m["residual_drift_by_leg_dph"].get<std::vector<double>>();
+    ASSERT_EQ(by_leg.size(), legs.size()) << m["name"];
+    const double whole = m["residual_drift_dph"];
+    EXPECT_LE(*std::min_element(by_leg.begin(), by_leg.end()), whole * (1 + 1e-9)) << m["name"];
+    EXPECT_GE(*std::max_element(by_leg.begin(), by_leg.end()), whole * (1 - 1e-9)) << m["name"];
+  }
+
+  // Four figures per held-out record when gnuplot is there: bias against temperature, |residual|
+  // against temperature and time, Allan deviation of the residuals.
+  const std::string html = read_text(dir_ + "/report/report.html");
+  EXPECT_NE(html.find("Held-out record"), std::string::npos);
+  EXPECT_NE(html.find("Oven-run quality gate"), std::string::npos);
+  std::size_t figures = 0;
+  for (auto at = html.find("<svg"); at != std::string::npos; at = html.find("<svg", at + 1)) ++figures;
+  EXPECT_EQ(figures, 4u);
+  for (const char* caption : {"Bias (measured - true rate) of the calibration records", "against temperature",
+                              "against time", "Allan deviation of every method"})
+    EXPECT_NE(html.find(caption), std::string::npos) << caption;
 }
 
 TEST_F(CalibrateCli, ThePaperPipelineIsScoredOnTheHeldOutRecordByItsFinalStage) {
@@ -215,6 +244,13 @@ TEST_F(CalibrateCli, TheQualityGateNamesWhatTheOvenRunLacksAndStrictRefusesIt) {
       << cooling.out;
   const auto model = nlohmann::json::parse(read_text(dir_ + "/cooling.json"));
   EXPECT_EQ(model["channels"][0]["model"]["kind"], "poly") << "no history terms from one direction";
+  const auto reported = run_driftlab("-q calibrate --data " + dir_ + "/cooling.csv --train-until 5000 --out " + dir_ +
+                                     "/cooling_r.json --report " + dir_ + "/cooling_report");
+  ASSERT_EQ(reported.exit_code, 0) << reported.err;
+  const auto report = nlohmann::json::parse(read_text(dir_ + "/cooling_report/report.json"));
+  ASSERT_FALSE(report["quality_gate"].empty()) << "the report carries the gate's findings";
+  EXPECT_EQ(report["quality_gate"][0]["code"], "one_direction");
+  EXPECT_EQ(report["quality_gate"][0]["severity"], "warning");
   const auto strict = run_driftlab("calibrate --strict --data " + dir_ + "/cooling.csv --out " + dir_ + "/strict.json");
   EXPECT_EQ(strict.exit_code, 3);
   EXPECT_NE(strict.err.find("quality gate (--strict)"), std::string::npos) << strict.err;

@@ -7,6 +7,7 @@
 #include "framework/sampling.hpp"
 #include "framework/units.hpp"
 #include "framework/error.hpp"
+#include "models/allan/analysis.hpp"
 #include "models/calibration/evidence.hpp"
 #include "models/evaluation/evaluation.hpp"
 #include "tools/driftlab/html_report.hpp"
@@ -14,44 +15,184 @@
 namespace driftlab::cli {
 namespace {
 
+// Leg directions in the figures: calibration records in saturated colours, held-out ones in light.
+struct LegColours {
+  const char *heating, *cooling, *level;
+};
+constexpr LegColours kCalibrationColours{"#d62728", "#1f77b4", "#7f7f7f"};
+constexpr LegColours kHeldOutColours{"#ff9f4a", "#5fd3e0", "#c7c7c7"};
+
+// The 60-s blocks of a record (evaluation::block_means, the residual-drift blocks): mean time,
+// mean temperature and the direction of the leg the block lies in (+1 heating, -1 cooling, 0
+// level or between legs), with the record's legs as the quality gate finds them.
+struct RecordBlocks {
+  std::vector<calibration::Leg> legs;
+  std::vector<double> t_s, temp_c;
+  std::vector<int> direction;
+  std::vector<Eigen::Index> first, samples;
+};
+
+RecordBlocks blocks_of(const calibration::Record& r) {
+  RecordBlocks b;
+  b.legs = calibration::analyse_oven_run(r.name, r.time_s, r.temp_c, evaluation::kResidualBlockS).legs;
+  const auto means = evaluation::block_means(r.time_s, r.temp_c);
+  b.first = means.first;
+  b.samples = means.samples;
+  for (std::size_t k = 0; k < means.first.size(); ++k) {
+    const double t = r.time_s.segment(means.first[k], means.samples[k]).mean();
+    b.t_s.push_back(t);
+    b.temp_c.push_back(means.means[static_cast<Eigen::Index>(k)]);
+    int direction = 0;
+    for (const auto& leg : b.legs)
+      if (t >= leg.start_s && t <= leg.end_s + evaluation::kResidualBlockS) direction = leg.direction;
+    b.direction.push_back(direction);
+  }
+  return b;
+}
+
+// Mean of x over each block, deg/h.
+std::vector<double> block_means_dph(const RecordBlocks& b, const Eigen::VectorXd& x_rad_s) {
+  std::vector<double> out;
+  for (std::size_t k = 0; k < b.first.size(); ++k)
+    out.push_back(x_rad_s.segment(b.first[k], b.samples[k]).mean() * kDphPerRadPerSec);
+  return out;
+}
+
+Eigen::VectorXd truth_of(const calibration::Record& r) {
+  return r.true_rate_rad_s.size() ? r.true_rate_rad_s : Eigen::VectorXd::Zero(r.time_s.size());
+}
 
 struct Scored {
   std::string name, description, bandwidth;
   double drift_dph = 0, b_dph = NAN, n_dph_rthz = NAN, extrapolated = 0;
   bool b_resolved = false;  // b_dph is B; otherwise only the bound B < b_dph (models/allan/analysis.hpp)
   double b_within_tau_s = 0;
-  std::vector<double> block_t, block_mean_dph;
+  std::vector<double> block_mean_dph;   // per block: mean of output - truth
+  std::vector<double> block_bias_dph;   // per block: mean of the correction applied (models only)
+  std::vector<double> leg_drift_dph;    // per leg: residual drift over the leg (NaN: shorter than a block)
+  std::vector<allan::Estimate> allan;   // OADEV of output - truth, rad/s (evenly sampled records)
 };
 
 Scored score(const std::string& name, const std::string& description, const calibration::Record& r,
-             const Eigen::VectorXd& out, const std::vector<char>* extrapolated) {
+             const RecordBlocks& blocks, const Eigen::VectorXd& out, const calibration::Compensated* compensated) {
   Scored s{name, description, ""};
-  const Eigen::VectorXd truth = r.true_rate_rad_s.size() ? r.true_rate_rad_s : Eigen::VectorXd::Zero(r.time_s.size());
-  const Eigen::VectorXd error = out - truth;
+  const Eigen::VectorXd error = out - truth_of(r);
   s.drift_dph = evaluation::block_mean_rms(r.time_s, error) * kDphPerRadPerSec;
   const auto facts = sampling::facts_of(r.time_s);
-  const double fs = facts.mean_rate_hz;
   // Allan figures need an evenly sampled record: none for records with gaps (bursts).
-  const bool even = facts.evenly_sampled();
-  if (const auto a = even ? calibration::allan_figures(error, fs) : std::nullopt) {
+  if (const auto a = facts.evenly_sampled() ? calibration::allan_figures(error, facts.mean_rate_hz) : std::nullopt) {
     const auto& b = a->bias_instability;
     s.b_resolved = b.resolved;
     s.b_dph = (b.resolved ? b.value : b.high) * kDphPerRadPerSec;
     s.b_within_tau_s = b.longest_tau_s;
     s.n_dph_rthz = a->arw_rad_sqrt_s * kDphPerRadPerSec;
+    s.allan = a->curve;
   }
-  if (extrapolated) {
+  if (compensated) {
     double n = 0;
-    for (char c : *extrapolated) n += c;
-    s.extrapolated = n / static_cast<double>(extrapolated->size());
+    for (char c : compensated->extrapolated) n += c;
+    s.extrapolated = n / static_cast<double>(compensated->extrapolated.size());
+    s.block_bias_dph = block_means_dph(blocks, compensated->bias_rad_s);
   }
-  const auto blocks = evaluation::block_means(r.time_s, error);
-  for (Eigen::Index b = 0; b < blocks.means.size(); ++b) {
-    const auto k = static_cast<std::size_t>(b);
-    s.block_t.push_back(r.time_s.segment(blocks.first[k], blocks.samples[k]).mean());
-    s.block_mean_dph.push_back(blocks.means[b] * kDphPerRadPerSec);
+  s.block_mean_dph = block_means_dph(blocks, error);
+  for (const auto& leg : blocks.legs) {
+    Eigen::Index from = 0, to = 0;
+    while (from < r.time_s.size() && r.time_s[from] < leg.start_s) ++from;
+    to = from;
+    while (to < r.time_s.size() && r.time_s[to] < leg.end_s + evaluation::kResidualBlockS) ++to;
+    try {
+      s.leg_drift_dph.push_back(
+          evaluation::block_mean_rms(r.time_s.segment(from, to - from), error.segment(from, to - from)) *
+          kDphPerRadPerSec);
+    } catch (const DataError&) {
+      s.leg_drift_dph.push_back(NAN);
+    }
   }
   return s;
+}
+
+std::string leg_text(const calibration::Leg& leg) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "%s %.1f → %.1f °C, %.0f min", leg.name().c_str(), leg.from_c, leg.to_c,
+                (leg.end_s - leg.start_s) / 60.0);
+  return buf;
+}
+
+// Block means of measured - true rate against temperature, one marker series per leg direction.
+void add_bias_points(PlotPanel& p, const std::string& what, const calibration::Record& r, const RecordBlocks& b,
+                     const LegColours& colours) {
+  const auto bias = block_means_dph(b, r.rate_rad_s - truth_of(r));
+  for (const int direction : {+1, -1, 0}) {
+    PlotSeries s;
+    s.label = what + ", " + (direction > 0 ? "heating" : direction < 0 ? "cooling" : "soak / level");
+    s.style = PlotSeries::Style::Markers;
+    s.color = direction > 0 ? colours.heating : direction < 0 ? colours.cooling : colours.level;
+    for (std::size_t k = 0; k < bias.size(); ++k)
+      if (b.direction[k] == direction) {
+        s.x.push_back(b.temp_c[k]);
+        s.y.push_back(bias[k]);
+      }
+    if (!s.x.empty()) p.series.push_back(std::move(s));
+  }
+}
+
+void add_figure(HtmlReport& html, const Figure& figure, const std::string& caption) {
+  try {
+    html.figure(figure, caption);
+  } catch (const PlotError& err) {
+    html.paragraph(std::string("(figure not drawn: ") + err.what() + ")");
+  }
+}
+
+// The figures of one held-out record (see the header).
+void add_figures(HtmlReport& html, const ReportInput& in, const calibration::Record& r, const RecordBlocks& blocks,
+                 const std::vector<Scored>& scores) {
+  {
+    PlotPanel p{"Bias against temperature (60-s block means) and each model's correction on " + r.name,
+                "temperature (°C)", "bias (°/h)"};
+    for (const auto& c : in.calibration) add_bias_points(p, "calibration", c, blocks_of(c), kCalibrationColours);
+    add_bias_points(p, "held out", r, blocks, kHeldOutColours);
+    for (const auto& s : scores) {
+      if (s.block_bias_dph.empty()) continue;
+      PlotSeries line{s.name + " correction", blocks.temp_c, s.block_bias_dph};
+      p.series.push_back(std::move(line));
+    }
+    add_figure(html, {{p}, 900, 420, 1, ""},
+               "Bias (measured - true rate) of the calibration records and of " + r.name +
+                   ", heating and cooling apart, with the correction each model applies to " + r.name);
+  }
+  PlotPanel by_temp{"|Residual| against temperature (60-s block means of output - true rate)", "temperature (°C)",
+                    "|residual| (°/h)"};
+  PlotPanel by_time{"|Residual| against time (60-s block means of output - true rate)", "time (s)", "|residual| (°/h)"};
+  by_temp.log_y = by_time.log_y = true;
+  PlotPanel allan{"Allan deviation of output - true rate, 68.3 % intervals", "tau (s)", "Allan deviation (°/h)"};
+  allan.log_x = allan.log_y = true;
+  for (const auto& s : scores) {
+    PlotSeries t{s.name, blocks.temp_c, {}};
+    PlotSeries h{s.name, blocks.t_s, {}};
+    t.style = PlotSeries::Style::Markers;
+    h.style = blocks.t_s.size() < 60 ? PlotSeries::Style::Markers : PlotSeries::Style::Line;
+    for (const double v : s.block_mean_dph) {
+      t.y.push_back(std::abs(v));
+      h.y.push_back(std::abs(v));
+    }
+    by_temp.series.push_back(std::move(t));
+    by_time.series.push_back(std::move(h));
+    if (s.allan.empty()) continue;
+    PlotSeries a{s.name, {}, {}};
+    a.interval = PlotSeries::Interval::Band;
+    for (const auto& e : s.allan) {
+      a.x.push_back(e.tau);
+      a.y.push_back(e.dev * kDphPerRadPerSec);
+      a.y_low.push_back(e.dev_lo * kDphPerRadPerSec);
+      a.y_high.push_back(e.dev_hi * kDphPerRadPerSec);
+    }
+    allan.series.push_back(std::move(a));
+  }
+  add_figure(html, {{by_temp}, 900, 360, 1, ""}, "Residual of every method against temperature on " + r.name);
+  add_figure(html, {{by_time}, 900, 300, 1, ""}, "Residual of every method against time on " + r.name);
+  if (!allan.series.empty())
+    add_figure(html, {{allan}, 900, 420, 1, ""}, "Allan deviation of every method's residual on " + r.name);
 }
 
 std::string terms_text(const calibration::CalibrationModel& m) {
@@ -96,13 +237,20 @@ nlohmann::json write_calibration_report(const ReportInput& in, const ReportFiles
   nlohmann::json j;
   j["format"] = "driftlab-calibrate-report/1";
   j["command"] = in.command;
-  j["calibration_records"] = in.calibration_records;
+  std::vector<std::string> names;
+  for (const auto& r : in.calibration) names.push_back(r.name);
+  j["calibration_records"] = names;
   j["truth"] = in.truth_note;
   j["metrics"] = {
       {"residual_drift_dph", "rms of 60-s block means of (output - true rate), deg/h, on records not fitted to"},
+      {"residual_drift_by_leg_dph", "the same over each leg of the held-out record (legs: evaluations[].legs)"},
       {"B_dph", "bias instability: min overlapping Allan deviation of (output - true rate) / 0.664, deg/h"},
       {"N_dph_rthz", "Allan deviation at tau = 1 s, deg/h/sqrt(Hz); every causal model keeps the full bandwidth fs/2"},
       {"extrapolated_fraction", "share of samples whose model temperature was outside the calibrated range"}};
+  j["quality_gate"] = nlohmann::json::array();
+  for (const auto& f : in.gate)
+    j["quality_gate"].push_back({{"severity", calibration::to_string(f.severity)}, {"code", f.code}, {"message", f.message}});
+  j["chosen"] = in.chosen;
   j["notes"] = in.notes;
   j["models"] = nlohmann::json::array();
   for (const auto& m : in.models) j["models"].push_back(model_json(m));
@@ -111,13 +259,21 @@ nlohmann::json write_calibration_report(const ReportInput& in, const ReportFiles
   html.paragraph("Command: " + in.command);
   html.paragraph("Calibration records: " + [&] {
     std::string s;
-    for (const auto& r : in.calibration_records) s += (s.empty() ? "" : ", ") + r;
+    for (const auto& r : names) s += (s.empty() ? "" : ", ") + r;
     return s;
   }());
   html.paragraph("Truth: " + in.truth_note);
+  html.paragraph("Chosen model: " + in.chosen);
+  {
+    HtmlTable t{"Oven-run quality gate on the calibration records", {"severity", "finding", "what was measured"}};
+    for (const auto& f : in.gate) t.rows.push_back({calibration::to_string(f.severity), f.code, f.message});
+    if (t.rows.empty()) t.rows.push_back({std::string("–"), std::string("none"), std::string("the run passes every check")});
+    t.note = "Errors stop the fit; warnings become errors with --strict (models/calibration/oven_run.hpp).";
+    html.table(t);
+  }
   for (const auto& n : in.notes) html.paragraph("Note: " + n);
   {
-    HtmlTable t{"Competing models, all fitted on the calibration records", {"name", "kind", "order", "terms", "valid range (degC)", "extrapolation", "fitted on", "held-out CV residual (deg/h)"}};
+    HtmlTable t{"Competing models, all fitted on the calibration records", {"name", "kind", "order", "terms", "valid range (°C)", "extrapolation", "fitted on", "held-out CV residual (°/h)"}};
     for (const auto& m : in.models) {
       if (!m.model) {
         t.rows.push_back({m.name, std::string("none"), std::string("-"), std::string("-"), std::string("-"),
@@ -131,26 +287,28 @@ nlohmann::json write_calibration_report(const ReportInput& in, const ReportFiles
                         std::string(m.model->fit.heating_only ? "heating only" : "heating and cooling"),
                         m.model->fit.holdout_rms_rad_s * kDphPerRadPerSec});
     }
-    t.note = "Held-out CV residual: pooled RMS of fitting-bin residuals on contiguous time blocks left out in turn.";
+    t.note = "Held-out CV residual: pooled RMS of fitting-bin residuals on the held-out legs, runs or time blocks "
+             "of the calibration records (each model's fit.holdout_design).";
     html.table(t);
   }
 
   j["evaluations"] = nlohmann::json::array();
   for (std::size_t e = 0; e < in.evaluations.size(); ++e) {
     const auto& r = in.evaluations[e];
+    const RecordBlocks blocks = blocks_of(r);
     std::vector<Scored> scores;
     for (const auto& m : in.models) {
       if (!m.model) {
-        scores.push_back(score(m.name, m.description, r, r.rate_rad_s, nullptr));
+        scores.push_back(score(m.name, m.description, r, blocks, r.rate_rad_s, nullptr));
       } else {
         const auto c = calibration::compensate(*m.model, r.time_s, r.rate_rad_s, r.temp_c);
-        scores.push_back(score(m.name, m.description, r, c.rate_rad_s, &c.extrapolated));
+        scores.push_back(score(m.name, m.description, r, blocks, c.rate_rad_s, &c));
       }
       scores.back().bandwidth = "fs/2 (unchanged: the correction is a slow bias)";
     }
     for (const auto& x : in.external) {
       if (x.record == e) {
-        scores.push_back(score(x.name, x.description, r, x.rate_rad_s, nullptr));
+        scores.push_back(score(x.name, x.description, r, blocks, x.rate_rad_s, nullptr));
         scores.back().bandwidth = x.bandwidth;
       }
     }
@@ -158,21 +316,37 @@ nlohmann::json write_calibration_report(const ReportInput& in, const ReportFiles
                       {"samples", r.time_s.size()},
                       {"duration_s", r.time_s[r.time_s.size() - 1] - r.time_s[0]},
                       {"temperature_range_c", {r.temp_c.minCoeff(), r.temp_c.maxCoeff()}}};
+    ej["legs"] = nlohmann::json::array();
+    for (const auto& leg : blocks.legs)
+      ej["legs"].push_back({{"direction", leg.name()}, {"from_c", leg.from_c}, {"to_c", leg.to_c},
+                            {"start_s", leg.start_s}, {"end_s", leg.end_s}});
     if (r.systematic_rad_s.size()) {
       const Eigen::VectorXd floor_err = r.rate_rad_s - r.systematic_rad_s;
       ej["intrinsic_floor_drift_dph"] =
           evaluation::block_mean_rms(r.time_s, floor_err) * kDphPerRadPerSec;
     }
+    const auto number_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
     ej["methods"] = nlohmann::json::array();
-    HtmlTable t{"Held-out record " + r.name, {"method", "residual drift (deg/h)", "B (deg/h)", "N (deg/h/sqrt(Hz))", "output bandwidth", "extrapolated (%)"}};
+    HtmlTable t{"Held-out record " + r.name, {"method", "residual drift (°/h)", "B (°/h)", "N (°/h/√Hz)", "output bandwidth", "extrapolated (%)"}};
+    std::vector<std::string> leg_header{"method"};
+    for (const auto& leg : blocks.legs) leg_header.push_back(leg_text(leg) + " (°/h)");
+    HtmlTable by_leg{"Residual drift of every method on each leg of " + r.name, leg_header};
     for (const auto& s : scores) {
+      nlohmann::json by_leg_json = nlohmann::json::array();
+      std::vector<HtmlCell> leg_row{s.name};
+      for (const double v : s.leg_drift_dph) {
+        by_leg_json.push_back(number_or_null(v));
+        leg_row.push_back(v);
+      }
+      by_leg.rows.push_back(std::move(leg_row));
       ej["methods"].push_back({{"name", s.name},
                                {"description", s.description},
                                {"residual_drift_dph", s.drift_dph},
-                               {"B_dph", std::isfinite(s.b_dph) && s.b_resolved ? nlohmann::json(s.b_dph) : nlohmann::json()},
+                               {"residual_drift_by_leg_dph", by_leg_json},
+                               {"B_dph", s.b_resolved ? number_or_null(s.b_dph) : nlohmann::json()},
                                {"B_resolved", s.b_resolved},
-                               {"B_upper_dph", std::isfinite(s.b_dph) && !s.b_resolved ? nlohmann::json(s.b_dph) : nlohmann::json()},
-                               {"N_dph_rthz", std::isfinite(s.n_dph_rthz) ? nlohmann::json(s.n_dph_rthz) : nlohmann::json()},
+                               {"B_upper_dph", !s.b_resolved ? number_or_null(s.b_dph) : nlohmann::json()},
+                               {"N_dph_rthz", number_or_null(s.n_dph_rthz)},
                                {"output_bandwidth", s.bandwidth},
                                {"extrapolated_fraction", s.extrapolated}});
       const HtmlCell b = !std::isfinite(s.b_dph) ? HtmlCell(std::string("–"))
@@ -186,26 +360,14 @@ nlohmann::json write_calibration_report(const ReportInput& in, const ReportFiles
              "the bound '< x'. " +
              (r.systematic_rad_s.size()
                   ? "Intrinsic floor (measured - true systematic rate): " +
-                        std::to_string(ej["intrinsic_floor_drift_dph"].get<double>()) + " deg/h."
+                        format_number(ej["intrinsic_floor_drift_dph"].get<double>()) + " °/h."
                   : std::string("No systematic-rate column: no intrinsic floor."));
+    by_leg.note = "Legs as the quality gate finds them (zig-zag reversals of the 60-s temperature means); – where "
+                  "a leg is shorter than one 60-s block.";
     html.section("Held-out record " + r.name + " (" + std::to_string(r.time_s.size()) + " samples)");
     html.table(t);
-    Figure fig;
-    PlotPanel p{"60-s block means of output - true rate", "time (s)", "deg/h"};
-    for (const auto& s : scores) {
-      PlotSeries ps;
-      ps.label = s.name;
-      ps.x = s.block_t;
-      ps.y = s.block_mean_dph;
-      ps.style = s.block_t.size() < 60 ? PlotSeries::Style::Markers : PlotSeries::Style::Line;
-      p.series.push_back(ps);
-    }
-    fig.panels.push_back(p);
-    try {
-      html.figure(fig, "Residual drift of every method on " + r.name);
-    } catch (const PlotError& err) {
-      html.paragraph(std::string("(figure not drawn: ") + err.what() + ")");
-    }
+    if (!blocks.legs.empty()) html.table(by_leg);
+    add_figures(html, in, r, blocks, scores);
     j["evaluations"].push_back(ej);
   }
   outputs.write(files.json, j.dump(2) + "\n");

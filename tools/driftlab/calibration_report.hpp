@@ -1,5 +1,14 @@
 // The `driftlab calibrate --report DIR` evidence: the competing models fitted on the same
-// calibration data, scored on held-out records (report.json + report.html).
+// calibration data, scored on held-out records (report.json + report.html), for a test engineer:
+//   - the quality gate's findings and which model was chosen, and why;
+//   - per held-out record a table of every method (residual drift, B, N, extrapolated share) and the
+//     residual drift of each on every leg of that record (legs as the quality gate finds them:
+//     models/calibration/oven_run.hpp);
+//   - figures: bias against temperature (60-s block means of measured - true rate; calibration and
+//     held-out records, heating and cooling in distinct colours) with each model's correction on
+//     the held-out record; |residual| against temperature and against time (log axes: the models
+//     differ by decades); the Allan deviation of every method's residual with 68.3 % intervals.
+// Units: deg/h throughout (the report scores gyro channels).
 #pragma once
 
 #include <filesystem>
@@ -11,6 +20,7 @@
 #include "framework/output_set.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "models/calibration/fit.hpp"
+#include "models/calibration/oven_run.hpp"
 #include "tools/driftlab/cli.hpp"
 
 namespace driftlab::cli {
@@ -31,11 +41,13 @@ struct ExternalOutput {
 
 struct ReportInput {
   std::string command;                           // the command line, for the report
-  std::vector<std::string> calibration_records;  // what was fitted
+  std::vector<calibration::Record> calibration;  // what was fitted
   std::vector<CompetingModel> models;
   std::vector<calibration::Record> evaluations;  // held-out records
   std::vector<ExternalOutput> external;
   std::string truth_note;                        // what "truth" is for these records
+  std::vector<calibration::Finding> gate;        // the oven-run quality gate on the calibration records
+  std::string chosen;                            // the model written, and why (its selection)
   std::vector<std::string> notes;                // e.g. a baseline that could not be fitted
 };
 

@@ -68,12 +68,11 @@ void report_channel(const CalibrateOptions& o, CommandEnv& env, const ChannelRec
                     const ReportFiles& report_files, OutputSet& files) {
   const calibration::FitOptions base = fit_options(o, env, ch.role);
   ReportInput in;
-  for (const auto& f : gate)
-    in.notes.push_back("quality gate " + calibration::to_string(f.severity) + " [" + f.code + "]: " + f.message);
-  in.notes.push_back(ch.role + ": chosen " + calibration::to_string(chosen.model.kind) + " (" +
-                     chosen.model.fit.selection + "; held out: " + chosen.model.fit.holdout_design + ")");
+  in.gate = gate;
+  in.chosen = ch.role + ": " + calibration::to_string(chosen.model.kind) + " (" + chosen.model.fit.selection +
+              "; held out: " + chosen.model.fit.holdout_design + ")";
   in.command = o.command_line;
-  for (const auto& r : records) in.calibration_records.push_back(r.name);
+  in.calibration = records;
   in.evaluations = held_out;
   bool any_truth = false;
   for (const auto& r : held_out) any_truth = any_truth || r.true_rate_rad_s.size();
