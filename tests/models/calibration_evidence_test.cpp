@@ -107,6 +107,32 @@ TEST(CalibrationEvidence, ThePhysicalModelDoesNoWorseWhereTheDriftIsPolynomial) 
   EXPECT_LT(physical, kNoiseTolerance * poly) << physical / kRadPerSecPerDph << " vs " << poly / kRadPerSecPerDph;
 }
 
+// The accuracy a model states (fit.holdout_rms_rad_s: pooled rms of its held-out bin residuals
+// on the calibration run) is what it delivers on a run it never saw: the same statistic (rms of
+// bin_s-s means of output - truth) on another seed and profile lies within 1.5x of it either way,
+// for every kind, with and without history effects in the drift. Measured (seed 1 -> 2): 0.69 (poly
+// on the drift with history effects: the other profile's ramps excite less of them) to 0.98 (printed).
+constexpr double kStatedAccuracyFactor = 1.5;
+
+TEST(CalibrationEvidence, TheStatedHeldOutAccuracyHoldsOnAnUnseenRunOfAnotherProfile) {
+  for (const bool effects : {false, true}) {
+    const auto device = fmvmg(effects);
+    const Record cal = run(device, devices::default_oven_profile(), 1);
+    const Record test = run(device, other_profile(), 2);
+    for (const auto kind : {ModelKind::Polynomial, ModelKind::Physical, ModelKind::Rbf}) {
+      const CalibrationModel m = fit(cal, kind);
+      const Eigen::VectorXd out = compensate(m, test.time_s, test.rate_rad_s, test.temp_c).rate_rad_s;
+      const double unseen = evaluation::block_mean_rms(test.time_s, out - test.true_rate_rad_s, m.fit.bin_s);
+      const double ratio = unseen / m.fit.holdout_rms_rad_s;
+      std::printf("effects %d, %s (kept %s): stated %.2f deg/h, unseen %.2f deg/h, ratio %.2f\n", effects,
+                  to_string(kind).c_str(), to_string(m.kind).c_str(), m.fit.holdout_rms_rad_s / kRadPerSecPerDph,
+                  unseen / kRadPerSecPerDph, ratio);
+      EXPECT_LT(ratio, kStatedAccuracyFactor) << to_string(kind) << ", effects " << effects;
+      EXPECT_GT(ratio, 1.0 / kStatedAccuracyFactor) << to_string(kind) << ", effects " << effects;
+    }
+  }
+}
+
 TEST(CalibrationEvidence, OutsideThePartialCalibratedRangeThePolicyHoldsAndIsReported) {
   const auto device = fmvmg(false);
   devices::SimulationProfile partial;
