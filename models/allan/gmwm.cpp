@@ -285,10 +285,27 @@ Fit fit(std::span<const Estimate> curve, double sample_rate_hz, const std::vecto
   const Eigen::MatrixXd covariance = lu.isInvertible()
                                          ? Eigen::MatrixXd(lu.inverse() * out.scale)
                                          : Eigen::MatrixXd::Constant(n, n, std::numeric_limits<double>::infinity());
+  // A component is visible when its Allan variance exceeds the one-sigma half width of some point's
+  // variance (A sqrt(2 / edf)); an invisible one, or a Gauss-Markov time at its bound, is not resolved.
+  const auto visible = [&](const std::vector<double>& values, Process p) {
+    for (const Point& q : points)
+      if (process_variance(p, values, q.m, dt) > q.variance * std::sqrt(2.0 / q.edf)) return true;
+    return false;
+  };
+  // The factor by which a component's variance can grow before it becomes visible.
+  const auto visibility_margin = [&](const std::vector<double>& values, Process p) {
+    double margin = std::numeric_limits<double>::infinity();
+    for (const Point& q : points)
+      margin = std::min(margin, q.variance * std::sqrt(2.0 / q.edf) / process_variance(p, values, q.m, dt));
+    return std::max(margin, 1.0);
+  };
   int at = 0;
   for (const Process p : model) {
     Component c{p, {}};
     const auto values = si_parameters(p, best.data() + at);
+    const bool at_bound = p == Process::GaussMarkov &&
+                          (best[at + 1] <= f.log_t_min + 1e-9 || best[at + 1] >= f.log_t_max - 1e-9);
+    c.observable = visible(values, p) && !at_bound;
     for (int k = 0; k < parameter_count(p); ++k) {
       // value = exp(u / 2) for the coefficients (log of a square), exp(u) for T.
       const double per_log = p == Process::GaussMarkov && k == 1 ? 1.0 : 0.5;
@@ -304,8 +321,12 @@ Fit fit(std::span<const Estimate> curve, double sample_rate_hz, const std::vecto
       q.value = values[static_cast<std::size_t>(k)];
       q.low = q.value * std::exp(-sigma_log);
       q.high = q.value * std::exp(sigma_log);
-      q.resolved = std::isfinite(sigma_log) && sigma_log < kResolvedLogSigma;
+      q.resolved = c.observable && std::isfinite(sigma_log) && sigma_log < kResolvedLogSigma;
       if (!std::isfinite(sigma_log)) q.low = 0.0;
+      if (!c.observable) {  // the bound is the level at which the component would become visible
+        q.low = 0.0;
+        q.high = k == 0 ? q.value * std::sqrt(visibility_margin(values, p)) : std::numeric_limits<double>::infinity();
+      }
       c.parameters.push_back(q);
     }
     out.components.push_back(std::move(c));
@@ -391,7 +412,7 @@ Fit bootstrap(const Fit& estimate, Eigen::Index samples, std::size_t replicates,
   for (const auto& f : fits) kept += f.has_value();
   out.intervals = "bootstrap, " + std::to_string(kept) + " of " + std::to_string(replicates) + " replicates";
   for (std::size_t c = 0; c < out.components.size(); ++c)
-    for (std::size_t k = 0; k < out.components[c].parameters.size(); ++k) {
+    for (std::size_t k = 0; out.components[c].observable && k < out.components[c].parameters.size(); ++k) {
       double sum = 0.0, sum2 = 0.0;
       for (const auto& f : fits) {
         if (!f) continue;
@@ -405,7 +426,7 @@ Fit bootstrap(const Fit& estimate, Eigen::Index samples, std::size_t replicates,
                                 : std::numeric_limits<double>::infinity();
       q.low = std::isfinite(s) ? q.value * std::exp(-s) : 0.0;
       q.high = q.value * std::exp(s);
-      q.resolved = std::isfinite(s) && s < kResolvedLogSigma;
+      q.resolved = out.components[c].observable && std::isfinite(s) && s < kResolvedLogSigma;
     }
   return out;
 }

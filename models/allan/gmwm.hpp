@@ -30,7 +30,11 @@
 // listed in increasing order.
 // Intervals, two ways; a parameter's one-sigma interval is value * exp(+-s) for a standard deviation
 // s of its logarithm, and it is resolved when s < 0.5 (its value exceeds twice its delta-method
-// sigma, the rule noise_fit.hpp uses); otherwise it is reported only as "< high".
+// sigma, the rule noise_fit.hpp uses) and its component is observable: its Allan variance exceeds
+// the one-sigma half width A sqrt(2 / edf) of at least one point, and a Gauss-Markov time is not at
+// its bound. Otherwise it is reported only as "< high"; for a component that is not observable,
+// high is the level at which it would become visible (its time T has no bound: infinite), and the
+// bootstrap leaves it so.
 //   asymptotic  s from (J^T J)^-1 at the solution (J the Jacobian of the weighted residuals), scaled
 //               by chi2/dof when that exceeds 1. Fast, but the overlapping Allan estimates are
 //               correlated and the diagonal weights ignore it: optimistic (below).
@@ -82,6 +86,7 @@ struct Parameter {
 struct Component {
   Process process = Process::WhiteNoise;
   std::vector<Parameter> parameters;  // one (two for gm: sigma, T)
+  bool observable = true;             // see "resolved" above
 };
 
 struct Fit {

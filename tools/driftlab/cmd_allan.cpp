@@ -1,6 +1,7 @@
 // `driftlab allan`: Allan-family deviation of one channel on a tau grid, with the identified noise
 // type, 68.3 % chi-square intervals and the number of terms per tau (allan.csv), the IEEE 952
-// noise terms fitted to the OADEV curve (summary.json) and a log-log plot (allan.svg).
+// noise terms fitted to the OADEV curve (summary.json) and a log-log plot (allan.svg); with --gmwm
+// a composite model fitted to the same curve by GMWM (models/allan/gmwm.hpp) beside them.
 //
 // --input angle: the column holds the integrated angle. Angles have no unit of their own in the
 // CSV reader, so the column is mapped with the matching rate unit (deg/s for an angle in deg,
@@ -20,6 +21,7 @@
 #include "framework/units.hpp"
 #include "models/allan/confidence.hpp"
 #include "models/allan/deviation.hpp"
+#include "models/allan/gmwm.hpp"
 #include "models/allan/analysis.hpp"
 #include "models/allan/noise_fit.hpp"
 #include "models/allan/tau_grid.hpp"
@@ -38,6 +40,10 @@ struct AllanOptions {
   std::string out;
   std::string json;
   std::string plot;
+  std::string gmwm;                      // composite model, e.g. "wn+rw+gm"; empty: none
+  std::size_t gmwm_bootstrap = 50;       // replicates of the parametric bootstrap; 0: asymptotic intervals
+  std::uint64_t seed = 1;                // of the bootstrap's simulations
+  unsigned threads = 1;
 };
 
 // Units of the fitted terms when the channel is not an angular rate: built from its unit u.
@@ -50,6 +56,52 @@ std::string generic_unit(allan::Term term, const std::string& u) {
     case allan::Term::R: return u + "/s";
   }
   return u;
+}
+
+// A GMWM parameter's display unit and factor: the IEEE 952 gyro units for a rate in rad/s (sigma in
+// deg/h), else built from the channel's unit.
+std::pair<std::string, double> gmwm_unit(const allan::gmwm::Parameter& p, bool angular, const std::string& u) {
+  const auto ieee = [](allan::Term t) {
+    for (const auto& c : allan::kIeee952Units)
+      if (c.term == t) return std::pair<std::string, double>(std::string(c.unit), c.factor);
+    return std::pair<std::string, double>("", 1.0);
+  };
+  if (p.name == "T") return {"s", 1.0};
+  if (p.name == "sigma") return angular ? ieee(allan::Term::B) : std::pair<std::string, double>(u, 1.0);
+  const allan::Term t = p.name == "N" ? allan::Term::N : p.name == "Q" ? allan::Term::Q
+                        : p.name == "K" ? allan::Term::K : allan::Term::R;
+  return angular ? ieee(t) : std::pair<std::string, double>(generic_unit(t, u), 1.0);
+}
+
+nlohmann::json gmwm_json(const allan::gmwm::Fit& f, bool angular, const std::string& u) {
+  nlohmann::json components = nlohmann::json::array();
+  for (const auto& c : f.components) {
+    nlohmann::json parameters = nlohmann::json::array();
+    for (const auto& p : c.parameters) {
+      const auto [unit, factor] = gmwm_unit(p, angular, u);
+      nlohmann::json j{{"name", p.name}, {"unit", unit}, {"resolved", p.resolved}};
+      if (p.resolved) {
+        j["value"] = p.value * factor;
+        j["interval"] = {p.low * factor, p.high * factor};
+      } else {
+        j["value"] = nullptr;
+        j["upper"] = std::isfinite(p.high) ? nlohmann::json(p.high * factor) : nlohmann::json();
+      }
+      parameters.push_back(j);
+    }
+    components.push_back({{"process", allan::gmwm::to_string(c.process)}, {"observable", c.observable},
+                          {"parameters", parameters}});
+  }
+  std::vector<allan::gmwm::Process> model;
+  for (const auto& c : f.components) model.push_back(c.process);
+  return {{"model", allan::gmwm::to_string(model)},
+          {"method", "GMWM (Guerrier et al. 2013) on the OADEV curve's variances; models/allan/gmwm.hpp"},
+          {"intervals", f.intervals},
+          {"confidence", 0.683},
+          {"points", f.points},
+          {"dof", f.dof},
+          {"chi2_per_dof", f.reduced_chi2()},
+          {"components", components}};
 }
 
 // A fitted term with its resolution (models/allan/noise_fit.hpp): an unresolved term has no value,
@@ -119,7 +171,7 @@ nlohmann::json readings_json(const allan::Analysis& a, bool angular, const std::
 }
 
 Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& curve,
-                    const allan::NoiseFit* fit, double scale, const std::string& unit) {
+                    const allan::NoiseFit* fit, const allan::gmwm::Fit* gmwm, double scale, const std::string& unit) {
   PlotPanel panel;
   panel.title = o.kind + " of " + o.data.path;
   panel.x_label = "tau (s)";
@@ -135,7 +187,7 @@ Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& c
     points.y_high.push_back(e.dev_hi / scale);
   }
   panel.series.push_back(points);
-  if (fit != nullptr && !curve.empty()) {
+  if ((fit != nullptr || gmwm != nullptr) && !curve.empty()) {
     const double first = curve.front().tau;
     const double last = curve.back().tau;
     std::vector<double> taus;
@@ -150,12 +202,20 @@ Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& c
       }
       panel.series.push_back(line);
     };
-    for (const auto& c : allan::kIeee952Units) {
-      if (!(*fit)[c.term].fitted) continue;
-      add_line(std::string(c.key) + " term", PlotSeries::Style::Dashed,
-               [&](double t) { return fit->term_deviation(c.term, t); });
+    if (fit) {
+      for (const auto& c : allan::kIeee952Units) {
+        if (!(*fit)[c.term].fitted) continue;
+        add_line(std::string(c.key) + " term", PlotSeries::Style::Dashed,
+                 [&](double t) { return fit->term_deviation(c.term, t); });
+      }
+      add_line("fitted model (IEEE 952 terms)", PlotSeries::Style::Line, [&](double t) { return fit->model_deviation(t); });
     }
-    add_line("fitted model", PlotSeries::Style::Line, [&](double t) { return fit->model_deviation(t); });
+    if (gmwm) {
+      std::vector<allan::gmwm::Process> model;
+      for (const auto& c : gmwm->components) model.push_back(c.process);
+      add_line("GMWM " + allan::gmwm::to_string(model), PlotSeries::Style::Line,
+               [&](double t) { return std::sqrt(gmwm->model_variance(t)); });
+    }
   }
   Figure figure;
   figure.panels.push_back(panel);
@@ -248,6 +308,18 @@ void allan_command(const AllanOptions& o) {
     std::cerr << "note: no noise-term fit: too few Allan points" << why << "\n";
   }
   const bool angular = channel.unit == "rad/s";
+  std::optional<allan::gmwm::Fit> gmwm;
+  if (!o.gmwm.empty()) {
+    const auto model = allan::gmwm::parse_model(o.gmwm, "--gmwm");
+    if (!analysis) throw DataError({o.data.path, 0, role}, "no Allan curve for the GMWM fit" + why);
+    if (bursts && o.gmwm_bootstrap > 0)
+      throw ConfigError({"", 0, "--gmwm-bootstrap"},
+                        "the bootstrap simulates a contiguous record and this one is " + std::to_string(facts.segments.size()) +
+                            " bursts; give --gmwm-bootstrap 0 for the asymptotic intervals");
+    gmwm = allan::gmwm::fit(analysis->curve, fs, model);
+    if (o.gmwm_bootstrap > 0)
+      gmwm = allan::gmwm::bootstrap(*gmwm, static_cast<Eigen::Index>(samples), o.gmwm_bootstrap, o.seed, o.threads);
+  }
   const std::string sampled = sampling::describe(facts, record.time());
   const nlohmann::json sampling_json{
       {"layout", bursts ? "regular_bursts" : "even"}, {"bursts", bursts ? facts.segments.size() : 1},
@@ -258,9 +330,10 @@ void allan_command(const AllanOptions& o) {
   if (!o.json.empty()) {
     auto summary = summary_json(o, *fit, angular, channel.unit, samples, tau0, sampling_json);
     summary["readings"] = readings_json(*analysis, angular, channel.unit);
+    if (gmwm) summary["gmwm"] = gmwm_json(*gmwm, angular, channel.unit);
     outputs.write(o.json, summary.dump(2) + "\n");
   }
-  if (!o.plot.empty()) outputs.write(o.plot, render_svg(allan_figure(o, curve, fit, scale, unit)));
+  if (!o.plot.empty()) outputs.write(o.plot, render_svg(allan_figure(o, curve, fit, gmwm ? &*gmwm : nullptr, scale, unit)));
   outputs.commit();
 
   std::cout << o.kind << " of " << role << ": " << curve.size() << " taus from " << curve.front().tau
@@ -300,11 +373,33 @@ void allan_command(const AllanOptions& o) {
       std::cout << line;
     }
   }
+  if (gmwm) {
+    std::vector<allan::gmwm::Process> model;
+    for (const auto& c : gmwm->components) model.push_back(c.process);
+    std::printf("GMWM %s (Guerrier et al. 2013; one-sigma intervals: %s; chi2/dof = %.3g, %zu points):\n",
+                allan::gmwm::to_string(model).c_str(), gmwm->intervals.c_str(), gmwm->reduced_chi2(), gmwm->points);
+    for (const auto& c : gmwm->components)
+      for (const auto& p : c.parameters) {
+        const auto [u, factor] = gmwm_unit(p, angular, channel.unit);
+        if (p.resolved)
+          std::printf("  %s %s = %.4g %s [%.3g, %.3g]\n", allan::gmwm::to_string(c.process).c_str(), p.name.c_str(),
+                      p.value * factor, u.c_str(), p.low * factor, p.high * factor);
+        else if (!c.observable && !std::isfinite(p.high))
+          std::printf("  %s %s not determined (the component is below what the curve resolves)\n",
+                      allan::gmwm::to_string(c.process).c_str(), p.name.c_str());
+        else
+          std::printf("  %s %s < %.3g %s  (not resolved: %s)\n", allan::gmwm::to_string(c.process).c_str(),
+                      p.name.c_str(), p.high * factor, u.c_str(),
+                      c.observable ? "its interval spans more than a factor e^0.5 either way"
+                                   : "below what the curve resolves; the bound is where it would show");
+      }
+    std::fflush(stdout);
+  }
 }
 
 }  // namespace
 
-void add_allan_command(CLI::App& app, CommandEnv&) {
+void add_allan_command(CLI::App& app, CommandEnv& env) {
   auto options = std::make_shared<AllanOptions>();
   auto* cmd = app.add_subcommand(
       "allan", "Allan-family deviation with confidence intervals and IEEE 952 noise terms (NIST SP 1065)");
@@ -323,7 +418,21 @@ void add_allan_command(CLI::App& app, CommandEnv&) {
   cmd->add_option("--out", options->out, "output CSV: tau_s,dev,dev_lo,dev_hi,n")->required();
   cmd->add_option("--json", options->json, "summary JSON with the fitted noise terms");
   cmd->add_option("--plot", options->plot, "log-log SVG plot with intervals and fitted terms");
-  cmd->callback([options] { allan_command(*options); });
+  cmd->add_option("--gmwm", options->gmwm,
+                  "also fit a composite noise model by GMWM, processes joined by '+': wn (white), qn (quantization), "
+                  "rw (rate random walk), dr (rate ramp), gm (Gauss-Markov, may repeat); e.g. wn+rw+gm");
+  cmd->add_option("--gmwm-bootstrap", options->gmwm_bootstrap,
+                  "replicates of the parametric bootstrap for the GMWM intervals (0: asymptotic intervals, "
+                  "which are optimistic)")
+      ->check(CLI::Range(static_cast<std::size_t>(0), static_cast<std::size_t>(10000)))
+      ->capture_default_str();
+  cmd->add_option("--seed", options->seed, "seed of the bootstrap's simulated records; same seed, same intervals")
+      ->check(whole_number(0, kMaxSeed))
+      ->capture_default_str();
+  cmd->callback([options, &env] {
+    options->threads = env.threads;
+    allan_command(*options);
+  });
 }
 
 }  // namespace driftlab::cli
