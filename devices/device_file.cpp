@@ -35,12 +35,13 @@ struct NoiseKeys {
   const char* white;
   const char* instability;
   const char* random_walk;
+  const char* gauss_markov_sigma;  // key of a Gauss-Markov term's std, in the instability's unit
   double white_scale, instability_scale, random_walk_scale;
 };
-const NoiseKeys kGyroNoise{"arw_dph_rthz", "bias_instability_dph", "rate_random_walk_dph_rth",
+const NoiseKeys kGyroNoise{"arw_dph_rthz", "bias_instability_dph", "rate_random_walk_dph_rth", "sigma_dph",
                            kRadPerSecPerDph, kRadPerSecPerDph, kRadPerSecPerDph / 60.0};
 constexpr double kMicroG = 1e-6 * kStandardGravity;  // m/s^2
-const NoiseKeys kAccelNoise{"vrw_ug_rthz", "bias_instability_ug", "acceleration_random_walk_ug_rth",
+const NoiseKeys kAccelNoise{"vrw_ug_rthz", "bias_instability_ug", "acceleration_random_walk_ug_rth", "sigma_ug",
                             kMicroG, kMicroG, kMicroG / 60.0};
 
 // The single-axis sections a whole-IMU file leaves out (its instances describe themselves).
@@ -244,8 +245,19 @@ class DeviceReader {
   void read_noise(const YAML::Node& noise, const std::string& np, const NoiseKeys& keys,
                   error_model::NoiseTerms& n) {
     if (!y_.map(noise, np, {keys.white, keys.instability, keys.random_walk, "flicker_correlation_times_s",
-                            "flicker_poles_per_decade"}))
+                            "flicker_poles_per_decade", "gauss_markov"}))
       return;
+    if (const YAML::Node gm = y_.child(noise, np, "gauss_markov", false); gm.IsDefined()) {
+      const std::string expected = std::string("expected a list of {") + keys.gauss_markov_sigma + ": S, tau_s: T}";
+      if (!gm.IsSequence()) y_.problem(gm, np + ".gauss_markov", expected);
+      for (std::size_t i = 0; gm.IsSequence() && i < gm.size(); ++i) {
+        const std::string gp = np + ".gauss_markov[" + std::to_string(i) + "]";
+        if (!y_.map(gm[i], gp, {keys.gauss_markov_sigma, "tau_s"})) continue;
+        const auto sigma = y_.number(gm[i], gp, keys.gauss_markov_sigma, true, Bounds::positive());
+        const auto tau = y_.number(gm[i], gp, "tau_s", true, Bounds::positive());
+        if (sigma && tau) n.gauss_markov.push_back({*tau, *sigma * keys.instability_scale});
+      }
+    }
     n.arw_rad_sqrt_s = y_.number_or(noise, np, keys.white, 0.0, Bounds::non_negative()) * keys.white_scale;
     n.bias_instability_rad_s =
         y_.number_or(noise, np, keys.instability, 0.0, Bounds::non_negative()) * keys.instability_scale;

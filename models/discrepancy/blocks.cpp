@@ -95,7 +95,7 @@ Eigen::MatrixXd noise_covariance(const Blocks& blocks, const error_model::NoiseT
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(n, n);
   const double white = noise.arw_rad_sqrt_s * noise.arw_rad_sqrt_s;
   const double walk = noise.rate_random_walk_rad_s_sqrt_s * noise.rate_random_walk_rad_s_sqrt_s;
-  const auto components = error_model::flicker_components(noise);
+  const auto components = error_model::gauss_markov_components(noise);
   for (Eigen::Index i = 0; i < n; ++i) {
     const double a = blocks.start_s[i] - blocks.record_start_s;
     c(i, i) = white / length[i] + walk * (a + length[i] / 3.0);
@@ -115,7 +115,7 @@ Eigen::MatrixXd noise_covariance(const Blocks& blocks, const error_model::NoiseT
 double model_allan_deviation(const error_model::NoiseTerms& noise, double tau_s) {
   double avar = noise.arw_rad_sqrt_s * noise.arw_rad_sqrt_s / tau_s +
                 noise.rate_random_walk_rad_s_sqrt_s * noise.rate_random_walk_rad_s_sqrt_s * tau_s / 3.0;
-  for (const auto& g : error_model::flicker_components(noise))
+  for (const auto& g : error_model::gauss_markov_components(noise))
     avar += gauss_markov_variance(g.sigma_rad_s, g.tau_s, tau_s) -
             gauss_markov_covariance(g.sigma_rad_s, g.tau_s, tau_s, tau_s, 0.0);
   return std::sqrt(avar);

@@ -29,6 +29,12 @@ std::vector<GaussMarkovComponent> flicker_components(const NoiseTerms& terms) {
   return components;
 }
 
+std::vector<GaussMarkovComponent> gauss_markov_components(const NoiseTerms& terms) {
+  auto components = flicker_components(terms);
+  components.insert(components.end(), terms.gauss_markov.begin(), terms.gauss_markov.end());
+  return components;
+}
+
 bool Effects::any() const {
   return thermal_lag || temperature_rate || hysteresis || warmup_transient || periodic_disturbance ||
          scale_factor_temperature;
@@ -139,7 +145,7 @@ Eigen::VectorXd rate_noise(const NoiseTerms& terms, double fs_hz, Eigen::Index n
       state += step * walk.next();
     }
   }
-  const auto components = flicker_components(terms);
+  const auto components = gauss_markov_components(terms);
   for (std::size_t i = 0; i < components.size(); ++i) {
     NormalStream stream(seed, 2 + i);
     const double a = std::exp(-h / components[i].tau_s);

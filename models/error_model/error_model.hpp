@@ -18,6 +18,8 @@
 //   B  bias instability, rad/s:          flicker rate, two-sided PSD B^2/(2 pi f);
 //                                        flat Allan floor s(tau) = B*sqrt(2 ln2/pi) = 0.664 B
 //   K  rate random walk, rad/s/sqrt(s):  random-walk rate, step std K*sqrt(h);  s2(tau) = K^2 tau/3
+//   GM Gauss-Markov bias noise (sigma rad/s, tau s), any number: the bump of a MEMS bias instability
+//      that is no flicker floor; first-order, stationary std sigma, correlation time tau.
 //   quantization: amplitude LSB of the rate output (rounding, applied by the simulator).
 //
 // Flicker approximation (B -> Gauss-Markov parameters): M first-order Gauss-Markov processes with
@@ -34,7 +36,8 @@
 // Discretization is exact: x_{k+1} = a x_k + sigma sqrt(1 - a^2) w_k, a = exp(-h/tau).
 //
 // Every noise term draws from its own random stream derived from (seed, term index), so switching
-// one term or effect on or off never changes the realization of another.
+// one term or effect on or off never changes the realization of another (the explicit Gauss-Markov
+// terms follow the flicker components' streams).
 // Cost: O(n (M + 2)) normal deviates for n samples; memory O(n) for the output only.
 #pragma once
 
@@ -58,6 +61,11 @@ struct DeviceResponse {
   double drive_frequency_hz = 0;  // resonance the drive loop tracks at T, Hz
 };
 
+struct GaussMarkovComponent {
+  double tau_s;      // correlation time, s
+  double sigma_rad_s;  // stationary standard deviation, rad/s
+};
+
 struct NoiseTerms {
   double arw_rad_sqrt_s = 0.0;             // N, rad/sqrt(s)
   double bias_instability_rad_s = 0.0;     // B, rad/s
@@ -65,16 +73,15 @@ struct NoiseTerms {
   double flicker_tau_min_s = 0.5;          // shortest Gauss-Markov correlation time, s
   double flicker_tau_max_s = 5000.0;       // longest Gauss-Markov correlation time, s
   double flicker_poles_per_decade = 2.0;   // d, poles per decade of correlation time
+  std::vector<GaussMarkovComponent> gauss_markov;  // explicit Gauss-Markov terms (GM above)
 };
 
-struct GaussMarkovComponent {
-  double tau_s;      // correlation time, s
-  double sigma_rad_s;  // stationary standard deviation, rad/s
-};
 
 // The Gauss-Markov set that approximates flicker of bias instability B (mapping above).
 // Empty when B = 0. Number of components M = ceil(d * log10(tau_max / tau_min)) + 1.
 std::vector<GaussMarkovComponent> flicker_components(const NoiseTerms& terms);
+// Every Gauss-Markov process of the noise: the flicker components, then the explicit terms.
+std::vector<GaussMarkovComponent> gauss_markov_components(const NoiseTerms& terms);
 
 // Optional effects (issue 6): each absent by default; the discrepancy workflow's fitted model
 // leaves them out and names them when the data show them.

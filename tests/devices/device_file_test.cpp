@@ -151,6 +151,30 @@ TEST(DeviceFile, ReadsTheEffectsSectionAndTheCommandLineFormAlike) {
   EXPECT_EQ(describe_effects(from_option), describe_effects(d.error_model.effects));
 }
 
+TEST(DeviceFile, ReadsGaussMarkovNoiseTermsAndNamesABadOne) {
+  const std::string head =
+      "format: driftlab-device/1\nidentity: {name: x}\n"
+      "structure: {youngs_modulus_gpa: 169, poisson_ratio: 0.27, density_kg_m3: 2330, length_um: 3000,"
+      " width_um: 2300, thickness_um: 60, proof_mass_area_fraction: 0.3}\n"
+      "modes: {drive: {frequency_hz: 30740, quality_factor: 8000}, sense: {frequency_hz: 30886, quality_factor: 2500}}\n"
+      "electronics: {drive_amplitude_um: 5}\n"
+      "channels: [{name: r, role: rate, unit: deg/s, range: [-10, 10]}, {name: t, role: temperature, unit: degC}]\n";
+  const DeviceDefinition d = parse_device(
+      head + "error_model:\n  noise: {arw_dph_rthz: 10, gauss_markov: [{sigma_dph: 20, tau_s: 200}, {sigma_dph: 5, tau_s: 30}]}\n",
+      "inline.yaml");
+  const auto& gm = d.error_model.noise.gauss_markov;
+  ASSERT_EQ(gm.size(), 2u);
+  EXPECT_DOUBLE_EQ(gm[0].sigma_rad_s, 20 * kDph);
+  EXPECT_DOUBLE_EQ(gm[0].tau_s, 200.0);
+  EXPECT_EQ(error_model::gauss_markov_components(d.error_model.noise).size(), 2u) << "no flicker: B is 0";
+  try {
+    parse_device(head + "error_model:\n  noise: {gauss_markov: [{sigma_dph: 20, tau_s: -1}]}\n", "bad.yaml");
+    FAIL() << "a negative correlation time was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("error_model.noise.gauss_markov[0].tau_s"));
+  }
+}
+
 std::string read_text(const std::string& path) {
   std::ifstream in(path);
   std::stringstream s;

@@ -279,6 +279,57 @@ TEST(WithoutTheDeviceFile, NothingIsNamedInRecordsWithOnlyColouredNoise) {
               kNoiseOnlyRecords / 2, largest);
 }
 
+// Gauss-Markov bias noise (the bump of a MEMS bias instability: one first-order process of
+// correlation time log-uniform in [100, 400] s and std log-uniform in [10, 30] deg/h, on the FMVMG
+// file's own small flicker and random walk): a device file that lists it (noise.gauss_markov) puts
+// it into the likelihood, and nothing is named on noise-only records; a hidden effect is still named
+// first through it. Without the device file the noise is estimated from the residual that the
+// candidates leave, and they absorb part of a slow wander: measured, 2 of these 8 records then name
+// an effect (README, discrepancy section) -- printed here, not asserted.
+testing_oven::OvenRecord gauss_markov_record(std::uint64_t index, const std::vector<std::string>& hidden,
+                                             devices::DeviceDefinition& device) {
+  testing_oven::Draw d(kSeed ^ 0x474D, index);
+  device = devices::load_device_file(std::filesystem::path(DRIFTLAB_SOURCE_DIR) / "devices" / "fmvmg.yaml");
+  std::erase_if(device.channels, [](const auto& c) { return c.role == role::kDriveFrequency; });
+  device.error_model.noise.gauss_markov.push_back(
+      {d.log_uniform(100.0, 400.0), d.log_uniform(10.0, 30.0) * kRadPerSecPerDph});
+  return testing_oven::make_record(device, kSeed, index, hidden);
+}
+
+TEST(GaussMarkovNoise, ADeviceFileThatListsItNamesNothingInNoiseOnlyRecords) {
+  double largest_with = -std::numeric_limits<double>::infinity();
+  int named_without = 0;
+  for (int i = 0; i < kNoiseOnlyRecords / 2; ++i) {
+    devices::DeviceDefinition device;
+    const auto record = gauss_markov_record(700000 + static_cast<std::uint64_t>(i), {}, device);
+    const auto with = discrepancy::find_missing_effects(record.series, candidates().list, devices::discrepancy_options(device));
+    EXPECT_THAT(named(with), ::testing::IsEmpty()) << "record " << i;
+    if (!with.final_scores.empty()) largest_with = std::max(largest_with, with.final_scores.front().delta_bic);
+    named_without += !run_without_device(record).steps.empty();
+  }
+  std::printf("[ summary  ] %d noise-only records with Gauss-Markov bias noise: largest delta BIC %.1f with the device "
+              "file listing it; without the device file %d of them name an effect\n",
+              kNoiseOnlyRecords / 2, largest_with, named_without);
+}
+
+TEST(GaussMarkovNoise, HiddenEffectsAreStillNamedThroughIt) {
+  const int records = kSingleEffectRecords / 4;
+  int named_first = 0;
+  for (int i = 0; i < records; ++i) {
+    const auto index = 800000 + static_cast<std::uint64_t>(i);
+    devices::DeviceDefinition device;
+    const auto hidden = testing_oven::draw_effects(kSeed, index, 1);
+    const auto record = gauss_markov_record(index, hidden, device);
+    const auto result =
+        discrepancy::find_missing_effects(record.series, candidates().list, devices::discrepancy_options(device));
+    for (const auto& n : named(result)) EXPECT_EQ(n, hidden.front()) << devices::describe_effects(record.effects)[0];
+    named_first += !result.steps.empty() && result.steps.front().effect == hidden.front();
+  }
+  std::printf("[ summary  ] Gauss-Markov noise in the device file: the hidden effect named first in %d of %d\n",
+              named_first, records);
+  EXPECT_GE(named_first, static_cast<int>(std::ceil(kNearlyAll * records))) << named_first << " of " << records;
+}
+
 // Effects outside the library, added to the simulated rate as functions of the resonator
 // temperature: the workflow must not name a candidate, and must say which view holds the rest.
 void expect_unexplained_in(const std::string& view, const std::function<double(double t, double temp, double rate)>& bias,

@@ -134,6 +134,8 @@ void describe(const devices::DeviceDefinition& d, std::ostream& out) {
     out << "  B as " << components.size() << " Gauss-Markov processes, tau " << components.front().tau_s << " .. "
         << components.back().tau_s << " s, sigma " << components.front().sigma_rad_s / kRadPerSecPerDph
         << " deg/h each\n";
+  for (const auto& g : n.gauss_markov)
+    out << "  Gauss-Markov sigma " << g.sigma_rad_s / kRadPerSecPerDph << " deg/h, tau " << g.tau_s << " s\n";
   out << "  bias polynomial (deg/h per K^i):";
   for (double c : d.error_model.bias_polynomial_rad_s) out << " " << c / kRadPerSecPerDph;
   out << "\n  scale-factor polynomial (ppm per K^i, i >= 1):";
