@@ -1,6 +1,7 @@
 #include "framework/ulog_imu.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "framework/error.hpp"
 #include "framework/imu_streams.hpp"
@@ -115,10 +116,55 @@ void combined_streams(const Log& log, std::vector<Stream>& out, std::vector<std:
   if (notes) notes->push_back("sensor_combined carries no IMU temperature: the record has no temperature channel");
 }
 
+// vehicle_imu, one gyro and one accelerometer stream per multi_id: the mean rate over each
+// integration period, delta / dt, at the period's midpoint timestamp_sample - dt / 2.
+void integrated_streams(const Log& log, std::vector<Stream>& out, std::vector<std::string>* notes) {
+  for (const auto* t : log.instances("vehicle_imu")) {
+    const std::string id = std::to_string(t->multi_id);
+    const auto& sample_time = t->has_column("timestamp_sample") ? t->column("timestamp_sample") : std::vector<double>{};
+    for (const auto sensor : {imu::Sensor::Gyro, imu::Sensor::Accel}) {
+      const bool gyro = sensor == imu::Sensor::Gyro;
+      const std::string delta = gyro ? "delta_angle" : "delta_velocity";
+      Stream s;
+      s.sensor = sensor;
+      s.instance = t->multi_id;
+      s.label = "vehicle_imu multi_id " + id + (gyro ? " gyro" : " accelerometer");
+      s.source = "vehicle_imu[" + id + "]";
+      const auto& dt_us = field(log, *t, delta + "_dt");
+      imu::SampleOrder raw;
+      std::size_t empty = 0;
+      for (std::size_t i = 0; i < t->timestamp_us.size(); ++i) {
+        if (!(dt_us[i] > 0.0)) {
+          ++empty;
+          continue;
+        }
+        const double end = sample_time.empty() ? static_cast<double>(t->timestamp_us[i]) : sample_time[i];
+        raw.time_us.push_back(imu::time_stamp_us(log.file, s.source, std::round(end - dt_us[i] / 2.0)));
+        raw.message.push_back(i);
+      }
+      if (notes && empty > 0)
+        notes->push_back(s.label + ": " + std::to_string(empty) + " samples with an empty integration period left out");
+      imu::repair_order(raw, s.label, notes);
+      s.time = raw.time_us;
+      for (int a = 0; a < 3; ++a) {
+        const std::string name = delta + "[" + std::to_string(a) + "]";
+        const auto& d = field(log, *t, name);
+        std::vector<double> rate(d.size());
+        for (std::size_t i = 0; i < d.size(); ++i) rate[i] = d[i] / (dt_us[i] / imu::kMicrosecondsPerSecond);
+        s.axes[a] = imu::pick(log.file, s, rate, raw, name);
+      }
+      const std::string device = gyro ? "gyro_device_id" : "accel_device_id";
+      if (t->has_column(device) && !raw.message.empty()) s.device_id = device_text(t->column(device)[raw.message.front()]);
+      out.push_back(std::move(s));
+    }
+  }
+  if (notes && !out.empty()) notes->push_back("vehicle_imu carries no IMU temperature: the record has no temperature channel");
+}
+
 }  // namespace
 
 const std::vector<std::string>& imu_topics() {
-  static const std::vector<std::string> topics{"sensor_gyro", "sensor_accel", "sensor_combined"};
+  static const std::vector<std::string> topics{"sensor_gyro", "sensor_accel", "vehicle_imu", "sensor_combined"};
   return topics;
 }
 
@@ -129,13 +175,16 @@ TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector
     const bool has_sensor_topics = !log.instances("sensor_gyro").empty() || !log.instances("sensor_accel").empty();
     if (has_sensor_topics) {
       topic = "sensor";
+    } else if (!log.instances("vehicle_imu").empty()) {
+      topic = "vehicle_imu";
     } else if (log.find("sensor_combined", 0)) {
       topic = "sensor_combined";
     } else {
-      fail(log, "--topic", "no IMU topic in the log (looked for sensor_gyro, sensor_accel, sensor_combined)");
+      fail(log, "--topic", "no IMU topic in the log (looked for sensor_gyro, sensor_accel, vehicle_imu, sensor_combined)");
     }
   } else if (std::find(imu_topics().begin(), imu_topics().end(), topic) == imu_topics().end()) {
-    throw ConfigError({"", 0, "--topic"}, "'" + topic + "': a ULog's IMU is read from sensor_gyro, sensor_accel or sensor_combined");
+    throw ConfigError({"", 0, "--topic"},
+                      "'" + topic + "': a ULog's IMU is read from sensor_gyro, sensor_accel, vehicle_imu or sensor_combined");
   } else if (log.instances(topic).empty()) {
     fail(log, "--topic", "topic '" + topic + "' is not in the log (IMU topics it has: " + imu_topic_list(log) + ")");
   }
@@ -143,6 +192,7 @@ TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector
   std::vector<Stream> all;
   if (topic == "sensor" || topic == "sensor_gyro") sensor_streams(log, "sensor_gyro", imu::Sensor::Gyro, all, notes);
   if (topic == "sensor" || topic == "sensor_accel") sensor_streams(log, "sensor_accel", imu::Sensor::Accel, all, notes);
+  if (topic == "vehicle_imu") integrated_streams(log, all, notes);
   if (topic == "sensor_combined") combined_streams(log, all, notes);
 
   return imu::assemble(std::move(all), {}, selection, imu::kMicrosecondsPerSecond, log.file, notes);

@@ -10,8 +10,17 @@
 //                 whose relative stamp is PX4's "invalid" 0x7fffffff are left out); instance 0 only;
 //                 it carries no IMU temperature (baro_temp_celcius is the barometer's), so the
 //                 record has none, and a note says so.
-// vehicle_imu (integrated delta angles) and sensor_gyro_fifo (packed int16 samples with a scale)
-// are not read: they need integration / unpacking that these topics do not.
+//   vehicle_imu   the next fallback (before sensor_combined), or chosen with --topic: PX4's
+//                 integrated IMU per multi_id: delta_angle[3] (rad) over delta_angle_dt (us),
+//                 delta_velocity[3] (m/s) over delta_velocity_dt (us); the record holds the mean
+//                 rate delta / dt at the period's midpoint timestamp_sample - dt / 2 (timestamp_sample
+//                 is the last raw sample of the period), rounded to 1 us; samples with dt = 0 are left
+//                 out with a note; device ids from gyro_device_id / accel_device_id; no temperature
+//                 (vehicle_imu has none), and a note says so. A mean over dt is a low-pass of the raw
+//                 rate (a moving average of length dt): the noise density reads the same, the
+//                 bandwidth is about 1 / (2 dt).
+// sensor_gyro_fifo (packed int16 samples with a scale) is not read: no log with it was at hand to
+// test against.
 //
 // Time base, interpolation, the temperature and device id of an instance, and the repairs of time
 // order: framework/imu_streams.hpp (shared by every log reader); the time stamps are
@@ -41,8 +50,9 @@ namespace driftlab::ulog {
 const std::vector<std::string>& imu_topics();
 
 // The IMU record of a parsed log (its imu_topics kept). `selection.topic` is "" (sensor_gyro /
-// sensor_accel when the log has them, else sensor_combined), "sensor_gyro" (gyros only),
-// "sensor_accel" or "sensor_combined"; any other name is a ConfigError naming --topic.
+// sensor_accel when the log has them, else vehicle_imu, else sensor_combined), "sensor_gyro" (gyros
+// only), "sensor_accel", "vehicle_imu" or "sensor_combined"; any other name is a ConfigError naming
+// --topic.
 // `selection.sensor` is parsed by imu::parse_selection (ConfigError naming --sensor).
 TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector<std::string>* notes = nullptr);
 

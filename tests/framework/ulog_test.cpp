@@ -249,6 +249,48 @@ TEST(UlogPyulogSamples, SensorCombinedIsTheFallbackAndSaysItHasNoTemperature) {
   EXPECT_NEAR(record.channel("accel_z").values[0], -9.8, 0.5);
 }
 
+// vehicle_imu (PX4's integrated IMU) of sample_log_small.ulg against pyulog's reading of the same
+// messages (tests/data/logs/pyulog-vehicle-imu: mean rate delta / dt, written by make_reference.py
+// with pyulog): per instance and sensor, every sample at timestamp_sample - dt / 2 with pyulog's
+// value, and the device ids.
+TEST(UlogPyulogSamples, VehicleImuIsTheMeanRateOfEachIntegrationPeriodAsPyulogReadsIt) {
+  SKIP_WITHOUT_PYULOG_LOGS();
+  std::ifstream in(fs::path(DRIFTLAB_TEST_DATA) / "logs" / "pyulog-vehicle-imu" / "vehicle_imu_reference.csv");
+  std::string line;
+  std::getline(in, line);
+  std::map<int, std::vector<std::vector<double>>> reference;  // multi_id -> rows
+  while (std::getline(in, line)) {
+    std::vector<double> row;
+    std::stringstream cells(line);
+    std::string cell;
+    while (std::getline(cells, cell, ',')) row.push_back(std::stod(cell));
+    reference[static_cast<int>(row[0])].push_back(row);
+  }
+  ASSERT_EQ(reference.size(), 3u);
+  for (const auto& [instance, rows] : reference) {
+    for (const bool gyro : {true, false}) {
+      SCOPED_TRACE(std::to_string(instance) + (gyro ? " gyro" : " accel"));
+      LogSelection selection;
+      selection.topic = "vehicle_imu";
+      selection.instance = instance;
+      selection.sensor = gyro ? "gyro" : "accel";
+      std::vector<std::string> notes;
+      const auto record = ulog::read_imu(pyulog_dir() / "sample_log_small.ulg", selection, &notes);
+      ASSERT_EQ(record.size(), static_cast<Eigen::Index>(rows.size()));
+      const std::string prefix = (gyro ? "gyro" : "accel") + (instance ? std::to_string(instance) : std::string());
+      for (Eigen::Index i = 0; i < record.size(); ++i) {
+        const auto& r = rows[static_cast<std::size_t>(i)];
+        const double dt = gyro ? r[2] : r[3];
+        EXPECT_EQ(record.time()[i], std::round(r[1] - dt / 2) / 1e6);
+        for (int a = 0; a < 3; ++a)
+          EXPECT_DOUBLE_EQ(record.channel(prefix + "_" + "xyz"[a]).values[i], r[(gyro ? 4 : 7) + a]) << i << " " << a;
+      }
+      EXPECT_EQ(record.device_id(instance), std::to_string(static_cast<std::uint64_t>(rows[0][gyro ? 10 : 11])));
+      EXPECT_THAT(notes, ::testing::Contains(HasSubstr("vehicle_imu carries no IMU temperature")));
+    }
+  }
+}
+
 TEST(UlogPyulogSamples, TruncatedFixtureIsADataErrorNamingFileAndOffset) {
   SKIP_WITHOUT_PYULOG_LOGS();
   const std::string bytes = read_file(pyulog_dir() / "sample_log_small.ulg");
@@ -269,7 +311,10 @@ TEST(UlogPyulogSamples, AMissingTopicIsADataErrorNamingWhatTheLogHas) {
                     HasSubstr("sensor_combined[0]")));
   selection.topic = "vehicle_imu";
   EXPECT_THAT(error_of([&] { ulog::read_imu(pyulog_dir() / "sample.ulg", selection); }),
-              AllOf(HasSubstr("ConfigError"), HasSubstr("--topic")));
+              AllOf(HasSubstr("DataError"), HasSubstr("'vehicle_imu' is not in the log"), HasSubstr("sensor_combined[0]")));
+  selection.topic = "vehicle_gps_position";
+  EXPECT_THAT(error_of([&] { ulog::read_imu(pyulog_dir() / "sample.ulg", selection); }),
+              AllOf(HasSubstr("ConfigError"), HasSubstr("--topic"), HasSubstr("vehicle_imu")));
   selection = {};
   selection.instance = 5;
   EXPECT_THAT(error_of([&] { ulog::read_imu(pyulog_dir() / "sample_log_small.ulg", selection); }),
