@@ -10,10 +10,13 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -270,6 +273,91 @@ TEST(FleetManifest, AMissingLogIsThatUnitsFailure) {
   const auto status = read_json(kDir / "missing" / "units" / "ghost" / "status.json");
   EXPECT_EQ(status["status"], "failed");
   EXPECT_THAT(status["reason"].get<std::string>(), HasSubstr("does_not_exist.csv"));
+}
+
+// One column of a simulated unit's CSV (the simulator writes no quoting).
+std::vector<double> csv_column(const fs::path& csv, const std::string& name) {
+  std::istringstream in(read_text(csv));
+  std::string line, cell;
+  std::getline(in, line);
+  int index = -1, c = 0;
+  for (std::istringstream h(line); std::getline(h, cell, ','); ++c)
+    if (cell == name) index = c;
+  EXPECT_GE(index, 0) << name << " is no column of " << csv;
+  std::vector<double> values;
+  while (std::getline(in, line)) {
+    std::istringstream row(line);
+    for (int k = 0; std::getline(row, cell, ','); ++k)
+      if (k == index) values.push_back(std::stod(cell));
+  }
+  return values;
+}
+
+std::string unit_with(const nlohmann::json& key, const std::string& kind, const fs::path& dir) {
+  const std::string id = planted(key, kind);
+  return id.empty() ? "" : (dir / (id + ".csv")).string();
+}
+
+TEST(FleetSimulate, TheOptionsPlantTheFaultsTheyNameAndSetTheSpread) {
+  const fs::path sim = kDir / "options";
+  const auto s = run_driftlab("simulate --fleet 8 --device imu3 --fs 0.2 --duration 3000 --seed 11 --spread 0 "
+                              "--outliers lag:1,dead_axis:2,lsb:1,hysteresis:0 --out " + sim.string());
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  const auto key = read_json(sim / "key.json");
+  std::map<std::string, int> kinds;
+  std::vector<std::string> normal;
+  for (const auto& u : key["units"]) {
+    if (u["fault"].is_null()) {
+      normal.push_back((sim / u["data"].get<std::string>()).string());
+      continue;
+    }
+    ++kinds[u["fault"]["kind"]];
+    EXPECT_FALSE(u["fault"]["expected"]["channel"].get<std::string>().empty()) << u;
+  }
+  EXPECT_EQ(kinds, (std::map<std::string, int>{{"lag", 1}, {"dead_axis", 2}, {"lsb", 1}}));
+  EXPECT_EQ(key["spread"]["bias_polynomial_sigma"], 0.0);
+  // A dead axis is constant; the LSB unit's axis sits on multiples of the LSB (0.05 deg/s) and moves.
+  const auto dead = csv_column(unit_with(key, "dead_axis", sim), "gyro1_z_dps");
+  EXPECT_EQ(std::set<double>(dead.begin(), dead.end()).size(), 1u);
+  const auto lsb = csv_column(unit_with(key, "lsb", sim), "gyro1_x_dps");
+  EXPECT_GT(std::set<double>(lsb.begin(), lsb.end()).size(), 3u);
+  for (double v : lsb) EXPECT_NEAR(v / 0.05, std::round(v / 0.05), 1e-6) << v;
+  // Without spread two normal units share every systematic column.
+  ASSERT_GE(normal.size(), 2u);
+  for (const char* column : {"systematic_gyro_x_dps", "systematic_gyro1_z_dps", "systematic_accel_y_mps2"})
+    EXPECT_EQ(csv_column(normal[0], column), csv_column(normal[1], column)) << column;
+}
+
+TEST(FleetSimulate, TheDefaultOptionsAreTheFourFaultsWithATenPercentSpread) {
+  const std::string common = "simulate --fleet 6 --device imu3 --fs 0.2 --duration 1200 --seed 3 --out ";
+  const auto a = run_driftlab(common + (kDir / "default_a").string());
+  const auto b = run_driftlab(common + (kDir / "default_b").string() +
+                              " --spread bias=0.1,scale_factor=0.1,noise=0.1,time_constant=0.1"
+                              " --outliers hysteresis:1,bias_step:1,noisy:1,truncated:1");
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  for (const auto& e : fs::directory_iterator(kDir / "default_a"))
+    EXPECT_EQ(read_text(e.path()), read_text(kDir / "default_b" / e.path().filename())) << e.path();
+  const auto spread = read_json(kDir / "default_a" / "key.json");
+  std::vector<double> x;
+  for (const auto& u : spread["units"])
+    if (u["fault"].is_null()) x.push_back(csv_column(kDir / "default_a" / u["data"].get<std::string>(),
+                                                     "systematic_gyro_x_dps")[0]);
+  ASSERT_GE(x.size(), 2u);
+  EXPECT_NE(x[0], x[1]) << "a spread fleet's units differ";
+}
+
+TEST(FleetSimulate, BadSpreadOrOutliersAreRefusedNamingTheOption) {
+  const std::string common = "simulate --fleet 6 --device imu3 --fs 0.2 --duration 600 --out " + (kDir / "bad_sim").string();
+  const auto a = run_driftlab(common + " --outliers lag:1,wobble:2");
+  EXPECT_EQ(a.exit_code, 2);
+  EXPECT_THAT(a.err, ::testing::AllOf(HasSubstr("--outliers"), HasSubstr("wobble:2"), HasSubstr("dead_axis")));
+  const auto b = run_driftlab(common + " --spread bias=-1");
+  EXPECT_EQ(b.exit_code, 2);
+  EXPECT_THAT(b.err, ::testing::AllOf(HasSubstr("--spread"), HasSubstr("bias=-1")));
+  const auto c = run_driftlab(common + " --outliers lsb:6");
+  EXPECT_EQ(c.exit_code, 2);
+  EXPECT_THAT(c.err, ::testing::AllOf(HasSubstr("--fleet"), HasSubstr("at least 7")));
 }
 
 TEST(FleetCalibrate, CalibrateRefusesTwoUnitsGivenAsOneDevice) {

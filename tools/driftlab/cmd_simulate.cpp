@@ -34,6 +34,8 @@ struct SimulateOptions {
   double duration = 0.0;
   std::uint64_t seed = 1;
   std::size_t fleet = 0;  // > 0: that many units into the directory --out (simulate_fleet)
+  std::string spread = "0.1";                                 // --spread (devices::parse_fleet_spread)
+  std::string outliers = devices::kDefaultOutliers;           // --outliers (devices::parse_fault_plan)
 };
 
 // A column in `unit`, snapped to the output's resolution (internal units; 0 = none) as k / steps
@@ -118,8 +120,9 @@ void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::De
     directory.make_directory(dir, "--out");
     directory.commit();
   }
-  const devices::FleetSpread spread;
-  const auto fleet = devices::plan_fleet(*device.imu, o.fleet, o.seed, spread);
+  const devices::FleetSpread spread = devices::parse_fleet_spread(o.spread);
+  const auto plan = devices::parse_fault_plan(o.outliers);
+  const auto fleet = devices::plan_fleet(*device.imu, o.fleet, o.seed, spread, plan);
   devices::SimulationOptions options;
   options.sample_rate_hz = o.fs;
   if (o.duration > 0.0) options.duration_s = o.duration;
@@ -167,6 +170,7 @@ void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::De
         {"scale_factor_polynomial_sigma", spread.scale_factor},
         {"noise_terms_sigma", spread.noise},
         {"time_constants_sigma", spread.time_constant}}},
+      {"outliers", o.outliers},
       {"units", units}};
   OutputSet outputs({device_path});
   outputs.plan(dir / "manifest.csv", "--out");
@@ -255,11 +259,21 @@ void add_simulate_command(CLI::App& app, CommandEnv& env) {
       ->capture_default_str();
   cmd->add_option("--effect", options->effects, effect_help());
   cmd->add_option("--devices-dir", options->devices_dir, "directory of device files");
-  cmd->add_option("--fleet", options->fleet,
-                  "simulate this many units of a whole-IMU device, spread unit to unit, with planted faults (a "
-                  "hysteresis, a bias step, a noisy instance, a truncated log): --out is then a directory that "
-                  "receives <unit>.csv, manifest.csv and key.json (the answer key)")
-      ->check(whole_number(1, 100000));
+  auto* fleet = cmd->add_option("--fleet", options->fleet,
+                                 "simulate this many units of a whole-IMU device, spread unit to unit, with planted "
+                                 "faults (--outliers): --out is then a directory that receives <unit>.csv, "
+                                 "manifest.csv and key.json (the answer key)")
+                    ->check(whole_number(1, 100000));
+  cmd->add_option("--spread", options->spread,
+                  "with --fleet, the unit-to-unit relative sigma of the device parameters: S for every group, or "
+                  "group=S,... of bias, scale_factor, noise, time_constant (devices/fleet_simulator.hpp)")
+      ->needs(fleet)
+      ->capture_default_str();
+  cmd->add_option("--outliers", options->outliers,
+                  "with --fleet, the planted faults, kind:count,... of hysteresis, bias_step, noisy, truncated, lag, "
+                  "dead_axis, lsb ('none': no fault)")
+      ->needs(fleet)
+      ->capture_default_str();
   cmd->add_option("--out", options->out, "output CSV (written atomically); with --fleet, a directory")->required();
   cmd->callback([options, &env] { simulate_command(*options, env); });
 }
