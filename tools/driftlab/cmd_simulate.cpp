@@ -17,6 +17,7 @@
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/effect_catalogue.hpp"
+#include "framework/imu.hpp"
 #include "framework/output_set.hpp"
 #include "framework/parallel.hpp"
 #include "framework/resources.hpp"
@@ -107,7 +108,8 @@ std::vector<CsvColumn> imu_columns(const devices::ImuDefinition& imu, const devi
 
 // `--fleet N`: N units of a whole-IMU device (devices/fleet_simulator.hpp: spread and planted
 // faults) into DIR: <unit>.csv each, manifest.csv (unit,data) for `driftlab fleet`, and key.json,
-// the answer key (per unit its seed, device ids, planted fault and the finding expected of it).
+// the answer key (per unit its seed, device ids, drawn parameters per channel under the fleet
+// report's figure keys (truth), planted fault and the finding expected of it).
 void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::DeviceDefinition& device,
                     const std::filesystem::path& device_path, const devices::SimulationProfile& profile) {
   if (!device.imu)
@@ -147,8 +149,25 @@ void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::De
     manifest += unit.id + "," + unit.id + ".csv\n";
     nlohmann::json ids = nlohmann::json::array();
     for (const auto& i : unit.imu.instances) ids.push_back(*i.device_id);
+    // The unit's drawn parameters per channel, as the fleet report's figures (display units).
+    nlohmann::json truth = nlohmann::json::object();
+    for (std::size_t i = 0; i < unit.imu.instances.size(); ++i)
+      for (const auto sensor : {imu::Sensor::Gyro, imu::Sensor::Accel})
+        for (std::size_t a = 0; a < 3; ++a) {
+          const auto& inst = unit.imu.instances[i];
+          const auto& axis = (sensor == imu::Sensor::Gyro ? inst.gyro : inst.accel).axes[a];
+          const double display = imu::display_unit(sensor).per_internal;
+          const bool gyro = sensor == imu::Sensor::Gyro;
+          const auto coefficient = [&](std::size_t k) {
+            return axis.bias_polynomial.size() > k ? axis.bias_polynomial[k] * display : 0.0;
+          };
+          truth[imu::ChannelId{sensor, static_cast<char>('x' + a), static_cast<int>(i)}.role()] = {
+              {gyro ? "a0_dph" : "a0_mg", coefficient(0)},
+              {gyro ? "a1_dph_per_k" : "a1_mg_per_k", coefficient(1)},
+              {gyro ? "N_dph_rthz" : "N_mg_rthz", axis.noise.arw_rad_sqrt_s * display}};
+        }
     nlohmann::json entry = {{"unit", unit.id}, {"data", unit.id + ".csv"}, {"seed", unit.seed}, {"device_ids", ids},
-                            {"fault", nullptr}};
+                            {"truth", truth},     {"fault", nullptr}};
     if (unit.fault) {
       const auto expected = devices::expected_finding(*unit.fault);
       entry["fault"] = {{"kind", devices::to_string(*unit.fault)},

@@ -25,7 +25,11 @@
 
 namespace driftlab::cli {
 
-using HtmlCell = std::variant<std::string, double>;  // text (left-aligned) or number (right-aligned)
+// A link to a file beside the report: `href` a relative path (escaped; the report stays offline).
+struct HtmlLink {
+  std::string text, href;
+};
+using HtmlCell = std::variant<std::string, double, HtmlLink>;  // text (left), number (right-aligned) or link
 
 struct HtmlTable {
   std::string caption;               // "Table N. caption"; empty = unnumbered
