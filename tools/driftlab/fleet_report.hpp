@@ -139,7 +139,8 @@ UnitSummary read_unit_summary(const std::filesystem::path& status_json);
 // A finding about one unit. rule "robust_z": channel, figure_key, value, fleet median, z;
 // "distance": channel "model", figure_key "distance", value the consistent D^2, median chi2_p(0.5)
 // (the fleet's median after the correction), z = D^2 / threshold; "quantisation": figure_key "quantisation_<suffix>", value the LSB, median the fleet's
-// LSB of that channel, z = LSB / per-sample noise.
+// LSB of that channel, z = LSB / per-sample noise (infinite, null in report.json, when the output
+// does not move between samples at all).
 struct Outlier {
   std::string unit, channel, figure_key;
   double value = 0.0, median = 0.0, z = 0.0;
