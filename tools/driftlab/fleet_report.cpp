@@ -479,6 +479,17 @@ Figure family_figure(const std::vector<UnitSummary>& units, const Families& fami
   return f;
 }
 
+// "family 1: 12 units (medoid unit007), family 2: ..."
+std::string family_sizes(const Families& families) {
+  std::vector<std::size_t> size(families.k, 0);
+  for (const auto& [unit, family] : families.family) ++size[family];
+  std::string text;
+  for (std::size_t f = 0; f < families.k; ++f)
+    text += (f ? ", " : "") + std::string("family ") + std::to_string(f + 1) + " (" + kFamilyColours[f % std::size(kFamilyColours)] +
+            "): " + std::to_string(size[f]) + " units, medoid " + families.medoids[f];
+  return text;
+}
+
 void add_figure(HtmlReport& html, const Figure& figure, const std::string& caption) {
   if (figure.panels.empty()) return;
   try {
@@ -634,7 +645,7 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
                             " below " + number(kFamilySilhouette) + ", or a family smaller than " +
                             number(100 * kMinFamilyShare) + " % of the units)."
                       : std::to_string(families.k) + " families of gyro bias-vs-temperature curves (mean silhouette " +
-                            number(families.silhouette) + "); medoid units in family order.");
+                            number(families.silhouette) + "); " + family_sizes(families) + ".");
   add_figure(html, family_figure(units, families), "Fitted gyro bias against temperature, one line per unit, coloured by family");
   HtmlTable checks{"Discrepancy check (--discrepancy)", {"unit", "channel: named effects"}, {},
                    "driftlab discrepancy without a device file on each gyro channel's first record; an effect is named "
