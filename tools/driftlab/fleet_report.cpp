@@ -490,15 +490,6 @@ std::string family_sizes(const Families& families) {
   return text;
 }
 
-void add_figure(HtmlReport& html, const Figure& figure, const std::string& caption) {
-  if (figure.panels.empty()) return;
-  try {
-    html.figure(figure, caption);
-  } catch (const PlotError& err) {
-    html.paragraph(std::string("(figure not drawn: ") + err.what() + ")");
-  }
-}
-
 }  // namespace
 
 void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector<Outlier>& outliers,
@@ -637,8 +628,8 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
   for (const auto& f : kFigures)
     figures.rows.push_back({std::string(f.doc), figure_key(f, imu::Sensor::Gyro), figure_key(f, imu::Sensor::Accel)});
   html.section("Failures").table(failed).section("Outliers").table(flagged);
-  add_figure(html, holdout_figure(units, outliers),
-             "Held-out residual of every calibrated unit per channel; red: a unit with a finding on that channel");
+  if (const Figure f = holdout_figure(units, outliers); !f.panels.empty())
+    html.figure_or_note(f, "Held-out residual of every calibrated unit per channel; red: a unit with a finding on that channel");
   html.section("Families").paragraph(
       families.k == 1 ? "One family: no split of the gyro bias-vs-temperature curves is supported (best mean silhouette " +
                             number(families.silhouette_by_k.empty() ? 0.0 : *std::max_element(families.silhouette_by_k.begin(), families.silhouette_by_k.end())) +
@@ -646,7 +637,8 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
                             number(100 * kMinFamilyShare) + " % of the units)."
                       : std::to_string(families.k) + " families of gyro bias-vs-temperature curves (mean silhouette " +
                             number(families.silhouette) + "); " + family_sizes(families) + ".");
-  add_figure(html, family_figure(units, families), "Fitted gyro bias against temperature, one line per unit, coloured by family");
+  if (const Figure f = family_figure(units, families); !f.panels.empty())
+    html.figure_or_note(f, "Fitted gyro bias against temperature, one line per unit, coloured by family");
   HtmlTable checks{"Discrepancy check (--discrepancy)", {"unit", "channel: named effects"}, {},
                    "driftlab discrepancy without a device file on each gyro channel's first record; an effect is named "
                    "when its delta BIC exceeds 10"};

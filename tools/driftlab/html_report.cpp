@@ -133,6 +133,14 @@ HtmlReport& HtmlReport::table(const HtmlTable& t) {
   return *this;
 }
 
+HtmlReport& HtmlReport::figure_or_note(const Figure& f, const std::string& caption) {
+  try {
+    return figure(f, caption);
+  } catch (const PlotError& err) {
+    return paragraph(std::string("(figure not drawn: ") + err.what() + ")");
+  }
+}
+
 HtmlReport& HtmlReport::figure(const Figure& f, const std::string& caption) {
   return figure_svg(render_svg(f), caption);
 }

@@ -49,6 +49,8 @@ class HtmlReport {
   HtmlReport& table(const HtmlTable& table);
   HtmlReport& figure(const Figure& figure, const std::string& caption);
   HtmlReport& figure_svg(const std::string& svg, const std::string& caption);
+  // figure(), or when gnuplot fails (PlotError) a paragraph saying why: the numbers stand without it.
+  HtmlReport& figure_or_note(const Figure& figure, const std::string& caption);
 
   std::string html() const;  // the whole document
   void write(const std::filesystem::path& path) const;
