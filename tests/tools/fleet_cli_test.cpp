@@ -516,6 +516,55 @@ TEST(FleetDiscrepancy, TheCheckNamesThePlantedHysteresisOnItsChannelOnly) {
   EXPECT_TRUE(read_json(kDir / "plain_out" / "units" / hysteresis / "status.json")["discrepancy"].empty());
 }
 
+// A unit whose log names its columns its own way is read through its manifest row's mappings (as
+// --column: what is mapped is what is read, here instance 0's gyros and temperature): the same
+// models as from the unit's original log (CSV and YAML manifests alike); a malformed mapping is a
+// manifest error naming line and unit.
+TEST(FleetManifest, AUnitsOwnColumnMappingsReadItsLog) {
+  const fs::path sim = kDir / "columns";
+  const auto s = run_driftlab("simulate --fleet 2 --device imu3 --fs 0.2 --seed 5 --outliers none --out " + sim.string());
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  {  // unit002's log with the gyro columns of instance 0 renamed gx, gy, gz (in deg/s)
+    std::string text = read_text(sim / "unit002.csv");
+    const auto header_end = text.find('\n');
+    std::string header = text.substr(0, header_end);
+    for (const char axis : {'x', 'y', 'z'}) {
+      const std::string from = std::string("gyro_") + axis + "_dps,", to = std::string("g") + axis + ",";
+      header.replace(header.find(from), from.size(), to);
+    }
+    std::ofstream(sim / "renamed.csv") << header << text.substr(header_end);
+  }
+  std::ofstream(sim / "m.csv") << "unit,data,columns\nunit001,unit001.csv,\n"
+                                  "unit002,renamed.csv,gyro_x=gx:deg/s;gyro_y=gy:deg/s;gyro_z=gz:deg/s;temperature=temp_c:degC\n";
+  std::ofstream(sim / "m.yaml") << "units:\n  - {unit: unit001, data: unit001.csv}\n"
+                                   "  - {unit: unit002, data: renamed.csv, columns: [gyro_x=gx:deg/s, gyro_y=gy:deg/s, "
+                                   "gyro_z=gz:deg/s, temperature=temp_c:degC]}\n";
+  std::ofstream(sim / "original.csv") << "unit,data\nunit001,unit001.csv\nunit002,unit002.csv\n";
+  const auto original = run_fleet(kDir / "columns_original", 1, sim / "original.csv");
+  const auto mapped = run_fleet(kDir / "columns_csv", 1, sim / "m.csv");
+  const auto yaml = run_fleet(kDir / "columns_yaml", 1, sim / "m.yaml");
+  ASSERT_EQ(mapped.exit_code, original.exit_code) << mapped.err;
+  ASSERT_EQ(yaml.exit_code, original.exit_code) << yaml.err;
+  const auto coefficients = [](const fs::path& model) {  // instance 0's gyro channels
+    std::vector<double> out;
+    const auto j = read_json(model);
+    for (const auto& c : j["channels"])
+      if (c["role"].get<std::string>().rfind("gyro_", 0) == 0)
+        for (const double a : c["model"]["bias"]["polynomial_rad_s_per_k_i"]) out.push_back(a);
+    return out;
+  };
+  const auto expected = coefficients(kDir / "columns_original" / "units" / "unit002" / "model.json");
+  ASSERT_FALSE(expected.empty());
+  EXPECT_EQ(coefficients(kDir / "columns_csv" / "units" / "unit002" / "model.json"), expected);
+  EXPECT_EQ(coefficients(kDir / "columns_yaml" / "units" / "unit002" / "model.json"), expected);
+  EXPECT_EQ(read_json(kDir / "columns_csv" / "units" / "unit002" / "model.json")["channels"][0]["column"], "gx");
+
+  std::ofstream(sim / "bad.csv") << "unit,data,columns\nunit001,unit001.csv,gyro_x=gx:furlongs\n";
+  const auto bad = run_fleet(kDir / "columns_bad", 1, sim / "bad.csv");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_THAT(bad.err, ::testing::AllOf(HasSubstr("bad.csv:2"), HasSubstr("unit001"), HasSubstr("furlongs")));
+}
+
 // A YAML manifest with the CSV manifest's content gives the same unit folders and report.
 TEST(FleetManifest, AYamlManifestIsTheCsvOne) {
   const fs::path sim = kDir / "yaml";

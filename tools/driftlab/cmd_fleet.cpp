@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "devices/yaml_fields.hpp"
+#include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/output_set.hpp"
 #include "framework/parallel.hpp"
@@ -55,6 +56,7 @@ struct FleetOptions {
 struct ManifestUnit {
   std::string id;
   std::vector<std::string> data;
+  std::vector<std::string> columns;  // the unit's own --column mappings, used after the fleet's
   std::vector<SpecLimit> limits;
 };
 
@@ -87,15 +89,27 @@ void check_unit_id(const std::string& id, std::set<std::string>& seen, const Loc
   if (!seen.insert(id).second) throw ConfigError(where, "unit '" + id + "' appears twice");
 }
 
+// A unit's column mapping, checked as --column is (ConfigError at `where`, naming the mapping).
+void add_column(ManifestUnit& u, const std::string& mapping, const Location& where) {
+  try {
+    parse_column_mapping(mapping);
+  } catch (const Error& e) {
+    throw ConfigError(where, "unit '" + u.id + "': column mapping '" + mapping + "': " + e.what());
+  }
+  u.columns.push_back(mapping);
+}
+
 // A record path of a unit, relative to the manifest's folder unless absolute; blank ones skipped.
 void add_record(ManifestUnit& u, const std::string& path, const fs::path& base) {
   if (path.empty()) return;
   u.data.push_back(fs::path(path).is_absolute() ? path : (base / path).string());
 }
 
-// Manifest CSV: a header with `unit` and `data` and any spec-limit columns
+// Manifest CSV: a header with `unit` and `data`, optionally `columns`, and any spec-limit columns
 // ("<channels>.<figure key>_max", fleet_report.hpp); one row per unit; `data` holds one or more
-// record paths separated by ';'. Blank lines and lines starting with '#' are skipped. No quoting.
+// record paths separated by ';', `columns` the unit's column mappings (as --column, e.g.
+// `gyro_x=gx:deg/s;temperature=T:degC`) separated by ';'. Blank lines and lines starting with '#'
+// are skipped. No quoting.
 std::vector<ManifestUnit> read_manifest_csv(const fs::path& path) {
   std::ifstream in(path);
   if (!in) throw ConfigError({path.string(), 0, ""}, "cannot open the manifest");
@@ -103,7 +117,7 @@ std::vector<ManifestUnit> read_manifest_csv(const fs::path& path) {
   std::string line;
   int number = 0;
   std::vector<std::string> header;
-  int unit_col = -1, data_col = -1;
+  int unit_col = -1, data_col = -1, columns_col = -1;
   std::vector<std::pair<int, SpecLimit>> limit_cols;
   std::vector<ManifestUnit> units;
   std::set<std::string> seen;
@@ -117,6 +131,7 @@ std::vector<ManifestUnit> read_manifest_csv(const fs::path& path) {
       for (int c = 0; c < static_cast<int>(header.size()); ++c) {
         if (header[c] == "unit") unit_col = c;
         else if (header[c] == "data") data_col = c;
+        else if (header[c] == "columns") columns_col = c;
         else limit_cols.emplace_back(c, parse_spec_column(header[c], {path.string(), number, header[c]}));
       }
       if (unit_col < 0 || data_col < 0)
@@ -132,6 +147,9 @@ std::vector<ManifestUnit> read_manifest_csv(const fs::path& path) {
     check_unit_id(u.id, seen, {path.string(), number, "unit"});
     for (const auto& p : split(cells[data_col], ';')) add_record(u, trim(p), base);
     if (u.data.empty()) throw ConfigError({path.string(), number, "data"}, "unit '" + u.id + "' has no record");
+    if (columns_col >= 0)
+      for (const auto& m : split(cells[columns_col], ';'))
+        if (!trim(m).empty()) add_column(u, trim(m), {path.string(), number, "columns"});
     for (const auto& [c, limit] : limit_cols) {
       if (cells[c].empty()) continue;
       SpecLimit l = limit;
@@ -151,6 +169,7 @@ std::vector<ManifestUnit> read_manifest_csv(const fs::path& path) {
 //   units:
 //     - unit: unit001
 //       data: unit001.csv            # or a list: [run1.csv, run2.csv]
+//       columns: [gyro_x=gx:deg/s]   # optional, the unit's column mappings (as --column)
 //       limits: {gyro.holdout_dph_max: 30, accel.a1_mg_per_k_max: 0.5}   # optional, as the CSV's columns
 // Every problem is collected and reported with file, line and key path (units[3].limits.gyro.x_max).
 std::vector<ManifestUnit> read_manifest_yaml(const fs::path& path) {
@@ -166,7 +185,7 @@ std::vector<ManifestUnit> read_manifest_yaml(const fs::path& path) {
     for (std::size_t i = 0; list && list.IsSequence() && i < list.size(); ++i) {
       const YAML::Node node = list[i];
       const std::string at = "units[" + std::to_string(i) + "]";
-      if (!f.map(node, at, {"unit", "data", "limits"})) continue;
+      if (!f.map(node, at, {"unit", "data", "columns", "limits"})) continue;
       ManifestUnit u;
       if (const auto id = f.text(node, at, "unit", true)) {
         u.id = *id;
@@ -183,6 +202,20 @@ std::vector<ManifestUnit> read_manifest_yaml(const fs::path& path) {
           if (d.IsScalar()) add_record(u, d.as<std::string>(), base);
           else f.problem(d, at + ".data", "expected a record path");
       if (data && u.data.empty()) f.problem(data, at + ".data", "expected a record path or a list of them");
+      const YAML::Node columns = f.child(node, at, "columns", false);
+      const auto add = [&](const YAML::Node& c) {
+        try {
+          add_column(u, c.as<std::string>(), {path.string(), devices::YamlFields::line_of(c), at + ".columns"});
+        } catch (const ConfigError& e) {
+          for (const auto& p : e.problems()) problems.push_back(p);
+        }
+      };
+      if (columns && columns.IsScalar()) add(columns);
+      else if (columns && columns.IsSequence())
+        for (const auto& c : columns)
+          if (c.IsScalar()) add(c);
+          else f.problem(c, at + ".columns", "expected a column mapping ROLE=COLUMN:UNIT");
+      else if (columns) f.problem(columns, at + ".columns", "expected a column mapping or a list of them");
       const YAML::Node limits = f.child(node, at, "limits", false);
       if (limits && !limits.IsMap()) f.problem(limits, at + ".limits", "expected a map <channels>.<figure>_max: limit");
       for (auto it = limits && limits.IsMap() ? limits.begin() : YAML::const_iterator(); limits && limits.IsMap() && it != limits.end(); ++it) {
@@ -236,6 +269,7 @@ std::string input_hash(const ManifestUnit& u, const FleetOptions& o) {
        << o.data.axis << "\nfs " << o.data.sample_rate_hz << "\nmax_gap " << o.data.max_gap_factor << "\ntopic "
        << o.data.log.topic << "\ninstance " << o.data.log.instance << "\nsensor " << o.data.log.sensor << "\n";
   for (const auto& c : o.data.columns) opts << "column " << c << "\n";
+  for (const auto& c : u.columns) opts << "unit column " << c << "\n";
   f.add(opts.str());
   std::vector<char> buffer(1 << 20);
   for (const auto& p : u.data) {
@@ -319,7 +353,9 @@ std::string run_unit(const ManifestUnit& u, const FleetOptions& o, const fs::pat
     status["reason"] = reason;
   };
   try {
-    const auto channels = load_channel_records(u.data, o.data);
+    CalibrationDataOptions data = o.data;
+    data.columns.insert(data.columns.end(), u.columns.begin(), u.columns.end());
+    const auto channels = load_channel_records(u.data, data);
     lap("read");
     for (const auto& f : run_quality_gate(channels, calibration::FitOptions{}.bin_s, o.strict, nullptr))
       gate.push_back({{"severity", calibration::to_string(f.severity)}, {"code", f.code}, {"message", f.message}});
@@ -494,8 +530,9 @@ void add_fleet_command(CLI::App& app, CommandEnv& env) {
       "fleet", "calibrate every unit of a manifest (as calibrate does), each into OUT/units/<id>/, resumable, then a "
                "fleet report with outliers and spec yield; exit 1 when a unit failed or is outside spec");
   cmd->add_option("--manifest", o->manifest,
-                  "CSV: unit,data[,<channels>.<figure>_max ...]; data = record paths separated by ';' (relative to "
-                  "the manifest); or YAML (.yaml/.yml): units: [{unit, data: path or list, limits: {<channels>."
+                  "CSV: unit,data[,columns][,<channels>.<figure>_max ...]; data = record paths separated by ';' "
+                  "(relative to the manifest), columns = the unit's --column mappings separated by ';'; or YAML "
+                  "(.yaml/.yml): units: [{unit, data: path or list, columns: [mapping, ...], limits: {<channels>."
                   "<figure>_max: value}}]");
   cmd->add_option("--out", o->out, "output directory (units/<id>/, report.json, units.csv, report.html)");
   cmd->add_option("--workers", o->workers, "units calibrated at once (results do not depend on it)")
