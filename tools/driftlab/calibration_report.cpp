@@ -136,14 +136,6 @@ void add_bias_points(PlotPanel& p, const std::string& what, const calibration::R
   }
 }
 
-void add_figure(HtmlReport& html, const Figure& figure, const std::string& caption) {
-  try {
-    html.figure(figure, caption);
-  } catch (const PlotError& err) {
-    html.paragraph(std::string("(figure not drawn: ") + err.what() + ")");
-  }
-}
-
 // The figures of one held-out record (see the header).
 void add_figures(HtmlReport& html, const ReportInput& in, const calibration::Record& r, const RecordBlocks& blocks,
                  const std::vector<Scored>& scores) {
@@ -157,7 +149,7 @@ void add_figures(HtmlReport& html, const ReportInput& in, const calibration::Rec
       PlotSeries line{s.name + " correction", blocks.temp_c, s.block_bias_dph};
       p.series.push_back(std::move(line));
     }
-    add_figure(html, {{p}, 900, 420, 1, ""},
+    html.figure_or_note({{p}, 900, 420, 1, ""},
                "Bias (measured - true rate) of the calibration records and of " + r.name +
                    ", heating and cooling apart, with the correction each model applies to " + r.name);
   }
@@ -189,10 +181,10 @@ void add_figures(HtmlReport& html, const ReportInput& in, const calibration::Rec
     }
     allan.series.push_back(std::move(a));
   }
-  add_figure(html, {{by_temp}, 900, 360, 1, ""}, "Residual of every method against temperature on " + r.name);
-  add_figure(html, {{by_time}, 900, 300, 1, ""}, "Residual of every method against time on " + r.name);
+  html.figure_or_note({{by_temp}, 900, 360, 1, ""}, "Residual of every method against temperature on " + r.name);
+  html.figure_or_note({{by_time}, 900, 300, 1, ""}, "Residual of every method against time on " + r.name);
   if (!allan.series.empty())
-    add_figure(html, {{allan}, 900, 420, 1, ""}, "Allan deviation of every method's residual on " + r.name);
+    html.figure_or_note({{allan}, 900, 420, 1, ""}, "Allan deviation of every method's residual on " + r.name);
 }
 
 std::string terms_text(const calibration::CalibrationModel& m) {

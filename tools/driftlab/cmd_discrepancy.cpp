@@ -81,19 +81,7 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
     assignments[name].push_back(set.substr(dot + 1));
   }
   std::vector<std::unique_ptr<Effect>> owned;
-  std::vector<discrepancy::Candidate> candidates;
-  for (const auto& name : names) {
-    ParamValues params;
-    try {
-      params = params_from_assignments(registry, name, assignments[name]);
-    } catch (const ConfigError& e) {
-      auto problems = e.problems();
-      for (auto& p : problems) p.where = {"", 0, "--set " + name + "." + p.where.field};
-      throw ConfigError(std::move(problems));
-    }
-    owned.push_back(registry.create_as<Effect>({name, std::move(params)}));
-    candidates.push_back({name.substr(7), owned.back().get()});
-  }
+  const auto candidates = discrepancy_candidates(registry, names, assignments, owned);
 
   // Gaps: unless --max-gap is given, a record of regular bursts is accepted as it is (the block
   // means handle it); irregular gaps are refused with where the first one is.

@@ -17,6 +17,7 @@
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/effect_catalogue.hpp"
+#include "framework/imu.hpp"
 #include "framework/output_set.hpp"
 #include "framework/parallel.hpp"
 #include "framework/resources.hpp"
@@ -34,6 +35,8 @@ struct SimulateOptions {
   double duration = 0.0;
   std::uint64_t seed = 1;
   std::size_t fleet = 0;  // > 0: that many units into the directory --out (simulate_fleet)
+  std::string spread = "0.1";                                 // --spread (devices::parse_fleet_spread)
+  std::string outliers = devices::kDefaultOutliers;           // --outliers (devices::parse_fault_plan)
 };
 
 // A column in `unit`, snapped to the output's resolution (internal units; 0 = none) as k / steps
@@ -105,7 +108,8 @@ std::vector<CsvColumn> imu_columns(const devices::ImuDefinition& imu, const devi
 
 // `--fleet N`: N units of a whole-IMU device (devices/fleet_simulator.hpp: spread and planted
 // faults) into DIR: <unit>.csv each, manifest.csv (unit,data) for `driftlab fleet`, and key.json,
-// the answer key (per unit its seed, device ids, planted fault and the finding expected of it).
+// the answer key (per unit its seed, device ids, drawn parameters per channel under the fleet
+// report's figure keys (truth), planted fault and the finding expected of it).
 void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::DeviceDefinition& device,
                     const std::filesystem::path& device_path, const devices::SimulationProfile& profile) {
   if (!device.imu)
@@ -118,8 +122,9 @@ void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::De
     directory.make_directory(dir, "--out");
     directory.commit();
   }
-  const devices::FleetSpread spread;
-  const auto fleet = devices::plan_fleet(*device.imu, o.fleet, o.seed, spread);
+  const devices::FleetSpread spread = devices::parse_fleet_spread(o.spread);
+  const auto plan = devices::parse_fault_plan(o.outliers);
+  const auto fleet = devices::plan_fleet(*device.imu, o.fleet, o.seed, spread, plan);
   devices::SimulationOptions options;
   options.sample_rate_hz = o.fs;
   if (o.duration > 0.0) options.duration_s = o.duration;
@@ -144,8 +149,25 @@ void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::De
     manifest += unit.id + "," + unit.id + ".csv\n";
     nlohmann::json ids = nlohmann::json::array();
     for (const auto& i : unit.imu.instances) ids.push_back(*i.device_id);
+    // The unit's drawn parameters per channel, as the fleet report's figures (display units).
+    nlohmann::json truth = nlohmann::json::object();
+    for (std::size_t i = 0; i < unit.imu.instances.size(); ++i)
+      for (const auto sensor : {imu::Sensor::Gyro, imu::Sensor::Accel})
+        for (std::size_t a = 0; a < 3; ++a) {
+          const auto& inst = unit.imu.instances[i];
+          const auto& axis = (sensor == imu::Sensor::Gyro ? inst.gyro : inst.accel).axes[a];
+          const double display = imu::display_unit(sensor).per_internal;
+          const bool gyro = sensor == imu::Sensor::Gyro;
+          const auto coefficient = [&](std::size_t k) {
+            return axis.bias_polynomial.size() > k ? axis.bias_polynomial[k] * display : 0.0;
+          };
+          truth[imu::ChannelId{sensor, static_cast<char>('x' + a), static_cast<int>(i)}.role()] = {
+              {gyro ? "a0_dph" : "a0_mg", coefficient(0)},
+              {gyro ? "a1_dph_per_k" : "a1_mg_per_k", coefficient(1)},
+              {gyro ? "N_dph_rthz" : "N_mg_rthz", axis.noise.arw_rad_sqrt_s * display}};
+        }
     nlohmann::json entry = {{"unit", unit.id}, {"data", unit.id + ".csv"}, {"seed", unit.seed}, {"device_ids", ids},
-                            {"fault", nullptr}};
+                            {"truth", truth},     {"fault", nullptr}};
     if (unit.fault) {
       const auto expected = devices::expected_finding(*unit.fault);
       entry["fault"] = {{"kind", devices::to_string(*unit.fault)},
@@ -167,6 +189,7 @@ void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::De
         {"scale_factor_polynomial_sigma", spread.scale_factor},
         {"noise_terms_sigma", spread.noise},
         {"time_constants_sigma", spread.time_constant}}},
+      {"outliers", o.outliers},
       {"units", units}};
   OutputSet outputs({device_path});
   outputs.plan(dir / "manifest.csv", "--out");
@@ -255,11 +278,21 @@ void add_simulate_command(CLI::App& app, CommandEnv& env) {
       ->capture_default_str();
   cmd->add_option("--effect", options->effects, effect_help());
   cmd->add_option("--devices-dir", options->devices_dir, "directory of device files");
-  cmd->add_option("--fleet", options->fleet,
-                  "simulate this many units of a whole-IMU device, spread unit to unit, with planted faults (a "
-                  "hysteresis, a bias step, a noisy instance, a truncated log): --out is then a directory that "
-                  "receives <unit>.csv, manifest.csv and key.json (the answer key)")
-      ->check(whole_number(1, 100000));
+  auto* fleet = cmd->add_option("--fleet", options->fleet,
+                                 "simulate this many units of a whole-IMU device, spread unit to unit, with planted "
+                                 "faults (--outliers): --out is then a directory that receives <unit>.csv, "
+                                 "manifest.csv and key.json (the answer key)")
+                    ->check(whole_number(1, 100000));
+  cmd->add_option("--spread", options->spread,
+                  "with --fleet, the unit-to-unit relative sigma of the device parameters: S for every group, or "
+                  "group=S,... of bias, scale_factor, noise, time_constant (devices/fleet_simulator.hpp)")
+      ->needs(fleet)
+      ->capture_default_str();
+  cmd->add_option("--outliers", options->outliers,
+                  "with --fleet, the planted faults, kind:count,... of hysteresis, bias_step, noisy, truncated, lag, "
+                  "dead_axis, lsb ('none': no fault)")
+      ->needs(fleet)
+      ->capture_default_str();
   cmd->add_option("--out", options->out, "output CSV (written atomically); with --fleet, a directory")->required();
   cmd->callback([options, &env] { simulate_command(*options, env); });
 }

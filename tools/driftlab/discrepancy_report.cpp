@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "framework/params_io.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/html_report.hpp"
 
@@ -296,6 +297,26 @@ std::string discrepancy_html(const discrepancy::Result& r, const DiscrepancyRepo
                  ", with χ² from the generalized least-squares fit under the covariance the noise terms predict "
                  "(see models/discrepancy/discrepancy.hpp).");
   return html.html();
+}
+
+std::vector<discrepancy::Candidate> discrepancy_candidates(
+    const Registry& registry, const std::vector<std::string>& names,
+    const std::map<std::string, std::vector<std::string>>& assignments, std::vector<std::unique_ptr<Effect>>& owned) {
+  std::vector<discrepancy::Candidate> candidates;
+  for (const auto& name : names) {
+    ParamValues params;
+    try {
+      const auto a = assignments.find(name);
+      params = params_from_assignments(registry, name, a == assignments.end() ? std::vector<std::string>{} : a->second);
+    } catch (const ConfigError& e) {
+      auto problems = e.problems();
+      for (auto& p : problems) p.where = {"", 0, "--set " + name + "." + p.where.field};
+      throw ConfigError(std::move(problems));
+    }
+    owned.push_back(registry.create_as<Effect>({name, std::move(params)}));
+    candidates.push_back({name.substr(7), owned.back().get()});
+  }
+  return candidates;
 }
 
 }  // namespace driftlab::cli

@@ -15,9 +15,13 @@
 //                     peaks, Allan deviation of the residual against the noise terms
 #pragma once
 
+#include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
+#include <vector>
 #include <string>
 
+#include "framework/registry.hpp"
 #include "models/discrepancy/discrepancy.hpp"
 
 namespace driftlab::cli {
@@ -30,5 +34,12 @@ struct DiscrepancyReportInfo {
 
 nlohmann::json discrepancy_json(const discrepancy::Result& result, const DiscrepancyReportInfo& info);
 std::string discrepancy_html(const discrepancy::Result& result, const DiscrepancyReportInfo& info);
+
+// The candidate effects of a discrepancy run: the registry's plugins `names` ("effect/NAME"), each
+// with its assignments (effect/NAME -> "key=value", as --set gives them) validated by its table;
+// the plugins are kept in `owned`. ConfigError naming --set NAME.key on a bad assignment.
+std::vector<discrepancy::Candidate> discrepancy_candidates(
+    const Registry& registry, const std::vector<std::string>& names,
+    const std::map<std::string, std::vector<std::string>>& assignments, std::vector<std::unique_ptr<Effect>>& owned);
 
 }  // namespace driftlab::cli

@@ -1,7 +1,9 @@
 #include "tools/driftlab/fleet_report.hpp"
 
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <fstream>
 #include <set>
@@ -122,43 +124,281 @@ UnitSummary read_unit_summary(const std::filesystem::path& status_json) {
     u.reason = j.at("reason").get<std::string>();
     for (const auto& [channel, figures] : j.at("figures").items())
       for (const auto& [key, value] : figures.items()) u.figures[channel][key] = value.get<double>();
+    for (const auto& [channel, q] : j.at("quantisation").items())
+      u.quantisation[channel] = {q.at("lsb").get<double>(), q.at("share").get<double>(),
+                                 q.at("sample_sigma").get<double>(), q.at("quantised").get<bool>()};
+    for (const auto& [channel, curve] : j.at("bias_curves").items())
+      u.bias_curves[channel] = curve.get<std::vector<double>>();
+    for (const auto& [channel, check] : j.at("discrepancy").items()) u.discrepancy.push_back(check.at("text").get<std::string>());
     return u;
   } catch (const nlohmann::json::exception& e) {
     throw ConfigError({status_json.string(), 0, ""}, std::string("not a fleet unit status file: ") + e.what());
   }
 }
 
-// Is `key` a figure whose outlier scale is floored (FigureDef::floored)?
-bool floored(const std::string& key) {
+// The FigureDef::holdout_floor of `key` (0 for no figure).
+double holdout_floor(const std::string& key) {
   for (const auto& f : kFigures)
     for (const auto sensor : {imu::Sensor::Gyro, imu::Sensor::Accel})
-      if (figure_key(f, sensor) == key) return f.floored;
-  return false;
+      if (figure_key(f, sensor) == key) return f.holdout_floor;
+  return 0.0;
 }
+
+namespace {
+
+// Median and robust scale of one (channel, figure) over the passed units (the rule in the header).
+struct RobustScale {
+  double median = 0.0, scale = 0.0;
+};
+std::map<std::pair<std::string, std::string>, RobustScale> robust_scales(
+    const std::map<std::pair<std::string, std::string>, std::vector<std::pair<std::string, double>>>& all) {
+  std::map<std::pair<std::string, std::string>, RobustScale> out;
+  for (const auto& [where, values] : all) {
+    const Distribution d = distribution(values);
+    double scale = d.mad > 0 ? d.mad / kMadToSigma : kMeanAdToSigma * d.mean_ad;
+    if (const double floor = holdout_floor(where.second); floor > 0) {
+      const auto id = imu::parse_role(where.first);
+      const auto holdout = id ? all.find({where.first, figure_key(kFigures[4], id->sensor)}) : all.end();
+      if (holdout != all.end()) scale = std::max(scale, floor * distribution(holdout->second).median);
+    }
+    out[where] = {d.median, scale};
+  }
+  return out;
+}
+
+std::string quantisation_key(const std::string& channel) {
+  const auto id = imu::parse_role(channel);
+  return std::string("quantisation_") + (id && id->sensor == imu::Sensor::Accel ? "mg" : "dph");
+}
+
+}  // namespace
 
 std::vector<Outlier> find_outliers(const std::vector<UnitSummary>& units) {
   std::vector<Outlier> out;
   const auto all = samples(units);
+  const auto scales = robust_scales(all);
   for (const auto& [where, values] : all) {
-    const Distribution d = distribution(values);
-    double scale = d.mad > 0 ? d.mad / kMadToSigma : kMeanAdToSigma * d.mean_ad;
-    if (floored(where.second)) {
-      const auto id = imu::parse_role(where.first);
-      const auto holdout = id ? all.find({where.first, figure_key(kFigures[4], id->sensor)}) : all.end();
-      if (holdout != all.end()) scale = std::max(scale, distribution(holdout->second).median);
-    }
-    if (!(scale > 0)) continue;
+    const RobustScale& r = scales.at(where);
+    if (!(r.scale > 0)) continue;
     for (const auto& [unit, value] : values) {
-      const double z = (value - d.median) / scale;
+      const double z = (value - r.median) / r.scale;
       if (std::abs(z) <= kOutlierZ) continue;
-      Outlier o{unit, where.first, where.second, value, d.median, z, ""};
-      o.text = o.channel + " " + o.figure_key + " " + number(value) + "; fleet median " + number(d.median) +
+      Outlier o{unit, where.first, where.second, value, r.median, z, "", "robust_z"};
+      o.text = o.channel + " " + o.figure_key + " " + number(value) + "; fleet median " + number(r.median) +
                " (robust z " + number(z) + ")";
+      out.push_back(std::move(o));
+    }
+  }
+  // The whole-model distance, made consistent (header): D^2 chi2_p(0.5) / median D^2.
+  struct Distance {
+    const UnitSummary* unit;
+    double d2;
+    std::vector<std::pair<double, std::string>> terms;
+  };
+  std::vector<Distance> distances;
+  for (const auto& u : units) {
+    if (u.status != "passed") continue;
+    Distance d{&u, 0.0, {}};
+    for (const auto& [channel, figures] : u.figures)
+      for (const auto& [key, value] : figures) {
+        const auto r = scales.find({channel, key});
+        if (r == scales.end() || !(r->second.scale > 0)) continue;
+        const double z = (value - r->second.median) / r->second.scale;
+        d.d2 += z * z;
+        d.terms.emplace_back(z * z, channel + " " + key + " (z " + number(z) + ")");
+      }
+    if (!d.terms.empty()) distances.push_back(std::move(d));
+  }
+  std::vector<double> d2s;
+  for (const auto& d : distances) d2s.push_back(d.d2);
+  const double median_d2 = d2s.empty() ? 0.0 : median(d2s);
+  for (auto& d : distances) {
+    const boost::math::chi_squared chi2(static_cast<double>(d.terms.size()));
+    const double consistent = median_d2 > 0 ? d.d2 * boost::math::median(chi2) / median_d2 : 0.0;
+    const double threshold = boost::math::quantile(chi2, kDistanceQuantile);
+    if (consistent <= threshold) continue;
+    std::stable_sort(d.terms.begin(), d.terms.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::string drivers;
+    for (std::size_t i = 0; i < std::min(kDistanceDrivers, d.terms.size()); ++i)
+      drivers += (i ? ", " : "") + d.terms[i].second;
+    Outlier o{d.unit->unit, "model", "distance", consistent, boost::math::median(chi2), consistent / threshold, "",
+              "distance"};
+    o.text = "whole model: robust distance^2 " + number(consistent) + " > " + number(threshold) + " (chi-square, " +
+             std::to_string(d.terms.size()) + " figures, " + number(kDistanceQuantile) + "; fleet median " +
+             number(o.median) + "); driven by " + drivers;
+    out.push_back(std::move(o));
+  }
+  // Quantised channels.
+  std::map<std::string, std::vector<double>> lsbs;
+  for (const auto& u : units)
+    if (u.status == "passed")
+      for (const auto& [channel, q] : u.quantisation) lsbs[channel].push_back(q.lsb);
+  for (const auto& u : units) {
+    if (u.status != "passed") continue;
+    for (const auto& [channel, q] : u.quantisation) {
+      if (!q.quantised) continue;
+      const double fleet = median(lsbs[channel]);
+      Outlier o{u.unit, channel, quantisation_key(channel), q.lsb, fleet,
+                q.sample_sigma > 0 ? q.lsb / q.sample_sigma : std::numeric_limits<double>::infinity(), "",
+                "quantisation"};
+      o.text = channel + " quantised: " + number(100.0 * q.share) + " % of samples on multiples of one LSB " +
+               number(q.lsb) + " (fleet median LSB " + number(fleet) + "), per-sample noise " +
+               number(q.sample_sigma);
       out.push_back(std::move(o));
     }
   }
   std::stable_sort(out.begin(), out.end(), [](const Outlier& a, const Outlier& b) { return a.unit < b.unit; });
   return out;
+}
+
+Quantisation quantisation_check(const Eigen::VectorXd& x) {
+  Quantisation q;
+  if (x.size() < 2) return q;
+  std::vector<double> sorted(x.data(), x.data() + x.size());
+  std::sort(sorted.begin(), sorted.end());
+  const double range = sorted.back() - sorted.front();
+  if (!(range > 0)) return q;
+  const double tolerance = kQuantisationTolerance * range;
+  double step = range;
+  for (std::size_t i = 1; i < sorted.size(); ++i)
+    if (sorted[i] - sorted[i - 1] > tolerance) step = std::min(step, sorted[i] - sorted[i - 1]);
+  q.lsb = step;
+  std::size_t on = 0;
+  for (double v : sorted) on += std::abs(v - step * std::round(v / step)) <= kQuantisationTolerance * step;
+  q.share = static_cast<double>(on) / static_cast<double>(sorted.size());
+  std::vector<double> d(static_cast<std::size_t>(x.size() - 1));
+  for (Eigen::Index i = 1; i < x.size(); ++i) d[static_cast<std::size_t>(i - 1)] = x[i] - x[i - 1];
+  const double m = median(d);
+  for (double& v : d) v = std::abs(v - m);
+  q.sample_sigma = median(d) / kMadToSigma / std::sqrt(2.0);
+  q.quantised = q.share >= kQuantisedShare && q.lsb >= q.sample_sigma;
+  return q;
+}
+
+std::vector<double> bias_curve(const calibration::ChannelCalibration& channel) {
+  const double display = imu::display_unit(channel.id.sensor).per_internal;
+  std::vector<double> out;
+  for (double t : kFamilyGridC) out.push_back(channel.model.polynomial_bias_rad_s(t) * display);
+  return out;
+}
+
+namespace {
+
+// Total distance of every point to its nearest medoid, and each point's medoid index.
+double assign(const Eigen::MatrixXd& d, const std::vector<std::size_t>& medoids, std::vector<std::size_t>* label) {
+  double cost = 0.0;
+  for (Eigen::Index i = 0; i < d.rows(); ++i) {
+    std::size_t best = 0;
+    for (std::size_t m = 1; m < medoids.size(); ++m)
+      if (d(i, medoids[m]) < d(i, medoids[best])) best = m;
+    cost += d(i, medoids[best]);
+    if (label) (*label)[static_cast<std::size_t>(i)] = best;
+  }
+  return cost;
+}
+
+std::vector<std::size_t> pam(const Eigen::MatrixXd& d, std::size_t k) {
+  const auto n = static_cast<std::size_t>(d.rows());
+  std::vector<std::size_t> medoids;
+  for (std::size_t c = 0; c < k; ++c) {  // BUILD: add the point that lowers the cost most
+    double best = std::numeric_limits<double>::infinity();
+    std::size_t pick = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (std::find(medoids.begin(), medoids.end(), i) != medoids.end()) continue;
+      auto trial = medoids;
+      trial.push_back(i);
+      const double cost = assign(d, trial, nullptr);
+      if (cost < best) best = cost, pick = i;
+    }
+    medoids.push_back(pick);
+  }
+  for (double cost = assign(d, medoids, nullptr);;) {  // SWAP: the best improving swap until none
+    double best = cost;
+    std::pair<std::size_t, std::size_t> swap{k, 0};
+    for (std::size_t m = 0; m < k; ++m)
+      for (std::size_t i = 0; i < n; ++i) {
+        if (std::find(medoids.begin(), medoids.end(), i) != medoids.end()) continue;
+        auto trial = medoids;
+        trial[m] = i;
+        const double c = assign(d, trial, nullptr);
+        if (c < best - 1e-12 * std::abs(best)) best = c, swap = {m, i};
+      }
+    if (swap.first == k) return medoids;
+    medoids[swap.first] = swap.second;
+    cost = best;
+  }
+}
+
+double mean_silhouette(const Eigen::MatrixXd& d, const std::vector<std::size_t>& label, std::size_t k) {
+  const auto n = static_cast<std::size_t>(d.rows());
+  double total = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    std::vector<double> sum(k, 0.0);
+    std::vector<std::size_t> count(k, 0);
+    for (std::size_t j = 0; j < n; ++j) {
+      if (j == i) continue;
+      sum[label[j]] += d(i, j);
+      ++count[label[j]];
+    }
+    if (count[label[i]] == 0) continue;  // a family of one: s = 0
+    const double a = sum[label[i]] / static_cast<double>(count[label[i]]);
+    double b = std::numeric_limits<double>::infinity();
+    for (std::size_t c = 0; c < k; ++c)
+      if (c != label[i] && count[c] > 0) b = std::min(b, sum[c] / static_cast<double>(count[c]));
+    if (std::max(a, b) > 0) total += (b - a) / std::max(a, b);
+  }
+  return total / static_cast<double>(n);
+}
+
+}  // namespace
+
+Families find_families(const std::vector<UnitSummary>& units) {
+  Families f;
+  std::set<std::string> channels;
+  for (const auto& u : units)
+    for (const auto& [channel, curve] : u.bias_curves)
+      if (const auto id = imu::parse_role(channel); id && id->sensor == imu::Sensor::Gyro) channels.insert(channel);
+  f.channels.assign(channels.begin(), channels.end());
+  std::vector<const UnitSummary*> members;
+  for (const auto& u : units) {
+    bool whole = u.status == "passed";
+    for (const auto& c : f.channels) whole = whole && u.bias_curves.count(c);
+    if (whole) members.push_back(&u);
+  }
+  const auto n = members.size();
+  for (const auto* u : members) f.family[u->unit] = 0;
+  if (n < 4 || f.channels.empty()) return f;
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(f.channels.size() * std::size(kFamilyGridC)));
+  for (std::size_t i = 0; i < n; ++i) {
+    Eigen::Index c = 0;
+    for (const auto& ch : f.channels)
+      for (double v : members[i]->bias_curves.at(ch)) x(static_cast<Eigen::Index>(i), c++) = v;
+  }
+  Eigen::MatrixXd d(x.rows(), x.rows());
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    for (Eigen::Index j = 0; j < x.rows(); ++j) d(i, j) = (x.row(i) - x.row(j)).norm();
+  const std::size_t min_size = std::max<std::size_t>(2, static_cast<std::size_t>(std::ceil(kMinFamilyShare * n)));
+  std::vector<std::size_t> best_label(n, 0), best_medoids{0};
+  for (std::size_t k = 2; k <= std::min(kMaxFamilies, n - 1); ++k) {
+    const auto medoids = pam(d, k);
+    std::vector<std::size_t> label(n);
+    assign(d, medoids, &label);
+    const double s = mean_silhouette(d, label, k);
+    f.silhouette_by_k.push_back(s);
+    std::vector<std::size_t> size(k, 0);
+    for (auto l : label) ++size[l];
+    if (*std::min_element(size.begin(), size.end()) < min_size) continue;
+    if (s >= kFamilySilhouette && s > f.silhouette) {
+      f.silhouette = s;
+      f.k = k;
+      best_label = label;
+      best_medoids = medoids;
+    }
+  }
+  f.medoids.clear();
+  for (auto m : best_medoids) f.medoids.push_back(members[m]->unit);
+  for (std::size_t i = 0; i < n; ++i) f.family[members[i]->unit] = best_label[i];
+  return f;
 }
 
 std::vector<std::string> spec_violations(const UnitSummary& unit) {
@@ -175,8 +415,86 @@ std::vector<std::string> spec_violations(const UnitSummary& unit) {
   return out;
 }
 
+namespace {
+
+constexpr const char* kFamilyColours[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2"};
+
+// Per channel the held-out residual of every passed unit (manifest order), units with a finding on
+// that channel marked apart.
+Figure holdout_figure(const std::vector<UnitSummary>& units, const std::vector<Outlier>& outliers) {
+  std::set<std::pair<std::string, std::string>> flagged;  // (unit, channel)
+  for (const auto& o : outliers) flagged.insert({o.unit, o.channel});
+  std::map<std::string, PlotPanel> panels;
+  for (std::size_t i = 0; i < units.size(); ++i) {
+    if (units[i].status != "passed") continue;
+    for (const auto& [channel, figures] : units[i].figures) {
+      const auto id = imu::parse_role(channel);
+      if (!id) continue;
+      const std::string key = figure_key(kFigures[4], id->sensor);
+      const auto v = figures.find(key);
+      if (v == figures.end()) continue;
+      PlotPanel& p = panels[channel];
+      if (p.series.empty()) {
+        p.title = channel;
+        p.x_label = "unit (manifest order)";
+        p.y_label = key + (id->sensor == imu::Sensor::Gyro ? " (°/h)" : " (mg)");
+        p.series = {{"unit", {}, {}}, {"unit with a finding on " + channel, {}, {}}};
+        for (auto& s : p.series) s.style = PlotSeries::Style::Markers;
+        p.series[1].color = "#d62728";
+      }
+      PlotSeries& s = p.series[flagged.count({units[i].unit, channel}) ? 1 : 0];
+      s.x.push_back(static_cast<double>(i + 1));
+      s.y.push_back(v->second);
+    }
+  }
+  Figure f;
+  f.columns = 3;
+  for (auto& [channel, p] : panels) f.panels.push_back(std::move(p));
+  f.panel_height = 220;
+  return f;
+}
+
+// Per gyro channel the fitted bias curve of every unit in the families, coloured by family.
+Figure family_figure(const std::vector<UnitSummary>& units, const Families& families) {
+  Figure f;
+  f.columns = 3;
+  f.panel_height = 220;
+  for (const auto& channel : families.channels) {
+    PlotPanel p;
+    p.title = channel;
+    p.x_label = "temperature (°C)";
+    p.y_label = "bias (°/h)";
+    p.legend = PlotPanel::Legend::None;
+    for (const auto& u : units) {
+      const auto fam = families.family.find(u.unit);
+      if (fam == families.family.end()) continue;
+      PlotSeries s;
+      s.x.assign(std::begin(kFamilyGridC), std::end(kFamilyGridC));
+      s.y = u.bias_curves.at(channel);
+      s.color = kFamilyColours[fam->second % std::size(kFamilyColours)];
+      p.series.push_back(std::move(s));
+    }
+    f.panels.push_back(std::move(p));
+  }
+  return f;
+}
+
+// "family 1: 12 units (medoid unit007), family 2: ..."
+std::string family_sizes(const Families& families) {
+  std::vector<std::size_t> size(families.k, 0);
+  for (const auto& [unit, family] : families.family) ++size[family];
+  std::string text;
+  for (std::size_t f = 0; f < families.k; ++f)
+    text += (f ? ", " : "") + std::string("family ") + std::to_string(f + 1) + " (" + kFamilyColours[f % std::size(kFamilyColours)] +
+            "): " + std::to_string(size[f]) + " units, medoid " + families.medoids[f];
+  return text;
+}
+
+}  // namespace
+
 void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector<Outlier>& outliers,
-                        const std::filesystem::path& out, const std::string& command, OutputSet& files) {
+                        const Families& families, const std::filesystem::path& out, const std::string& command,
+                        OutputSet& files) {
   std::map<std::string, std::vector<std::string>> flags;
   for (const auto& o : outliers) flags[o.unit].push_back(o.text);
   std::size_t passed = 0, within = 0;
@@ -196,7 +514,10 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
                             {"reason", u.reason},
                             {"within_spec", ok && spec[i].empty()},
                             {"spec_violations", spec[i]},
-                            {"outliers", flags[u.unit]}});
+                            {"family", families.family.count(u.unit) ? nlohmann::json(families.family.at(u.unit))
+                                                                     : nlohmann::json(nullptr)},
+                            {"outliers", flags[u.unit]},
+                            {"discrepancy", u.discrepancy}});
   }
   nlohmann::json dist = nlohmann::json::object();
   for (const auto& [where, values] : samples(units)) {
@@ -205,8 +526,8 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
   }
   nlohmann::json outlier_list = nlohmann::json::array();
   for (const auto& o : outliers)
-    outlier_list.push_back({{"unit", o.unit}, {"channel", o.channel}, {"figure", o.figure_key}, {"value", o.value},
-                            {"fleet_median", o.median}, {"robust_z", o.z}, {"text", o.text}});
+    outlier_list.push_back({{"unit", o.unit}, {"rule", o.rule}, {"channel", o.channel}, {"figure", o.figure_key},
+                            {"value", o.value}, {"fleet_median", o.median}, {"robust_z", o.z}, {"text", o.text}});
   const double yield = units.empty() ? 0.0 : static_cast<double>(within) / static_cast<double>(units.size());
   const nlohmann::json report = {
       {"format", "driftlab-fleet-report/1"},
@@ -220,9 +541,26 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
                        "mg/K, N mg/sqrt(Hz)), as each key's suffix says"},
       {"outlier_rule",
        {{"statistic", "modified z-score 0.6745 (x - median) / MAD per channel and figure over the passed units "
-                      "(Iglewicz & Hoaglin 1993); MAD = 0: (x - median) / (1.2533 mean |x - median|); for a0 and "
-                      "hysteresis the scale is at least the channel's fleet-median held-out residual"},
-        {"threshold", kOutlierZ}}},
+                      "(Iglewicz & Hoaglin 1993); MAD = 0: (x - median) / (1.2533 mean |x - median|); the scale is at "
+                      "least the channel's fleet-median held-out residual for a0 and hysteresis, half of it for "
+                      "holdout"},
+        {"threshold", kOutlierZ},
+        {"distance", "robust distance^2 = sum of the unit's squared robust z over its figures; flagged above the "
+                     "chi-square quantile " + number(kDistanceQuantile) + " with as many degrees of freedom as "
+                     "figures; robust_z of a distance finding is D^2 / threshold"},
+        {"quantisation", "raw output on multiples of its smallest step (share >= " + number(kQuantisedShare) +
+                         ") and that step >= the per-sample noise; robust_z of a quantisation finding is LSB / "
+                         "noise"}}},
+      {"families",
+       {{"k", families.k},
+        {"silhouette", families.silhouette},
+        {"silhouette_by_k", families.silhouette_by_k},
+        {"medoids", families.medoids},
+        {"channels", families.channels},
+        {"rule", "k-medoids (PAM) of the gyro bias curves at " + std::to_string(std::size(kFamilyGridC)) +
+                     " temperatures, k = 2.." + std::to_string(kMaxFamilies) + " by mean silhouette >= " +
+                     number(kFamilySilhouette) + ", smallest family >= " + number(100 * kMinFamilyShare) +
+                     " % of the units; else one family"}}},
       {"distributions", dist},
       {"outliers", outlier_list},
       {"failures", failures},
@@ -262,26 +600,52 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
                                     number(100.0 * yield) + " %); " + std::to_string(outliers.size()) +
                                     " outlier figures. Command: " + command);
   HtmlTable failed{"Units that failed", {"unit", "exit class", "reason"}, {}, "exit class: 1 failure, 2 configuration, 3 bad input data"};
+  const auto unit_link = [](const std::string& unit) -> HtmlCell {
+    return HtmlLink{unit, "units/" + unit + "/status.json"};
+  };
   for (const auto& u : units)
-    if (u.status != "passed") failed.rows.push_back({u.unit, static_cast<double>(u.exit_class), u.reason});
-  HtmlTable flagged{"Outliers", {"unit", "channel", "figure", "value", "fleet median", "robust z"}, {},
-                    "modified z-score over the passed units, |z| > " + number(kOutlierZ) +
-                        "; gyro figures in deg/h, accelerometer figures in mg (see the key's suffix); each unit's "
-                        "model and status are in units/<unit>/"};
-  for (const auto& o : outliers) flagged.rows.push_back({o.unit, o.channel, o.figure_key, o.value, o.median, o.z});
+    if (u.status != "passed") failed.rows.push_back({unit_link(u.unit), static_cast<double>(u.exit_class), u.reason});
+  HtmlTable flagged{"Outliers", {"unit", "model", "rule", "channel", "figure", "value", "fleet median", "z"}, {},
+                    "robust_z: modified z-score over the passed units, |z| > " + number(kOutlierZ) +
+                        "; distance: the whole model's robust distance^2 above the chi-square " +
+                        number(kDistanceQuantile) + " quantile (z = D^2 / threshold); quantisation: output on "
+                        "multiples of one LSB above the noise (z = LSB / noise); gyro figures in deg/h, "
+                        "accelerometer figures in mg (see the key's suffix); each unit links to its status, "
+                        "its model is beside it"};
+  for (const auto& o : outliers)
+    flagged.rows.push_back({unit_link(o.unit), HtmlLink{"model.json", "units/" + o.unit + "/model.json"}, o.rule,
+                            o.channel, o.figure_key, o.value, o.median, o.z});
   HtmlTable all{"Every unit", {"unit", "status", "within spec", "outliers", "spec violations"}, {}, ""};
   for (std::size_t i = 0; i < units.size(); ++i) {
     std::string v, f;
     for (const auto& t : spec[i]) v += (v.empty() ? "" : "; ") + t;
     for (const auto& t : flags[units[i].unit]) f += (f.empty() ? "" : "; ") + t;
-    all.rows.push_back({units[i].unit, units[i].status,
+    all.rows.push_back({unit_link(units[i].unit), units[i].status,
                         std::string(units[i].status == "passed" && spec[i].empty() ? "yes" : "no"), f, v});
   }
   HtmlTable figures{"Figures of a channel", {"figure", "gyro key", "accelerometer key"}, {},
                     "gyro figures in deg/h, accelerometer figures in mg, as each key's suffix says"};
   for (const auto& f : kFigures)
     figures.rows.push_back({std::string(f.doc), figure_key(f, imu::Sensor::Gyro), figure_key(f, imu::Sensor::Accel)});
-  html.section("Failures").table(failed).section("Outliers").table(flagged).section("Units").table(all);
+  html.section("Failures").table(failed).section("Outliers").table(flagged);
+  if (const Figure f = holdout_figure(units, outliers); !f.panels.empty())
+    html.figure_or_note(f, "Held-out residual of every calibrated unit per channel; red: a unit with a finding on that channel");
+  html.section("Families").paragraph(
+      families.k == 1 ? "One family: no split of the gyro bias-vs-temperature curves is supported (best mean silhouette " +
+                            number(families.silhouette_by_k.empty() ? 0.0 : *std::max_element(families.silhouette_by_k.begin(), families.silhouette_by_k.end())) +
+                            " below " + number(kFamilySilhouette) + ", or a family smaller than " +
+                            number(100 * kMinFamilyShare) + " % of the units)."
+                      : std::to_string(families.k) + " families of gyro bias-vs-temperature curves (mean silhouette " +
+                            number(families.silhouette) + "); " + family_sizes(families) + ".");
+  if (const Figure f = family_figure(units, families); !f.panels.empty())
+    html.figure_or_note(f, "Fitted gyro bias against temperature, one line per unit, coloured by family");
+  HtmlTable checks{"Discrepancy check (--discrepancy)", {"unit", "channel: named effects"}, {},
+                   "driftlab discrepancy without a device file on each gyro channel's first record; an effect is named "
+                   "when its delta BIC exceeds 10"};
+  for (const auto& u : units)
+    for (const auto& text : u.discrepancy) checks.rows.push_back({unit_link(u.unit), text});
+  if (!checks.rows.empty()) html.section("Discrepancy check").table(checks);
+  html.section("Units").table(all);
   html.section("Figures").table(figures);
   files.write(out / "report.html", html.html());
 }

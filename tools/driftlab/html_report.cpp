@@ -121,6 +121,8 @@ HtmlReport& HtmlReport::table(const HtmlTable& t) {
     for (const auto& cell : row) {
       if (const auto* v = std::get_if<double>(&cell))
         body_ += "<td class=\"n\">" + number(*v, t.digits) + "</td>";
+      else if (const auto* l = std::get_if<HtmlLink>(&cell))
+        body_ += "<td><a href=\"" + html_escape(l->href) + "\">" + html_escape(l->text) + "</a></td>";
       else
         body_ += "<td>" + html_escape(std::get<std::string>(cell)) + "</td>";
     }
@@ -129,6 +131,14 @@ HtmlReport& HtmlReport::table(const HtmlTable& t) {
   body_ += "</tbody></table>\n";
   if (!t.note.empty()) body_ += "<p class=\"note\">" + html_escape(t.note) + "</p>\n";
   return *this;
+}
+
+HtmlReport& HtmlReport::figure_or_note(const Figure& f, const std::string& caption) {
+  try {
+    return figure(f, caption);
+  } catch (const PlotError& err) {
+    return paragraph(std::string("(figure not drawn: ") + err.what() + ")");
+  }
 }
 
 HtmlReport& HtmlReport::figure(const Figure& f, const std::string& caption) {

@@ -25,7 +25,11 @@
 
 namespace driftlab::cli {
 
-using HtmlCell = std::variant<std::string, double>;  // text (left-aligned) or number (right-aligned)
+// A link to a file beside the report: `href` a relative path (escaped; the report stays offline).
+struct HtmlLink {
+  std::string text, href;
+};
+using HtmlCell = std::variant<std::string, double, HtmlLink>;  // text (left), number (right-aligned) or link
 
 struct HtmlTable {
   std::string caption;               // "Table N. caption"; empty = unnumbered
@@ -45,6 +49,8 @@ class HtmlReport {
   HtmlReport& table(const HtmlTable& table);
   HtmlReport& figure(const Figure& figure, const std::string& caption);
   HtmlReport& figure_svg(const std::string& svg, const std::string& caption);
+  // figure(), or when gnuplot fails (PlotError) a paragraph saying why: the numbers stand without it.
+  HtmlReport& figure_or_note(const Figure& figure, const std::string& caption);
 
   std::string html() const;  // the whole document
   void write(const std::filesystem::path& path) const;
