@@ -216,5 +216,74 @@ TEST_F(Hostile, FirmwareExportsWriteOnlyRealThirtyTwoValues) {
   }
 }
 
+TEST_F(Hostile, AChamberTemperatureOutsideThePhysicalRangeIsRefused) {
+  write(dir_ / "hot.yaml", "format: driftlab-profile/1\nchamber: {start_c: 1e6}\n");
+  const auto r = run_driftlab("simulate --device fmvmg --profile " + p("hot.yaml") + " --duration 10 --out " + p("s.csv"),
+                              "DRIFTLAB_DEVICES_DIR=" + std::string(DRIFTLAB_SOURCE_DIR) + "/devices");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, HasSubstr(p("hot.yaml") + ":2: chamber.start_c: must be in [-273.15, 1000], got '1e6'"));
+  EXPECT_FALSE(fs::exists(p("s.csv")));
+}
+
+// A record with a 1e9-s pause between two 300-sample runs at 1 Hz: the model's sample rate is the
+// rate while it samples (1 Hz), not the mean over the pause (6e-7 Hz), which would scale N, K, the
+// Kalman variances and Kalibr's update_rate wrongly.
+TEST_F(Hostile, AHugeGapDoesNotLowerTheModelsSampleRate) {
+  std::string text = oven_rows();
+  std::string shifted;
+  std::size_t line_start = text.find('\n') + 1, row = 0;
+  shifted = text.substr(0, line_start);
+  while (line_start < text.size()) {
+    const std::size_t end = text.find('\n', line_start);
+    std::string line = text.substr(line_start, end - line_start + 1);
+    if (row++ >= 300) {
+      const std::size_t comma = line.find(',');
+      line = std::to_string(std::stol(line.substr(0, comma)) + 1000000000L) + line.substr(comma);
+    }
+    shifted += line;
+    line_start = end + 1;
+  }
+  write(dir_ / "gap.csv", shifted);
+  const auto r = run_driftlab("calibrate --data " + p("gap.csv") + " --max-gap 0 --bin 10 --out " + p("m.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string model = read_text(p("m.json"));
+  const std::smatch m = [&] {
+    std::smatch found;
+    std::regex_search(model, found, std::regex("\"sample_rate_hz\": ([^,\\s}]+)"));
+    return found;
+  }();
+  ASSERT_FALSE(m.empty()) << model;
+  EXPECT_DOUBLE_EQ(std::stod(m[1].str()), 1.0) << model;
+}
+
+TEST_F(Hostile, TheCalibrationRecordIsNotScoredAsHeldOut) {
+  write(dir_ / "copy.csv", oven_rows());
+  fs::create_symlink(p("oven.csv"), p("link.csv"));
+  for (const std::string held : {"oven.csv", "link.csv"}) {
+    const auto r = run_driftlab("calibrate --data " + p("oven.csv") + " --evaluate " + p(held) + " --bin 10 --out " +
+                                p("m.json") + " --report " + p("report"));
+    EXPECT_EQ(r.exit_code, 2) << held << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr(p(held) + ": --evaluate: is also a --data record")) << held;
+    EXPECT_THAT(r.err, HasSubstr("would not be held out")) << held;
+    EXPECT_FALSE(fs::exists(p("m.json")) || fs::exists(p("report"))) << held;
+  }
+  // Another file (here a copy of the same rows, which the command cannot tell apart) is scored.
+  const auto ok = run_driftlab("calibrate --data " + p("oven.csv") + " --evaluate " + p("copy.csv") +
+                               " --bin 10 --out " + p("m.json"));
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+}
+
+TEST_F(Hostile, KalmanOptionsWithoutKalmanAreAnError) {
+  make_model();
+  for (const std::string option : {"--kalman-r 0", "--kalman-r 1e-6", "--kalman-q 0", "--kalman-fs 100"}) {
+    const auto r = run_driftlab("compensate --data " + p("oven.csv") + " --model " + p("model.json") + " --out " +
+                                p("c.csv") + " " + option);
+    EXPECT_EQ(r.exit_code, 2) << option << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr(option.substr(0, option.find(' ')) + ": " + option.substr(0, option.find(' ')) +
+                                 " needs --kalman")) << option;
+    EXPECT_FALSE(fs::exists(p("c.csv"))) << option;
+  }
+}
+
 }  // namespace
 }  // namespace driftlab

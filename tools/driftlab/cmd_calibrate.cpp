@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -148,6 +149,13 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
   if (o.train_until_s > 0 && o.data.paths.size() != 1) {
     throw ConfigError({"", 0, "--train-until"}, "--train-until splits a single --data record");
   }
+  for (const auto& held : o.evaluate)  // a record scored against itself is no held-out figure
+    for (const auto& data : o.data.paths) {
+      std::error_code error;
+      if (std::filesystem::equivalent(held, data, error))
+        throw ConfigError({held, 0, "--evaluate"}, "is also a --data record: the model is fitted on it, so its "
+                                                   "score would not be held out; give a record not used for the fit");
+    }
   auto channels = load_channel_records(o.data.paths, o.data);
   const auto gate = run_quality_gate(channels, o.fit.bin_s, o.strict, &std::cout);
   // --report scores the gyro channels (its figures are in deg/h): one gyro channel writes
@@ -253,7 +261,7 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--ga-population", o->fit.ga_population, "RBF tuning: GA population")->check(CLI::Range(2, 1000))->capture_default_str();
   cmd->add_option("--ga-generations", o->fit.ga_generations, "RBF tuning: GA generations")->check(CLI::Range(1, 1000))->capture_default_str();
   cmd->add_option("--seed", o->fit.seed, "seed of the RBF tuning (k-means, holdout, GA)")->capture_default_str();
-  cmd->add_option("--evaluate", o->evaluate, "held-out record(s) to score in the report (other seed / profile)");
+  cmd->add_option("--evaluate", o->evaluate, "held-out record(s) to score in the report (other seed / profile; not a --data record)");
   cmd->add_option("--train-until", o->train_until_s,
                   "calibrate on t < this (s) of the single --data record and score the rest in the report")
       ->check(finite_number(0.0, 1e12, true));

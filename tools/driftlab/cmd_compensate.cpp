@@ -349,20 +349,23 @@ void add_compensate_command(CLI::App& app, CommandEnv&) {
                 "read CSV rows from standard input and write compensated rows to standard output, one by one");
   cmd->add_flag("--kalman", o->kalman,
                 "add a causal Kalman stage to each gyro channel (random walk + white noise, plugins/kalman)");
-  cmd->add_option("--kalman-q", o->kalman_q, "Kalman random-walk variance per sample, (rad/s)^2 (default: K^2/fs "
-                                             "from the model's noise terms)")
-      ->check(finite_number(0.0, 1e12));
-  cmd->add_option("--kalman-r", o->kalman_r, "Kalman measurement variance, (rad/s)^2 (default: N^2 fs)")
-      ->check(finite_number(0.0, 1e12));
-  cmd->add_option("--kalman-fs", o->kalman_fs, "sample rate for the noise-term conversion, Hz (default: the model's)")
-      ->check(finite_number(0.0, 1e12));
-  cmd->callback([o] {
+  const std::vector<CLI::Option*> kalman_options{
+      cmd->add_option("--kalman-q", o->kalman_q, "Kalman random-walk variance per sample, (rad/s)^2 (default: K^2/fs "
+                                                 "from the model's noise terms)")
+          ->check(finite_number(0.0, 1e12)),
+      cmd->add_option("--kalman-r", o->kalman_r, "Kalman measurement variance, (rad/s)^2 (default: N^2 fs)")
+          ->check(finite_number(0.0, 1e12)),
+      cmd->add_option("--kalman-fs", o->kalman_fs, "sample rate for the noise-term conversion, Hz (default: the model's)")
+          ->check(finite_number(0.0, 1e12))};
+  cmd->callback([o, kalman_options] {
     if (o->stream == !o->data.paths.empty()) {
       throw ConfigError({"", 0, "--data"}, "give either --data (with --out) or --stream");
     }
     if (o->stream && !o->out.empty()) throw ConfigError({"", 0, "--out"}, "--stream writes to standard output; drop --out");
-    if (!o->kalman && (o->kalman_q > 0 || o->kalman_r > 0 || o->kalman_fs > 0))
-      throw ConfigError({"", 0, "--kalman-q"}, "--kalman-q, --kalman-r and --kalman-fs need --kalman");
+    for (const CLI::Option* option : kalman_options)  // given at all, even as 0, it would be ignored
+      if (!o->kalman && option->count() > 0)
+        throw ConfigError({"", 0, option->get_name()}, option->get_name() + " needs --kalman (without it no Kalman "
+                                                                            "stage runs and the value would be ignored)");
     const auto model = calibration::read_calibration(o->model);
     if (o->stream) {
       stream(model, *o);
