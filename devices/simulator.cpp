@@ -138,7 +138,7 @@ SimulationProfile parse_profile(const std::string& yaml_text, const std::string&
 }
 
 SimulationProfile load_profile_file(const std::filesystem::path& path) {
-  return parse_profile(read_config_text(path, "profile file"), path.string());
+  return parse_profile(read_config_text(path, "profile file"), input_name(path));
 }
 
 TimeSeries SimulationRecord::to_time_series() const {

@@ -174,7 +174,7 @@ YAML::Node parse_yaml_text(const std::string& text, const std::string& file) {
 }
 
 YAML::Node load_yaml_file(const std::string& path) {
-  return parse_yaml_text(read_config_text(path, "device file"), path);
+  return parse_yaml_text(read_config_text(path, "device file"), input_name(path));
 }
 
 }  // namespace driftlab::devices

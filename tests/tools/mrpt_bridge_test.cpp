@@ -811,6 +811,30 @@ TEST(MrptNavScenario, SeedsAreWholeNumbersAndTheCabinTemperatureIsPhysical) {
   }
 }
 
+// A scenario's cost is estimated before the drive: 1e6 Hz (memory) or a 1e7-s segment (time) are
+// refused at once naming the scenario and the estimate, and no output directory is left.
+TEST(MrptNav, AnAbsurdScenarioIsRefusedOnItsCostEstimate) {
+  SKIP_WITHOUT_MRPT();
+  const auto dir = driftlab::testing_cli::scratch_dir("nav_cost");
+  const std::string tail = "format: driftlab-nav-scenario/1\nyaw_rate: {start_dps: 0}\ncabin: {start_c: 20}\n";
+  std::ofstream(dir / "fast.yaml") << tail << "sample_rate_hz: 1e6\nspeed: {start_mps: 1, segments: [{hold_s: 3600}]}\n";
+  std::ofstream(dir / "long.yaml") << tail << "sample_rate_hz: 50\nspeed: {start_mps: 1, segments: [{hold_s: 1e7}]}\n";
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {"fast.yaml", "fast.yaml: sample_rate_hz, duration: 3.6e+09 samples (scenario sample_rate_hz x duration 3.6e+03 s) "
+                    "at 600 bytes each: about"},
+      {"long.yaml", "long.yaml: sample_rate_hz, duration: 5e+08 samples (scenario sample_rate_hz x duration 1e+07 s) "
+                    "at 5e-05 s each: about 2.5e+04 s (6.94 h) of computing, above the budget of 4 h"},
+  };
+  for (const auto& [file, message] : cases) {
+    const auto r = run_driftlab("nav --device fmvmg --scenario " + (dir / file).string() + " --out " + (dir / "out").string(),
+                                file == "long.yaml" ? "DRIFTLAB_MEMORY_LIMIT_MB=1e12" : "");
+    EXPECT_EQ(r.exit_code, 2) << file << "\n" << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << file << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out")) << file;
+  }
+  fs::remove_all(dir);
+}
+
 [[maybe_unused]] nlohmann::json read_json(const fs::path& path) {
   return nlohmann::json::parse(driftlab::testing_cli::read_text(path));
 }

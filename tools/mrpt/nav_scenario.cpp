@@ -54,7 +54,7 @@ NavScenario parse_nav_scenario(const std::string& yaml_text, const std::string& 
 }
 
 NavScenario load_nav_scenario(const std::filesystem::path& path) {
-  return parse_nav_scenario(read_config_text(path, "scenario file"), path.string());
+  return parse_nav_scenario(read_config_text(path, "scenario file"), input_name(path));
 }
 
 DriveRecord simulate_drive(const devices::DeviceDefinition& device, const NavScenario& scenario) {
