@@ -7,9 +7,12 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -378,6 +381,18 @@ TEST_F(Hostile, AbsurdParametersAreRefusedOnTheirCostEstimate) {
   EXPECT_EQ(ga.exit_code, 2) << ga.err;
   EXPECT_THAT(ga.err, HasSubstr("--ga-population, --ga-generations: 1e+06 GA evaluations per channel over 1.8e+04 bins"));
   EXPECT_FALSE(fs::exists(p("m.json")));
+  // An ensemble decomposition: 1e5 members over 1e5 samples, refused before the first member.
+  std::string signal = "t_s,rate_dps\n";
+  for (int i = 0; i < 100000; ++i) signal += std::to_string(i) + "," + std::to_string(std::sin(0.01 * i)) + "\n";
+  write(dir_ / "signal.csv", signal);
+  for (const std::string plugin : {"eemd", "ceemdan"}) {
+    const auto r = run_driftlab("decompose --data " + p("signal.csv") + " --plugin decomposition/" + plugin +
+                                " --set ensemble_size=100000 --out " + p("imfs.csv"));
+    EXPECT_EQ(r.exit_code, 2) << plugin << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr("ensemble_size: 100000 members x 100000 samples at 2e-06 s per sample and member: "
+                                 "about 2e+04 s (5.56 h) of computing, above the budget of 4 h")) << plugin;
+    EXPECT_FALSE(fs::exists(p("imfs.csv"))) << plugin;
+  }
 }
 
 // Stream and batch read CSV by one rule (CsvLineCursor, plan_columns, the cell messages): the same
@@ -421,6 +436,55 @@ TEST_F(Hostile, StreamAndBatchAgreeOnHostileCsv) {
       EXPECT_EQ(stream.err, expected) << name;
     }
   }
+}
+
+// SIGKILL at any point of a long write (compensate of 300 000 rows, about 20 MB out) leaves no
+// visible temporary file and no partial output under the final name: either nothing, a hidden
+// .c.csv.tmp-XXXXXX, or the whole output. The kill points are spread over the run; the property is
+// checked whichever point each lands on.
+TEST_F(Hostile, SigkillLeavesNoVisibleTemporaryAndNoPartialOutput) {
+  make_model();
+  std::string rows = "t_s,rate_dps,temp_c\n";
+  char line[96];
+  for (int i = 0; i < 300000; ++i) {
+    std::snprintf(line, sizeof line, "%.2f,%.9f,%.6f\n", 0.01 * i, 0.01 + 1e-4 * std::sin(0.37 * i), 20.0 + 30.0 * i / 300000.0);
+    rows += line;
+  }
+  write(dir_ / "big.csv", rows);
+  const auto full = run_driftlab("compensate --data " + p("big.csv") + " --model " + p("model.json") + " --out " + p("ref.csv"));
+  ASSERT_EQ(full.exit_code, 0) << full.err;
+  const std::string reference = read_text(p("ref.csv"));
+  fs::remove(p("ref.csv"));
+  const auto before = entries();
+  int killed = 0;
+  for (const int delay_us : {0, 2000, 10000, 30000, 60000, 100000, 150000, 250000, 400000, 700000}) {
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      const std::string data = p("big.csv"), model = p("model.json"), out = p("c.csv");
+      ::execl(DRIFTLAB_EXE, DRIFTLAB_EXE, "compensate", "--data", data.c_str(), "--model", model.c_str(), "--out",
+              out.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    ::usleep(delay_us);
+    ::kill(pid, SIGKILL);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    killed += WIFSIGNALED(status) ? 1 : 0;
+    for (const auto& e : fs::directory_iterator(dir_)) {
+      const std::string name = e.path().filename().string();
+      if (name == "c.csv") {
+        EXPECT_EQ(read_text(e.path()), reference) << "a partial output under the final name, kill after " << delay_us << " us";
+        continue;
+      }
+      if (name.rfind(".c.csv.tmp-", 0) == 0) continue;  // the documented hidden temporary
+      EXPECT_NE(std::find(before.begin(), before.end(), e.path().string()), before.end())
+          << name << " left visible, kill after " << delay_us << " us";
+    }
+    for (const auto& e : fs::directory_iterator(dir_))
+      if (e.path().filename().string().rfind(".c.csv.tmp-", 0) == 0 || e.path().filename() == "c.csv") fs::remove(e.path());
+  }
+  EXPECT_GT(killed, 0) << "no kill landed while the command ran";
 }
 
 }  // namespace
