@@ -66,7 +66,8 @@ std::string read_stdin_text(const std::string& what, std::uintmax_t max_bytes) {
                                    " bytes; expected at most that (reading stopped there)");
     if (n < sizeof buffer) break;
   }
-  if (std::ferror(stdin)) throw ConfigError(where, "cannot read the " + what + " from standard input: " + std::strerror(errno));
+  if (std::ferror(stdin))
+    throw ConfigError(where, "cannot read the " + what + " from standard input: " + std::strerror(errno));
   return text;
 }
 

@@ -1,8 +1,9 @@
 // `driftlab compensate`: applies a calibration model (driftlab-calibration/2, or /1) sample by
 // sample (CausalCompensator per channel), to a file (--data in.csv --out out.csv) or as a pipe
 // (--stream: CSV rows on standard input, compensated rows on standard output, one by one, constant
-// memory: at most one line of --max-line-bytes, 1 MiB by default, is held). Optional causal Kalman stage on the gyro channels (plugins/kalman scalar random-walk
-// filter). Both modes run one row engine, so streaming output equals batch output byte for byte.
+// memory: at most one line of --max-line-bytes, 1 MiB by default, is held). Optional causal Kalman
+// stage on the gyro channels (plugins/kalman scalar random-walk filter). Both modes run one row
+// engine and one line rule (CsvLineCursor), so streaming output equals batch output byte for byte.
 // A log (PX4 ULog, ArduPilot DataFlash; --data, recognised by content) is read as its IMU record in
 // the columns `driftlab log export` writes (cli.hpp imu_record_columns), --topic/--instance/--sensor
 // picking what to read; --column then names those columns.
