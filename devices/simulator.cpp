@@ -57,12 +57,13 @@ const Eigen::Vector3d& OrientationSchedule::up_at(double t_s) const {
 }
 
 Profile read_profile_section(YamlFields& y, const YAML::Node& node, const std::string& path,
-                             const std::string& unit_suffix, double scale, double fallback_start) {
+                             const std::string& unit_suffix, double scale, double fallback_start,
+                             const Bounds& values) {
   const std::string start_key = "start_" + unit_suffix;
   const std::string to_key = "to_" + unit_suffix;
   const std::string rate_key = "rate_" + unit_suffix + "_per_min";
   if (!y.map(node, path, {start_key, "segments"})) return Profile(fallback_start);
-  Profile profile(y.number_or(node, path, start_key, fallback_start / scale) * scale);
+  Profile profile(y.number_or(node, path, start_key, fallback_start / scale, values) * scale);
   const YAML::Node segments = y.child(node, path, "segments", false);
   if (!segments.IsDefined()) return profile;
   if (!segments.IsSequence()) {
@@ -83,7 +84,7 @@ Profile read_profile_section(YamlFields& y, const YAML::Node& node, const std::s
       if (auto d = y.number(s, p, "hold_s", true, Bounds::non_negative())) profile.hold(*d);
       continue;
     }
-    const auto target = y.number(s, p, to_key, true);
+    const auto target = y.number(s, p, to_key, true, values);
     const bool has_duration = y.child(s, p, "duration_s", false).IsDefined();
     const bool has_rate = y.child(s, p, rate_key, false).IsDefined();
     if (has_duration == has_rate) {
@@ -164,9 +165,9 @@ SimulationProfile parse_profile(const std::string& yaml_text, const std::string&
       y.problem(y.child(root, "", "format", false), "format",
                 "unsupported format '" + *format + "'; expected driftlab-profile/1");
     if (const auto chamber = y.child(root, "", "chamber", false); chamber.IsDefined())
-      profile.chamber_c = read_profile_section(y, chamber, "chamber", "c", 1.0, 25.0);
+      profile.chamber_c = read_profile_section(y, chamber, "chamber", "c", 1.0, 25.0, Bounds::absolute_temperature_c());
     if (const auto rate = y.child(root, "", "rate", false); rate.IsDefined())
-      profile.true_rate = read_profile_section(y, rate, "rate", "dps", kRadPerDeg, 0.0);
+      profile.true_rate = read_profile_section(y, rate, "rate", "dps", kRadPerDeg, 0.0, {});
     if (const auto orientation = y.child(root, "", "orientation", false); orientation.IsDefined())
       profile.orientation = read_orientation_section(y, orientation);
   }
@@ -175,7 +176,7 @@ SimulationProfile parse_profile(const std::string& yaml_text, const std::string&
 }
 
 SimulationProfile load_profile_file(const std::filesystem::path& path) {
-  return parse_profile(read_config_text(path, "profile file"), path.string());
+  return parse_profile(read_config_text(path, "profile file"), input_name(path));
 }
 
 TimeSeries SimulationRecord::to_time_series() const {

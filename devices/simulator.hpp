@@ -93,7 +93,8 @@ SimulationProfile default_oven_profile();
 //   rate:    {start_dps: 0, segments: [{hold_s: 600}, {to_dps: 100, duration_s: 0}, {hold_s: 60}]}
 //   orientation: {dwell_s: 300, up_directions: [[0, 0, 1], [0, 0, -1], [1, 0, 0], [-1, 0, 0], ...]}
 // Every section is optional (chamber defaults to 25 degC, rate to 0, orientation to the device's
-// up_direction; orientation needs a whole-IMU device); a segment is either
+// up_direction; orientation needs a whole-IMU device; chamber temperatures within
+// [kMinTemperatureC, kMaxTemperatureC], framework/units.hpp); a segment is either
 // {hold_s} or {to_*, duration_s | rate_*_per_min}. Throws ConfigError with file, line and key.
 SimulationProfile load_profile_file(const std::filesystem::path& path);
 SimulationProfile parse_profile(const std::string& yaml_text, const std::string& file);
@@ -102,8 +103,12 @@ class YamlFields;
 // One profile section {start_<suffix>, segments: [{hold_s} | {to_<suffix>, duration_s |
 // rate_<suffix>_per_min}]}, values in the file unit times `scale` (e.g. suffix "dps", scale
 // rad/deg); problems are reported through `y`. Also used by other formats (the nav scenario).
+// `values` bounds the start and every to_<suffix> value in the file unit (an absolute temperature:
+// Bounds::absolute_temperature_c()).
+struct Bounds;
 Profile read_profile_section(YamlFields& y, const YAML::Node& node, const std::string& path,
-                             const std::string& unit_suffix, double scale, double fallback_start);
+                             const std::string& unit_suffix, double scale, double fallback_start,
+                             const Bounds& values);
 
 struct SimulationOptions {
   double sample_rate_hz = 100.0;

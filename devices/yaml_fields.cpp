@@ -1,6 +1,7 @@
 #include "devices/yaml_fields.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -96,6 +97,31 @@ double YamlFields::number_or(const YAML::Node& parent, const std::string& path, 
   return number(parent, path, key, false, bounds).value_or(fallback);
 }
 
+std::optional<std::uint64_t> YamlFields::whole_number(const YAML::Node& parent, const std::string& path,
+                                                      const std::string& key, bool required, std::uint64_t max) {
+  const YAML::Node node = child(parent, path, key, required);
+  if (!node.IsDefined()) return std::nullopt;
+  const std::string expected = "expected a whole number from 0 to " + std::to_string(max) + ", got ";
+  if (!node.IsScalar()) {
+    problem(node, join(path, key), expected + yaml_shape(node));
+    return std::nullopt;
+  }
+  const std::string& text = node.Scalar();
+  std::uint64_t value = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  const bool digits = !text.empty() && text.find_first_not_of("0123456789") == std::string::npos;
+  if (!digits || error != std::errc() || end != text.data() + text.size() || value > max) {
+    problem(node, join(path, key), expected + quoted_excerpt(text, 40));
+    return std::nullopt;
+  }
+  return value;
+}
+
+std::uint64_t YamlFields::whole_number_or(const YAML::Node& parent, const std::string& path, const std::string& key,
+                                          std::uint64_t fallback, std::uint64_t max) {
+  return whole_number(parent, path, key, false, max).value_or(fallback);
+}
+
 std::optional<std::string> YamlFields::text(const YAML::Node& parent, const std::string& path,
                                             const std::string& key, bool required) {
   const YAML::Node node = child(parent, path, key, required);
@@ -148,7 +174,7 @@ YAML::Node parse_yaml_text(const std::string& text, const std::string& file) {
 }
 
 YAML::Node load_yaml_file(const std::string& path) {
-  return parse_yaml_text(read_config_text(path, "device file"), path);
+  return parse_yaml_text(read_config_text(path, "device file"), input_name(path));
 }
 
 }  // namespace driftlab::devices

@@ -5,11 +5,13 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "framework/error.hpp"
+#include "framework/units.hpp"
 
 namespace driftlab::devices {
 
@@ -19,6 +21,7 @@ struct Bounds {
   static Bounds positive() { return {0.0, std::nullopt, true}; }
   static Bounds non_negative() { return {0.0, std::nullopt, false}; }
   static Bounds between(double lo, double hi) { return {lo, hi, false}; }
+  static Bounds absolute_temperature_c() { return between(kMinTemperatureC, kMaxTemperatureC); }
 };
 
 class YamlFields {
@@ -42,6 +45,12 @@ class YamlFields {
                                bool required, Bounds bounds = {});
   double number_or(const YAML::Node& parent, const std::string& path, const std::string& key,
                    double fallback, Bounds bounds = {});
+  // A whole number written as digits, from 0 to `max` (a seed, a count): "1e30", "1.5" and "-1" are
+  // refused (a cast would turn them into 0, 1 or 2^64 - 1 without a word).
+  std::optional<std::uint64_t> whole_number(const YAML::Node& parent, const std::string& path, const std::string& key,
+                                            bool required, std::uint64_t max = UINT64_MAX);
+  std::uint64_t whole_number_or(const YAML::Node& parent, const std::string& path, const std::string& key,
+                                std::uint64_t fallback, std::uint64_t max = UINT64_MAX);
   std::optional<std::string> text(const YAML::Node& parent, const std::string& path, const std::string& key,
                                   bool required);
   // A list of finite numbers (a single number is a list of one).

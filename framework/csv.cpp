@@ -302,10 +302,11 @@ std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& hea
 }
 
 std::string read_text_file(const std::filesystem::path& path) {
+  // The text and the parsed values of every column: at most about three times the text's size.
+  if (is_stdin(path)) return read_stdin_text("data", static_cast<std::uintmax_t>(memory_limit_bytes() / 3.0));
   const auto size = check_data_input(path);
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) throw DataError({path.string(), 0, ""}, std::string("cannot open: ") + std::strerror(errno));
-  // The text and the parsed values of every column: at most about three times the file size.
   check_memory_estimate(3.0 * static_cast<double>(size), {path.string(), 0, ""},
                         "reading a " + std::to_string(size >> 20) + " MB file");
   std::string buffer(size, '\0');

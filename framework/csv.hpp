@@ -100,6 +100,7 @@ std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& hea
 TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& options = {});
 // The whole text of an input file, with read_csv's checks (a regular file, check_data_input in
 // regular_file.hpp; enough memory for it and its parsed columns); DataError naming the file otherwise.
+// "-" reads standard input (regular_file.hpp), at most a third of the memory limit.
 std::string read_text_file(const std::filesystem::path& path);
 // The same on text already in memory; `file` names it in messages.
 TimeSeries parse_csv(const std::string& text, const std::string& file, const CsvReadOptions& options = {});

@@ -353,7 +353,7 @@ Pipeline parse_pipeline(const std::string& yaml_text, const std::string& file_la
 }
 
 Pipeline load_pipeline(const std::filesystem::path& path, const Registry& registry) {
-  return parse_pipeline(read_config_text(path, "pipeline file"), path.string(), registry);
+  return parse_pipeline(read_config_text(path, "pipeline file"), input_name(path), registry);
 }
 
 std::string effective_pipeline_yaml(const Pipeline& pipeline, const Registry& registry) {

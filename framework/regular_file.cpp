@@ -45,7 +45,34 @@ std::uintmax_t check_data_input(const fs::path& path) {
   return size;
 }
 
+bool is_stdin(const fs::path& path) { return path == "-"; }
+
+std::string input_name(const fs::path& path) { return is_stdin(path) ? "<stdin>" : path.string(); }
+
+std::string read_stdin_text(const std::string& what, std::uintmax_t max_bytes) {
+  static std::string reader;  // who read it: standard input has one content per process
+  const Location where{"<stdin>", 0, ""};
+  if (!reader.empty())
+    throw ConfigError(where, "standard input is already read as the " + reader + "; only one input can be -, not the " +
+                                 what + " too");
+  reader = what;
+  std::string text;
+  char buffer[1 << 16];
+  while (true) {
+    const std::size_t n = std::fread(buffer, 1, sizeof buffer, stdin);
+    text.append(buffer, n);
+    if (text.size() > max_bytes)
+      throw ConfigError(where, "the " + what + " on standard input has more than " + std::to_string(max_bytes) +
+                                   " bytes; expected at most that (reading stopped there)");
+    if (n < sizeof buffer) break;
+  }
+  if (std::ferror(stdin))
+    throw ConfigError(where, "cannot read the " + what + " from standard input: " + std::strerror(errno));
+  return text;
+}
+
 std::string read_config_text(const fs::path& path, const std::string& what) {
+  if (is_stdin(path)) return read_stdin_text(what, kMaxTextInputBytes);
   const Location where{path.string(), 0, ""};
   if (const auto problem = input_problem(path); !problem.empty()) throw ConfigError(where, "cannot read the " + what + ": it " + problem);
   std::error_code ec;

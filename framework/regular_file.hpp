@@ -24,9 +24,20 @@ std::string non_regular_kind(const std::filesystem::path& path);
 // regular file").
 std::uintmax_t check_data_input(const std::filesystem::path& path);
 
+// "-" names standard input, explicitly, where a reader accepts it (issue 28): read_config_text (model
+// JSON, pipeline, device file, profile, nav scenario) and the CSV reader's read_text_file. Standard
+// input is read once per process, bounded like a file; a second reader of "-" in the same command is
+// a ConfigError ("standard input is already read as the ...").
+bool is_stdin(const std::filesystem::path& path);
+// How messages name an input: "<stdin>" for "-", the path otherwise.
+std::string input_name(const std::filesystem::path& path);
+// The whole of standard input for `what` ("pipeline file"), at most `max_bytes`; ConfigError naming
+// <stdin> when it is longer (reading stops one byte past the cap), unreadable, or already read.
+std::string read_stdin_text(const std::string& what, std::uintmax_t max_bytes);
+
 // The whole text of a small configuration file; `what` names the format in messages ("pipeline
 // file"). ConfigError (exit 2) naming the file when it is missing, not a regular file, larger than
-// kMaxTextInputBytes or unreadable.
+// kMaxTextInputBytes or unreadable. "-" reads standard input, with the same cap.
 std::string read_config_text(const std::filesystem::path& path, const std::string& what);
 
 }  // namespace driftlab

@@ -45,5 +45,8 @@ constexpr double kRadPerSecPerDph = kRadPerDeg / kSecondsPerHour;  // rad/s per 
 constexpr double kDphPerRadPerSec = 1.0 / kRadPerSecPerDph;         // deg/h per rad/s
 constexpr double kPpm = 1e-6;                                        // parts per million
 constexpr double kStandardGravity = 9.80665;                         // m/s^2 per g (CGPM 1901)
+// The physical range of an absolute temperature a file may give, degC: absolute zero to 1000 degC,
+// far beyond any sensor (calibration models, simulator chamber and nav cabin profiles).
+constexpr double kMinTemperatureC = -273.15, kMaxTemperatureC = 1000.0;
 
 }  // namespace driftlab

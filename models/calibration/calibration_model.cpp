@@ -535,7 +535,7 @@ std::string to_json_text(const ImuCalibration& imu_model) {
 }
 
 ImuCalibration read_calibration(const std::filesystem::path& path) {
-  const Reader r(path.string());
+  const Reader r(input_name(path));
   const std::string text = read_config_text(path, "calibration model file");
   nlohmann::json j;
   try {

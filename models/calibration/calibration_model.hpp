@@ -39,7 +39,7 @@
 //
 // Validation (CalibrationModel::validate, issue 28): a model is checked as physics, not only as
 // syntax, by the same rules where calibrate writes it and where compensate / export / mrpt / nav
-// read it: temperatures within [kMinTemperatureC, kMaxTemperatureC]; at most kMaxPolynomialTerms
+// read it: temperatures within [kMinTemperatureC, kMaxTemperatureC] (framework/units.hpp); at most kMaxPolynomialTerms
 // bias and scale-factor coefficients and kMaxRbfCentres RBF centres; every number finite; the
 // scale factor within [kMinScaleFactor, kMaxScaleFactor] over the valid range (positive: it
 // divides); the bias finite over the valid range and, under the linear or evaluate policy, over
@@ -60,6 +60,7 @@
 #include <vector>
 
 #include "framework/imu.hpp"
+#include "framework/units.hpp"
 
 namespace driftlab::calibration {
 
@@ -67,7 +68,6 @@ inline constexpr const char* kFormat = "driftlab-calibration/1";     // single-a
 inline constexpr const char* kImuFormat = "driftlab-calibration/2";  // whole IMU
 
 // The bounds validate() checks (see above).
-inline constexpr double kMinTemperatureC = -273.15, kMaxTemperatureC = 1000.0;  // T0 and the valid range, degC
 inline constexpr std::size_t kMaxPolynomialTerms = 16;  // bias and scale-factor coefficients, each
 inline constexpr std::size_t kMaxRbfCentres = 10000;
 inline constexpr double kMinRbfSigma = 1e-3, kMaxRbfSigma = 1e3;  // standardized units

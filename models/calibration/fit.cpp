@@ -605,7 +605,8 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
     const auto out = compensate(m, r.time_s, r.rate_rad_s, r.temp_c);
     const Eigen::VectorXd err =
         r.true_rate_rad_s.size() ? Eigen::VectorXd(out.rate_rad_s - r.true_rate_rad_s) : out.rate_rad_s;
-    const double rate_hz = sampling::mean_rate_hz(r.time_s);
+    // The rate while it samples: a gap in the record (a 1e9-s pause) must not lower it (issue 28).
+    const double rate_hz = sampling::rate_within_segments_hz(r.time_s, sampling::facts_of(r.time_s));
     o.progress("calibrate: Allan noise terms", 0.0);
     if (const auto n = fit_noise(err, rate_hz)) {
       m.noise = {n->arw_rad_sqrt_s, n->bias_instability_rad_s, n->rate_random_walk_rad_s_sqrt_s, rate_hz,

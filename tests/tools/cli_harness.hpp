@@ -33,13 +33,14 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
   return dir;
 }
 
-// `args` is appended to the executable path as shell words (quote paths with spaces yourself).
-inline CliResult run_driftlab(const std::string& args, const std::string& env = "") {
+// `args` is appended to the executable path as shell words (quote paths with spaces yourself);
+// standard input is the file `input`.
+inline CliResult run_driftlab(const std::string& args, const std::string& env = "", const std::string& input = "/dev/null") {
   static int calls = 0;  // ctest runs test processes in parallel: name captures by pid and call
   const auto dir = scratch_dir("capture_" + std::to_string(::getpid()) + "_" + std::to_string(++calls));
   const auto out = dir / "stdout", err = dir / "stderr";
   const std::string command = env + (env.empty() ? "" : " ") + std::string(DRIFTLAB_EXE) + " " + args + " >" +
-                              out.string() + " 2>" + err.string() + " </dev/null";
+                              out.string() + " 2>" + err.string() + " <" + input;
   const int status = std::system(command.c_str());
   CliResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -775,6 +775,66 @@ yaw_rate:
 )";
 }
 
+// Seeds are whole numbers written as digits (a cast turned 1e30 into 0, 1.5 into 1 and -1 into
+// 2^64 - 1); the cabin is an absolute temperature within the physical range (1e6 degC was accepted).
+TEST(MrptNavScenario, SeedsAreWholeNumbersAndTheCabinTemperatureIsPhysical) {
+  SKIP_WITHOUT_MRPT();
+  using driftlab::mrpt_bridge::parse_nav_scenario;
+  const std::string tail =
+      "cabin: {start_c: 20}\nspeed: {start_mps: 1, segments: [{hold_s: 10}]}\nyaw_rate: {start_dps: 0}\nformat: driftlab-nav-scenario/1\n";
+  const auto ok = parse_nav_scenario("seed: 18446744073709551615\ncalibration_seed: 0\n" + tail, "s.yaml");
+  EXPECT_EQ(ok.seed, 18446744073709551615ull);
+  EXPECT_EQ(ok.calibration_seed, 0u);
+  const std::vector<std::pair<std::string, std::string>> bad{
+      {"seed: 1e30\n", "s.yaml:1: seed: expected a whole number from 0 to 18446744073709551615, got '1e30'"},
+      {"seed: 1.5\n", "s.yaml:1: seed: expected a whole number from 0 to 18446744073709551615, got '1.5'"},
+      {"calibration_seed: -1\n", "s.yaml:1: calibration_seed: expected a whole number from 0 to 18446744073709551615, got '-1'"},
+      {"seed: 18446744073709551616\n", "s.yaml:1: seed: expected a whole number"},
+      {"seed: [1]\n", "s.yaml:1: seed: expected a whole number"},
+  };
+  for (const auto& [head, message] : bad) {
+    try {
+      parse_nav_scenario(head + tail, "s.yaml");
+      ADD_FAILURE() << head << " accepted";
+    } catch (const driftlab::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << head << "\n" << e.what();
+    }
+  }
+  for (const std::string cabin : {"cabin: {start_c: 1e6}\n", "cabin: {start_c: 20, segments: [{to_c: -300, duration_s: 5}]}\n"}) {
+    try {
+      parse_nav_scenario(cabin + "speed: {start_mps: 1, segments: [{hold_s: 10}]}\nyaw_rate: {start_dps: 0}\nformat: driftlab-nav-scenario/1\n", "s.yaml");
+      ADD_FAILURE() << cabin << " accepted";
+    } catch (const driftlab::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("s.yaml:1: cabin."), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("must be in [-273.15, 1000]"), std::string::npos) << e.what();
+    }
+  }
+}
+
+// A scenario's cost is estimated before the drive: 1e6 Hz (memory) or a 1e7-s segment (time) are
+// refused at once naming the scenario and the estimate, and no output directory is left.
+TEST(MrptNav, AnAbsurdScenarioIsRefusedOnItsCostEstimate) {
+  SKIP_WITHOUT_MRPT();
+  const auto dir = driftlab::testing_cli::scratch_dir("nav_cost");
+  const std::string tail = "format: driftlab-nav-scenario/1\nyaw_rate: {start_dps: 0}\ncabin: {start_c: 20}\n";
+  std::ofstream(dir / "fast.yaml") << tail << "sample_rate_hz: 1e6\nspeed: {start_mps: 1, segments: [{hold_s: 3600}]}\n";
+  std::ofstream(dir / "long.yaml") << tail << "sample_rate_hz: 50\nspeed: {start_mps: 1, segments: [{hold_s: 1e7}]}\n";
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {"fast.yaml", "fast.yaml: sample_rate_hz, duration: 3.6e+09 samples (scenario sample_rate_hz x duration 3.6e+03 s) "
+                    "at 600 bytes each: about"},
+      {"long.yaml", "long.yaml: sample_rate_hz, duration: 5e+08 samples (scenario sample_rate_hz x duration 1e+07 s) "
+                    "at 5e-05 s each: about 2.5e+04 s (6.94 h) of computing, above the budget of 4 h"},
+  };
+  for (const auto& [file, message] : cases) {
+    const auto r = run_driftlab("nav --device fmvmg --scenario " + (dir / file).string() + " --out " + (dir / "out").string(),
+                                file == "long.yaml" ? "DRIFTLAB_MEMORY_LIMIT_MB=1e12" : "");
+    EXPECT_EQ(r.exit_code, 2) << file << "\n" << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << file << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out")) << file;
+  }
+  fs::remove_all(dir);
+}
+
 [[maybe_unused]] nlohmann::json read_json(const fs::path& path) {
   return nlohmann::json::parse(driftlab::testing_cli::read_text(path));
 }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -11,6 +12,7 @@
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/parallel.hpp"
+#include "framework/resources.hpp"
 #include "models/calibration/fit.hpp"
 #include "models/calibration/oven_run.hpp"
 #include "framework/pipeline.hpp"
@@ -44,6 +46,28 @@ calibration::FitOptions fit_options(const CalibrateOptions& o, const CommandEnv&
   f.extrapolation = extrapolation_option(o.extrapolation);
   f.progress = [&env, channel](const std::string& label, double fraction) { env.progress(channel + ": " + label, fraction); };
   return f;
+}
+
+// The GA's run time (issue 28): population x (generations + 1) evaluations per channel, each an RBF
+// fit and a held-out prediction over the records' bins. Cost of one evaluation per bin, rounded up
+// from `calibrate --model rbf --bin 10` on a simulated oven run of 1620 bins: 240 more evaluations
+// took 0.33 s (8.6e-7 s per bin each) on the development machine (2 shared cores).
+constexpr double kGaSecondsPerBinEvaluation = 1e-6;
+
+void check_ga_cost(const CalibrateOptions& o, const std::vector<ChannelRecords>& channels) {
+  double bins = 0.0;
+  for (const auto& ch : channels)
+    for (const auto& r : ch.records) {
+      if (r.time_s.size() < 2) continue;
+      const double span = r.time_s[r.time_s.size() - 1] - r.time_s[0];
+      bins += std::min(static_cast<double>(r.time_s.size()), std::ceil(span / o.fit.bin_s) + 1.0);
+    }
+  const double evaluations = static_cast<double>(o.fit.ga_population) * static_cast<double>(o.fit.ga_generations + 1);
+  char what[200];
+  std::snprintf(what, sizeof what, "%.3g GA evaluations per channel over %.3g bins in all at %.2g s per bin each",
+                evaluations, bins, kGaSecondsPerBinEvaluation);
+  check_time_estimate(evaluations * bins * kGaSecondsPerBinEvaluation, {"", 0, "--ga-population, --ga-generations"},
+                      what);
 }
 
 TimeSeries as_time_series(const calibration::Record& r) {
@@ -147,7 +171,15 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
   if (o.train_until_s > 0 && o.data.paths.size() != 1) {
     throw ConfigError({"", 0, "--train-until"}, "--train-until splits a single --data record");
   }
+  for (const auto& held : o.evaluate)  // a record scored against itself is no held-out figure
+    for (const auto& data : o.data.paths) {
+      std::error_code error;
+      if (std::filesystem::equivalent(held, data, error))
+        throw ConfigError({held, 0, "--evaluate"}, "is also a --data record: the model is fitted on it, so its "
+                                                   "score would not be held out; give a record not used for the fit");
+    }
   auto channels = load_channel_records(o.data.paths, o.data);
+  if (o.model == "rbf") check_ga_cost(o, channels);
   const auto gate = run_quality_gate(channels, o.fit.bin_s, o.strict, &std::cout);
   // --report scores the gyro channels (its figures are in deg/h): one gyro channel writes
   // DIR/report.{json,html}, several write DIR/<channel>/report.{json,html}.
@@ -252,7 +284,7 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--ga-population", o->fit.ga_population, "RBF tuning: GA population")->check(CLI::Range(2, 1000))->capture_default_str();
   cmd->add_option("--ga-generations", o->fit.ga_generations, "RBF tuning: GA generations")->check(CLI::Range(1, 1000))->capture_default_str();
   cmd->add_option("--seed", o->fit.seed, "seed of the RBF tuning (k-means, holdout, GA)")->capture_default_str();
-  cmd->add_option("--evaluate", o->evaluate, "held-out record(s) to score in the report (other seed / profile)");
+  cmd->add_option("--evaluate", o->evaluate, "held-out record(s) to score in the report (other seed / profile; not a --data record)");
   cmd->add_option("--train-until", o->train_until_s,
                   "calibrate on t < this (s) of the single --data record and score the rest in the report")
       ->check(finite_number(0.0, 1e12, true));

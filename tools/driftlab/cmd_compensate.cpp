@@ -1,8 +1,9 @@
 // `driftlab compensate`: applies a calibration model (driftlab-calibration/2, or /1) sample by
 // sample (CausalCompensator per channel), to a file (--data in.csv --out out.csv) or as a pipe
 // (--stream: CSV rows on standard input, compensated rows on standard output, one by one, constant
-// memory). Optional causal Kalman stage on the gyro channels (plugins/kalman scalar random-walk
-// filter). Both modes run one row engine, so streaming output equals batch output byte for byte.
+// memory: at most one line of --max-line-bytes, 1 MiB by default, is held). Optional causal Kalman
+// stage on the gyro channels (plugins/kalman scalar random-walk filter). Both modes run one row
+// engine and one line rule (CsvLineCursor), so streaming output equals batch output byte for byte.
 // A log (PX4 ULog, ArduPilot DataFlash; --data, recognised by content) is read as its IMU record in
 // the columns `driftlab log export` writes (cli.hpp imu_record_columns), --topic/--instance/--sensor
 // picking what to read; --column then names those columns.
@@ -12,6 +13,7 @@
 // as it was. Appended: bias_<column> (the correction subtracted, same unit) per corrected column,
 // with --kalman compensated_<column> (before the Kalman stage) per gyro column, and extrapolated
 // (1 when some channel's model temperature was outside its calibrated range).
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -28,6 +30,7 @@
 #include "framework/imu.hpp"
 #include "framework/output_set.hpp"
 #include "framework/record_reader.hpp"
+#include "framework/regular_file.hpp"
 #include "framework/units.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "plugins/kalman/kalman.hpp"
@@ -45,6 +48,7 @@ struct CompensateOptions {
   bool kalman = false;
   double kalman_q = 0.0, kalman_r = 0.0;  // (rad/s)^2 per sample; 0: from the model's noise terms
   double kalman_fs = 0.0;                 // Hz, for the noise-term conversion; 0: the model's
+  std::size_t max_line_bytes = std::size_t{1} << 20;  // --stream: the one line it holds at most
 };
 
 std::optional<kalman::ScalarModel> kalman_model(const calibration::ChannelCalibration& c, const CompensateOptions& o) {
@@ -101,7 +105,11 @@ class Engine {
     read.required_roles = {};
     read.sample_rate_hz = options_.data.sample_rate_hz;
     const auto names = split_csv_row(line);
+    double number = 0.0;
+    if (std::all_of(names.begin(), names.end(), [&](std::string_view c) { return parse_csv_number(c, number); }))
+      throw DataError({file_, line_number, ""}, "missing header row (the first row holds only numbers)");
     const auto planned = plan_columns(names, read, file_, line_number);
+    names_.assign(names.begin(), names.end());
     const auto find = [&](const std::string& role) -> const PlannedColumn* {
       for (const auto& p : planned)
         if (p.mapping.role == role) return &p;
@@ -151,18 +159,18 @@ class Engine {
     if (cells_.size() != columns_)
       throw DataError({file_, line_number, ""}, "row has " + std::to_string(cells_.size()) + " cells, the header has " +
                                                     std::to_string(columns_));
-    const double t = time_ ? value(time_->first, &time_->second, line_number, "time")
+    const double t = time_ ? value(time_->first, &time_->second, line_number)
                            : static_cast<double>(sample_) / options_.data.sample_rate_hz;
     ++sample_;
     replaced_.assign(cells_.size(), std::string());
     std::string tail;
     bool extrapolated = false;
     for (auto& k : corrected_) {
-      const double measured = value(k.value_index, &k.value_unit, line_number, k.channel->role);
-      const double temp = value(k.temp_index, &k.temp_unit, line_number, k.channel->temperature_column);
+      const double measured = value(k.value_index, &k.value_unit, line_number);
+      const double temp = value(k.temp_index, &k.temp_unit, line_number);
       if (k.device_index && !k.channel->device_id.empty()) {
         std::string id;
-        append_number(value(*k.device_index, nullptr, line_number, "device_id"), id);
+        append_number(value(*k.device_index, nullptr, line_number), id);
         if (id != k.channel->device_id)
           throw ConfigError({file_, line_number, "device_id"}, "this record is device " + id + ", the model's " +
                                                                    k.channel->role + " was fitted on device " +
@@ -212,16 +220,23 @@ class Engine {
     std::optional<kalman::ScalarFilter> filter;
   };
 
-  // The cell as a number in internal units (`unit` null: the number as written).
-  double value(std::size_t index, const Unit* unit, int line_number, const std::string& field) const {
+  // The cell as a number in internal units (`unit` null: the number as written); a bad cell is
+  // named by its column with the batch reader's messages (parse_csv, which batch runs first).
+  double value(std::size_t index, const Unit* unit, int line_number) const {
+    const std::string& field = names_[index];
     std::string_view text = cells_[index];
     while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
     while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
     double v = 0.0;
-    if (text.empty() || !parse_csv_number(text, v))
+    if (text.empty()) throw DataError({file_, line_number, field}, "empty cell (expected a number)");
+    if (!parse_csv_number(text, v))
       throw DataError({file_, line_number, field}, "expected a number, got " + quoted_excerpt(text));
-    if (!std::isfinite(v)) throw DataError({file_, line_number, field}, "NaN or Inf");
-    return unit ? to_internal(v, *unit) : v;
+    if (!std::isfinite(v))
+      throw DataError({file_, line_number, field}, "value is " + quoted_excerpt(text) + " (NaN/Inf not allowed)");
+    const double internal = unit ? to_internal(v, *unit) : v;
+    if (!(std::abs(internal) <= kMaxMagnitude))
+      throw DataError({file_, line_number, field}, "value " + quoted_excerpt(text) + " is too large to compute with");
+    return internal;
   }
 
   const calibration::ImuCalibration& model_;
@@ -229,6 +244,7 @@ class Engine {
   std::string file_;
   std::optional<std::pair<std::size_t, Unit>> time_;
   std::size_t columns_ = 0;
+  std::vector<std::string> names_;  // the header's cells
   std::vector<Corrected> corrected_;
   std::vector<std::string_view> cells_;
   std::vector<std::string> replaced_;
@@ -247,7 +263,7 @@ void batch(const calibration::ImuCalibration& model, const CompensateOptions& o)
   read.sample_rate_hz = o.data.sample_rate_hz;
   read.max_gap_factor = o.data.max_gap_factor;
   std::string text;
-  if (sniff_record_format(path) == RecordFormat::Csv) {
+  if (is_stdin(path) || sniff_record_format(path) == RecordFormat::Csv) {  // "-": CSV on standard input
     text = read_text_file(path);
   } else {
     CsvReadOptions log_read = read;
@@ -256,9 +272,9 @@ void batch(const calibration::ImuCalibration& model, const CompensateOptions& o)
     text = format_csv(imu_record_columns(read_record(path, log_read, o.data.log, &notes)), path);
     for (const auto& n : notes) std::cerr << "note: " << n << "\n";
   }
-  parse_csv(text, path, read);
+  parse_csv(text, input_name(path), read);
   // ... then every row through the engine.
-  Engine engine(model, o, path);
+  Engine engine(model, o, input_name(path));
   CsvLineCursor cursor(text);
   std::string_view line;
   cursor.next(line);
@@ -274,58 +290,67 @@ void stream(const calibration::ImuCalibration& model, const CompensateOptions& o
   std::string out;
   out.reserve(1 << 17);
   std::vector<char> buffer(1 << 20);
-  std::string carry;
-  int line = 0;
+  // Bytes read and not yet processed: after each read, the complete lines go through the batch
+  // reader's line cursor (byte-order mark, LF / CR LF / CR line ends, blank and '#' lines: one
+  // rule), and at most one incomplete line of at most --max-line-bytes stays.
+  std::string pending;
+  int lines_before = 0, header_line = 0;
   bool have_header = false;
+  long rows = 0;
+  const auto too_long = [&](std::size_t bytes, int line) {
+    if (bytes > o.max_line_bytes)
+      throw DataError({"<stdin>", line, ""}, "the line is longer than " + std::to_string(o.max_line_bytes) +
+                                                 " bytes (--max-line-bytes): --stream holds one line at a time, "
+                                                 "and a CSV row is far shorter");
+  };
   const auto flush = [&] {
     if (!out.empty() && std::fwrite(out.data(), 1, out.size(), stdout) != out.size()) {
       throw Error("write to standard output failed");
     }
     out.clear();
   };
-  const auto handle = [&](std::string_view text) {
-    ++line;
-    if (line == 1 && text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);
-    if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
-    std::string_view blank = text;
-    while (!blank.empty() && (blank.front() == ' ' || blank.front() == '\t')) blank.remove_prefix(1);
-    if (blank.empty() || text.front() == '#') return;
-    if (!have_header) {
-      out += engine.header(text, line);
-      have_header = true;
-      return;
-    }
-    engine.row(text, line, out);
-    if (out.size() > (1 << 16)) flush();
-  };
-  while (true) {
+  bool end = false;
+  while (!end) {
     const std::size_t got = std::fread(buffer.data(), 1, buffer.size(), stdin);
-    if (got == 0) break;
-    std::string_view chunk(buffer.data(), got);
-    std::size_t start = 0;
-    while (true) {
-      const std::size_t nl = chunk.find('\n', start);
-      if (nl == std::string_view::npos) {
-        carry.append(chunk.substr(start));
-        break;
-      }
-      if (!carry.empty()) {
-        carry.append(chunk.substr(start, nl - start));
-        handle(carry);
-        carry.clear();
-      } else {
-        handle(chunk.substr(start, nl - start));
-      }
-      start = nl + 1;
+    end = got == 0;
+    pending.append(buffer.data(), got);
+    // The complete lines: up to the last line end, unless that is a CR at the end of what was read
+    // (a CR LF may be split between two reads); at the end, everything.
+    std::size_t complete = pending.size();
+    if (!end) {
+      std::size_t last = pending.find_last_of("\r\n");
+      if (last != std::string::npos && pending[last] == '\r' && last + 1 == pending.size())
+        last = last == 0 ? std::string::npos : pending.find_last_of("\r\n", last - 1);
+      complete = last == std::string::npos ? 0 : last + 1;
     }
+    if (complete > 0) {
+      const std::string block = pending.substr(0, complete);
+      pending.erase(0, complete);
+      CsvLineCursor cursor(block);
+      std::string_view text;
+      while (cursor.next(text)) {
+        const int line = lines_before + cursor.line_number();
+        too_long(text.size(), line);
+        if (!have_header) {
+          out += engine.header(text, line);
+          have_header = true;
+          header_line = line;
+          continue;
+        }
+        engine.row(text, line, out);
+        ++rows;
+        if (out.size() > (1 << 16)) flush();
+      }
+      lines_before += cursor.line_number();
+    }
+    too_long(pending.size(), lines_before + 1);
     // Rows are emitted as they complete; a pipe reader sees them after each read.
     flush();
     std::fflush(stdout);
   }
-  if (!carry.empty()) handle(carry);
-  if (!have_header) throw DataError({"<stdin>", 1, ""}, "empty input: no header row");
-  flush();
-  std::fflush(stdout);
+  // The batch reader's messages for an input without rows.
+  if (!have_header) throw DataError({"<stdin>", 0, ""}, "file is empty (expected a header row and data rows)");
+  if (rows == 0) throw DataError({"<stdin>", header_line, ""}, "no data rows after the header");
 }
 
 }  // namespace
@@ -334,10 +359,11 @@ void add_compensate_command(CLI::App& app, CommandEnv&) {
   auto o = std::make_shared<CompensateOptions>();
   auto* cmd = app.add_subcommand(
       "compensate", "apply a calibration model sample by sample (causal), to a file or as a stdin -> stdout pipe");
-  cmd->add_option("--model", o->model, "calibration model JSON (from driftlab calibrate)")->required();
+  cmd->add_option("--model", o->model, "calibration model JSON (from driftlab calibrate); - reads standard input")
+      ->required();
   cmd->add_option("--data", o->data.paths, "input CSV (the columns the model was fitted on; every other column is "
                                            "passed through), or a PX4 ULog / ArduPilot DataFlash log, read as "
-                                           "`driftlab log export` writes it")->expected(1);
+                                           "`driftlab log export` writes it; - reads CSV from standard input")->expected(1);
   cmd->add_option("--column", o->data.columns,
                   "column mapping role=column:unit, as for driftlab calibrate (gyro_x=gx:deg/s, temperature=T:degC, ...)");
   add_log_selection_options(cmd, o->data.log);
@@ -347,22 +373,31 @@ void add_compensate_command(CLI::App& app, CommandEnv&) {
   cmd->add_option("--out", o->out, "output CSV (written atomically)");
   cmd->add_flag("--stream", o->stream,
                 "read CSV rows from standard input and write compensated rows to standard output, one by one");
+  cmd->add_option("--max-line-bytes", o->max_line_bytes,
+                  "--stream: longest input line held, bytes; a longer one is a data error (exit 3)")
+      ->check(CLI::Range(std::size_t{16}, std::size_t{1} << 30))
+      ->capture_default_str();
   cmd->add_flag("--kalman", o->kalman,
                 "add a causal Kalman stage to each gyro channel (random walk + white noise, plugins/kalman)");
-  cmd->add_option("--kalman-q", o->kalman_q, "Kalman random-walk variance per sample, (rad/s)^2 (default: K^2/fs "
-                                             "from the model's noise terms)")
-      ->check(finite_number(0.0, 1e12));
-  cmd->add_option("--kalman-r", o->kalman_r, "Kalman measurement variance, (rad/s)^2 (default: N^2 fs)")
-      ->check(finite_number(0.0, 1e12));
-  cmd->add_option("--kalman-fs", o->kalman_fs, "sample rate for the noise-term conversion, Hz (default: the model's)")
-      ->check(finite_number(0.0, 1e12));
-  cmd->callback([o] {
+  const std::vector<CLI::Option*> kalman_options{
+      cmd->add_option("--kalman-q", o->kalman_q, "Kalman random-walk variance per sample, (rad/s)^2 (default: K^2/fs "
+                                                 "from the model's noise terms)")
+          ->check(finite_number(0.0, 1e12)),
+      cmd->add_option("--kalman-r", o->kalman_r, "Kalman measurement variance, (rad/s)^2 (default: N^2 fs)")
+          ->check(finite_number(0.0, 1e12)),
+      cmd->add_option("--kalman-fs", o->kalman_fs, "sample rate for the noise-term conversion, Hz (default: the model's)")
+          ->check(finite_number(0.0, 1e12))};
+  cmd->callback([o, kalman_options] {
     if (o->stream == !o->data.paths.empty()) {
       throw ConfigError({"", 0, "--data"}, "give either --data (with --out) or --stream");
     }
     if (o->stream && !o->out.empty()) throw ConfigError({"", 0, "--out"}, "--stream writes to standard output; drop --out");
-    if (!o->kalman && (o->kalman_q > 0 || o->kalman_r > 0 || o->kalman_fs > 0))
-      throw ConfigError({"", 0, "--kalman-q"}, "--kalman-q, --kalman-r and --kalman-fs need --kalman");
+    if (o->stream && is_stdin(o->model))
+      throw ConfigError({"<stdin>", 0, "--model"}, "--stream reads the rows from standard input; the model cannot be - too");
+    for (const CLI::Option* option : kalman_options)  // given at all, even as 0, it would be ignored
+      if (!o->kalman && option->count() > 0)
+        throw ConfigError({"", 0, option->get_name()}, option->get_name() + " needs --kalman (without it no Kalman "
+                                                                            "stage runs and the value would be ignored)");
     const auto model = calibration::read_calibration(o->model);
     if (o->stream) {
       stream(model, *o);

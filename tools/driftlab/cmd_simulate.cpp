@@ -28,6 +28,11 @@
 namespace driftlab::cli {
 namespace {
 
+// Run time per sample and IMU instance (or single-axis gyro), rounded up from `driftlab simulate
+// --device fmvmg --fs 100 --duration 36000`: 12.1 s for 3.6e6 samples (3.4e-6 s each) on the
+// development machine (2 shared cores); checked against the time budget (framework/resources.hpp).
+constexpr double kSimulateSecondsPerSample = 4e-6;
+
 struct SimulateOptions {
   std::string device, profile = "oven", out, devices_dir;
   std::vector<std::string> effects;
@@ -134,6 +139,10 @@ void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::De
                 800.0 * static_cast<double>(device.imu->instances.size()), env.threads);
   check_memory_estimate(samples * 800.0 * static_cast<double>(device.imu->instances.size()) * env.threads,
                         {"", 0, "--fs, --duration"}, what);
+  const double per_unit = kSimulateSecondsPerSample * static_cast<double>(device.imu->instances.size());
+  std::snprintf(what, sizeof what, "%.3g samples (--fs x --duration) for %zu units at %.2g s each", samples, fleet.size(),
+                per_unit);
+  check_time_estimate(samples * per_unit * static_cast<double>(fleet.size()), {"", 0, "--fs, --duration, --fleet"}, what);
   // Each unit is its own item (its own seed and file): the files do not depend on --threads.
   parallel_for(fleet.size(), env.threads, [&](std::size_t u) {
     const auto& unit = fleet[u];
@@ -228,6 +237,9 @@ void simulate_command(const SimulateOptions& o, CommandEnv& env) {
   char what[96];
   std::snprintf(what, sizeof what, "%.3g samples (--fs x --duration) at %.0f bytes each", samples, bytes);
   check_memory_estimate(samples * bytes, {"", 0, "--fs, --duration"}, what);
+  const double seconds = kSimulateSecondsPerSample * (device.imu ? static_cast<double>(device.imu->instances.size()) : 1.0);
+  std::snprintf(what, sizeof what, "%.3g samples (--fs x --duration) at %.2g s each", samples, seconds);
+  check_time_estimate(samples * seconds, {"", 0, "--fs, --duration"}, what);
   env.progress("simulate " + device.name, 0.0);
   const std::vector<CsvColumn> columns =
       device.imu ? imu_columns(*device.imu, devices::simulate_imu(*device.imu, profile, options))

@@ -31,15 +31,14 @@ NavScenario parse_nav_scenario(const std::string& yaml_text, const std::string& 
       y.problem(y.child(root, "", "format", false), "format",
                 "unsupported format '" + *format + "'; expected driftlab-nav-scenario/1");
     s.sample_rate_hz = y.number_or(root, "", "sample_rate_hz", s.sample_rate_hz, Bounds::positive());
-    s.seed = static_cast<std::uint64_t>(y.number_or(root, "", "seed", 7.0, Bounds::non_negative()));
-    s.calibration_seed =
-        static_cast<std::uint64_t>(y.number_or(root, "", "calibration_seed", 1001.0, Bounds::non_negative()));
+    s.seed = y.whole_number_or(root, "", "seed", s.seed);
+    s.calibration_seed = y.whole_number_or(root, "", "calibration_seed", s.calibration_seed);
     if (auto n = y.child(root, "", "cabin", true); n.IsDefined())
-      s.cabin_c = devices::read_profile_section(y, n, "cabin", "c", 1.0, 25.0);
+      s.cabin_c = devices::read_profile_section(y, n, "cabin", "c", 1.0, 25.0, Bounds::absolute_temperature_c());
     if (auto n = y.child(root, "", "yaw_rate", true); n.IsDefined())
-      s.yaw_rate_rad_s = devices::read_profile_section(y, n, "yaw_rate", "dps", kRadPerDeg, 0.0);
+      s.yaw_rate_rad_s = devices::read_profile_section(y, n, "yaw_rate", "dps", kRadPerDeg, 0.0, {});
     if (auto n = y.child(root, "", "speed", true); n.IsDefined())
-      s.speed_mps = devices::read_profile_section(y, n, "speed", "mps", 1.0, 0.0);
+      s.speed_mps = devices::read_profile_section(y, n, "speed", "mps", 1.0, 0.0, {});
     if (auto n = y.child(root, "", "odometry", false); n.IsDefined() && y.map(n, "odometry", {"speed_sigma_mps"}))
       s.odometry_speed_sigma_mps = y.number_or(n, "odometry", "speed_sigma_mps", s.odometry_speed_sigma_mps,
                                                Bounds::non_negative());
@@ -55,7 +54,7 @@ NavScenario parse_nav_scenario(const std::string& yaml_text, const std::string& 
 }
 
 NavScenario load_nav_scenario(const std::filesystem::path& path) {
-  return parse_nav_scenario(read_config_text(path, "scenario file"), path.string());
+  return parse_nav_scenario(read_config_text(path, "scenario file"), input_name(path));
 }
 
 DriveRecord simulate_drive(const devices::DeviceDefinition& device, const NavScenario& scenario) {

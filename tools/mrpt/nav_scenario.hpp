@@ -6,9 +6,10 @@
 // tools/mrpt/scenarios/cold_start_drive.yaml):
 //   format: driftlab-nav-scenario/1
 //   sample_rate_hz: 50            gyro and odometry rate, Hz
-//   seed: 7                       drive seed (gyro noise, odometry noise, fixes)
-//   calibration_seed: 1001        seed of the oven run `nav` calibrates on when given no model
-//   cabin:    {start_c: -10, segments: [...]}     cabin air around the gyro, degC
+//   seed: 7                       drive seed (gyro noise, odometry noise, fixes); whole number, digits
+//   calibration_seed: 1001        seed of the oven run `nav` calibrates on when given no model (same)
+//   cabin:    {start_c: -10, segments: [...]}     cabin air around the gyro, degC, within
+//                                                 [kMinTemperatureC, kMaxTemperatureC]
 //   yaw_rate: {start_dps: 0, segments: [...]}     true yaw rate, deg/s
 //   speed:    {start_mps: 0, segments: [...]}     true forward speed, m/s
 //   odometry: {speed_sigma_mps: 0.05}             white noise of the odometry speed, per sample
