@@ -88,8 +88,10 @@ CandidateSet make_candidates(const Registry& registry, std::vector<std::string> 
   if (names.empty())
     for (const auto* info : registry.list("effect"))
       if (!device_file_effects_only || find_effect_info(info->name.substr(7))) names.push_back(info->name);
-  for (auto& name : names)
+  for (auto& name : names) {
     if (name.rfind("effect/", 0) != 0) name = "effect/" + name;
+    registry.info(name);  // an unknown name: UnknownPluginError listing the known effects
+  }
   std::map<std::string, std::vector<std::string>> assignments;
   for (const auto& set : sets) {
     const auto dot = set.find('.');

@@ -66,7 +66,7 @@ def test_discrepancy_errors(cli, tmp_path):
         driftlab.discrepancy(r, effects=["hysteresis"], sets=["thermal_lag.tau_max_s=100"])
     with pytest.raises(driftlab.ConfigError, match="expected effect/NAME.key=value"):
         driftlab.discrepancy(r, sets=["nonsense"])
-    with pytest.raises(driftlab.ConfigError, match="nope: unknown plugin"):
+    with pytest.raises(driftlab.UnknownPluginError, match="effect/nope"):
         driftlab.discrepancy(r, effects=["nope"])
     with pytest.raises(driftlab.ConfigError, match="bias_degree"):
         driftlab.discrepancy(r, bias_degree=9)
