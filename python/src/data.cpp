@@ -14,7 +14,7 @@
 
 #include "devices/device_file.hpp"
 #include "devices/discrepancy_options.hpp"
-#include "devices/imu_record_columns.hpp"
+#include "devices/imu_simulation_columns.hpp"
 #include "devices/imu_simulator.hpp"
 #include "devices/simulator.hpp"
 #include "framework/csv.hpp"
@@ -134,7 +134,7 @@ std::filesystem::path device_file(const std::filesystem::path& device) {
 // ---- devices ---------------------------------------------------------------------------------
 
 // A whole IMU's record (an `imu:` device file): every column `driftlab simulate` writes, by its SI
-// name (devices/imu_record_columns.hpp).
+// name (devices/imu_simulation_columns.hpp).
 py::dict simulate_whole_imu(const devices::ImuDefinition& imu, const devices::SimulationProfile& chamber,
                       const devices::SimulationOptions& options) {
   // About 800 bytes per sample and instance, as the command line estimates.
@@ -142,10 +142,10 @@ py::dict simulate_whole_imu(const devices::ImuDefinition& imu, const devices::Si
   check_memory_estimate(samples * 800.0 * static_cast<double>(imu.instances.size()), {"", 0, "fs_hz, duration_s"},
                         std::to_string(samples) + " samples of " + std::to_string(imu.instances.size()) +
                             " IMU instances");
-  std::vector<devices::ImuRecordColumn> columns;
+  std::vector<devices::ImuSimulationColumn> columns;
   {
     py::gil_scoped_release release;
-    columns = devices::imu_record_columns(imu, devices::simulate_imu(imu, chamber, options));
+    columns = devices::imu_simulation_columns(imu, devices::simulate_imu(imu, chamber, options));
   }
   py::dict d;
   for (auto& c : columns) d[py::str(c.si_name)] = to_numpy(std::move(c.values));
@@ -733,7 +733,8 @@ unexplained, model_initial_rad_s, model_final_rad_s).)");
       .def("run", &run, py::arg("inputs"), py::arg("threads") = 1, py::arg("fs_hz") = py::none(),
            "Runs the steps on a Record, or on a dict of arrays by channel role ('rate' rad/s, 'temperature' degC, "
            "...) with 'time' (s) or fs_hz. threads: worker threads (results do not depend on them). "
-           "Returns PipelineRun (outputs, units, report).");
+           "Returns PipelineRun (outputs, units, report, table2_text); a record with a rate is scored as `driftlab run` "
+           "scores it (Table 2 in report).");
 }
 
 }  // namespace driftlab::python

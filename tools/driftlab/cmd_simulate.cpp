@@ -1,6 +1,6 @@
 // `driftlab simulate`: run a device file through the oven simulator and write a CSV record:
 // a single-axis gyro as t_s, rate_dps, temp_c, true_rate_dps, systematic_dps, die_temp_c,
-// drive_freq_hz; a whole IMU (an `imu:` device file) as devices/imu_record_columns.hpp lists them; with
+// drive_freq_hz; a whole IMU (an `imu:` device file) as devices/imu_simulation_columns.hpp lists them; with
 // --fleet, a fleet of such IMUs (simulate_fleet below).
 #include <cmath>
 #include <cstdio>
@@ -11,7 +11,7 @@
 
 #include "devices/device_file.hpp"
 #include "devices/fleet_simulator.hpp"
-#include "devices/imu_record_columns.hpp"
+#include "devices/imu_simulation_columns.hpp"
 #include "devices/imu_simulator.hpp"
 #include "devices/simulator.hpp"
 #include "framework/atomic_file.hpp"
@@ -61,10 +61,10 @@ std::vector<CsvColumn> single_axis_columns(const devices::DeviceDefinition& devi
   return columns;
 }
 
-// The whole-IMU record (issue 20): devices::imu_record_columns in their written units.
+// The whole-IMU record (issue 20): devices::imu_simulation_columns in their written units.
 std::vector<CsvColumn> imu_columns(const devices::ImuDefinition& imu, const devices::ImuSimulationRecord& record) {
   std::vector<CsvColumn> columns;
-  for (const auto& c : devices::imu_record_columns(imu, record))
+  for (const auto& c : devices::imu_simulation_columns(imu, record))
     columns.push_back(output_column(c.name, c.values, c.unit));
   return columns;
 }

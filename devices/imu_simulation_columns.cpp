@@ -1,4 +1,4 @@
-#include "devices/imu_record_columns.hpp"
+#include "devices/imu_simulation_columns.hpp"
 
 #include <cmath>
 
@@ -19,8 +19,8 @@ Eigen::VectorXd written_values(const Eigen::VectorXd& internal, const std::strin
   return values;
 }
 
-std::vector<ImuRecordColumn> imu_record_columns(const ImuDefinition& imu, const ImuSimulationRecord& record) {
-  std::vector<ImuRecordColumn> columns{{"t_s", "time_s", "s", record.time_s}};
+std::vector<ImuSimulationColumn> imu_simulation_columns(const ImuDefinition& imu, const ImuSimulationRecord& record) {
+  std::vector<ImuSimulationColumn> columns{{"t_s", "time_s", "s", record.time_s}};
   for (std::size_t i = 0; i < record.instances.size(); ++i) {
     const auto& instance = record.instances[i];
     const std::string digit = i == 0 ? "" : std::to_string(i);

@@ -18,14 +18,14 @@
 
 namespace driftlab::devices {
 
-struct ImuRecordColumn {
+struct ImuSimulationColumn {
   std::string name;        // as written: "gyro1_x_dps", "temp_c", "device_id"
   std::string si_name;     // in SI: "gyro1_x_rad_s", "temp_c", "device_id"
   std::string unit;        // the written unit's symbol (framework/units.hpp), "1" for the device id
   Eigen::VectorXd values;  // SI (internal unit); temperatures snapped to the instance's resolution
 };
 
-std::vector<ImuRecordColumn> imu_record_columns(const ImuDefinition& imu, const ImuSimulationRecord& record);
+std::vector<ImuSimulationColumn> imu_simulation_columns(const ImuDefinition& imu, const ImuSimulationRecord& record);
 
 // `internal` in `unit` (a framework/units.hpp symbol), snapped to `resolution` (internal units;
 // 0 = none) as k / steps, steps = 1 / resolution in that unit when it is a whole number, so that the
