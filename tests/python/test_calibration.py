@@ -1,7 +1,10 @@
-"""load_calibration, CalibrationModel.compensate / to_json / export: a model fitted by
-`driftlab calibrate` on a simulated oven run, applied here and by `driftlab compensate` to another
-run of the same device (same code: the same numbers)."""
+"""calibrate, load_calibration, CalibrationModel.compensate / to_json / export against `driftlab
+calibrate`, `compensate` and `export` on the same records (same code: the same numbers): a simulated
+single-axis oven run, a simulated whole IMU (devices/imu3.yaml) with channel selection and the
+same-device rule, and a real IMU's thermal cycle; compensation also against the simulator's truth."""
 import json
+import os
+import pathlib
 
 import driftlab
 import numpy as np
@@ -156,3 +159,22 @@ def test_channel_selection_and_the_same_device_rule_are_the_commands(cli, imu_ov
         driftlab.calibrate(record, channels="wheel")
     with pytest.raises(driftlab.ConfigError, match="gyro1_x"):
         gyros.model.compensate(mine)  # the model's channels are not in this record
+
+
+THERMAL_CYCLE = (pathlib.Path(os.environ.get("DRIFTLAB_SHARED_DATA", "/nonexistent"))
+                 / "real/tofupilot-imu-thermal-cycle/data.csv")
+
+
+@pytest.mark.skipif(not THERMAL_CYCLE.exists(), reason="no shared data (../shared/data)")
+def test_a_real_imus_thermal_cycle_is_calibrated_and_compensated_as_the_commands_do(cli, tmp_path):
+    """A real IMU in a chamber (3 gyro + 3 accel axes, -17.6 .. 74 degC, three legs; PROVENANCE.md)."""
+    cli("calibrate", "--data", THERMAL_CYCLE, "--out", "real.json")
+    cli("compensate", "--model", "real.json", "--data", THERMAL_CYCLE, "--out", "real_compensated.csv")
+    record = driftlab.read_record(THERMAL_CYCLE)
+    fitted = driftlab.calibrate(record)
+    assert json.loads(fitted.model.to_json()) == json.loads((tmp_path / "real.json").read_text())
+    expected = read_csv_columns(tmp_path / "real_compensated.csv")
+    compensated = fitted.model.compensate(record)
+    for channel in fitted.model.channels:  # gyro_x_rps .. acc_z_mps2: written in SI, as read
+        assert np.array_equal(compensated[channel["role"]], expected[channel["column"]]), channel["role"]
+        assert np.array_equal(compensated["bias_" + channel["role"]], expected["bias_" + channel["column"]])
