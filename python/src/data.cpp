@@ -446,7 +446,15 @@ Discrepancy find_discrepancy(const py::object& inputs, const std::optional<std::
   }
   Discrepancy d;
   d.report = to_python(report);
-  d.named_effects = d.report["named_effects"];
+  // The named effects with the units in the gaps' names (the parameters' keys carry theirs).
+  for (const auto& e : report["named_effects"]) {
+    py::dict named;
+    named["effect"] = e["effect"].get<std::string>();
+    for (const char* key : {"parameters", "uncertainty", "units", "evidence"}) named[key] = to_python(e[key]);
+    named["gap_before_deg_h"] = e["gap_before"].get<double>();
+    named["gap_after_deg_h"] = e["gap_after"].get<double>();
+    d.named_effects.append(named);
+  }
   d.gap_initial_deg_h = report["gap_initial"].get<double>();
   d.gap_final_deg_h = report["gap_final"].get<double>();
   d.noise_floor_deg_h = report["noise_floor"].get<double>();
@@ -665,8 +673,10 @@ gate's findings that did not stop the fit).)");
                     "report.json's data as `driftlab discrepancy` writes it (named_effects, gap_initial, gap_final, "
                     "noise_floor in deg/h, criterion, final_scores, unexplained, model, views)")
       .def_readonly("named_effects", &Discrepancy::named_effects,
-                    "per named effect, in order: effect, parameters (final model, a device file's effects: keys), "
-                    "uncertainty, units, gap_before / gap_after (deg/h), evidence (delta_chi2, delta_bic, ...)")
+                    "per named effect, in order: effect, parameters (final model, in a device file's effects: keys, "
+                    "which carry their units: amplitude_dph, period_s), uncertainty (1 sigma, same keys), units, "
+                    "gap_before_deg_h, gap_after_deg_h, evidence (delta_chi2, delta_bic, chi2_scale, scores, "
+                    "runner_up); report['named_effects'] holds the same as report.json writes it")
       .def_readonly("gap_initial_deg_h", &Discrepancy::gap_initial_deg_h,
                     "rms of the block-mean residual with the device's model (or the bias polynomial), deg/h")
       .def_readonly("gap_final_deg_h", &Discrepancy::gap_final_deg_h, "the same after the named effects, deg/h")

@@ -42,6 +42,10 @@ def test_discrepancy_equals_driftlab_discrepancy_and_names_the_planted_effect(cl
     assert [e["effect"] for e in found.named_effects] == ["periodic_disturbance"]
     assert found.named_effects[0]["parameters"]["period_s"] == pytest.approx(900.0, abs=9.0)
     assert found.named_effects[0]["units"]["amplitude_dph"] == "deg/h"
+    written = report["named_effects"][0]
+    assert found.named_effects[0]["gap_before_deg_h"] == written["gap_before"] == report["gap_initial"]
+    assert found.named_effects[0]["gap_after_deg_h"] == written["gap_after"] == report["gap_final"]
+    assert found.named_effects[0]["evidence"]["delta_bic"] == written["evidence"]["delta_bic"] > 10.0
     assert found.gap_initial_deg_h == report["gap_initial"] > found.gap_final_deg_h == report["gap_final"]
     assert found.noise_floor_deg_h == report["noise_floor"] and not found.unexplained
     series = read_csv_columns(tmp_path / "series.csv")
