@@ -61,6 +61,7 @@ def test_the_measurement_tells_a_held_gil_from_a_released_one():
     ("sample_entropy", lambda: [driftlab.sample_entropy(X[:100_000]) for _ in range(4)]),
     ("allan", lambda: driftlab.allan(np.tile(X, 10), 100.0)),
     ("simulate", lambda: driftlab.simulate("fmvmg", fs_hz=100.0, duration_s=1800)),
+    ("simulate a whole IMU", lambda: driftlab.simulate("imu3", fs_hz=100.0, duration_s=1800)),
 ])
 def test_a_python_thread_keeps_running_while_a_kernel_runs(name, call):
     assert other_thread_progress(call) > 0.2, name
@@ -79,6 +80,19 @@ def test_a_python_thread_keeps_running_while_a_record_is_read_compensated_and_ru
     pipeline = driftlab.Pipeline.from_yaml("polynomial_baseline")
     inputs = {"time": t, "rate": X[: n // 2].repeat(2), "temperature": temperature}
     assert other_thread_progress(lambda: pipeline.run(inputs)) > 0.2
+
+
+def test_a_python_thread_keeps_running_while_an_imu_is_calibrated_and_a_discrepancy_sought():
+    imu = driftlab.simulate("imu3", fs_hz=2.0, seed=3)
+    record = {"time": imu["time_s"], "temperature": imu["temp_c"], "temperature1": imu["temp1_c"],
+              **{f"{s}{i}_{a}": imu[f"{s}{i}_{a}_{u}"] for i in ("", "1") for s, u in (("gyro", "rad_s"), ("accel", "mps2"))
+                 for a in "xyz"}}
+    fitted = driftlab.calibrate(record, model="poly")
+    assert other_thread_progress(lambda: driftlab.calibrate(record)) > 0.2
+    assert other_thread_progress(lambda: fitted.model.compensate(record)) > 0.2
+    oven = driftlab.simulate("fmvmg", fs_hz=1.0, seed=4)
+    single = {"time": oven["time_s"], "rate": oven["rate_rad_s"], "temperature": oven["temp_c"]}
+    assert other_thread_progress(lambda: driftlab.discrepancy(single, device="fmvmg")) > 0.2
 
 
 def test_kernels_called_from_several_threads_at_once_give_the_sequential_results():
