@@ -120,6 +120,8 @@ def test_a_thousand_calls_do_not_leak(tmp_path):
     x = X[:2048]
     path = tmp_path / "r.csv"
     path.write_text("t_s,rate_dps\n" + "".join(f"{i},{v!r}\n" for i, v in enumerate(X[:4000])))
+    oven = driftlab.simulate("imu3", fs_hz=1.0, seed=3)
+    gyro = {"time": oven["time_s"], "gyro_x": oven["gyro_x_rad_s"], "temperature": oven["temp_c"]}
 
     def calls():
         d = driftlab.emd(x)
@@ -128,6 +130,10 @@ def test_a_thousand_calls_do_not_leak(tmp_path):
         driftlab.sample_entropy(x)
         r = driftlab.read_record(path)
         assert r.channels["rate"].size == 4000
+        imu = driftlab.simulate("imu3", fs_hz=10.0, duration_s=60)
+        model = driftlab.calibrate(gyro, model="poly").model
+        assert model.compensate({"time": imu["time_s"], "gyro_x": imu["gyro_x_rad_s"],
+                                 "temperature": imu["temp_c"]})["gyro_x"].size == 600
         try:
             driftlab.emd(x, s_number=0)
         except driftlab.ConfigError:
@@ -138,5 +144,6 @@ def test_a_thousand_calls_do_not_leak(tmp_path):
     before = resident_bytes()
     for _ in range(1000):
         calls()
-    # A leaked result would be ~0.2 MB per iteration (IMFs 0.15 MB, the record 0.06 MB): 200 MB in all.
+    # A leaked result would be ~0.2 MB per iteration (IMFs 0.15 MB, the record 0.06 MB, the IMU
+    # record 0.2 MB): 200 MB or more in all.
     assert resident_bytes() - before < 20e6
