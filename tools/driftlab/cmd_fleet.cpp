@@ -1,5 +1,5 @@
 // `driftlab fleet`: calibrates every unit of a manifest (read_manifest below) with the calibrate
-// code path (calibration_cli.hpp), one unit per work item of a worker pool, each unit's results
+// code path (models/calibration/imu_channels.hpp), one unit per work item of a worker pool, each unit's results
 // written atomically into OUT/units/<id>/, then the fleet report (fleet_report.hpp).
 // `--shard i/N` runs every N-th unit and no report (one task of a scheduler job array);
 // `driftlab fleet merge` writes the report from the unit folders once every shard has run.
