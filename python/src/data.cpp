@@ -20,8 +20,8 @@
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
-#include "framework/parallel.hpp"
 #include "framework/number_text.hpp"
+#include "framework/parallel.hpp"
 #include "framework/pipeline.hpp"
 #include "framework/record_reader.hpp"
 #include "framework/resources.hpp"
@@ -136,7 +136,7 @@ std::filesystem::path device_file(const std::filesystem::path& device) {
 // A whole IMU's record (an `imu:` device file): every column `driftlab simulate` writes, by its SI
 // name (devices/imu_simulation_columns.hpp).
 py::dict simulate_whole_imu(const devices::ImuDefinition& imu, const devices::SimulationProfile& chamber,
-                      const devices::SimulationOptions& options) {
+                            const devices::SimulationOptions& options) {
   // About 800 bytes per sample and instance, as the command line estimates.
   const double samples = std::floor(options.duration_s.value_or(chamber.duration_s()) * options.sample_rate_hz) + 1.0;
   check_memory_estimate(samples * 800.0 * static_cast<double>(imu.instances.size()), {"", 0, "fs_hz, duration_s"},
