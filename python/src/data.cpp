@@ -626,15 +626,22 @@ true_gyro{i}_*, true_accel{i}_*, systematic_gyro{i}_*, systematic_accel{i}_*; th
   const calibration::FitOptions fit_defaults;
   m.def(
       "calibrate",
-      [](const py::object& records, const std::string& model, const std::string& channels, char axis,
+      [](const py::object& records, const std::string& model, const py::object& channels, char axis,
          bool same_device, const std::string& extrapolation, double reference_temp_c, int min_order, int max_order,
          std::size_t blocks, double bin_s, double derivative_tau_s, bool heating_only, std::size_t ga_population,
          std::size_t ga_generations, std::uint64_t seed, bool strict, bool force, const std::string& device,
          int threads, std::optional<double> fs_hz) {
+        // A selection as text ("gyro,accel1_z") or as a list of its items (["gyro", "accel1_z"]).
+        std::string selection;
+        if (py::isinstance<py::str>(channels)) {
+          selection = channels.cast<std::string>();
+        } else {
+          for (const auto& item : channels) selection += (selection.empty() ? "" : ",") + item.cast<std::string>();
+        }
         return calibrate(records,
                          {model, extrapolation, reference_temp_c, bin_s, derivative_tau_s, min_order, max_order, blocks,
                           ga_population, ga_generations, heating_only, seed},
-                         channels, axis, same_device, strict, force, device, threads, fs_hz);
+                         selection, axis, same_device, strict, force, device, threads, fs_hz);
       },
       py::arg("records"), py::arg("model") = "physical", py::kw_only(), py::arg("channels") = "",
       py::arg("axis") = 'z', py::arg("same_device") = false, py::arg("extrapolation") = "clamp",
@@ -654,7 +661,8 @@ records: a Record (read_record of a CSV or a log), a dict of arrays by role ('ti
   'temperature1' degC, 'true_gyro_x' a reference input; 'rate' for a single-axis gyro; or fs_hz),
   or a list of those: several oven runs of one IMU.
 model: 'physical' (default), 'poly' or 'rbf': the richest kind allowed (--model).
-channels: comma-separated selection, e.g. 'gyro', 'accel1', 'gyro_x,accel_z' (--channels; empty: all).
+channels: the selection of --channels, as text or a list: 'gyro', 'accel1', 'gyro_x,accel_z' or
+  ['gyro_x', 'accel_z'] (empty: every channel).
 axis: the axis of a single-axis 'rate' channel. same_device: records whose device ids or bias levels
   differ are one device (--same-device; otherwise refused with ConfigError).
 extrapolation, reference_temp_c (T0, degC), min_order, max_order, blocks (held-out time blocks),

@@ -146,6 +146,8 @@ def test_channel_selection_and_the_same_device_rule_are_the_commands(cli, imu_ov
     fitted = driftlab.calibrate(record, model="poly", channels="gyro_x,accel1_z")
     assert json.loads(fitted.model.to_json()) == json.loads((imu_oven / "two.json").read_text())
     assert [c["role"] for c in fitted.model.channels] == ["gyro_x", "accel1_z"]
+    as_list = driftlab.calibrate(record, model="poly", channels=["gyro_x", "accel1_z"])
+    assert as_list.model.to_json() == fitted.model.to_json()
     gyros = driftlab.calibrate(record, model="poly", channels="gyro1")
     assert [c["role"] for c in gyros.model.channels] == ["gyro1_x", "gyro1_y", "gyro1_z"]
     # Another unit's run (its bias 0.5 deg/s away) is refused as one device unless same_device=True.
