@@ -13,14 +13,14 @@ import pathlib
 
 from . import _driftlab
 from ._driftlab import (DEG_H_PER_RAD_S, Allan, BiasInstability, Calibration, CalibrationModel, Compensation,
-                        ConfigError, DataError, Decomposition, Error, NoiseTerm, NoiseTerms, NotFittedError, Pipeline,
+                        ConfigError, DataError, Decomposition, Discrepancy, Error, NoiseTerm, NoiseTerms, NotFittedError, Pipeline,
                         PipelineRun, Record, SampleEntropy, UnknownPluginError, allan, calibrate, device_files,
-                        load_calibration, plugin_info, plugins, read_record, simulate)
+                        discrepancy, load_calibration, plugin_info, plugins, read_record, simulate)
 
 __version__ = _driftlab.__version__
 
 # The result classes are the package's, whichever file defines them.
-for _class in (Allan, BiasInstability, Calibration, CalibrationModel, Compensation, Decomposition, NoiseTerm, NoiseTerms, Pipeline,
+for _class in (Allan, BiasInstability, Calibration, CalibrationModel, Compensation, Decomposition, Discrepancy, NoiseTerm, NoiseTerms, Pipeline,
                PipelineRun, Record, SampleEntropy):
     _class.__module__ = __name__
 

@@ -78,3 +78,38 @@ def test_run_errors():
         pipeline.run({"time": [0.0, 2.0, 1.0], "rate": np.zeros(3), "temperature": np.zeros(3)})
     with pytest.raises(driftlab.DataError, match="samples"):
         pipeline.run({"time": [0.0, 1.0, 2.0], "rate": np.zeros(2), "temperature": np.zeros(3)})
+
+
+def test_table2_of_li2023_equals_driftlab_runs_report_and_print(cli, oven_csv, tmp_path):
+    printed = cli("run", "--pipeline", driftlab.pipelines_dir() / "li2023.yaml", "--data", oven_csv, "--out", "run")
+    report = json.loads((tmp_path / "run" / "report.json").read_text())
+    run = driftlab.Pipeline.from_yaml("li2023").run(driftlab.read_record(oven_csv))
+    # The same scoring code on the same record: every number equal (JSON keeps doubles exactly).
+    for key in ("table2", "allan", "intrinsic_floor", "baseline", "units", "readings"):
+        assert run.report[key] == report[key], key
+    assert run.table2_text and run.table2_text in printed
+    rows = {row["stage"]: row for row in run.report["table2"]}
+    assert list(rows) == ["original", "rbf", "rbf_ga", "rbf_ga_kf", "px4_polynomial"]
+    for stage, row in rows.items():
+        # A value with its interval only where the deviation has a floor, otherwise the bound alone.
+        if row["B_resolved"]:
+            low, high = row["B_ci"]
+            assert low <= row["B_deg_h"] <= high == row["B_upper_deg_h"], stage
+        else:
+            assert row["B_deg_h"] is None and "B_ci" not in row and row["B_upper_deg_h"] > 0, stage
+        assert row["N_deg_h_rtHz"] > 0
+    # Independent check of N on the raw record: the -1/2 line at tau = 1 s of allan() on the same rate.
+    record = driftlab.read_record(oven_csv)
+    a = driftlab.allan(record.channels["rate"], fs_hz=record.sample_rate_hz)
+    assert rows["original"]["N_deg_h_rtHz"] == pytest.approx(a.arw_rad_sqrt_s * driftlab.DEG_H_PER_RAD_S, rel=1e-12)
+
+
+def test_a_record_without_a_rate_has_no_table2():
+    t = np.arange(600.0)
+    run = driftlab.Pipeline.from_yaml("polynomial_baseline").run(
+        {"time": t, "rate": 1e-3 * np.sin(t / 50), "temperature": 20 + 0.01 * t})
+    assert "table2" in run.report  # arrays by role: 'rate' is the rate
+    too_short = driftlab.Pipeline.from_yaml("polynomial_baseline").run(
+        {"time": t[:8], "rate": np.zeros(8) + 1e-3 * t[:8], "temperature": 20 + t[:8]})
+    assert "table2" not in too_short.report and too_short.table2_text == ""
+    assert "table2_skipped" in too_short.report

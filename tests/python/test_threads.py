@@ -61,6 +61,7 @@ def test_the_measurement_tells_a_held_gil_from_a_released_one():
     ("sample_entropy", lambda: [driftlab.sample_entropy(X[:100_000]) for _ in range(4)]),
     ("allan", lambda: driftlab.allan(np.tile(X, 10), 100.0)),
     ("simulate", lambda: driftlab.simulate("fmvmg", fs_hz=100.0, duration_s=1800)),
+    ("simulate a whole IMU", lambda: driftlab.simulate("imu3", fs_hz=100.0, duration_s=1800)),
 ])
 def test_a_python_thread_keeps_running_while_a_kernel_runs(name, call):
     assert other_thread_progress(call) > 0.2, name
@@ -79,6 +80,19 @@ def test_a_python_thread_keeps_running_while_a_record_is_read_compensated_and_ru
     pipeline = driftlab.Pipeline.from_yaml("polynomial_baseline")
     inputs = {"time": t, "rate": X[: n // 2].repeat(2), "temperature": temperature}
     assert other_thread_progress(lambda: pipeline.run(inputs)) > 0.2
+
+
+def test_a_python_thread_keeps_running_while_an_imu_is_calibrated_and_a_discrepancy_sought():
+    imu = driftlab.simulate("imu3", fs_hz=2.0, seed=3)
+    record = {"time": imu["time_s"], "temperature": imu["temp_c"], "temperature1": imu["temp1_c"],
+              **{f"{s}{i}_{a}": imu[f"{s}{i}_{a}_{u}"] for i in ("", "1") for s, u in (("gyro", "rad_s"), ("accel", "mps2"))
+                 for a in "xyz"}}
+    fitted = driftlab.calibrate(record, model="poly")
+    assert other_thread_progress(lambda: driftlab.calibrate(record)) > 0.2
+    assert other_thread_progress(lambda: fitted.model.compensate(record)) > 0.2
+    oven = driftlab.simulate("fmvmg", fs_hz=1.0, seed=4)
+    single = {"time": oven["time_s"], "rate": oven["rate_rad_s"], "temperature": oven["temp_c"]}
+    assert other_thread_progress(lambda: driftlab.discrepancy(single, device="fmvmg")) > 0.2
 
 
 def test_kernels_called_from_several_threads_at_once_give_the_sequential_results():
@@ -106,6 +120,8 @@ def test_a_thousand_calls_do_not_leak(tmp_path):
     x = X[:2048]
     path = tmp_path / "r.csv"
     path.write_text("t_s,rate_dps\n" + "".join(f"{i},{v!r}\n" for i, v in enumerate(X[:4000])))
+    oven = driftlab.simulate("imu3", fs_hz=1.0, seed=3)
+    gyro = {"time": oven["time_s"], "gyro_x": oven["gyro_x_rad_s"], "temperature": oven["temp_c"]}
 
     def calls():
         d = driftlab.emd(x)
@@ -114,6 +130,10 @@ def test_a_thousand_calls_do_not_leak(tmp_path):
         driftlab.sample_entropy(x)
         r = driftlab.read_record(path)
         assert r.channels["rate"].size == 4000
+        imu = driftlab.simulate("imu3", fs_hz=10.0, duration_s=60)
+        model = driftlab.calibrate(gyro, model="poly").model
+        assert model.compensate({"time": imu["time_s"], "gyro_x": imu["gyro_x_rad_s"],
+                                 "temperature": imu["temp_c"]})["gyro_x"].size == 600
         try:
             driftlab.emd(x, s_number=0)
         except driftlab.ConfigError:
@@ -124,5 +144,6 @@ def test_a_thousand_calls_do_not_leak(tmp_path):
     before = resident_bytes()
     for _ in range(1000):
         calls()
-    # A leaked result would be ~0.2 MB per iteration (IMFs 0.15 MB, the record 0.06 MB): 200 MB in all.
+    # A leaked result would be ~0.2 MB per iteration (IMFs 0.15 MB, the record 0.06 MB, the IMU
+    # record 0.2 MB): 200 MB or more in all.
     assert resident_bytes() - before < 20e6

@@ -1,5 +1,5 @@
 // driftlab compare: several pipelines on the same record, one report. Every pipeline is run as
-// `driftlab run` runs it and scored by the same code (run_report.hpp: score_run, i.e.
+// `driftlab run` runs it and scored by the same code (models/evaluation/run_scores.hpp: score_run, i.e.
 // models/evaluation and the Allan entry point models/allan/analysis.hpp); this file only runs,
 // times and lays the scores side by side:
 //   report.json  per pipeline its Table 2 rows (scores_json), step seconds and total seconds;

@@ -1,11 +1,9 @@
 // `driftlab discrepancy`: fit the device's model to a measured record, show where it misses and
 // name the physical effects it lacks (models/discrepancy/discrepancy.hpp). Candidates are every
 // effect/* plugin of the registry (built-in and external), or those given with --effects.
-// Outputs: report.json and report.html (discrepancy_report.hpp), series.csv
+// Outputs: report.json (models/discrepancy/report.hpp), report.html (discrepancy_report.hpp), series.csv
 // (t_s, measured_dps, model_initial_dps, model_final_dps).
-#include <algorithm>
 #include <iostream>
-#include <map>
 #include <memory>
 
 #include "devices/device_file.hpp"
@@ -17,7 +15,6 @@
 #include "framework/regular_file.hpp"
 #include "framework/sampling.hpp"
 #include "framework/output_set.hpp"
-#include "framework/params_io.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
 #include "tools/driftlab/devices_dir.hpp"
@@ -58,30 +55,9 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
   outputs.plan(o.html, "--html");
   outputs.plan(o.update_device, "--update-device");
 
-  const Registry& registry = env.registry();
-  std::vector<std::string> names = o.effects;
   // With --update-device and no --effects, only effects a device file can hold are candidates
   // (effect/mode_split_drift would otherwise explain a lag that the file cannot record).
-  if (names.empty())
-    for (const auto* info : registry.list("effect"))
-      if (o.update_device.empty() || find_effect_info(info->name.substr(7))) names.push_back(info->name);
-  for (auto& name : names)
-    if (name.rfind("effect/", 0) != 0) name = "effect/" + name;
-  // --set NAME.key=value: search bounds and options of the candidates, validated by their tables.
-  std::map<std::string, std::vector<std::string>> assignments;
-  for (const auto& set : o.sets) {
-    const auto dot = set.find('.');
-    const auto eq = set.find('=');
-    if (dot == std::string::npos || eq == std::string::npos || dot > eq)
-      throw ConfigError({"", 0, "--set " + set}, "expected effect/NAME.key=value, e.g. effect/thermal_lag.tau_max_s=8000");
-    std::string name = set.substr(0, dot);
-    if (name.rfind("effect/", 0) != 0) name = "effect/" + name;
-    if (std::find(names.begin(), names.end(), name) == names.end())
-      throw ConfigError({"", 0, "--set " + set}, name + " is not a candidate (see --effects and `driftlab plugins list`)");
-    assignments[name].push_back(set.substr(dot + 1));
-  }
-  std::vector<std::unique_ptr<Effect>> owned;
-  const auto candidates = discrepancy_candidates(registry, names, assignments, owned);
+  const auto candidates = discrepancy::make_candidates(env.registry(), o.effects, o.sets, !o.update_device.empty());
 
   // Gaps: unless --max-gap is given, a record of regular bursts is accepted as it is (the block
   // means handle it); irregular gaps are refused with where the first one is.
@@ -98,11 +74,11 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
                           " .. " + std::to_string(gaps.longest_period_s) + " s); give --max-gap 0 to accept them");
   }
   env.progress("discrepancy", 0.0);
-  const auto result = discrepancy::find_missing_effects(record, candidates, options);
+  const auto result = discrepancy::find_missing_effects(record, candidates.candidates, options);
   env.progress("discrepancy", 1.0);
 
-  const DiscrepancyReportInfo info{o.data.path, device_path, &options};
-  outputs.write(o.report, discrepancy_json(result, info).dump(2) + "\n");
+  const discrepancy::ReportInfo info{o.data.path, device_path, &options};
+  outputs.write(o.report, discrepancy::report_json(result, info).dump(2) + "\n");
   if (!o.series.empty())
     outputs.write_csv(o.series, {{"t_s", record.time(), "s"},
                          {"measured_dps", record.channel(role::kRate).values, "deg/s"},

@@ -1,5 +1,5 @@
 // `driftlab fleet`: calibrates every unit of a manifest (read_manifest below) with the calibrate
-// code path (calibration_cli.hpp), one unit per work item of a worker pool, each unit's results
+// code path (models/calibration/imu_channels.hpp), one unit per work item of a worker pool, each unit's results
 // written atomically into OUT/units/<id>/, then the fleet report (fleet_report.hpp).
 // `--shard i/N` runs every N-th unit and no report (one task of a scheduler job array);
 // `driftlab fleet merge` writes the report from the unit folders once every shard has run.
@@ -27,7 +27,7 @@
 #include "framework/units.hpp"
 #include "models/discrepancy/discrepancy.hpp"
 #include "tools/driftlab/calibration_cli.hpp"
-#include "tools/driftlab/discrepancy_report.hpp"
+#include "models/discrepancy/report.hpp"
 #include "tools/driftlab/cli.hpp"
 #include "tools/driftlab/fleet_mpi.hpp"
 #include "tools/driftlab/fleet_report.hpp"
@@ -306,10 +306,8 @@ nlohmann::json discrepancy_check(const ChannelRecords& ch, const Registry& regis
   record.set_channel({role::kRate, "rad/s", ch.column, r.rate_rad_s});
   record.set_channel({role::kTemperature, "degC", ch.temperature_column, r.temp_c});
   if (r.true_rate_rad_s.size() == r.time_s.size()) record.set_channel({role::kTrueRate, "rad/s", "", r.true_rate_rad_s});
-  std::vector<std::string> names;
-  for (const auto* info : registry.list("effect")) names.push_back(info->name);
-  std::vector<std::unique_ptr<Effect>> owned;
-  const auto result = discrepancy::find_missing_effects(record, discrepancy_candidates(registry, names, {}, owned), {});
+  const auto candidates = discrepancy::make_candidates(registry, {}, {}, false);
+  const auto result = discrepancy::find_missing_effects(record, candidates.candidates, {});
   nlohmann::json named = nlohmann::json::array();
   std::string text;
   for (const auto& step : result.steps) {

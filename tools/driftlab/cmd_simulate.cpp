@@ -1,6 +1,6 @@
 // `driftlab simulate`: run a device file through the oven simulator and write a CSV record:
 // a single-axis gyro as t_s, rate_dps, temp_c, true_rate_dps, systematic_dps, die_temp_c,
-// drive_freq_hz; a whole IMU (an `imu:` device file) as the columns of imu_columns below; with
+// drive_freq_hz; a whole IMU (an `imu:` device file) as devices/imu_simulation_columns.hpp lists them; with
 // --fleet, a fleet of such IMUs (simulate_fleet below).
 #include <cmath>
 #include <cstdio>
@@ -11,6 +11,7 @@
 
 #include "devices/device_file.hpp"
 #include "devices/fleet_simulator.hpp"
+#include "devices/imu_simulation_columns.hpp"
 #include "devices/imu_simulator.hpp"
 #include "devices/simulator.hpp"
 #include "framework/atomic_file.hpp"
@@ -44,22 +45,11 @@ struct SimulateOptions {
   std::string outliers = devices::kDefaultOutliers;           // --outliers (devices::parse_fault_plan)
 };
 
-// A column in `unit`, snapped to the output's resolution (internal units; 0 = none) as k / steps
-// (steps = 1 / resolution in that unit, when it is a whole number) so that the shortest round-trip
-// text is the clean decimal the device would print; values are already converted, so they are
-// written with unit "1".
+// A column in `unit`, snapped to the output's resolution (devices::written_values); values are
+// already converted, so they are written with unit "1".
 CsvColumn output_column(const std::string& name, const Eigen::VectorXd& internal, const std::string& unit,
                         double resolution = 0.0) {
-  const auto u = find_unit(unit);
-  Eigen::VectorXd values = internal.unaryExpr([&](double v) { return from_internal(v, *u); });
-  if (resolution > 0.0) {
-    const double steps = u->scale / resolution;
-    if (std::abs(steps - std::round(steps)) < 1e-6 * steps) {
-      const double whole = std::round(steps);
-      for (double& v : values) v = std::round(v * whole) / whole;
-    }
-  }
-  return {name, std::move(values), "1"};
+  return {name, devices::written_values(internal, unit, resolution), "1"};
 }
 
 double resolution_of(const devices::ChannelSpec* channel) { return channel ? channel->resolution : 0.0; }
@@ -79,35 +69,11 @@ std::vector<CsvColumn> single_axis_columns(const devices::DeviceDefinition& devi
   return columns;
 }
 
-// The whole-IMU record (issue 20), in the names framework/imu.hpp and the CSV reader know: t_s,
-// then per instance i (the digit omitted for i = 0) the measured gyro{i}_{x,y,z}_dps,
-// accel{i}_{x,y,z}_mps2 and temp{i}_c, device_id{i} when the file gives one, the reference input
-// true_gyro{i}_{x,y,z}_dps and true_accel{i}_{x,y,z}_mps2, and the noise-free
-// systematic_gyro{i}_{x,y,z}_dps and systematic_accel{i}_{x,y,z}_mps2.
+// The whole-IMU record (issue 20): devices::imu_simulation_columns in their written units.
 std::vector<CsvColumn> imu_columns(const devices::ImuDefinition& imu, const devices::ImuSimulationRecord& record) {
-  std::vector<CsvColumn> columns{{"t_s", record.time_s, "s"}};
-  for (std::size_t i = 0; i < record.instances.size(); ++i) {
-    const auto& instance = record.instances[i];
-    const std::string digit = i == 0 ? "" : std::to_string(i);
-    auto add = [&](const std::string& prefix, auto member) {
-      for (int a = 0; a < 3; ++a) {
-        const std::string axis(1, "xyz"[a]);
-        columns.push_back(output_column(prefix + "gyro" + digit + "_" + axis + "_dps", instance.gyro[a].*member, "deg/s"));
-      }
-      for (int a = 0; a < 3; ++a) {
-        const std::string axis(1, "xyz"[a]);
-        columns.push_back(
-            output_column(prefix + "accel" + digit + "_" + axis + "_mps2", instance.accel[a].*member, "m/s^2"));
-      }
-    };
-    add("", &devices::ImuAxisRecord::measured);
-    columns.push_back(
-        output_column("temp" + digit + "_c", instance.temp_c, "degC", imu.instances[i].temperature_resolution_c));
-    if (instance.device_id)
-      columns.push_back({"device_id" + digit, Eigen::VectorXd::Constant(record.time_s.size(), *instance.device_id)});
-    add("true_", &devices::ImuAxisRecord::truth);
-    add("systematic_", &devices::ImuAxisRecord::systematic);
-  }
+  std::vector<CsvColumn> columns;
+  for (const auto& c : devices::imu_simulation_columns(imu, record))
+    columns.push_back(output_column(c.name, c.values, c.unit));
   return columns;
 }
 

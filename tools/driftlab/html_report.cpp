@@ -22,24 +22,12 @@ constexpr const char* kStyle =
     "figcaption{font-size:.92em;color:#333;margin-top:.3em}"
     "pre{background:#f6f6f6;padding:.5em;overflow-x:auto;font-size:.88em}";
 
-std::string number(double v, int digits) {
-  if (!std::isfinite(v)) return "–";
-  char buf[48];
-  if (v == std::floor(v) && std::abs(v) < 1e15)
-    std::snprintf(buf, sizeof buf, "%.0f", v == 0.0 ? 0.0 : v);
-  else
-    std::snprintf(buf, sizeof buf, "%.*g", std::max(1, digits), v);
-  return buf;
-}
-
 void replace_all(std::string& s, const std::string& from, const std::string& to) {
   for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
     s.replace(at, from.size(), to);
 }
 
 }  // namespace
-
-std::string format_number(double v, int digits) { return number(v, digits); }
 
 std::string html_escape(const std::string& text) {
   std::string out;
@@ -120,7 +108,7 @@ HtmlReport& HtmlReport::table(const HtmlTable& t) {
     body_ += "<tr>";
     for (const auto& cell : row) {
       if (const auto* v = std::get_if<double>(&cell))
-        body_ += "<td class=\"n\">" + number(*v, t.digits) + "</td>";
+        body_ += "<td class=\"n\">" + format_number(*v, t.digits) + "</td>";
       else if (const auto* l = std::get_if<HtmlLink>(&cell))
         body_ += "<td><a href=\"" + html_escape(l->href) + "\">" + html_escape(l->text) + "</a></td>";
       else

@@ -21,6 +21,7 @@
 #include <variant>
 #include <vector>
 
+#include "framework/number_text.hpp"
 #include "tools/driftlab/plot.hpp"
 
 namespace driftlab::cli {
@@ -62,10 +63,6 @@ class HtmlReport {
 };
 
 std::string html_escape(const std::string& text);
-
-// A number as the tables write it: integers in full, else `digits` significant digits (C locale),
-// non-finite values as "–".
-std::string format_number(double v, int digits = 4);
 
 // An SVG document (from render_svg) made fit to sit inside HTML beside others: no XML prolog, no
 // namespace URIs (the HTML parser supplies them), no ids of gnuplot's own, the remaining ids and

@@ -1,0 +1,213 @@
+#include "models/evaluation/run_scores.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "framework/units.hpp"
+#include "models/calibration/fit.hpp"
+#include "models/calibration/oven_run.hpp"
+
+namespace driftlab::evaluation {
+namespace {
+
+// Li et al. 2023, Table 2.
+constexpr PaperRow kPaperTable2[] = {
+    {"original", 34.66, 99.608}, {"rbf", 28.42, 99.6037}, {"rbf_ga", 23.65, 99.6011}, {"rbf_ga_kf", 3.589, 0.967814}};
+
+nlohmann::json curve_json(const allan::Analysis& a) {
+  nlohmann::json c = nlohmann::json::array();
+  for (const auto& e : a.curve)
+    c.push_back({{"tau_s", e.tau}, {"dev_deg_h", e.dev * kDphPerRadPerSec}, {"lo_deg_h", e.dev_lo * kDphPerRadPerSec},
+                 {"hi_deg_h", e.dev_hi * kDphPerRadPerSec}});
+  return c;
+}
+
+nlohmann::json fit_json(const allan::Analysis& a) {
+  if (!a.fit) return nullptr;
+  nlohmann::json j{{"label", "least-squares fit of the five IEEE 952 terms (not the paper's reading)"},
+                   {"chi2_per_dof", a.fit->reduced_chi2()},
+                   {"dof", a.fit->dof}};
+  for (const auto& c : allan::kIeee952Units) {
+    const auto& t = (*a.fit)[c.term];
+    nlohmann::json term{{"resolved", t.resolved}, {"unit", std::string(c.unit)}};
+    if (t.resolved) {
+      term["value"] = t.value * c.factor;
+      term["sigma"] = t.sigma * c.factor;
+      term["interval"] = {t.low * c.factor, t.high * c.factor};
+    } else {
+      term["value"] = nullptr;
+      term["upper"] = t.high * c.factor;
+    }
+    j[std::string(c.key)] = term;
+  }
+  return j;
+}
+
+std::string number_text(double v, const char* format) {
+  char b[32];
+  std::snprintf(b, sizeof b, format, v);
+  return b;
+}
+
+}  // namespace
+
+const PaperRow* paper_row(const std::string& stage) {
+  for (const auto& r : kPaperTable2)
+    if (stage == r.stage) return &r;
+  return nullptr;
+}
+
+std::vector<std::string> rate_stages(const Pipeline& pipeline, const std::map<std::string, Signal>& outputs) {
+  std::vector<std::string> names;
+  for (const auto& name : pipeline.output_order) {
+    const auto it = outputs.find(name);
+    if (it == outputs.end() || it->second.unit != "rad/s" || it->second.columns.cols() != 1) continue;
+    if (name != "drift_model") names.push_back(name);
+  }
+  return names;
+}
+
+RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const std::map<std::string, Signal>& outputs) {
+  RunScores s;
+  const double fs = record.sample_rate_hz();
+  const Eigen::VectorXd& rate = record.channel(role::kRate).values;
+  std::optional<Truth> truth;
+  if (record.has(role::kTrueRate)) {
+    truth = Truth{record.channel(role::kTrueRate).values, std::nullopt};
+    if (record.has(role::kSystematic)) truth->systematic_rad_s = record.channel(role::kSystematic).values;
+  }
+  const Truth* t = truth ? &*truth : nullptr;
+  const double reference_n = allan::analyze_rate(rate, fs, {.fit_terms = false}).arw_rad_sqrt_s;
+
+  const Eigen::VectorXd& time = record.time();
+  s.stages.push_back(score_stage("original", rate, time, fs, reference_n, t));
+  for (const auto& name : rate_stages(pipeline, outputs))
+    s.stages.push_back(score_stage(name, outputs.at(name).columns.col(0), time, fs, reference_n, t));
+  // The PX4-style row needs an oven run the calibration quality gate does not refuse.
+  const auto fittable = [&](const Eigen::VectorXd& temp) {
+    const auto gate = calibration::quality_gate({calibration::analyse_oven_run("the record", time, temp, calibration::FitOptions{}.bin_s)});
+    return std::none_of(gate.begin(), gate.end(), [](const auto& f) { return f.severity == calibration::Finding::Severity::Error; });
+  };
+  if (record.has(role::kTemperature) && fittable(record.channel(role::kTemperature).values)) {
+    const Eigen::VectorXd& temp = record.channel(role::kTemperature).values;
+    auto model = calibration::fit_px4_style({{"the record", time, rate, temp, {}, {}}}, {});
+    Eigen::VectorXd compensated = calibration::compensate(model, time, rate, temp).rate_rad_s;
+    s.baseline = Px4Baseline{std::move(model), std::move(compensated)};
+    s.stages.push_back(score_stage("px4_polynomial", s.baseline->compensated_rad_s, time, fs, reference_n, t));
+  }
+  if (truth && truth->systematic_rad_s) {
+    s.intrinsic = intrinsic_floor(rate, *truth->systematic_rad_s, fs);
+    for (const auto& stage : s.stages)
+      if (stage.error) s.against_floor[stage.stage] = compare_to_floor(*stage.error, *s.intrinsic, kFloorFactor);
+  }
+  return s;
+}
+
+nlohmann::json b_json(const allan::FloorReading& b) {
+  const double f = kDphPerRadPerSec;
+  nlohmann::json j{{"B_resolved", b.resolved}, {"B_deg_h", nullptr}, {"B_upper_deg_h", b.high * f},
+                   {"B_tau_s", b.tau_s}, {"B_within_tau_s", b.longest_tau_s}};
+  if (b.resolved) {
+    j["B_deg_h"] = b.value * f;
+    j["B_ci"] = {b.low * f, b.high * f};
+  }
+  return j;
+}
+
+std::string b_text(const allan::FloorReading& b) {
+  const double f = kDphPerRadPerSec;
+  if (b.resolved)
+    return number_text(b.value * f, "%.3g") + " [" + number_text(b.low * f, "%.2g") + "," + number_text(b.high * f, "%.2g") + "]";
+  return "< " + number_text(b.high * f, "%.3g") + " (tau<=" + number_text(b.longest_tau_s, "%.0f") + "s)";
+}
+
+nlohmann::json scores_json(const RunScores& s) {
+  nlohmann::json j;
+  auto& rows = j["table2"] = nlohmann::json::array();
+  auto& curves = j["allan"] = nlohmann::json::object();
+  for (const auto& st : s.stages) {
+    const auto& a = st.analysis;
+    nlohmann::json row{{"stage", st.stage},
+                       {"N_deg_h_rtHz", a.arw_rad_sqrt_s * kDphPerRadPerSec},
+                       {"bandwidth_hz", st.bandwidth_hz},
+                       {"correlation_time_s", st.correlation_time_s},
+                       {"fit", fit_json(a)}};
+    row.update(b_json(a.bias_instability));
+    if (st.residual_drift_rad_s) row["residual_drift_deg_h"] = *st.residual_drift_rad_s * kDphPerRadPerSec;
+    if (const auto it = s.against_floor.find(st.stage); it != s.against_floor.end()) {
+      row["error_vs_floor"] = {{"max_ratio", it->second.max_ratio}, {"tau_of_max_s", it->second.tau_of_max_s},
+                               {"within_1_5x", it->second.within}};
+    }
+    if (const auto* p = paper_row(st.stage)) row["paper"] = {{"B_deg_h", p->b_deg_h}, {"N_deg_h_rtHz", p->n_deg_h_rthz}};
+    rows.push_back(row);
+    curves[st.stage] = curve_json(a);
+    if (st.error) curves[st.stage + "_minus_truth"] = curve_json(*st.error);
+  }
+  if (s.intrinsic) {
+    const auto& a = *s.intrinsic;
+    j["intrinsic_floor"] = {
+        {"what", "Allan analysis of measured - true systematic rate: the gyro's own noise"},
+        {"N_deg_h_rtHz", a.arw_rad_sqrt_s * kDphPerRadPerSec}};
+    j["intrinsic_floor"].update(b_json(a.bias_instability));
+    curves["intrinsic_floor"] = curve_json(a);
+  }
+  if (s.baseline) {
+    const auto& m = s.baseline->model;
+    nlohmann::json c = nlohmann::json::array();
+    for (double v : m.bias_rad_s) c.push_back(v * kDphPerRadPerSec);
+    j["baseline"] = {{"what", std::string("PX4-style (driftlab calibrate's PX4-style poly, fitted on this record): "
+                                          "third-order polynomial in T - T0 fitted on ") +
+                                  (m.fit.heating_only ? "the heating bins" : "all bins (too few heating bins)") +
+                                  ", T clamped to their range"},
+                     {"coefficients_deg_h_per_c_pow_i", c},
+                     {"reference_temp_c", m.reference_temp_c},
+                     {"fit_range_c", {m.valid_min_c, m.valid_max_c}},
+                     {"heating_only", m.fit.heating_only},
+                     {"bin_s", m.fit.bin_s}};
+  }
+  j["units"] = {{"B", "deg/h"}, {"N", "deg/h/sqrt(Hz)"}, {"bandwidth", "Hz (one-sided equivalent noise bandwidth)"},
+                {"residual_drift", "deg/h, rms of 60-s block means of output - true rate"}, {"allan", "deg/h"}};
+  j["readings"] = {{"B", "flat floor of the overlapping Allan deviation / 0.664 (IEEE 952 Annex C), at tau >= the "
+                         "output's correlation time (1 / bandwidth); a value only where the deviation has a floor (a "
+                         "minimum with rising or flat neighbours within the intervals), otherwise B_deg_h is null and "
+                         "B_upper_deg_h bounds B within tau <= B_within_tau_s"},
+                   {"N", "-1/2 slope line at tau = 1 s"}};
+  return j;
+}
+
+std::string table2_text(const RunScores& s) {
+  std::string out;
+  char line[256];
+  out += "Table 2 (B in deg/h, N in deg/h/sqrt(Hz), noise bandwidth in Hz, residual drift in deg/h; B is a value "
+         "[68% CI] only where the Allan deviation has a floor, otherwise a bound '< x' within the taus read)\n";
+  std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", "stage", "paper B", "paper N", "B",
+                "N", "bandwidth", "resid. drift");
+  out += line;
+  const auto cell = [](std::optional<double> v, const char* fmt) {
+    char b[32];
+    if (!v) return std::string("-");
+    std::snprintf(b, sizeof b, fmt, *v);
+    return std::string(b);
+  };
+  for (const auto& st : s.stages) {
+    const auto* p = paper_row(st.stage);
+    const auto& a = st.analysis;
+    const std::string b = b_text(a.bias_instability);
+    std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", st.stage.c_str(),
+                  p ? cell(p->b_deg_h, "%.4g").c_str() : "-", p ? cell(p->n_deg_h_rthz, "%.4g").c_str() : "-", b.c_str(),
+                  cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g").c_str(), cell(st.bandwidth_hz, "%.3g").c_str(),
+                  st.residual_drift_rad_s ? cell(*st.residual_drift_rad_s * kDphPerRadPerSec, "%.3g").c_str() : "-");
+    out += line;
+  }
+  if (s.intrinsic) {
+    const auto& a = *s.intrinsic;
+    std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", "intrinsic floor", "-", "-",
+                  b_text(a.bias_instability).c_str(),
+                  cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g").c_str(), "-", "-");
+    out += line;
+  }
+  return out;
+}
+
+}  // namespace driftlab::evaluation
