@@ -196,11 +196,14 @@ std::vector<ManifestUnit> read_manifest_yaml(const fs::path& path) {
         }
       }
       const YAML::Node data = f.child(node, at, "data", true);
-      if (data && data.IsScalar()) add_record(u, data.as<std::string>(), base);
-      else if (data && data.IsSequence())
-        for (const auto& d : data)
+      if (data && data.IsScalar()) {
+        add_record(u, data.as<std::string>(), base);
+      } else if (data && data.IsSequence()) {
+        for (const auto& d : data) {
           if (d.IsScalar()) add_record(u, d.as<std::string>(), base);
           else f.problem(d, at + ".data", "expected a record path");
+        }
+      }
       if (data && u.data.empty()) f.problem(data, at + ".data", "expected a record path or a list of them");
       const YAML::Node columns = f.child(node, at, "columns", false);
       const auto add = [&](const YAML::Node& c) {
@@ -210,12 +213,16 @@ std::vector<ManifestUnit> read_manifest_yaml(const fs::path& path) {
           for (const auto& p : e.problems()) problems.push_back(p);
         }
       };
-      if (columns && columns.IsScalar()) add(columns);
-      else if (columns && columns.IsSequence())
-        for (const auto& c : columns)
+      if (columns && columns.IsScalar()) {
+        add(columns);
+      } else if (columns && columns.IsSequence()) {
+        for (const auto& c : columns) {
           if (c.IsScalar()) add(c);
           else f.problem(c, at + ".columns", "expected a column mapping ROLE=COLUMN:UNIT");
-      else if (columns) f.problem(columns, at + ".columns", "expected a column mapping or a list of them");
+        }
+      } else if (columns) {
+        f.problem(columns, at + ".columns", "expected a column mapping or a list of them");
+      }
       const YAML::Node limits = f.child(node, at, "limits", false);
       if (limits && !limits.IsMap()) f.problem(limits, at + ".limits", "expected a map <channels>.<figure>_max: limit");
       for (auto it = limits && limits.IsMap() ? limits.begin() : YAML::const_iterator(); limits && limits.IsMap() && it != limits.end(); ++it) {
