@@ -25,7 +25,6 @@ constexpr double kVaryingTrueRate = 1e-3;   // rad/s: a true rate with a larger 
 struct Features {
   Eigen::VectorXd tm, d, s;
   Eigen::MatrixXd w_powers;  // true rate x (Tm - T0)^j, j = 0..kScaleFactorOrder (unscaled)
-  double tm_min = std::numeric_limits<double>::infinity(), tm_max = -std::numeric_limits<double>::infinity();
 };
 
 Features features(const Record& r, const Binning& b, double lag_s, double deriv_s, double width_k, double t0,
@@ -43,8 +42,6 @@ Features features(const Record& r, const Binning& b, double lag_s, double deriv_
     f.tm[k] += tm;
     f.d[k] += state.temp_rate_k_s();
     f.s[k] += state.hysteresis_state();
-    f.tm_min = std::min(f.tm_min, tm);
-    f.tm_max = std::max(f.tm_max, tm);
     if (with_w) {
       double p = r.true_rate_rad_s.size() ? r.true_rate_rad_s[i] : 0.0;
       for (int j = 0; j <= kScaleFactorOrder; ++j) {
@@ -68,13 +65,10 @@ struct Candidate {
   double cv = std::numeric_limits<double>::infinity();
 };
 
-// All records' bins stacked, with the rows kept (heating-only mask) and record ends.
+// All records' bins stacked: the rows kept (heating-only mask) and where each record's rows end.
 struct Stack {
-  std::vector<Features> per_record;
-  Eigen::VectorXd y;
   std::vector<Eigen::Index> rows;  // kept rows into the stacked bins
   std::vector<Eigen::Index> group_ends;
-  double tm_min = std::numeric_limits<double>::infinity(), tm_max = -std::numeric_limits<double>::infinity();
 };
 
 Eigen::VectorXd stacked(const std::vector<Features>& fs, Eigen::VectorXd Features::*member) {
@@ -227,320 +221,202 @@ std::string implausible(const Design& dz, const polynomial::LinearFit& lf, const
   return "";
 }
 
-}  // namespace
-
-Record slice(const Record& r, double from_s, double to_s) {
-  std::vector<Eigen::Index> rows;
-  for (Eigen::Index i = 0; i < r.time_s.size(); ++i) {
-    if (r.time_s[i] >= from_s && r.time_s[i] < to_s) rows.push_back(i);
-  }
-  Record out;
-  out.name = r.name;
-  out.time_s = r.time_s(rows);
-  out.rate_rad_s = r.rate_rad_s(rows);
-  out.temp_c = r.temp_c(rows);
-  if (r.true_rate_rad_s.size()) out.true_rate_rad_s = r.true_rate_rad_s(rows);
-  if (r.systematic_rad_s.size()) out.systematic_rad_s = r.systematic_rad_s(rows);
-  return out;
-}
-
-CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOptions& o) {
-  if (records.empty()) throw ConfigError({"", 0, "data"}, "no calibration records");
-  if (o.min_order < 0 || o.max_order < o.min_order || o.max_order > 12) {
-    throw ConfigError({"", 0, "order"}, "polynomial orders need 0 <= min_order <= max_order <= 12");
-  }
-  if (!(o.bin_s > 0)) throw ConfigError({"", 0, "bin_s"}, "bin length must be > 0 s");
-  if (!(o.derivative_tau_s > 0)) throw ConfigError({"", 0, "derivative_tau_s"}, "must be > 0 s");
-
-  const double t0 = o.reference_temp_c;
-  bool with_sf = false;
-  for (const auto& r : records) {
-    if (r.time_s.size() != r.rate_rad_s.size() || r.time_s.size() != r.temp_c.size()) {
-      throw DataError({r.name, 0, "rate"}, "time, rate and temperature differ in length");
-    }
-    if (r.true_rate_rad_s.size() && r.true_rate_rad_s.size() != r.time_s.size()) {
-      throw DataError({r.name, 0, "true_rate"}, "true rate differs in length");
-    }
-    if (r.true_rate_rad_s.size() > 1) {
-      const double mean = r.true_rate_rad_s.mean();
-      const double sd = std::sqrt((r.true_rate_rad_s.array() - mean).square().mean());
-      if (sd > kVaryingTrueRate) with_sf = true;
-    }
+// One calibration fit, step by step, on the records' bins stacked once (the rows kept: all, or the
+// heating ones).
+class Fitter {
+ public:
+  Fitter(const std::vector<Record>& records, const FitOptions& o) : records_(records), o_(o), t0_(o.reference_temp_c) {
+    check_records();
+    stack_bins();
+    assess_runs();
+    choose_holdout_designs();
   }
 
-  // Bins, targets and the heating mask (from the dT/dt estimate without lag).
-  std::vector<Binning> bins;
-  Stack st;
-  std::vector<double> y_all, heating;
-  Eigen::Index offset = 0;
-  for (const auto& r : records) {
-    bins.push_back(make_bins(r.time_s, o.bin_s));
-    const Binning& b = bins.back();
-    if (static_cast<std::size_t>(b.bins) < 2 * o.holdout_blocks) {
-      throw DataError({r.name, 0, "t_s"}, "record too short: " + std::to_string(b.bins) + " bins of " +
-                                              std::to_string(o.bin_s) + " s for " + std::to_string(o.holdout_blocks) +
-                                              " held-out blocks (need at least two bins per block)");
-    }
-    std::vector<double> y(static_cast<std::size_t>(b.bins), 0.0);
-    for (Eigen::Index i = 0; i < r.time_s.size(); ++i) {
-      const double w = r.true_rate_rad_s.size() ? r.true_rate_rad_s[i] : 0.0;
-      y[static_cast<std::size_t>(b.bin_of[static_cast<std::size_t>(i)])] += r.rate_rad_s[i] - w;  // rate - true = sf_dev w + bias
-    }
-    const Features f0 = features(r, b, 0.0, o.derivative_tau_s, 0.0, t0, false);
-    for (int k = 0; k < b.bins; ++k) {
-      y_all.push_back(y[static_cast<std::size_t>(k)] / b.count[static_cast<std::size_t>(k)]);
-      if (!o.heating_only || f0.d[k] > 0) st.rows.push_back(offset + k);
-    }
-    offset += b.bins;
-    st.group_ends.push_back(static_cast<Eigen::Index>(st.rows.size()));
-  }
-  const Eigen::VectorXd y_stack = Eigen::Map<const Eigen::VectorXd>(y_all.data(), static_cast<Eigen::Index>(y_all.size()));
-  const Eigen::VectorXd y = y_stack(st.rows);
-  if (static_cast<std::size_t>(y.size()) < 2 * o.holdout_blocks * records.size()) {
-    throw DataError({records.front().name, 0, "temperature"},
-                    o.heating_only ? "too few heating bins to fit (dT/dt > 0)" : "too few bins to fit");
-  }
-
-  const auto features_for = [&](double lag, double width) {
-    std::vector<Features> fs;
-    for (std::size_t i = 0; i < records.size(); ++i) {
-      fs.push_back(features(records[i], bins[i], lag, o.derivative_tau_s, width, t0, with_sf));
-    }
-    return fs;
-  };
-
-  // ---- what the runs determine, and how candidates are held out ------------------------------
-  std::vector<OvenRun> runs;
-  for (std::size_t i = 0; i < records.size(); ++i) runs.push_back(analyse_oven_run(records[i].name, records[i].time_s, records[i].temp_c, o.bin_s));
-  for (const auto& f : quality_gate(runs))
-    if (f.severity == Finding::Severity::Error) throw DataError({records.front().name, 0, "temperature"}, f.message);
-  const bool physical = o.kind != ModelKind::Polynomial;
-  const Determinable can = determinable(runs);
-
-  // Two hold-out designs. Orders and history terms are searched on contiguous time blocks of each
-  // record (noise inside the range the final fit covers, so scored as evaluated). History terms
-  // are then kept only when they also lower the error on what transfers: whole runs when there
-  // are several records, else whole legs when the record has at least two legs of every
-  // direction it holds (so each fold still holds that direction), with the extrapolation policy.
-  std::vector<int> blocks, transfer;
-  try {
-    blocks = polynomial::block_labels(y.size(), o.holdout_blocks, st.group_ends);
-  } catch (const std::invalid_argument& e) {
-    throw DataError({records.front().name, 0, "t_s"}, e.what());
-  }
-  std::string holdout_design = std::to_string(o.holdout_blocks) + " contiguous time blocks per record";
-  if (records.size() >= 2) {
-    for (std::size_t i = 0, at = 0; i < records.size(); ++i)
-      for (; at < static_cast<std::size_t>(st.group_ends[i]); ++at) transfer.push_back(static_cast<int>(i));
-    holdout_design += "; history terms also on whole runs (leave-one-run-out over " + std::to_string(records.size()) +
-                      " records)";
-  } else {
-    int heating_legs = 0, cooling_legs = 0, legs = 0;
-    for (const auto& l : runs.front().legs) {
-      heating_legs += l.direction > 0;
-      cooling_legs += l.direction < 0;
-      ++legs;
-    }
-    if (legs >= 3 && heating_legs != 1 && cooling_legs != 1) {
-      std::vector<int> leg_of_bin;
-      std::size_t leg = 0;
-      for (const Eigen::Index first : bins.front().first) {
-        while (leg + 1 < runs.front().legs.size() && records.front().time_s[first] > runs.front().legs[leg].end_s) ++leg;
-        leg_of_bin.push_back(static_cast<int>(leg));
+  // The best candidate of the grid (order, lag, width, dT/dt term) by held-out error, and the best
+  // one without history terms.
+  std::pair<Candidate, Candidate> search() {
+    // Candidates whose history terms the runs cannot determine are not scored; a scored candidate
+    // with history terms is kept only when they are significant and plausible (implausible()).
+    lags_ = {0.0};
+    widths_ = {0.0};
+    std::vector<bool> rate_terms{false};
+    if (physical()) {
+      for (double lag : o_.lag_grid_s)
+        if (lag > 0 && lag <= can_.max_lag_s) lags_.push_back(lag);
+      if (can_.rate_and_hysteresis) {
+        for (double w : o_.hysteresis_width_grid_k)
+          if (w > 0) widths_.push_back(w);
+        rate_terms.push_back(true);
       }
-      for (const auto row : st.rows) transfer.push_back(leg_of_bin[static_cast<std::size_t>(row)]);
-      holdout_design += "; history terms also on whole legs (leave-one-leg-out over " + std::to_string(legs) + " legs: " +
-                        std::to_string(heating_legs) + " heating, " + std::to_string(cooling_legs) + " cooling)";
-    } else {
-      holdout_design += " (one record with fewer than two legs of a direction: whole legs cannot be held out)";
     }
-  }
-  const auto cv_of = [&](const Design& dz) {
-    try {
-      return polynomial::labelled_cv_rmse(dz.A, y, blocks);
-    } catch (const std::invalid_argument&) {
-      return std::numeric_limits<double>::infinity();
-    }
-  };
-
-  // ---- search -----------------------------------------------------------------------------
-  // Candidates whose history terms the runs cannot determine are not scored; a scored candidate
-  // with history terms is kept only when they are significant and plausible (implausible()).
-  std::vector<double> lags{0.0}, widths{0.0};
-  std::vector<bool> rate_terms{false};
-  if (physical) {
-    for (double lag : o.lag_grid_s)
-      if (lag > 0 && lag <= can.max_lag_s) lags.push_back(lag);
-    if (can.rate_and_hysteresis) {
-      for (double w : o.hysteresis_width_grid_k)
-        if (w > 0) widths.push_back(w);
-      rate_terms.push_back(true);
-    }
-  }
-  std::vector<std::string> rejected;
-  const auto admissible = [&](const std::vector<Features>& fs, const Design& dz) {
-    if (!dz.rate_term && !dz.hysteresis) return true;
-    try {
-      const auto why = implausible(dz, polynomial::least_squares(dz.A, y), y, stacked(fs, &Features::d)(st.rows), blocks);
-      if (!why.empty() && std::find(rejected.begin(), rejected.end(), why) == rejected.end()) rejected.push_back(why);
-      return why.empty();
-    } catch (const std::invalid_argument&) {
-      return false;
-    }
-  };
-  Candidate best, simple;  // simple: the best polynomial without history terms
-  std::size_t done = 0;
-  const std::size_t total = lags.size() * widths.size();
-  for (double lag : lags) {
-    for (double width : widths) {
-      const auto fs = features_for(lag, width);
-      for (bool rate_term : rate_terms) {
-        for (int p = o.min_order; p <= o.max_order; ++p) {
-          const Design dz = design(fs, st.rows, t0, p, rate_term, width > 0, with_sf);
-          const double cv = cv_of(dz);
-          const Candidate c{lag, width, rate_term, p, cv};
-          if (lag == 0 && width == 0 && !rate_term && cv < simple.cv) simple = c;
-          if (cv < best.cv && admissible(fs, dz)) best = c;
+    Candidate best, simple;
+    std::size_t done = 0;
+    const std::size_t total = lags_.size() * widths_.size();
+    for (double lag : lags_) {
+      for (double width : widths_) {
+        const auto fs = features_for(lag, width);
+        for (bool rate_term : rate_terms) {
+          for (int p = o_.min_order; p <= o_.max_order; ++p) {
+            const Design dz = design(fs, st_.rows, t0_, p, rate_term, width > 0, with_sf_);
+            const double cv = cv_of(dz);
+            const Candidate c{lag, width, rate_term, p, cv};
+            if (lag == 0 && width == 0 && !rate_term && cv < simple.cv) simple = c;
+            if (cv < best.cv && admissible(fs, dz)) best = c;
+          }
         }
+        o_.progress(physical() ? "calibrate: physical model search" : "calibrate: polynomial order", double(++done) / total);
       }
-      o.progress(physical ? "calibrate: physical model search" : "calibrate: polynomial order", double(++done) / total);
     }
-  }
-  if (!std::isfinite(best.cv)) throw DataError({records.front().name, 0, "rate"}, "no candidate model could be fitted");
-
-  // ---- refinement of the best cell's lag and width between their grid neighbours ------------
-  const auto cv_at = [&](double lag, double width) {
-    const auto fs = features_for(lag, width);
-    const Design d = design(fs, st.rows, t0, best.order, best.rate_term, width > 0, with_sf);
-    return admissible(fs, d) ? cv_of(d) : std::numeric_limits<double>::infinity();
-  };
-  const auto refine = [&](const std::vector<double>& grid, double value, double upper, const std::function<double(double)>& cv) {
-    if (!(value > 0) || o.refine_iterations <= 0) return value;
-    std::vector<double> sorted = grid;
-    std::sort(sorted.begin(), sorted.end());
-    const auto at = std::find(sorted.begin(), sorted.end(), value);
-    if (at == sorted.end()) return value;
-    const double lo = at == sorted.begin() || *std::prev(at) <= 0 ? value / 2 : *std::prev(at);
-    const double hi = std::min(upper, std::next(at) == sorted.end() ? value : *std::next(at));
-    const auto m = golden_section_minimize([&](double u) { return cv(std::exp(u)); }, std::log(lo), std::log(hi),
-                                           o.refine_iterations);
-    if (m.value < best.cv) {
-      best.cv = m.value;
-      return std::exp(m.x);
-    }
-    return value;
-  };
-  if (physical) {
-    o.progress("calibrate: refining lag and hysteresis width", 0.0);
-    best.lag_s = refine(lags, best.lag_s, can.max_lag_s, [&](double lag) { return cv_at(lag, best.width_k); });
-    best.width_k = refine(widths, best.width_k, INFINITY, [&](double width) { return cv_at(best.lag_s, width); });
-    o.progress("calibrate: refining lag and hysteresis width", 1.0);
-  }
-  // Never worse than the simple model: history terms stay only when they transfer by the margin.
-  std::string chosen_why;
-  if ((best.lag_s > 0 || best.width_k > 0 || best.rate_term) && !(best.cv < (1.0 - kTransferMargin) * simple.cv)) {
-    chosen_why = "history terms lowered the held-out error by less than " +
-                 std::to_string(static_cast<int>(100 * kTransferMargin)) + " % (" + std::to_string(best.cv) + " vs " +
-                 std::to_string(simple.cv) + "): polynomial kept";
-    best = simple;
+    if (!std::isfinite(best.cv)) throw DataError({records_.front().name, 0, "rate"}, "no candidate model could be fitted");
+    return {best, simple};
   }
 
-  if (best.lag_s > 0 || best.width_k > 0 || best.rate_term) {
-    if (!transfer.empty()) {
+  // The best cell's lag and width refined between their grid neighbours (golden section).
+  void refine(Candidate& best) const {
+    if (!physical()) return;
+    const auto cv_at = [&](double lag, double width) {
+      const auto fs = features_for(lag, width);
+      const Design d = design(fs, st_.rows, t0_, best.order, best.rate_term, width > 0, with_sf_);
+      return admissible(fs, d) ? cv_of(d) : std::numeric_limits<double>::infinity();
+    };
+    const auto refined = [&](const std::vector<double>& grid, double value, double upper,
+                             const std::function<double(double)>& cv) {
+      if (!(value > 0) || o_.refine_iterations <= 0) return value;
+      std::vector<double> sorted = grid;
+      std::sort(sorted.begin(), sorted.end());
+      const auto at = std::find(sorted.begin(), sorted.end(), value);
+      if (at == sorted.end()) return value;
+      const double lo = at == sorted.begin() || *std::prev(at) <= 0 ? value / 2 : *std::prev(at);
+      const double hi = std::min(upper, std::next(at) == sorted.end() ? value : *std::next(at));
+      const auto m = golden_section_minimize([&](double u) { return cv(std::exp(u)); }, std::log(lo), std::log(hi),
+                                             o_.refine_iterations);
+      if (m.value < best.cv) {
+        best.cv = m.value;
+        return std::exp(m.x);
+      }
+      return value;
+    };
+    o_.progress("calibrate: refining lag and hysteresis width", 0.0);
+    best.lag_s = refined(lags_, best.lag_s, can_.max_lag_s, [&](double lag) { return cv_at(lag, best.width_k); });
+    best.width_k = refined(widths_, best.width_k, INFINITY, [&](double width) { return cv_at(best.lag_s, width); });
+    o_.progress("calibrate: refining lag and hysteresis width", 1.0);
+  }
+
+  // Never worse than the simple model: history terms stay only when they lower the held-out error
+  // by the margin, on time blocks and on what transfers (whole runs or legs). Returns why the simple
+  // model was kept instead ("" when it was not).
+  std::string keep_history_only_if_it_transfers(Candidate& best, const Candidate& simple) const {
+    const auto has_history = [](const Candidate& c) { return c.lag_s > 0 || c.width_k > 0 || c.rate_term; };
+    std::string why;
+    if (has_history(best) && !(best.cv < (1.0 - kTransferMargin) * simple.cv)) {
+      why = "history terms lowered the held-out error by less than " +
+            std::to_string(static_cast<int>(100 * kTransferMargin)) + " % (" + std::to_string(best.cv) + " vs " +
+            std::to_string(simple.cv) + "): polynomial kept";
+      best = simple;
+    }
+    if (has_history(best) && !transfer_.empty()) {
       const auto transfer_cv = [&](const Candidate& c) {
         const auto fs = features_for(c.lag_s, c.width_k);
-        return policy_cv_rmse(design(fs, st.rows, t0, c.order, c.rate_term, c.width_k > 0, with_sf),
-                              stacked(fs, &Features::tm)(st.rows), y, transfer, t0, o.extrapolation);
+        return policy_cv_rmse(design(fs, st_.rows, t0_, c.order, c.rate_term, c.width_k > 0, with_sf_),
+                              stacked(fs, &Features::tm)(st_.rows), y_, transfer_, t0_, o_.extrapolation);
       };
       const double rich = transfer_cv(best), plain = transfer_cv(simple);
       if (!(rich < (1.0 - kTransferMargin) * plain)) {
-        chosen_why = "history terms did not transfer to held-out whole runs/legs (" + std::to_string(rich) + " vs " +
-                     std::to_string(plain) + "): polynomial kept";
+        why = "history terms did not transfer to held-out whole runs/legs (" + std::to_string(rich) + " vs " +
+              std::to_string(plain) + "): polynomial kept";
         best = simple;
       }
     }
+    return why;
   }
 
-  // ---- final linear fit -------------------------------------------------------------------
-  const auto fs = features_for(best.lag_s, best.width_k);
-  const Design dz = design(fs, st.rows, t0, best.order, best.rate_term, best.width_k > 0, with_sf);
-  polynomial::LinearFit lf;
-  try {
-    lf = polynomial::least_squares(dz.A, y);
-  } catch (const std::invalid_argument& e) {
-    throw DataError({records.front().name, 0, "rate"}, std::string("least-squares fit failed: ") + e.what());
-  }
-  const Eigen::VectorXd residual = y - dz.A * lf.coefficients;
-  const double inflate = lag1_inflation(residual);
+  // The chosen candidate's final linear fit on every kept bin, as a model with its fit summary;
+  // `residual` receives the bins' residuals.
+  CalibrationModel linear_model(const Candidate& best, const std::string& chosen_why, Eigen::VectorXd& residual) {
+    const auto fs = features_for(best.lag_s, best.width_k);
+    const Design dz = design(fs, st_.rows, t0_, best.order, best.rate_term, best.width_k > 0, with_sf_);
+    polynomial::LinearFit lf;
+    try {
+      lf = polynomial::least_squares(dz.A, y_);
+    } catch (const std::invalid_argument& e) {
+      throw DataError({records_.front().name, 0, "rate"}, std::string("least-squares fit failed: ") + e.what());
+    }
+    residual = y_ - dz.A * lf.coefficients;
+    const double inflate = lag1_inflation(residual);
 
-  CalibrationModel m;
-  m.kind = o.kind;
-  m.reference_temp_c = t0;
-  m.extrapolation = o.extrapolation;
-  {  // the range the fitted bins cover
-    const Eigen::VectorXd tm = stacked(fs, &Features::tm)(st.rows);
-    m.valid_min_c = tm.minCoeff();
-    m.valid_max_c = tm.maxCoeff();
-  }
-  double si = 1.0;
-  int c = 0;
-  for (int i = 0; i <= best.order; ++i, ++c) {
-    m.bias_rad_s.push_back(lf.coefficients[c] / si);
-    m.bias_sigma_rad_s.push_back(inflate * lf.standard_errors[c] / si);
-    si *= dz.scale;
-  }
-  m.lag_tau_s = best.lag_s;
-  m.derivative_tau_s = o.derivative_tau_s;
-  if (best.rate_term) {
-    m.temperature_rate_rad_s_per_k_s = lf.coefficients[c];
-    m.temperature_rate_sigma = inflate * lf.standard_errors[c];
-    ++c;
-  }
-  if (best.width_k > 0) {
-    m.hysteresis_width_k = best.width_k;
-    m.hysteresis_rad_s = lf.coefficients[c];
-    m.hysteresis_sigma_rad_s = inflate * lf.standard_errors[c];
-    ++c;
-  }
-  if (with_sf) {
-    for (int j = 0; j <= kScaleFactorOrder; ++j, ++c) m.scale_factor_per_k.push_back(lf.coefficients[c] / std::pow(dz.scale, j));
+    CalibrationModel m;
+    m.kind = o_.kind;
+    m.reference_temp_c = t0_;
+    m.extrapolation = o_.extrapolation;
+    tm_ = stacked(fs, &Features::tm)(st_.rows);
+    d_ = stacked(fs, &Features::d)(st_.rows);
+    s_ = stacked(fs, &Features::s)(st_.rows);
+    m.valid_min_c = tm_.minCoeff();  // the range the fitted bins cover
+    m.valid_max_c = tm_.maxCoeff();
+    double si = 1.0;
+    int c = 0;
+    for (int i = 0; i <= best.order; ++i, ++c) {
+      m.bias_rad_s.push_back(lf.coefficients[c] / si);
+      m.bias_sigma_rad_s.push_back(inflate * lf.standard_errors[c] / si);
+      si *= dz.scale;
+    }
+    m.lag_tau_s = best.lag_s;
+    m.derivative_tau_s = o_.derivative_tau_s;
+    if (best.rate_term) {
+      m.temperature_rate_rad_s_per_k_s = lf.coefficients[c];
+      m.temperature_rate_sigma = inflate * lf.standard_errors[c];
+      ++c;
+    }
+    if (best.width_k > 0) {
+      m.hysteresis_width_k = best.width_k;
+      m.hysteresis_rad_s = lf.coefficients[c];
+      m.hysteresis_sigma_rad_s = inflate * lf.standard_errors[c];
+      ++c;
+    }
+    if (with_sf_) {
+      for (int j = 0; j <= kScaleFactorOrder; ++j, ++c) m.scale_factor_per_k.push_back(lf.coefficients[c] / std::pow(dz.scale, j));
+    }
+
+    m.fit.bin_s = o_.bin_s;
+    m.fit.holdout_blocks = o_.holdout_blocks;
+    m.fit.holdout_rms_rad_s = best.cv;
+    m.fit.train_rms_rad_s = lf.rms_residual;
+    m.fit.heating_only = o_.heating_only;
+    m.fit.scale_factor_fitted = with_sf_;
+    for (const auto& r : records_) {
+      m.fit.records.push_back(r.name);
+      m.fit.samples += static_cast<std::size_t>(r.time_s.size());
+    }
+    m.fit.holdout_design = holdout_design_;
+    m.fit.uncompensated_rms_rad_s = std::sqrt(y_.squaredNorm() / static_cast<double>(y_.size()));
+    m.fit.selection = "order " + std::string(physical() ? "and history terms (lag_tau_s, dT/dt, hysteresis width) " : "") +
+                      "by held-out error over orders " + std::to_string(o_.min_order) + ".." + std::to_string(o_.max_order);
+    if (physical() && !can_.why_not.empty()) m.fit.selection += "; " + can_.why_not;
+    if (!rejected_.empty()) {
+      m.fit.selection += "; candidates rejected:";
+      for (const auto& r : rejected_) m.fit.selection += " " + r + (&r == &rejected_.back() ? "" : ",");
+    }
+    if (!chosen_why.empty()) m.fit.selection += "; " + chosen_why;
+    if (physical() && !m.uses_state()) m.kind = ModelKind::Polynomial;
+    return m;
   }
 
-  m.fit.bin_s = o.bin_s;
-  m.fit.holdout_blocks = o.holdout_blocks;
-  m.fit.holdout_rms_rad_s = best.cv;
-  m.fit.train_rms_rad_s = lf.rms_residual;
-  m.fit.heating_only = o.heating_only;
-  m.fit.scale_factor_fitted = with_sf;
-  for (const auto& r : records) {
-    m.fit.records.push_back(r.name);
-    m.fit.samples += static_cast<std::size_t>(r.time_s.size());
-  }
-  m.fit.holdout_design = holdout_design;
-  m.fit.uncompensated_rms_rad_s = std::sqrt(y.squaredNorm() / static_cast<double>(y.size()));
-  m.fit.selection = "order " + std::string(physical ? "and history terms (lag_tau_s, dT/dt, hysteresis width) " : "") +
-                    "by held-out error over orders " + std::to_string(o.min_order) + ".." + std::to_string(o.max_order);
-  if (physical && !can.why_not.empty()) m.fit.selection += "; " + can.why_not;
-  if (!rejected.empty()) {
-    m.fit.selection += "; candidates rejected:";
-    for (const auto& r : rejected) m.fit.selection += " " + r + (&r == &rejected.back() ? "" : ",");
-  }
-  if (!chosen_why.empty()) m.fit.selection += "; " + chosen_why;
-  if (physical && !m.uses_state()) m.kind = ModelKind::Polynomial;
-
-  // ---- RBF on the physical residual ----------------------------------------------------------
-  if (o.kind == ModelKind::Rbf && !can.rate_and_hysteresis) {
-    m.fit.selection += "; no RBF network (its inputs dT/dt and branch state need both directions and the span)";
-  } else if (o.kind == ModelKind::Rbf) {
-    Eigen::MatrixXd X(y.size(), 3);
-    X.col(0) = stacked(fs, &Features::tm)(st.rows).cwiseMax(m.valid_min_c).cwiseMin(m.valid_max_c);
-    X.col(1) = stacked(fs, &Features::d)(st.rows);
-    X.col(2) = stacked(fs, &Features::s)(st.rows);
-    const auto split = holdout::blocked_holdout(X.rows(), 0.2, 10, o.seed);
+  // An RBF network of (model temperature, dT/dt, branch state) on the linear model's residual,
+  // GA-tuned on blocked held-out bins; kept only when it lowers their error by the margin.
+  void add_rbf(CalibrationModel& m, const Eigen::VectorXd& residual) const {
+    if (!can_.rate_and_hysteresis) {
+      m.fit.selection += "; no RBF network (its inputs dT/dt and branch state need both directions and the span)";
+      return;
+    }
+    Eigen::MatrixXd X(y_.size(), 3);
+    X.col(0) = tm_.cwiseMax(m.valid_min_c).cwiseMin(m.valid_max_c);
+    X.col(1) = d_;
+    X.col(2) = s_;
+    const auto split = holdout::blocked_holdout(X.rows(), 0.2, 10, o_.seed);
     const Eigen::MatrixXd Xt = X(split.train, Eigen::all), Xh = X(split.holdout, Eigen::all);
     const Eigen::VectorXd rt = residual(split.train), rh = residual(split.holdout);
     rbf::Config base;
-    base.seed = o.seed;
+    base.seed = o_.seed;
     base.kmeans_sample = 2000;
     const auto decode = [&](const Eigen::VectorXd& v) {
       rbf::Config cfg = base;
@@ -550,20 +426,20 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
       return cfg;
     };
     std::size_t evals = 0;
-    const std::size_t expected = o.ga_population * (o.ga_generations + 1);
+    const std::size_t expected = o_.ga_population * (o_.ga_generations + 1);
     const auto objective = [&](const Eigen::VectorXd& v) {
       double e = std::numeric_limits<double>::infinity();
       try {
         e = holdout::rmse(rbf::fit(Xt, rt, decode(v)).network.predict(Xh), rh);
       } catch (const std::invalid_argument&) {
       }
-      o.progress("calibrate: RBF tuning (GA)", std::min(1.0, double(++evals) / expected));
+      o_.progress("calibrate: RBF tuning (GA)", std::min(1.0, double(++evals) / expected));
       return e;
     };
     ga::Config gc;
-    gc.population = o.ga_population;
-    gc.generations = o.ga_generations;
-    gc.seed = o.seed;
+    gc.population = o_.ga_population;
+    gc.generations = o_.ga_generations;
+    gc.seed = o_.seed;
     gc.threads = 1;  // one thread: the progress counter is not thread safe, and fits are seconds
     const double max_centres = std::min<double>(40.0, static_cast<double>(split.train.size()) / 4.0);
     const auto result = ga::minimize(objective, {{0.1, 3.0, false}, {-8.0, -1.0, false}, {3.0, std::max(3.0, max_centres), true}}, gc);
@@ -590,6 +466,200 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
                          " rad/s) by " + std::to_string(static_cast<int>(100 * kTransferMargin)) + " %";
     }
   }
+
+  // Allan noise terms of the compensated calibration residual (first record), for the Kalman stage
+  // and the Kalibr export.
+  void add_noise_terms(CalibrationModel& m) const {
+    const Record& r = records_.front();
+    const auto out = compensate(m, r.time_s, r.rate_rad_s, r.temp_c);
+    const Eigen::VectorXd err =
+        r.true_rate_rad_s.size() ? Eigen::VectorXd(out.rate_rad_s - r.true_rate_rad_s) : out.rate_rad_s;
+    // The rate while it samples: a gap in the record (a 1e9-s pause) must not lower it (issue 28).
+    const double rate_hz = sampling::rate_within_segments_hz(r.time_s, sampling::facts_of(r.time_s));
+    o_.progress("calibrate: Allan noise terms", 0.0);
+    if (const auto n = fit_noise(err, rate_hz)) {
+      m.noise = {n->arw_rad_sqrt_s, n->bias_instability_rad_s, n->rate_random_walk_rad_s_sqrt_s, rate_hz,
+                 n->arw_upper, n->bias_instability_upper, n->rate_random_walk_upper};
+    }
+    o_.progress("calibrate: Allan noise terms", 1.0);
+  }
+
+ private:
+  bool physical() const { return o_.kind != ModelKind::Polynomial; }
+
+  void check_records() {
+    for (const auto& r : records_) {
+      if (r.time_s.size() != r.rate_rad_s.size() || r.time_s.size() != r.temp_c.size()) {
+        throw DataError({r.name, 0, "rate"}, "time, rate and temperature differ in length");
+      }
+      if (r.true_rate_rad_s.size() && r.true_rate_rad_s.size() != r.time_s.size()) {
+        throw DataError({r.name, 0, "true_rate"}, "true rate differs in length");
+      }
+      if (r.true_rate_rad_s.size() > 1) {
+        const double mean = r.true_rate_rad_s.mean();
+        const double sd = std::sqrt((r.true_rate_rad_s.array() - mean).square().mean());
+        if (sd > kVaryingTrueRate) with_sf_ = true;
+      }
+    }
+  }
+
+  // Bins, targets and the heating mask (from the dT/dt estimate without lag).
+  void stack_bins() {
+    std::vector<double> y_all;
+    Eigen::Index offset = 0;
+    for (const auto& r : records_) {
+      bins_.push_back(make_bins(r.time_s, o_.bin_s));
+      const Binning& b = bins_.back();
+      if (static_cast<std::size_t>(b.bins) < 2 * o_.holdout_blocks) {
+        throw DataError({r.name, 0, "t_s"}, "record too short: " + std::to_string(b.bins) + " bins of " +
+                                                std::to_string(o_.bin_s) + " s for " + std::to_string(o_.holdout_blocks) +
+                                                " held-out blocks (need at least two bins per block)");
+      }
+      std::vector<double> y(static_cast<std::size_t>(b.bins), 0.0);
+      for (Eigen::Index i = 0; i < r.time_s.size(); ++i) {
+        const double w = r.true_rate_rad_s.size() ? r.true_rate_rad_s[i] : 0.0;
+        y[static_cast<std::size_t>(b.bin_of[static_cast<std::size_t>(i)])] += r.rate_rad_s[i] - w;  // rate - true = sf_dev w + bias
+      }
+      const Features f0 = features(r, b, 0.0, o_.derivative_tau_s, 0.0, t0_, false);
+      for (int k = 0; k < b.bins; ++k) {
+        y_all.push_back(y[static_cast<std::size_t>(k)] / b.count[static_cast<std::size_t>(k)]);
+        if (!o_.heating_only || f0.d[k] > 0) st_.rows.push_back(offset + k);
+      }
+      offset += b.bins;
+      st_.group_ends.push_back(static_cast<Eigen::Index>(st_.rows.size()));
+    }
+    const Eigen::VectorXd y_stack = Eigen::Map<const Eigen::VectorXd>(y_all.data(), static_cast<Eigen::Index>(y_all.size()));
+    y_ = y_stack(st_.rows);
+    if (static_cast<std::size_t>(y_.size()) < 2 * o_.holdout_blocks * records_.size()) {
+      throw DataError({records_.front().name, 0, "temperature"},
+                      o_.heating_only ? "too few heating bins to fit (dT/dt > 0)" : "too few bins to fit");
+    }
+  }
+
+  // What the runs determine; a run the quality gate refuses is a DataError.
+  void assess_runs() {
+    for (std::size_t i = 0; i < records_.size(); ++i)
+      runs_.push_back(analyse_oven_run(records_[i].name, records_[i].time_s, records_[i].temp_c, o_.bin_s));
+    for (const auto& f : quality_gate(runs_))
+      if (f.severity == Finding::Severity::Error) throw DataError({records_.front().name, 0, "temperature"}, f.message);
+    can_ = determinable(runs_);
+  }
+
+  // Two hold-out designs. Orders and history terms are searched on contiguous time blocks of each
+  // record (noise inside the range the final fit covers, so scored as evaluated). History terms
+  // are then kept only when they also lower the error on what transfers: whole runs when there
+  // are several records, else whole legs when the record has at least two legs of every
+  // direction it holds (so each fold still holds that direction), with the extrapolation policy.
+  void choose_holdout_designs() {
+    try {
+      blocks_ = polynomial::block_labels(y_.size(), o_.holdout_blocks, st_.group_ends);
+    } catch (const std::invalid_argument& e) {
+      throw DataError({records_.front().name, 0, "t_s"}, e.what());
+    }
+    holdout_design_ = std::to_string(o_.holdout_blocks) + " contiguous time blocks per record";
+    if (records_.size() >= 2) {
+      for (std::size_t i = 0, at = 0; i < records_.size(); ++i)
+        for (; at < static_cast<std::size_t>(st_.group_ends[i]); ++at) transfer_.push_back(static_cast<int>(i));
+      holdout_design_ += "; history terms also on whole runs (leave-one-run-out over " + std::to_string(records_.size()) +
+                         " records)";
+      return;
+    }
+    int heating_legs = 0, cooling_legs = 0, legs = 0;
+    for (const auto& l : runs_.front().legs) {
+      heating_legs += l.direction > 0;
+      cooling_legs += l.direction < 0;
+      ++legs;
+    }
+    if (legs >= 3 && heating_legs != 1 && cooling_legs != 1) {
+      std::vector<int> leg_of_bin;
+      std::size_t leg = 0;
+      for (const Eigen::Index first : bins_.front().first) {
+        while (leg + 1 < runs_.front().legs.size() && records_.front().time_s[first] > runs_.front().legs[leg].end_s) ++leg;
+        leg_of_bin.push_back(static_cast<int>(leg));
+      }
+      for (const auto row : st_.rows) transfer_.push_back(leg_of_bin[static_cast<std::size_t>(row)]);
+      holdout_design_ += "; history terms also on whole legs (leave-one-leg-out over " + std::to_string(legs) + " legs: " +
+                         std::to_string(heating_legs) + " heating, " + std::to_string(cooling_legs) + " cooling)";
+    } else {
+      holdout_design_ += " (one record with fewer than two legs of a direction: whole legs cannot be held out)";
+    }
+  }
+
+  std::vector<Features> features_for(double lag, double width) const {
+    std::vector<Features> fs;
+    for (std::size_t i = 0; i < records_.size(); ++i)
+      fs.push_back(features(records_[i], bins_[i], lag, o_.derivative_tau_s, width, t0_, with_sf_));
+    return fs;
+  }
+
+  double cv_of(const Design& dz) const {
+    try {
+      return polynomial::labelled_cv_rmse(dz.A, y_, blocks_);
+    } catch (const std::invalid_argument&) {
+      return std::numeric_limits<double>::infinity();
+    }
+  }
+
+  // True when the candidate has no history terms or they are significant and plausible; records why not.
+  bool admissible(const std::vector<Features>& fs, const Design& dz) const {
+    if (!dz.rate_term && !dz.hysteresis) return true;
+    try {
+      const auto why = implausible(dz, polynomial::least_squares(dz.A, y_), y_, stacked(fs, &Features::d)(st_.rows), blocks_);
+      if (!why.empty() && std::find(rejected_.begin(), rejected_.end(), why) == rejected_.end()) rejected_.push_back(why);
+      return why.empty();
+    } catch (const std::invalid_argument&) {
+      return false;
+    }
+  }
+
+  const std::vector<Record>& records_;
+  const FitOptions& o_;
+  const double t0_;
+  bool with_sf_ = false;
+  std::vector<Binning> bins_;
+  Stack st_;
+  Eigen::VectorXd y_;
+  std::vector<OvenRun> runs_;
+  Determinable can_;
+  std::vector<int> blocks_, transfer_;
+  std::string holdout_design_;
+  std::vector<double> lags_, widths_;
+  mutable std::vector<std::string> rejected_;
+  Eigen::VectorXd tm_, d_, s_;  // the final candidate's features of the kept bins
+};
+
+}  // namespace
+
+Record slice(const Record& r, double from_s, double to_s) {
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index i = 0; i < r.time_s.size(); ++i) {
+    if (r.time_s[i] >= from_s && r.time_s[i] < to_s) rows.push_back(i);
+  }
+  Record out;
+  out.name = r.name;
+  out.time_s = r.time_s(rows);
+  out.rate_rad_s = r.rate_rad_s(rows);
+  out.temp_c = r.temp_c(rows);
+  if (r.true_rate_rad_s.size()) out.true_rate_rad_s = r.true_rate_rad_s(rows);
+  if (r.systematic_rad_s.size()) out.systematic_rad_s = r.systematic_rad_s(rows);
+  return out;
+}
+
+CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOptions& o) {
+  if (records.empty()) throw ConfigError({"", 0, "data"}, "no calibration records");
+  if (o.min_order < 0 || o.max_order < o.min_order || o.max_order > 12) {
+    throw ConfigError({"", 0, "order"}, "polynomial orders need 0 <= min_order <= max_order <= 12");
+  }
+  if (!(o.bin_s > 0)) throw ConfigError({"", 0, "bin_s"}, "bin length must be > 0 s");
+  if (!(o.derivative_tau_s > 0)) throw ConfigError({"", 0, "derivative_tau_s"}, "must be > 0 s");
+
+  Fitter fitter(records, o);
+  auto [best, simple] = fitter.search();
+  fitter.refine(best);
+  const std::string chosen_why = fitter.keep_history_only_if_it_transfers(best, simple);
+  Eigen::VectorXd residual;
+  CalibrationModel m = fitter.linear_model(best, chosen_why, residual);
+  if (o.kind == ModelKind::Rbf) fitter.add_rbf(m, residual);
   try {  // the records' model must be physical (e.g. a rate that ignores a moving true rate gives sf 0)
     m.validate();
   } catch (const ConfigError& e) {
@@ -597,23 +667,7 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
     throw DataError({records.front().name, 0, first.where.field},
                     "the calibration records give a model that is not physical: " + first.message);
   }
-
-  // Allan noise terms of the compensated calibration residual (first record), for the Kalman stage
-  // and the Kalibr export.
-  {
-    const Record& r = records.front();
-    const auto out = compensate(m, r.time_s, r.rate_rad_s, r.temp_c);
-    const Eigen::VectorXd err =
-        r.true_rate_rad_s.size() ? Eigen::VectorXd(out.rate_rad_s - r.true_rate_rad_s) : out.rate_rad_s;
-    // The rate while it samples: a gap in the record (a 1e9-s pause) must not lower it (issue 28).
-    const double rate_hz = sampling::rate_within_segments_hz(r.time_s, sampling::facts_of(r.time_s));
-    o.progress("calibrate: Allan noise terms", 0.0);
-    if (const auto n = fit_noise(err, rate_hz)) {
-      m.noise = {n->arw_rad_sqrt_s, n->bias_instability_rad_s, n->rate_random_walk_rad_s_sqrt_s, rate_hz,
-                 n->arw_upper, n->bias_instability_upper, n->rate_random_walk_upper};
-    }
-    o.progress("calibrate: Allan noise terms", 1.0);
-  }
+  fitter.add_noise_terms(m);
   return m;
 }
 
