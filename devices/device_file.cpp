@@ -451,7 +451,7 @@ void require_single_axis(const DeviceDefinition& d) {
 }
 
 DeviceDefinition parse_device(const std::string& yaml_text, const std::string& file) {
-  const YAML::Node root = parse_yaml_text(yaml_text, file);
+  const YAML::Node root = load_yaml_checked(yaml_text, file);
   std::vector<Diagnostic> problems;
   DeviceReader reader(file, problems);
   DeviceDefinition d = reader.read(root);
@@ -460,7 +460,7 @@ DeviceDefinition parse_device(const std::string& yaml_text, const std::string& f
 }
 
 DeviceDefinition load_device_file(const std::filesystem::path& path) {
-  const YAML::Node root = load_yaml_file(path.string());
+  const YAML::Node root = load_yaml_file(path, "device file");
   std::vector<Diagnostic> problems;
   DeviceReader reader(path.string(), problems);
   DeviceDefinition d = reader.read(root);
@@ -543,7 +543,7 @@ void apply_effect_option(const std::string& text, error_model::Effects& effects)
   }
   yaml += "}}";
   std::vector<Diagnostic> problems;
-  const YAML::Node node = parse_yaml_text(yaml, "--effect " + field);  // syntax, repeated keys
+  const YAML::Node node = load_yaml_checked(yaml, "--effect " + field);  // syntax, repeated keys
   parse_effects(node, "", "", effects, problems);
   for (auto& p : problems) {
     p.where.line = 0;

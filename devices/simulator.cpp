@@ -155,7 +155,7 @@ SimulationProfile default_oven_profile() {
 }
 
 SimulationProfile parse_profile(const std::string& yaml_text, const std::string& file) {
-  const YAML::Node root = parse_yaml_text(yaml_text, file);
+  const YAML::Node root = load_yaml_checked(yaml_text, file);
   std::vector<Diagnostic> problems;
   YamlFields y(file, problems);
   SimulationProfile profile;

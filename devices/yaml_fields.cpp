@@ -3,10 +3,8 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <sstream>
 
-#include "framework/regular_file.hpp"
 #include "framework/yaml_io.hpp"
 
 namespace driftlab::devices {
@@ -158,23 +156,6 @@ std::optional<std::vector<double>> YamlFields::numbers(const YAML::Node& parent,
     return std::nullopt;
   }
   return values;
-}
-
-YAML::Node parse_yaml_text(const std::string& text, const std::string& file) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw ConfigError({file, e.mark.line >= 0 ? e.mark.line + 1 : 0, ""}, "YAML syntax error: " + e.msg);
-  }
-  std::vector<Diagnostic> problems;  // the shared rules (framework/yaml_io.hpp): repeated keys, size
-  find_duplicate_keys(root, file, problems);
-  if (!problems.empty()) throw ConfigError(problems);
-  return root;
-}
-
-YAML::Node load_yaml_file(const std::string& path) {
-  return parse_yaml_text(read_config_text(path, "device file"), input_name(path));
 }
 
 }  // namespace driftlab::devices

@@ -12,6 +12,7 @@
 
 #include "framework/error.hpp"
 #include "framework/units.hpp"
+#include "framework/yaml_io.hpp"  // load_yaml_checked, load_yaml_file: parsing with the shared rules
 
 namespace driftlab::devices {
 
@@ -61,10 +62,5 @@ class YamlFields {
   std::string file_;
   std::vector<Diagnostic>& problems_;
 };
-
-// Parses YAML text; a syntax error becomes a ConfigError with the file and line.
-YAML::Node parse_yaml_text(const std::string& text, const std::string& file);
-// Reads and parses a file; a missing or unreadable file is a ConfigError naming it.
-YAML::Node load_yaml_file(const std::string& path);
 
 }  // namespace driftlab::devices

@@ -2,6 +2,8 @@
 
 #include <set>
 
+#include "framework/regular_file.hpp"
+
 namespace driftlab {
 namespace {
 
@@ -49,15 +51,19 @@ YAML::Node load_yaml_checked(const std::string& text, const std::string& file, s
   try {
     root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
-    throw ConfigError({file, e.mark.line >= 0 ? e.mark.line + 1 : 0, ""}, "not valid YAML: " + e.msg);
+    throw ConfigError({file, e.mark.line >= 0 ? e.mark.line + 1 : 0, ""}, "YAML syntax error: " + e.msg);
   } catch (const YAML::Exception& e) {
-    throw ConfigError({file, e.mark.line >= 0 ? e.mark.line + 1 : 0, ""}, "not valid YAML: " + e.msg);
+    throw ConfigError({file, e.mark.line >= 0 ? e.mark.line + 1 : 0, ""}, "YAML syntax error: " + e.msg);
   }
   std::vector<Diagnostic> found;
   find_duplicate_keys(root, file, found);
   if (problems) problems->insert(problems->end(), found.begin(), found.end());
   else if (!found.empty()) throw ConfigError(found);
   return root;
+}
+
+YAML::Node load_yaml_file(const std::filesystem::path& path, const std::string& what) {
+  return load_yaml_checked(read_config_text(path, what), input_name(path));
 }
 
 std::optional<std::string> scalar_text(const YAML::Node& node) {

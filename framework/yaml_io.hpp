@@ -10,6 +10,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,6 +28,9 @@ int yaml_line(const YAML::Node& node);
 // appended there instead, so a loader can report them together with its own findings.
 YAML::Node load_yaml_checked(const std::string& text, const std::string& file,
                              std::vector<Diagnostic>* problems = nullptr);
+// Reads a YAML file (framework/regular_file.hpp read_config_text: a regular file or "-", size-capped;
+// `what` names it in errors, e.g. "device file") and parses and checks it.
+YAML::Node load_yaml_file(const std::filesystem::path& path, const std::string& what);
 
 // Appends a problem for every repeated key in every mapping under `node`.
 void find_duplicate_keys(const YAML::Node& node, const std::string& file, std::vector<Diagnostic>& problems);

@@ -173,7 +173,7 @@ std::vector<ManifestUnit> read_manifest_csv(const fs::path& path) {
 //       limits: {gyro.holdout_dph_max: 30, accel.a1_mg_per_k_max: 0.5}   # optional, as the CSV's columns
 // Every problem is collected and reported with file, line and key path (units[3].limits.gyro.x_max).
 std::vector<ManifestUnit> read_manifest_yaml(const fs::path& path) {
-  const YAML::Node root = devices::load_yaml_file(path.string());
+  const YAML::Node root = load_yaml_file(path, "fleet manifest");
   std::vector<Diagnostic> problems;
   devices::YamlFields f(path.string(), problems);
   const fs::path base = path.parent_path();

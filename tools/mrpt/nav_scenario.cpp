@@ -20,7 +20,7 @@ std::filesystem::path default_scenario_path() {
 
 NavScenario parse_nav_scenario(const std::string& yaml_text, const std::string& file) {
   using devices::Bounds;
-  const YAML::Node root = devices::parse_yaml_text(yaml_text, file);
+  const YAML::Node root = load_yaml_checked(yaml_text, file);
   std::vector<Diagnostic> problems;
   devices::YamlFields y(file, problems);
   NavScenario s;
