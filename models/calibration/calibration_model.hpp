@@ -98,13 +98,14 @@ struct RbfTerm {
   double bias_rad_s = 0.0;
 };
 
-// Allan noise terms of the compensated calibration residual (IEEE-952 names), for the Kalman stage
+// Allan noise terms of the compensated calibration residual (IEEE-952 names; what the records show,
+// unlike the simulated truth of error_model::NoiseTerms), for the Kalman stage
 // and the Kalibr export. 0 = not estimated.
 // A term the residual's Allan curve did not resolve (models/allan/noise_fit.hpp: set to 0 by the
 // fit, or within one sigma of 0) has its bound in *_upper: its value above is then the fit's (0 when
 // set to 0) and means nothing, and no export writes it as measured. The model file lists them under
 // noise.unresolved_upper; a file without that entry (written before it existed) has none.
-struct NoiseTerms {
+struct ResidualNoise {
   double arw_rad_sqrt_s = 0.0;                 // N, rad/s/sqrt(Hz) = rad/sqrt(s)
   double bias_instability_rad_s = 0.0;         // B, rad/s
   double rate_random_walk_rad_s_sqrt_s = 0.0;  // K, rad/s^2/sqrt(Hz) = rad/s/sqrt(s)
@@ -147,7 +148,7 @@ struct CalibrationModel {
 
   std::vector<double> scale_factor_per_k;  // k_j, 1/K^j, j = 0..; empty: no scale-factor model
 
-  NoiseTerms noise;
+  ResidualNoise noise;
   FitSummary fit;
 
   int order() const { return static_cast<int>(bias_rad_s.size()) - 1; }
@@ -217,7 +218,6 @@ class CausalCompensator {
   double step(double t_s, double rate_rad_s, double temp_c);
   double last_bias_rad_s() const { return bias_; }    // the correction subtracted at the last step
   bool last_extrapolated() const { return extrapolated_; }  // model temperature outside the range
-  double last_model_temp_c() const { return state_.model_temp_c(); }
 
  private:
   double rbf_value(double tc) const;

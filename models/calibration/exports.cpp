@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "framework/error.hpp"
+#include "framework/units.hpp"
 
 namespace driftlab::calibration {
 namespace {
@@ -38,7 +39,7 @@ std::string one_line(std::string text) {
 // "value unit", with deg/h beside a gyro value.
 std::string with_unit(double value, imu::Sensor sensor) {
   if (sensor == imu::Sensor::Accel) return short_num(value) + " m/s^2";
-  return short_num(value) + " rad/s (" + short_num(value * 180.0 / M_PI * 3600.0) + " deg/h)";
+  return short_num(value) + " rad/s (" + short_num(value * kDphPerRadPerSec) + " deg/h)";
 }
 
 // A value the firmware stores as REAL32: finite and within float's range, written with 9 digits.
@@ -211,7 +212,7 @@ std::vector<std::string> unrepresentable_terms(const CalibrationModel& m, imu::S
   if (m.temperature_rate_rad_s_per_k_s != 0.0) {
     const double per_k_min = m.temperature_rate_rad_s_per_k_s / 60.0;
     out.push_back("dT/dt term " + short_num(m.temperature_rate_rad_s_per_k_s) + " " + unit + " per K/s (" +
-                  (gyro ? short_num(per_k_min * 180.0 / M_PI * 3600.0) + " deg/h" : short_num(per_k_min) + " m/s^2") +
+                  (gyro ? short_num(per_k_min * kDphPerRadPerSec) + " deg/h" : short_num(per_k_min) + " m/s^2") +
                   " at 1 K/min)");
   }
   if (m.hysteresis_width_k > 0) out.push_back("hysteresis branch term +-" + with_unit(std::abs(m.hysteresis_rad_s), sensor));
@@ -415,7 +416,7 @@ ExportResult export_kalibr_imu_yaml(const ImuCalibration& model, const ExportOpt
     double value = 0.0;
     std::string bound_of;  // the axes whose bound it is; empty for a measured value
   };
-  const auto largest = [&](const Channels& cs, double NoiseTerms::*term, std::optional<double> NoiseTerms::*upper,
+  const auto largest = [&](const Channels& cs, double ResidualNoise::*term, std::optional<double> ResidualNoise::*upper,
                            const std::string& key, const std::string& what) {
     Written w;
     for (const auto* c : cs) {
@@ -425,7 +426,7 @@ ExportResult export_kalibr_imu_yaml(const ImuCalibration& model, const ExportOpt
     }
     if (!(w.value > 0) || !std::isfinite(w.value)) {
       throw ConfigError({"", 0, key}, roles(cs) + ": " + what + " is not measured on any axis (0; " +
-                                          (term == &NoiseTerms::arw_rad_sqrt_s
+                                          (term == &ResidualNoise::arw_rad_sqrt_s
                                                ? "recalibrate with driftlab calibrate, which fits it)"
                                                : "the records are too short for the Allan deviation to reach its +1/2 slope)"));
     }
@@ -437,11 +438,11 @@ ExportResult export_kalibr_imu_yaml(const ImuCalibration& model, const ExportOpt
     }
     return w;
   };
-  const Written accel_n = largest(accel, &NoiseTerms::arw_rad_sqrt_s, &NoiseTerms::arw_upper, "accelerometer_noise_density", "the noise density N");
-  const Written accel_k = largest(accel, &NoiseTerms::rate_random_walk_rad_s_sqrt_s, &NoiseTerms::rate_random_walk_upper,
+  const Written accel_n = largest(accel, &ResidualNoise::arw_rad_sqrt_s, &ResidualNoise::arw_upper, "accelerometer_noise_density", "the noise density N");
+  const Written accel_k = largest(accel, &ResidualNoise::rate_random_walk_rad_s_sqrt_s, &ResidualNoise::rate_random_walk_upper,
                                   "accelerometer_random_walk", "the random walk K");
-  const Written gyro_n = largest(gyro, &NoiseTerms::arw_rad_sqrt_s, &NoiseTerms::arw_upper, "gyroscope_noise_density", "the noise density N");
-  const Written gyro_k = largest(gyro, &NoiseTerms::rate_random_walk_rad_s_sqrt_s, &NoiseTerms::rate_random_walk_upper,
+  const Written gyro_n = largest(gyro, &ResidualNoise::arw_rad_sqrt_s, &ResidualNoise::arw_upper, "gyroscope_noise_density", "the noise density N");
+  const Written gyro_k = largest(gyro, &ResidualNoise::rate_random_walk_rad_s_sqrt_s, &ResidualNoise::rate_random_walk_upper,
                                  "gyroscope_random_walk", "the random walk K");
   const auto line = [](const std::string& key, const Written& w, const std::string& unit) {
     return key + ": " + short_num(w.value) + "  # " + unit +

@@ -40,7 +40,7 @@
 //              accelerometer_random_walk of its accelerometer axes (continuous-time, Kalibr's names);
 //              several axes are combined by taking the largest (the file lists every axis). Refused
 //              (ConfigError) when the instance lacks gyro or accelerometer channels or a term is not
-//              measured (0): no placeholders. A term the records only bound (NoiseTerms::*_upper) counts
+//              measured (0): no placeholders. A term the records only bound (ResidualNoise::*_upper) counts
 //              with its bound; when that is the largest, the value is refused too, unless
 //              kalibr_allow_bounds: then the bound is written, its line saying "UPPER BOUND, not a
 //              measured value" and naming the axes.

@@ -11,6 +11,15 @@
 
 namespace driftlab::calibration {
 
+TimeSeries single_axis_record(const Record& r) {
+  TimeSeries ts(r.time_s);
+  ts.set_channel({role::kRate, "rad/s", r.name, r.rate_rad_s});
+  ts.set_channel({role::kTemperature, "degC", r.name, r.temp_c});
+  if (r.true_rate_rad_s.size()) ts.set_channel({role::kTrueRate, "rad/s", r.name, r.true_rate_rad_s});
+  if (r.systematic_rad_s.size()) ts.set_channel({role::kSystematic, "rad/s", r.name, r.systematic_rad_s});
+  return ts;
+}
+
 const Channel* temperature_of(const TimeSeries& ts, int instance) {
   const std::string own = imu::temperature_role(instance);
   if (ts.has(own)) return &ts.channel(own);

@@ -41,6 +41,10 @@ struct ChannelSelection {
   std::string channels_field = "--channels", same_device_field = "--same-device", records_field = "--data";
 };
 
+// A channel's record as a single-axis record again: rate (rad/s, in the channel's internal unit),
+// temperature, and true_rate / systematic when it has them (for a pipeline run on one channel).
+TimeSeries single_axis_record(const Record& record);
+
 // The temperature channel of an instance: its own (temperature1, ...), else "temperature"; null if none.
 const Channel* temperature_of(const TimeSeries& ts, int instance);
 

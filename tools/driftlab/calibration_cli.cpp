@@ -27,27 +27,21 @@ void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, b
 }
 
 void add_calibration_channel_options(CLI::App* cmd, CalibrationDataOptions& data) {
-  cmd->add_option("--column", data.columns,
-                  "column mapping role=column:unit (repeatable). Roles: gyro_x..gyro_z, accel_x..accel_z (gyro1_x, "
-                  "accel2_z for instances 1, 2), temperature (temperature1, ...), true_gyro_x (reference input), "
-                  "time; rate for a single-axis gyro. Raw counts: gyro_x=gx:lsb*0.061:mdps. Without --column, "
-                  "headers such as t_s, time_us, timestamp, gyro_x, gx, GyrX, gyro_x_dps, acc_z, accel_z_g, temp, "
-                  "temp_c, T, rate_dps are recognised (no unit suffix: rad/s, m/s^2, degC)");
   cmd->add_option("--channels", data.channels,
                   "channels to calibrate, comma-separated: gyro, accel, gyro1, gyro_x, accel1_z, all (default: all)");
   cmd->add_option("--axis", data.axis, "axis of a single-axis 'rate' column (an IMU column names its own axis)")
       ->check(CLI::IsMember({"x", "y", "z"}))
       ->capture_default_str();
-  add_sampling_options(cmd, data.sample_rate_hz, data.max_gap_factor);
-  add_log_selection_options(cmd, data.log);
+  add_record_read_options(cmd, data,
+                  "column mapping role=column:unit (repeatable). Roles: gyro_x..gyro_z, accel_x..accel_z (gyro1_x, "
+                  "accel2_z for instances 1, 2), temperature (temperature1, ...), true_gyro_x (reference input), "
+                  "time; rate for a single-axis gyro. Raw counts: gyro_x=gx:lsb*0.061:mdps. Without --column, "
+                  "headers such as t_s, time_us, timestamp, gyro_x, gx, GyrX, gyro_x_dps, acc_z, accel_z_g, temp, "
+                  "temp_c, T, rate_dps are recognised (no unit suffix: rad/s, m/s^2, degC)");
 }
 
 std::vector<ChannelRecords> load_channel_records(const std::vector<std::string>& paths, const CalibrationDataOptions& data) {
-  CsvReadOptions options;
-  for (const auto& c : data.columns) options.columns.push_back(parse_column_mapping(c));
-  options.required_roles = {};
-  options.sample_rate_hz = data.sample_rate_hz;
-  options.max_gap_factor = data.max_gap_factor;
+  const CsvReadOptions options = csv_read_options(data);
   std::vector<TimeSeries> series;
   for (const auto& p : paths) {
     std::vector<std::string> notes;

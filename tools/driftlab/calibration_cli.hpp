@@ -14,18 +14,16 @@
 #include "models/calibration/fit.hpp"
 #include "models/calibration/imu_channels.hpp"
 #include "models/calibration/oven_run.hpp"
+#include "tools/driftlab/cli.hpp"
 
 namespace driftlab::cli {
 
-struct CalibrationDataOptions {
+// The records of a calibration command, read alike (cli.hpp RecordReadOptions), and the channels taken.
+struct CalibrationDataOptions : RecordReadOptions {
   std::vector<std::string> paths;     // --data (repeatable)
-  std::vector<std::string> columns;   // --column role=column:unit
-  double sample_rate_hz = 0.0;        // --fs
-  double max_gap_factor = 3.0;        // --max-gap
   std::string channels;               // --channels (empty: every channel)
   std::string axis = "z";             // --axis: the axis of a single-axis "rate" column
   bool same_device = false;           // --same-device: records of several devices are not refused
-  LogSelection log;                   // --topic, --instance, --sensor (logs only)
 };
 
 void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, bool repeatable);

@@ -76,9 +76,13 @@ void add_data_options(CLI::App* command, DataOptions& data, const std::string& c
                       "ArduPilot DataFlash log (.bin) or a ROS bag (ROS 1 .bag, ROS 2 .db3 / .mcap or its directory), "
                       "recognised by content; for a log name the channel to analyse, e.g. --column rate=gyro_z for the "
                       "z gyro in rad/s");
-  command->add_option("--column", data.columns, column_help);
-  add_sampling_options(command, data.sample_rate_hz, data.max_gap_factor);
-  add_log_selection_options(command, data.log);
+  add_record_read_options(command, data, column_help);
+}
+
+void add_record_read_options(CLI::App* command, RecordReadOptions& read, const std::string& column_help) {
+  command->add_option("--column", read.columns, column_help);
+  add_sampling_options(command, read.sample_rate_hz, read.max_gap_factor);
+  add_log_selection_options(command, read.log);
 }
 
 void add_log_selection_options(CLI::App* command, LogSelection& selection) {
@@ -135,14 +139,20 @@ std::string primary_role(const DataOptions& data) {
   return role::kRate;
 }
 
+CsvReadOptions csv_read_options(const RecordReadOptions& read) {
+  CsvReadOptions options;
+  for (const auto& c : read.columns) options.columns.push_back(parse_column_mapping(c));
+  options.required_roles = {};
+  options.sample_rate_hz = read.sample_rate_hz;
+  options.max_gap_factor = read.max_gap_factor;
+  return options;
+}
+
 TimeSeries load_record(const DataOptions& data, std::vector<std::string> required_roles) {
   if (data.path.empty()) throw ConfigError({"", 0, "--data"}, "--data is required");
-  CsvReadOptions options;
-  for (const auto& c : data.columns) options.columns.push_back(parse_column_mapping(c));
+  CsvReadOptions options = csv_read_options(data);
   if (!required_roles.empty() && required_roles.front() == role::kRate) required_roles.front() = primary_role(data);
   options.required_roles = std::move(required_roles);
-  options.sample_rate_hz = data.sample_rate_hz;
-  options.max_gap_factor = data.max_gap_factor;
   std::vector<std::string> notes;
   TimeSeries record = read_record(data.path, options, data.log, &notes);
   for (const auto& n : notes) std::cerr << "note: " << n << "\n";

@@ -44,12 +44,21 @@ using AddCommand = void (*)(CLI::App& app, CommandEnv& env);
 // driftlab-mrpt (mrpt_main.cpp, the commands that load MRPT) both call it, so both parse alike.
 int run(int argc, char** argv, const std::vector<AddCommand>& commands);
 
-struct DataOptions {
-  std::string path;
+// How a record file is read: the options every record-reading command shares.
+struct RecordReadOptions {
   std::vector<std::string> columns;  // --column mappings (see csv.hpp; for a log, record_reader.hpp)
   double sample_rate_hz = 0.0;       // --fs
   double max_gap_factor = 3.0;       // --max-gap
   LogSelection log;                  // --topic, --instance, --sensor (logs only)
+};
+
+// The CSV reader's options for these: the --column mappings parsed (ConfigError naming a bad one),
+// --fs and --max-gap; no required roles.
+CsvReadOptions csv_read_options(const RecordReadOptions& read);
+
+// The record of a single-record command.
+struct DataOptions : RecordReadOptions {
+  std::string path;  // --data
 };
 
 // Validators for number options (CLI11's Range and PositiveNumber let NaN through): the text must be
@@ -66,8 +75,10 @@ void add_sampling_options(CLI::App* command, double& sample_rate_hz, double& max
                           const std::string& gap_help = "a time step longer than this multiple of the median step "
                                                         "is a gap, an error (0 reads gaps; allan, run, compare, "
                                                         "decompose and entropy still find them at 3x)");
-// Adds --data, --column, --fs and --max-gap, and the log options --topic, --instance and --sensor,
-// to a subcommand.
+// Adds --column (with the command's help), --fs and --max-gap, and the log options --topic,
+// --instance and --sensor, to a subcommand.
+void add_record_read_options(CLI::App* command, RecordReadOptions& read, const std::string& column_help);
+// Adds --data and the record read options to a subcommand.
 void add_data_options(CLI::App* command, DataOptions& data, const std::string& column_help);
 // Adds --topic, --instance and --sensor (framework/record_reader.hpp LogSelection).
 void add_log_selection_options(CLI::App* command, LogSelection& selection);
