@@ -50,8 +50,8 @@ class Parser {
     }
     for (const auto& kv : root) {
       const auto key = scalar_text(kv.first).value_or("?");
-      if (key != "format" && key != "seed" && key != "inputs" && key != "steps" && key != "outputs")
-        problem(kv.first, key, "unknown key (expected format, seed, inputs, steps, outputs)");
+      if (key != "format" && key != "seed" && key != "inputs" && key != "steps" && key != "outputs" && key != "stages")
+        problem(kv.first, key, "unknown key (expected format, seed, inputs, steps, outputs, stages)");
     }
     const auto format = root["format"];
     if (!format) problem(root, "format", std::string("missing (expected ") + kPipelineFormat + ")");
@@ -69,6 +69,7 @@ class Parser {
     read_inputs(root["inputs"], p);
     auto raw = read_steps(root["steps"], p);
     read_outputs(root["outputs"], p);
+    read_stages(root["stages"], p);
     check_references(raw, p);
     order_steps(raw, p);
     finish();
@@ -243,6 +244,25 @@ class Parser {
     }
   }
 
+  void read_stages(const YAML::Node& node, Pipeline& p) {
+    if (!node) return;
+    if (!node.IsMap() || node.size() == 0)
+      return problem(node, "stages", "expected a map of output name to label, got " + yaml_shape(node));
+    for (const auto& kv : node) {
+      const auto name = scalar_text(kv.first);
+      if (!name || !p.outputs.count(*name)) {
+        problem(kv.first, "stages", "stage " + yaml_shape(kv.first) + " is not one of the pipeline's outputs");
+        continue;
+      }
+      const auto label = scalar_text(kv.second);
+      if (!label || label->empty()) {
+        problem(kv.second, "stages." + *name, "expected a label (text), got " + yaml_shape(kv.second));
+        continue;
+      }
+      p.stages.push_back({*name, *label});
+    }
+  }
+
   // Output names of a step, or empty when the step is unknown.
   std::vector<std::string> outputs_of(const std::vector<RawStep>& raw, const std::string& step) const {
     for (const auto& r : raw)
@@ -387,7 +407,13 @@ std::string effective_pipeline_yaml(const Pipeline& pipeline, const Registry& re
   out << YAML::EndSeq;
   out << YAML::Key << "outputs" << YAML::Value << YAML::BeginMap;
   for (const auto& name : pipeline.output_order) out << YAML::Key << name << YAML::Value << pipeline.outputs.at(name);
-  out << YAML::EndMap << YAML::EndMap;
+  out << YAML::EndMap;
+  if (!pipeline.stages.empty()) {
+    out << YAML::Key << "stages" << YAML::Value << YAML::BeginMap;
+    for (const auto& stage : pipeline.stages) out << YAML::Key << stage.output << YAML::Value << stage.label;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }
 

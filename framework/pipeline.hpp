@@ -11,13 +11,16 @@
 //     - name: reconstruct
 //       sum: [denoise.signal, compensate.residual]   # built-in: adds signals; output `signal`
 //   outputs: {compensated: reconstruct.signal}
+//   stages: {compensated: "EMD + Kalman"}   # optional: outputs scored as stages, with their labels
 //
 // Ports per plugin kind are listed by ports_of_kind() (plugin.hpp); a port marked `many` takes a
 // list of references whose columns are put side by side. load_pipeline() validates everything
 // before any data is touched and reports every problem at once (file, line, key): unknown keys,
 // wrong format version, unknown plugin, unknown or invalid parameter, unknown port, missing
 // required port, dangling reference, cycle, duplicate step name, steps of a kind that cannot run
-// as a step. Steps run in dependency order (file order among independent steps).
+// as a step, a stage that is not an output. Steps run in dependency order (file order among
+// independent steps). Reports (`driftlab run`, Pipeline.run) score the declared stages in file
+// order; without `stages`, every output of one rad/s column is a stage labelled by its name.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -48,6 +51,12 @@ struct PipelineStep {
   int line = 0;
 };
 
+// An output that reports score as a compensated rate (a row of Table 2), and its label.
+struct PipelineStage {
+  std::string output;
+  std::string label;
+};
+
 struct Pipeline {
   std::string file;
   std::int64_t seed = 1;
@@ -55,6 +64,7 @@ struct Pipeline {
   std::vector<PipelineStep> steps;             // in execution order
   std::map<std::string, std::string> outputs;  // output name -> reference
   std::vector<std::string> output_order;       // output names in file order
+  std::vector<PipelineStage> stages;           // declared stages in file order; empty: not declared
 };
 
 // Parses and validates. Throws ConfigError with every problem found.

@@ -60,6 +60,7 @@ StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_r
                        double sample_rate_hz, double reference_arw_rad_sqrt_s, const Truth* truth) {
   StageScore s;
   s.stage = stage;
+  s.label = stage;
   s.bandwidth_hz = std::min(allan::noise_bandwidth_hz(output_rad_s, sample_rate_hz, reference_arw_rad_sqrt_s),
                             sample_rate_hz / 2.0);
   s.correlation_time_s = allan::correlation_time_s(s.bandwidth_hz);

@@ -34,7 +34,10 @@ struct Truth {
 };
 
 struct StageScore {
-  std::string stage;
+  enum class Source { Record, Pipeline, Baseline };  // the record itself, a pipeline stage, a reference model
+  std::string stage;                 // the output's name
+  std::string label;                 // what reports call it (the pipeline's stage label)
+  Source source = Source::Pipeline;
   allan::Analysis analysis;          // B, N, curve of the output
   double bandwidth_hz = 0.0;         // noise bandwidth relative to the original record's N
   double correlation_time_s = 0.0;   // 1 / bandwidth: B is read beyond it

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "framework/error.hpp"
 #include "framework/units.hpp"
 #include "models/calibration/fit.hpp"
 #include "models/calibration/oven_run.hpp"
@@ -58,14 +59,21 @@ const PaperRow* paper_row(const std::string& stage) {
   return nullptr;
 }
 
-std::vector<std::string> rate_stages(const Pipeline& pipeline, const std::map<std::string, Signal>& outputs) {
-  std::vector<std::string> names;
-  for (const auto& name : pipeline.output_order) {
+std::vector<PipelineStage> rate_stages(const Pipeline& pipeline, const std::map<std::string, Signal>& outputs) {
+  const auto is_rate = [&](const std::string& name) {
     const auto it = outputs.find(name);
-    if (it == outputs.end() || it->second.unit != "rad/s" || it->second.columns.cols() != 1) continue;
-    if (name != "drift_model") names.push_back(name);
+    return it != outputs.end() && it->second.unit == "rad/s" && it->second.columns.cols() == 1;
+  };
+  if (!pipeline.stages.empty()) {
+    for (const auto& stage : pipeline.stages)
+      if (!is_rate(stage.output))
+        throw DataError({pipeline.file, 0, "stages." + stage.output}, "a stage must be one rad/s column (a compensated rate)");
+    return pipeline.stages;
   }
-  return names;
+  std::vector<PipelineStage> stages;
+  for (const auto& name : pipeline.output_order)
+    if (is_rate(name)) stages.push_back({name, name});
+  return stages;
 }
 
 RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const std::map<std::string, Signal>& outputs) {
@@ -81,9 +89,12 @@ RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const st
   const double reference_n = allan::analyze_rate(rate, fs, {.fit_terms = false}).arw_rad_sqrt_s;
 
   const Eigen::VectorXd& time = record.time();
-  s.stages.push_back(score_stage("original", rate, time, fs, reference_n, t));
-  for (const auto& name : rate_stages(pipeline, outputs))
-    s.stages.push_back(score_stage(name, outputs.at(name).columns.col(0), time, fs, reference_n, t));
+  s.stages.push_back(score_stage(kOriginalStage, rate, time, fs, reference_n, t));
+  s.stages.back().source = StageScore::Source::Record;
+  for (const auto& stage : rate_stages(pipeline, outputs)) {
+    s.stages.push_back(score_stage(stage.output, outputs.at(stage.output).columns.col(0), time, fs, reference_n, t));
+    s.stages.back().label = stage.label;
+  }
   // The PX4-style row needs an oven run the calibration quality gate does not refuse.
   const auto fittable = [&](const Eigen::VectorXd& temp) {
     const auto gate = calibration::quality_gate({calibration::analyse_oven_run("the record", time, temp, calibration::FitOptions{}.bin_s)});
@@ -94,7 +105,8 @@ RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const st
     auto model = calibration::fit_px4_style({{"the record", time, rate, temp, {}, {}}}, {});
     Eigen::VectorXd compensated = calibration::compensate(model, time, rate, temp).rate_rad_s;
     s.baseline = Px4Baseline{std::move(model), std::move(compensated)};
-    s.stages.push_back(score_stage("px4_polynomial", s.baseline->compensated_rad_s, time, fs, reference_n, t));
+    s.stages.push_back(score_stage(kBaselineStage, s.baseline->compensated_rad_s, time, fs, reference_n, t));
+    s.stages.back().source = StageScore::Source::Baseline;
   }
   if (truth && truth->systematic_rad_s) {
     s.intrinsic = intrinsic_floor(rate, *truth->systematic_rad_s, fs);
@@ -122,35 +134,43 @@ std::string b_text(const allan::FloorReading& b) {
   return "< " + number_text(b.high * f, "%.3g") + " (tau<=" + number_text(b.longest_tau_s, "%.0f") + "s)";
 }
 
+nlohmann::json stage_json(const RunScores& s, const StageScore& st) {
+  const auto& a = st.analysis;
+  nlohmann::json row{{"stage", st.stage},
+                     {"label", st.label},
+                     {"N_deg_h_rtHz", a.arw_rad_sqrt_s * kDphPerRadPerSec},
+                     {"bandwidth_hz", st.bandwidth_hz},
+                     {"correlation_time_s", st.correlation_time_s},
+                     {"fit", fit_json(a)}};
+  row.update(b_json(a.bias_instability));
+  if (st.residual_drift_rad_s) row["residual_drift_deg_h"] = *st.residual_drift_rad_s * kDphPerRadPerSec;
+  if (const auto it = s.against_floor.find(st.stage); it != s.against_floor.end()) {
+    row["error_vs_floor"] = {{"max_ratio", it->second.max_ratio}, {"tau_of_max_s", it->second.tau_of_max_s},
+                             {"within_1_5x", it->second.within}};
+  }
+  if (const auto* p = paper_row(st.stage)) row["paper"] = {{"B_deg_h", p->b_deg_h}, {"N_deg_h_rtHz", p->n_deg_h_rthz}};
+  return row;
+}
+
+nlohmann::json intrinsic_floor_json(const allan::Analysis& a) {
+  nlohmann::json j{{"what", "Allan analysis of measured - true systematic rate: the gyro's own noise"},
+                   {"N_deg_h_rtHz", a.arw_rad_sqrt_s * kDphPerRadPerSec}};
+  j.update(b_json(a.bias_instability));
+  return j;
+}
+
 nlohmann::json scores_json(const RunScores& s) {
   nlohmann::json j;
   auto& rows = j["table2"] = nlohmann::json::array();
   auto& curves = j["allan"] = nlohmann::json::object();
   for (const auto& st : s.stages) {
-    const auto& a = st.analysis;
-    nlohmann::json row{{"stage", st.stage},
-                       {"N_deg_h_rtHz", a.arw_rad_sqrt_s * kDphPerRadPerSec},
-                       {"bandwidth_hz", st.bandwidth_hz},
-                       {"correlation_time_s", st.correlation_time_s},
-                       {"fit", fit_json(a)}};
-    row.update(b_json(a.bias_instability));
-    if (st.residual_drift_rad_s) row["residual_drift_deg_h"] = *st.residual_drift_rad_s * kDphPerRadPerSec;
-    if (const auto it = s.against_floor.find(st.stage); it != s.against_floor.end()) {
-      row["error_vs_floor"] = {{"max_ratio", it->second.max_ratio}, {"tau_of_max_s", it->second.tau_of_max_s},
-                               {"within_1_5x", it->second.within}};
-    }
-    if (const auto* p = paper_row(st.stage)) row["paper"] = {{"B_deg_h", p->b_deg_h}, {"N_deg_h_rtHz", p->n_deg_h_rthz}};
-    rows.push_back(row);
-    curves[st.stage] = curve_json(a);
+    rows.push_back(stage_json(s, st));
+    curves[st.stage] = curve_json(st.analysis);
     if (st.error) curves[st.stage + "_minus_truth"] = curve_json(*st.error);
   }
   if (s.intrinsic) {
-    const auto& a = *s.intrinsic;
-    j["intrinsic_floor"] = {
-        {"what", "Allan analysis of measured - true systematic rate: the gyro's own noise"},
-        {"N_deg_h_rtHz", a.arw_rad_sqrt_s * kDphPerRadPerSec}};
-    j["intrinsic_floor"].update(b_json(a.bias_instability));
-    curves["intrinsic_floor"] = curve_json(a);
+    j["intrinsic_floor"] = intrinsic_floor_json(*s.intrinsic);
+    curves["intrinsic_floor"] = curve_json(*s.intrinsic);
   }
   if (s.baseline) {
     const auto& m = s.baseline->model;

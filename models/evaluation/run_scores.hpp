@@ -20,18 +20,24 @@
 
 namespace driftlab::evaluation {
 
-// The pipeline's compensated-rate stages, in the pipeline file's output order: every output that
-// is one rad/s column, except `drift_model` (li2023.yaml's model of the drift, not a compensated
-// rate). The last is the pipeline's final stage.
-std::vector<std::string> rate_stages(const Pipeline& pipeline, const std::map<std::string, Signal>& outputs);
+// The pipeline's compensated-rate stages with their labels: its declared `stages` (each must be one
+// rad/s column, else DataError), or, when none are declared, every output of one rad/s column in
+// output order, labelled by its name. The last is the pipeline's final stage.
+std::vector<PipelineStage> rate_stages(const Pipeline& pipeline, const std::map<std::string, Signal>& outputs);
 
 struct Px4Baseline {
   calibration::CalibrationModel model;
   Eigen::VectorXd compensated_rad_s;
 };
 
+// The stage names of the record itself and of the PX4-style baseline in RunScores::stages.
+inline constexpr const char* kOriginalStage = "original";
+inline constexpr const char* kBaselineStage = "px4_polynomial";
+
+inline bool is_pipeline_stage(const StageScore& stage) { return stage.source == StageScore::Source::Pipeline; }
+
 struct RunScores {
-  std::vector<StageScore> stages;                        // "original", the pipeline's rate outputs, "px4_polynomial"
+  std::vector<StageScore> stages;                        // kOriginalStage, the pipeline's stages, kBaselineStage
   std::optional<allan::Analysis> intrinsic;              // measured - systematic
   std::optional<Px4Baseline> baseline;
   std::map<std::string, FloorComparison> against_floor;  // per stage, factor 1.5
@@ -53,6 +59,9 @@ std::string b_text(const allan::FloorReading& b);
 
 // report.json's "table2", "intrinsic_floor", "baseline" and "allan" entries.
 nlohmann::json scores_json(const RunScores& scores);
+// One "table2" row of scores_json, and its "intrinsic_floor" entry.
+nlohmann::json stage_json(const RunScores& scores, const StageScore& stage);
+nlohmann::json intrinsic_floor_json(const allan::Analysis& intrinsic);
 
 // Table 2 as text for the terminal, with the paper's rows beside ours.
 std::string table2_text(const RunScores& scores);

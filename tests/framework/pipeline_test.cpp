@@ -107,6 +107,31 @@ outputs: {out: fit.fitted}
   }
 }
 
+TEST_F(PipelineTest, DeclaredStagesKeepTheirOrderAndLabelsAndMustBeOutputs) {
+  const std::string head = R"(format: driftlab-pipeline/1
+steps:
+  - {name: s, plugin: filter/test_gain, inputs: {signal: rate}}
+outputs: {a: s.signal, b: s.signal}
+)";
+  const auto p = parse_pipeline(head + "stages: {b: second stage, a: first stage}\n", "stages.yaml", registry_);
+  ASSERT_EQ(p.stages.size(), 2u);
+  EXPECT_EQ(p.stages[0].output, "b");
+  EXPECT_EQ(p.stages[0].label, "second stage");
+  EXPECT_EQ(p.stages[1].output, "a");
+  const auto again = parse_pipeline(effective_pipeline_yaml(p, registry_), "effective.yaml", registry_);
+  ASSERT_EQ(again.stages.size(), 2u);
+  EXPECT_EQ(again.stages[1].label, "first stage");
+  try {
+    parse_pipeline(head + "stages: {c: not an output, a: [1]}\n", "bad_stages.yaml", registry_);
+    FAIL() << "a stage that is not an output was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_TRUE(reported(e.problems(), 5, "stages", "'c' is not one of the pipeline's outputs") ||
+                reported(e.problems(), 5, "stages", "is not one of the pipeline's outputs"))
+        << all(e.problems());
+    EXPECT_TRUE(reported(e.problems(), 5, "stages.a", "expected a label")) << all(e.problems());
+  }
+}
+
 TEST_F(PipelineTest, RunsStepsInDependencyOrderAndFillsTheReport) {
   const auto pipeline = load_pipeline(kPipelines / "compensate.yaml", registry_);
   std::vector<std::string> order;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "framework/error.hpp"
+#include "models/evaluation/run_scores.hpp"
 
 namespace driftlab::evaluation {
 namespace {
@@ -81,6 +82,26 @@ TEST(BlockMeanRms, IsTheRmsOfTheBlockMeansAndRefusesARecordShorterThanOneBlock) 
   EXPECT_NEAR(block_mean_rms(t, x), std::sqrt(25.0 / 3.0), kSum);
   EXPECT_THROW(block_mean_rms(t.head(599), x.head(599)), DataError);
   EXPECT_THROW(block_means(t, x.head(10)), DataError);
+}
+
+TEST(RateStages, AreTheDeclaredStagesOrElseEveryOutputOfOneRateColumn) {
+  const auto rate = Signal::single(Eigen::VectorXd::Zero(4), "rate", "rad/s");
+  const auto temperature = Signal::single(Eigen::VectorXd::Zero(4), "temperature", "degC");
+  const std::map<std::string, Signal> outputs{{"b", rate}, {"a", rate}, {"model", rate}, {"trend", temperature}};
+  Pipeline p;
+  p.file = "p.yaml";
+  p.output_order = {"b", "a", "model", "trend"};
+  const auto undeclared = rate_stages(p, outputs);
+  ASSERT_EQ(undeclared.size(), 3u) << "every rad/s output, in output order";
+  EXPECT_EQ(undeclared[0].output, "b");
+  EXPECT_EQ(undeclared[2].label, "model");
+  p.stages = {{"a", "first"}, {"b", "second"}};
+  const auto declared = rate_stages(p, outputs);
+  ASSERT_EQ(declared.size(), 2u) << "the model output is not a stage once stages are declared";
+  EXPECT_EQ(declared[0].output, "a");
+  EXPECT_EQ(declared[1].label, "second");
+  p.stages = {{"trend", "a temperature"}};
+  EXPECT_THROW(rate_stages(p, outputs), DataError);
 }
 
 }  // namespace

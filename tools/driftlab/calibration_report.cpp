@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <nlohmann/json.hpp>
 #include <numbers>
 
 #include "framework/sampling.hpp"
@@ -62,20 +63,9 @@ Eigen::VectorXd truth_of(const calibration::Record& r) {
   return r.true_rate_rad_s.size() ? r.true_rate_rad_s : Eigen::VectorXd::Zero(r.time_s.size());
 }
 
-struct Scored {
-  std::string name, description, bandwidth;
-  double drift_dph = 0, b_dph = NAN, n_dph_rthz = NAN, extrapolated = 0;
-  bool b_resolved = false;  // b_dph is B; otherwise only the bound B < b_dph (models/allan/analysis.hpp)
-  double b_within_tau_s = 0;
-  std::vector<double> block_mean_dph;   // per block: mean of output - truth
-  std::vector<double> block_bias_dph;   // per block: mean of the correction applied (models only)
-  std::vector<double> leg_drift_dph;    // per leg: residual drift over the leg (NaN: shorter than a block)
-  std::vector<allan::Estimate> allan;   // OADEV of output - truth, rad/s (evenly sampled records)
-};
-
-Scored score(const std::string& name, const std::string& description, const calibration::Record& r,
+MethodScore score(const std::string& name, const std::string& description, const calibration::Record& r,
              const RecordBlocks& blocks, const Eigen::VectorXd& out, const calibration::Compensated* compensated) {
-  Scored s{name, description, ""};
+  MethodScore s{name, description, ""};
   const Eigen::VectorXd error = out - truth_of(r);
   s.drift_dph = evaluation::block_mean_rms(r.time_s, error) * kDphPerRadPerSec;
   const auto facts = sampling::facts_of(r.time_s);
@@ -137,12 +127,14 @@ void add_bias_points(PlotPanel& p, const std::string& what, const calibration::R
 }
 
 // The figures of one held-out record (see the header).
-void add_figures(HtmlReport& html, const ReportInput& in, const calibration::Record& r, const RecordBlocks& blocks,
-                 const std::vector<Scored>& scores) {
+void add_figures(HtmlReport& html, const ReportInput& in, const std::vector<RecordBlocks>& calibration_blocks,
+                 const calibration::Record& r, const RecordBlocks& blocks,
+                 const std::vector<MethodScore>& scores) {
   {
     PlotPanel p{"Bias against temperature (60-s block means) and each model's correction on " + r.name,
                 "temperature (°C)", "bias (°/h)"};
-    for (const auto& c : in.calibration) add_bias_points(p, "calibration", c, blocks_of(c), kCalibrationColours);
+    for (std::size_t c = 0; c < in.calibration.size(); ++c)
+      add_bias_points(p, "calibration", in.calibration[c], calibration_blocks[c], kCalibrationColours);
     add_bias_points(p, "held out", r, blocks, kHeldOutColours);
     for (const auto& s : scores) {
       if (s.block_bias_dph.empty()) continue;
@@ -171,15 +163,7 @@ void add_figures(HtmlReport& html, const ReportInput& in, const calibration::Rec
     by_temp.series.push_back(std::move(t));
     by_time.series.push_back(std::move(h));
     if (s.allan.empty()) continue;
-    PlotSeries a{s.name, {}, {}};
-    a.interval = PlotSeries::Interval::Band;
-    for (const auto& e : s.allan) {
-      a.x.push_back(e.tau);
-      a.y.push_back(e.dev * kDphPerRadPerSec);
-      a.y_low.push_back(e.dev_lo * kDphPerRadPerSec);
-      a.y_high.push_back(e.dev_hi * kDphPerRadPerSec);
-    }
-    allan.series.push_back(std::move(a));
+    allan.series.push_back(allan_series(s.name, s.allan, kDphPerRadPerSec));
   }
   html.figure_or_note({{by_temp}, 900, 360, 1, ""}, "Residual of every method against temperature on " + r.name);
   html.figure_or_note({{by_time}, 900, 300, 1, ""}, "Residual of every method against time on " + r.name);
@@ -225,7 +209,7 @@ nlohmann::json model_json(const CompetingModel& m) {
 
 }  // namespace
 
-nlohmann::json write_calibration_report(const ReportInput& in, const ReportFiles& files, OutputSet& outputs) {
+std::vector<HeldOutScores> write_calibration_report(const ReportInput& in, const ReportFiles& files, OutputSet& outputs) {
   nlohmann::json j;
   j["format"] = "driftlab-calibrate-report/1";
   j["command"] = in.command;
@@ -284,11 +268,14 @@ nlohmann::json write_calibration_report(const ReportInput& in, const ReportFiles
     html.table(t);
   }
 
+  std::vector<RecordBlocks> calibration_blocks;
+  for (const auto& c : in.calibration) calibration_blocks.push_back(blocks_of(c));
+  std::vector<HeldOutScores> held_out;
   j["evaluations"] = nlohmann::json::array();
   for (std::size_t e = 0; e < in.evaluations.size(); ++e) {
     const auto& r = in.evaluations[e];
     const RecordBlocks blocks = blocks_of(r);
-    std::vector<Scored> scores;
+    std::vector<MethodScore> scores;
     for (const auto& m : in.models) {
       if (!m.model) {
         scores.push_back(score(m.name, m.description, r, blocks, r.rate_rad_s, nullptr));
@@ -312,10 +299,10 @@ nlohmann::json write_calibration_report(const ReportInput& in, const ReportFiles
     for (const auto& leg : blocks.legs)
       ej["legs"].push_back({{"direction", leg.name()}, {"from_c", leg.from_c}, {"to_c", leg.to_c},
                             {"start_s", leg.start_s}, {"end_s", leg.end_s}});
+    std::optional<double> floor_dph;
     if (r.systematic_rad_s.size()) {
-      const Eigen::VectorXd floor_err = r.rate_rad_s - r.systematic_rad_s;
-      ej["intrinsic_floor_drift_dph"] =
-          evaluation::block_mean_rms(r.time_s, floor_err) * kDphPerRadPerSec;
+      floor_dph = evaluation::block_mean_rms(r.time_s, Eigen::VectorXd(r.rate_rad_s - r.systematic_rad_s)) * kDphPerRadPerSec;
+      ej["intrinsic_floor_drift_dph"] = *floor_dph;
     }
     const auto number_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
     ej["methods"] = nlohmann::json::array();
@@ -352,19 +339,20 @@ nlohmann::json write_calibration_report(const ReportInput& in, const ReportFiles
              "the bound '< x'. " +
              (r.systematic_rad_s.size()
                   ? "Intrinsic floor (measured - true systematic rate): " +
-                        format_number(ej["intrinsic_floor_drift_dph"].get<double>()) + " °/h."
+                        format_number(*floor_dph) + " °/h."
                   : std::string("No systematic-rate column: no intrinsic floor."));
     by_leg.note = "Legs as the quality gate finds them (zig-zag reversals of the 60-s temperature means); – where "
                   "a leg is shorter than one 60-s block.";
     html.section("Held-out record " + r.name + " (" + std::to_string(r.time_s.size()) + " samples)");
     html.table(t);
     if (!blocks.legs.empty()) html.table(by_leg);
-    add_figures(html, in, r, blocks, scores);
+    add_figures(html, in, calibration_blocks, r, blocks, scores);
     j["evaluations"].push_back(ej);
+    held_out.push_back({r.name, std::move(scores), floor_dph});
   }
   outputs.write(files.json, j.dump(2) + "\n");
   outputs.write(files.html, html.html());
-  return j;
+  return held_out;
 }
 
 }  // namespace driftlab::cli

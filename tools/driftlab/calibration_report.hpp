@@ -11,13 +11,14 @@
 // Units: deg/h throughout (the report scores gyro channels).
 #pragma once
 
+#include <cmath>
 #include <filesystem>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "framework/output_set.hpp"
+#include "models/allan/confidence.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "models/calibration/fit.hpp"
 #include "models/calibration/oven_run.hpp"
@@ -51,9 +52,28 @@ struct ReportInput {
   std::vector<std::string> notes;                // e.g. a baseline that could not be fitted
 };
 
+// One method's scores on one held-out record, in deg/h.
+struct MethodScore {
+  std::string name, description, bandwidth;
+  double drift_dph = 0, b_dph = NAN, n_dph_rthz = NAN, extrapolated = 0;  // extrapolated: share of samples
+  bool b_resolved = false;  // b_dph is B; otherwise only the bound B < b_dph (models/allan/analysis.hpp)
+  double b_within_tau_s = 0;
+  std::vector<double> block_mean_dph;   // per 60-s block: mean of output - truth
+  std::vector<double> block_bias_dph;   // per block: mean of the correction applied (models only)
+  std::vector<double> leg_drift_dph;    // per leg: residual drift over the leg (NaN: shorter than a block)
+  std::vector<allan::Estimate> allan;   // OADEV of output - truth, rad/s (evenly sampled records)
+};
+
+// Every method's scores on one held-out record.
+struct HeldOutScores {
+  std::string record;
+  std::vector<MethodScore> methods;                // the models in input order, then the external outputs
+  std::optional<double> intrinsic_floor_drift_dph;  // measured - systematic, when the record has it
+};
+
 // Scores every model on every held-out record and stages `files` (report.json, report.html; planned
 // with plan_report_files, cli.hpp) in `outputs` (figures need gnuplot; without it the HTML says so);
-// the caller commits. Returns the JSON.
-nlohmann::json write_calibration_report(const ReportInput& input, const ReportFiles& files, OutputSet& outputs);
+// the caller commits. Returns the scores per held-out record.
+std::vector<HeldOutScores> write_calibration_report(const ReportInput& input, const ReportFiles& files, OutputSet& outputs);
 
 }  // namespace driftlab::cli

@@ -70,13 +70,6 @@ void check_ga_cost(const CalibrateOptions& o, const std::vector<ChannelRecords>&
                       what);
 }
 
-TimeSeries as_time_series(const calibration::Record& r) {
-  TimeSeries ts(r.time_s);
-  ts.set_channel({role::kRate, "rad/s", r.name, r.rate_rad_s});
-  ts.set_channel({role::kTemperature, "degC", r.name, r.temp_c});
-  return ts;
-}
-
 // The records of `channels` that match `ch` (by role), for held-out scoring.
 std::vector<calibration::Record> matching(const std::vector<ChannelRecords>& channels, const ChannelRecords& ch) {
   for (const auto& c : channels)
@@ -134,31 +127,28 @@ void report_channel(const CalibrateOptions& o, CommandEnv& env, const ChannelRec
       po.progress = [&env](std::size_t i, std::size_t n, const std::string& step, double f) {
         env.progress("paper pipeline [" + std::to_string(i + 1) + "/" + std::to_string(n) + "] " + step, f);
       };
-      const auto outputs = run_pipeline(pipeline, registry, as_time_series(held_out[e]), po, report);
+      const auto outputs = run_pipeline(pipeline, registry, calibration::single_axis_record(held_out[e]), po, report);
       const auto stages = rate_stages(pipeline, outputs);
       if (stages.empty())
         throw ConfigError({o.paper_pipeline, 0, "outputs"}, "needs an output that is a compensated rate (rad/s)");
-      in.external.push_back({"paper pipeline (offline, stage " + stages.back() + ")",
+      in.external.push_back({"paper pipeline (offline, stage " + stages.back().output + ")",
                              "fitted in-sample on this very record, non-causal",
                              "below fs/2: noise IMFs dropped, RBF + Kalman smoothing", e,
-                             outputs.at(stages.back()).sum()});
+                             outputs.at(stages.back().output).sum()});
     }
   }
-  const auto j = write_calibration_report(in, report_files, files);
-  for (const auto& ev : j["evaluations"]) {
-    std::cout << ch.role << ": held-out " << ev["record"].get<std::string>() << ":\n";
-    for (const auto& m : ev["methods"]) {
+  for (const auto& held : write_calibration_report(in, report_files, files)) {
+    std::cout << ch.role << ": held-out " << held.record << ":\n";
+    for (const auto& m : held.methods) {
       char line[200];
       std::snprintf(line, sizeof line, "  %-26s residual drift %9.3f deg/h   B %s deg/h   extrapolated %5.1f %%\n",
-                    m["name"].get<std::string>().c_str(), m["residual_drift_dph"].get<double>(),
-                    m["B_dph"].is_null() ? "-" : std::to_string(m["B_dph"].get<double>()).c_str(),
-                    100.0 * m["extrapolated_fraction"].get<double>());
+                    m.name.c_str(), m.drift_dph,
+                    m.b_resolved && std::isfinite(m.b_dph) ? std::to_string(m.b_dph).c_str() : "-",
+                    100.0 * m.extrapolated);
       std::cout << line;
     }
-    if (ev.contains("intrinsic_floor_drift_dph")) {
-      std::cout << "  intrinsic floor (measured - systematic): " << ev["intrinsic_floor_drift_dph"].get<double>()
-                << " deg/h\n";
-    }
+    if (held.intrinsic_floor_drift_dph)
+      std::cout << "  intrinsic floor (measured - systematic): " << *held.intrinsic_floor_drift_dph << " deg/h\n";
   }
 }
 

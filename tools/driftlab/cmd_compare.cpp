@@ -140,10 +140,10 @@ void compare(const CompareOptions& o, CommandEnv& env) {
                   "drift: rms of 60-s block means of output - true rate (records with a truth column); run time: "
                   "wall-clock seconds until the stage's step finished, on this machine."};
   for (const auto& s : first.stages)
-    if (s.stage == "original" || s.stage == "px4_polynomial") table.rows.push_back(row("(record)", s, std::nullopt));
+    if (!is_pipeline_stage(s)) table.rows.push_back(row("(record)", s, std::nullopt));
   for (const auto& r : results)
     for (const auto& s : r.scores.stages)
-      if (s.stage != "original" && s.stage != "px4_polynomial") table.rows.push_back(row(r.label, s, stage_seconds(r, s.stage)));
+      if (is_pipeline_stage(s)) table.rows.push_back(row(r.label, s, stage_seconds(r, s.stage)));
 
   PlotPanel panel;
   panel.title = "Overlapping Allan deviation of every output";
@@ -151,12 +151,12 @@ void compare(const CompareOptions& o, CommandEnv& env) {
   panel.y_label = "OADEV (°/h)";
   panel.log_x = panel.log_y = true;
   for (const auto& s : first.stages)
-    if (s.stage == "original" || s.stage == "px4_polynomial")
+    if (!is_pipeline_stage(s))
       panel.series.push_back(curve_series(s.stage, s.analysis, PlotSeries::Style::Dashed));
   if (first.intrinsic) panel.series.push_back(curve_series("intrinsic floor", *first.intrinsic, PlotSeries::Style::Dashed));
   for (const auto& r : results)
     for (const auto& s : r.scores.stages)
-      if (s.stage != "original" && s.stage != "px4_polynomial")
+      if (is_pipeline_stage(s))
         panel.series.push_back(curve_series(r.label + ": " + s.stage, s.analysis, PlotSeries::Style::Line));
   Figure figure;
   figure.panels.push_back(panel);
@@ -165,14 +165,9 @@ void compare(const CompareOptions& o, CommandEnv& env) {
   nlohmann::json report{{"format", "driftlab-compare-report/1"}, {"driftlab_version", kVersion},
                         {"data", o.data.path},                  {"samples", record.size()},
                         {"threads", env.threads},               {"pipelines", nlohmann::json::array()}};
-  {
-    const nlohmann::json record_scores = scores_json(first);
-    for (const auto& t : record_scores["table2"]) {
-      if (t["stage"] == "original") report["original"] = t;
-      if (t["stage"] == "px4_polynomial") report["px4_polynomial"] = t;
-    }
-    if (record_scores.contains("intrinsic_floor")) report["intrinsic_floor"] = record_scores["intrinsic_floor"];
-  }
+  for (const auto& st : first.stages)
+    if (!is_pipeline_stage(st)) report[st.stage] = stage_json(first, st);
+  if (first.intrinsic) report["intrinsic_floor"] = intrinsic_floor_json(*first.intrinsic);
   for (const auto& r : results) {
     nlohmann::json p = scores_json(r.scores);
     p["pipeline"] = r.file;
@@ -182,8 +177,8 @@ void compare(const CompareOptions& o, CommandEnv& env) {
     p["steps"] = nlohmann::json::array();
     for (const auto& s : r.report.value("steps", nlohmann::json::array()))
       p["steps"].push_back({{"name", s.value("name", "")}, {"plugin", s.value("plugin", "")}, {"seconds", s.value("seconds", 0.0)}});
-    for (auto& t : p["table2"])
-      if (t["stage"] != "original" && t["stage"] != "px4_polynomial") t["seconds"] = stage_seconds(r, t["stage"]);
+    for (std::size_t i = 0; i < r.scores.stages.size(); ++i)  // table2 has one row per stage, in order
+      if (is_pipeline_stage(r.scores.stages[i])) p["table2"][i]["seconds"] = stage_seconds(r, r.scores.stages[i].stage);
     report["pipelines"].push_back(p);
   }
   files.write(report_json, report.dump(2) + "\n");

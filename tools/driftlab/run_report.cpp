@@ -93,17 +93,7 @@ Figure allan_figure(const RunScores& scores) {
   p.y_label = "Allan deviation (°/h)";
   p.log_x = p.log_y = true;
   const auto add = [&](const std::string& label, const allan::Analysis& a, PlotSeries::Style style) {
-    PlotSeries s;
-    s.label = label;
-    s.style = style;
-    s.interval = PlotSeries::Interval::Band;
-    for (const auto& e : a.curve) {
-      s.x.push_back(e.tau);
-      s.y.push_back(e.dev * kDphPerRadPerSec);
-      s.y_low.push_back(e.dev_lo * kDphPerRadPerSec);
-      s.y_high.push_back(e.dev_hi * kDphPerRadPerSec);
-    }
-    p.series.push_back(s);
+    p.series.push_back(allan_series(label, a.curve, kDphPerRadPerSec, style));
   };
   for (const auto& st : scores.stages) add(st.stage, st.analysis, PlotSeries::Style::Line);
   if (scores.intrinsic) add("intrinsic floor (measured - systematic)", *scores.intrinsic, PlotSeries::Style::Dashed);
@@ -180,7 +170,7 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
     const auto* p = evaluation::paper_row(st.stage);
     const auto& a = st.analysis;
     const auto [b_value, b_interval] = b_cells(a.bias_instability);
-    std::vector<HtmlCell> row{st.stage,
+    std::vector<HtmlCell> row{st.label == st.stage ? st.stage : st.stage + " (" + st.label + ")",
                               p ? HtmlCell(p->b_deg_h) : HtmlCell(std::string("–")),
                               p ? HtmlCell(p->n_deg_h_rthz) : HtmlCell(std::string("–")),
                               b_value,
@@ -266,11 +256,14 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
 
   std::map<std::string, Eigen::VectorXd> stage_outputs;
   std::vector<std::string> stage_names;
+  std::optional<std::string> final_stage, baseline_stage;
   for (const auto& st : scores.stages) {
-    if (st.stage == "original") continue;
-    if (st.stage == "px4_polynomial") {
+    if (st.source == StageScore::Source::Record) continue;
+    if (st.source == StageScore::Source::Baseline) {
+      baseline_stage = st.stage;
       stage_outputs[st.stage] = scores.baseline->compensated_rad_s;
     } else {
+      final_stage = st.stage;
       stage_outputs[st.stage] = outputs.at(st.stage).columns.col(0);
     }
     stage_names.push_back(st.stage);
@@ -287,27 +280,34 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
       p.series.push_back(line(name, minutes, evaluation::block_means(time, stage_outputs[name]).means, kHoursPerSecond,
                               kDphPerRadPerSec));
     }
-    PlotPanel mixed;
-    mixed.title = "Mixed group before and after the Kalman filter, first 10 minutes";
-    mixed.x_label = "time (s)";
-    mixed.y_label = "rate (°/h)";
+    // Every filter step on a rate: its input and its output over the first 10 minutes.
+    PlotPanel filtered;
+    filtered.title = "Filter steps on a rate, input and output, first 10 minutes";
+    filtered.x_label = "time (s)";
+    filtered.y_label = "rate (°/h)";
     const auto first = std::min<Eigen::Index>(record.size(), static_cast<Eigen::Index>(600.0 * record.sample_rate_hz()));
-    for (const auto& [name, sig] : step_signals) {
-      const bool is_mixed = name.size() > 6 && name.substr(name.size() - 6) == ".mixed";
-      const bool is_filtered = name.find("kf") != std::string::npos && name.substr(name.size() - 7) == ".signal";
-      if ((is_mixed || is_filtered) && sig.unit == "rad/s")
-        mixed.series.push_back(line(name, record.time().head(first), sig.columns.col(0).head(first), 1.0, kDphPerRadPerSec));
+    const auto add_rate = [&](const std::string& name) {
+      const auto it = step_signals.find(name);
+      if (it != step_signals.end() && it->second.unit == "rad/s" && it->second.columns.cols() == 1)
+        filtered.series.push_back(line(name, record.time().head(first), it->second.columns.col(0).head(first), 1.0, kDphPerRadPerSec));
+    };
+    for (const auto& step : pipeline.steps) {
+      if (step.plugin.rfind("filter/", 0) != 0) continue;
+      const auto in = step.inputs.find("signal");
+      if (in == step.inputs.end() || in->second.size() != 1) continue;
+      const auto before = filtered.series.size();
+      add_rate(in->second.front());
+      if (filtered.series.size() > before) add_rate(step.name + ".signal");
     }
     Figure f{{p}, 900, 320, 1, ""};
-    if (!mixed.series.empty()) f.panels.push_back(mixed);
+    if (!filtered.series.empty()) f.panels.push_back(filtered);
     html.section("Reconstruction");
-    html.figure(f, "The reconstructed rate of every stage (60-s means) and the denoising of the mixed group");
+    html.figure(f, "The reconstructed rate of every stage (60-s means) and what each filter step on a rate does");
   }
   if (record.has(role::kTrueRate) && record.has(role::kTemperature) && !stage_names.empty()) {
     std::vector<std::string> shown;
-    for (const auto& name : stage_names)
-      if (name != "px4_polynomial") shown = {name};
-    if (stage_outputs.count("px4_polynomial")) shown.push_back("px4_polynomial");
+    if (final_stage) shown.push_back(*final_stage);
+    if (baseline_stage) shown.push_back(*baseline_stage);
     html.section("Residual against temperature");
     html.figure(residual_figure(record, shown, stage_outputs),
                 "Residual of the final stage and of the PX4-style baseline against temperature, heating (red) and "
