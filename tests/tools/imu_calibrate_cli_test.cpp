@@ -8,13 +8,13 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "devices/device_file.hpp"
 #include "framework/csv.hpp"
 #include "framework/imu.hpp"
 #include "framework/units.hpp"
@@ -140,12 +140,15 @@ TEST(ImuMultiPositionCli, OneCallRecoversEveryChannelsScaleFactorAndCompensatesA
 
   const auto j = nlohmann::json::parse(read_text(dir / "imu.json"));
   ASSERT_EQ(j["channels"].size(), 12u);
-  // devices/imu3.yaml's scale_factor_polynomial_ppm (slope per K), by channel.
-  const std::map<std::string, double> slope_ppm_per_k{
-      {"gyro_x", 60},    {"gyro_y", -40},    {"gyro_z", 90},    {"gyro1_x", 30},   {"gyro1_y", -25},   {"gyro1_z", 35},
-      {"accel_x", 150},  {"accel_y", -120},  {"accel_z", 100},  {"accel1_x", 20},  {"accel1_y", -15},  {"accel1_z", 25}};
+  // The truth: devices/imu3.yaml's scale-factor slope (per K) of each channel.
+  const auto imu = *devices::load_device_file(std::string(DRIFTLAB_SOURCE_DIR) + "/devices/imu3.yaml").imu;
   for (const auto& channel : j["channels"]) {
     const std::string role = channel["role"];
+    const auto& instance = imu.instances.at(channel["instance"].get<std::size_t>());
+    const auto& sensor = channel["sensor"] == "gyro" ? instance.gyro : instance.accel;
+    const auto& axis = sensor.axes.at(std::string("xyz").find(channel["axis"].get<std::string>()));
+    ASSERT_EQ(axis.scale_factor_polynomial.size(), 1u) << role << ": a constant slope in the device file";
+    const double slope_per_k = axis.scale_factor_polynomial[0];
     const auto& m = channel["model"];
     ASSERT_TRUE(m["fit"]["scale_factor_fitted"].get<bool>()) << role;
     const auto k = m["scale_factor"]["polynomial_per_k_j"].get<std::vector<double>>();
@@ -155,7 +158,7 @@ TEST(ImuMultiPositionCli, OneCallRecoversEveryChannelsScaleFactorAndCompensatesA
     for (int i = 0; i < kPoints; ++i) {
       const double dt = lo + (hi - lo) * i / (kPoints - 1) - t0;
       const double fitted = 1.0 + k[0] + k[1] * dt + k[2] * dt * dt;
-      const double truth = 1.0 + slope_ppm_per_k.at(role) * 1e-6 * dt;
+      const double truth = 1.0 + slope_per_k * dt;
       ASSERT_NEAR(fitted, truth, kScaleFactorTolerance) << role << " at " << dt + t0 << " degC";
     }
   }

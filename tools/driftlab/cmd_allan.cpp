@@ -177,16 +177,9 @@ Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& c
   panel.x_label = "tau (s)";
   panel.y_label = o.kind + " (" + unit + ")";
   panel.log_x = panel.log_y = true;
-  PlotSeries points;
-  points.label = o.kind + " with " + std::to_string(o.confidence * 100.0).substr(0, 4) + " % interval";
-  points.style = PlotSeries::Style::Markers;
-  for (const auto& e : curve) {
-    points.x.push_back(e.tau);
-    points.y.push_back(e.dev / scale);
-    points.y_low.push_back(e.dev_lo / scale);
-    points.y_high.push_back(e.dev_hi / scale);
-  }
-  panel.series.push_back(points);
+  panel.series.push_back(allan_series(o.kind + " with " + std::to_string(o.confidence * 100.0).substr(0, 4) +
+                                          " % interval",
+                                      curve, 1.0 / scale, PlotSeries::Style::Markers, PlotSeries::Interval::Bars));
   if ((fit != nullptr || gmwm != nullptr) && !curve.empty()) {
     const double first = curve.front().tau;
     const double last = curve.back().tau;

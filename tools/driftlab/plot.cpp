@@ -495,6 +495,21 @@ std::string run_gnuplot(const std::string& script) {
 
 }  // namespace
 
+PlotSeries allan_series(std::string label, std::span<const allan::Estimate> curve, double factor,
+                        PlotSeries::Style style, PlotSeries::Interval interval) {
+  PlotSeries s;
+  s.label = std::move(label);
+  s.style = style;
+  s.interval = interval;
+  for (const auto& e : curve) {
+    s.x.push_back(e.tau);
+    s.y.push_back(e.dev * factor);
+    s.y_low.push_back(e.dev_lo * factor);
+    s.y_high.push_back(e.dev_hi * factor);
+  }
+  return s;
+}
+
 std::string render_svg(const Figure& figure) {
   const long columns = std::max(1, figure.columns);
   const long rows = std::max<long>(1, (static_cast<long>(figure.panels.size()) + columns - 1) / columns);

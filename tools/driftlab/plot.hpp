@@ -21,10 +21,12 @@
 //   A missing executable, a failing run or an empty result throws PlotError.
 #pragma once
 
+#include <span>
 #include <string>
 #include <vector>
 
 #include "framework/error.hpp"
+#include "models/allan/confidence.hpp"
 
 namespace driftlab::cli {
 
@@ -67,6 +69,12 @@ struct Figure {
   bool shared_x = false;          // one x range for all panels, labelled only under the bottom row
                                   // (rows with a panel below every one of theirs are 40 px shorter)
 };
+
+// An Allan curve as a series: (tau, dev) with its interval [dev_lo, dev_hi], each deviation times
+// `factor` (e.g. kDphPerRadPerSec for deg/h); drawn as `style` with the interval as `interval`.
+PlotSeries allan_series(std::string label, std::span<const allan::Estimate> curve, double factor,
+                        PlotSeries::Style style = PlotSeries::Style::Line,
+                        PlotSeries::Interval interval = PlotSeries::Interval::Band);
 
 // The figure as a standalone SVG document (viewBox width x rows * panel_height, less the rows
 // shortened by shared_x, plus 30 px for a title).
