@@ -89,7 +89,7 @@ TEST(Tfpf, TracksALinearChirpInWhiteNoise) {
 
 TEST(Tfpf, LongerWindowsForNoisierInputsByTheDocumentedRule) {
   // Noise estimate (below): sigma within 3 x the MAD's ~2 % relative standard error (6 % of 2.0);
-  // the share sigma^2 / var doubles that relative error (4 %): 2.5 of its sigmas (measured 0.1 %, 0.4 %).
+  // the share sigma^2 / var (clamped at 1) doubles that error (4 %): 2.5 sigmas (measured 0.1 %, 0.4 %).
   constexpr double kNoiseSigma = 0.12, kNoiseShare = 0.1;
   EXPECT_EQ(tfpf::window_for_noise_share(0.05, 9, 65, 10000), 9);
   EXPECT_EQ(tfpf::window_for_noise_share(0.95, 9, 65, 10000), 65);
