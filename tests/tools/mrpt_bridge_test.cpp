@@ -675,7 +675,7 @@ TEST(MrptNavEkf, EstimatesAKnownConstantGyroBiasWithinTwoSigma) {
   const double sigma = std::sqrt(s.covariance(3, 3));
   EXPECT_LT(sigma, 0.25 * bias) << "the bias must be well observed for the test to mean something";
   EXPECT_NEAR(s.bias_rad_s, bias, kSigmas * sigma) << "estimate " << s.bias_rad_s * driftlab::kDphPerRadPerSec
-                                               << " deg/h, sigma " << sigma * driftlab::kDphPerRadPerSec << " deg/h";
+                                                   << " deg/h, sigma " << sigma * driftlab::kDphPerRadPerSec << " deg/h";
 #endif
 }
 
