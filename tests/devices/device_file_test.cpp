@@ -17,8 +17,8 @@ const std::string kDevices = std::string(DRIFTLAB_SOURCE_DIR) + "/devices/";
 const std::string kFixtures = std::string(DRIFTLAB_TEST_DATA) + "/devices/";
 constexpr double kDph = kRadPerSecPerDph;
 // A decimal from the file through a unit factor (or the up direction normalised): rounding only.
-// Absolute: a few ulps of the O(1) values (0.6, 0.8), many of the 1e-5 .. 1e-2 ones (measured: 0 or
-// below 5e-19).
+// Absolute: a few ulps of the O(1) values (0.6, 0.8), many ulps of the 1e-5 .. 1e-2 ones (measured: 0
+// or below 5e-19).
 constexpr double kConverted = 1e-15;
 
 TEST(DeviceFile, LoadsTheFmvmgWithThePapersNumbers) {
