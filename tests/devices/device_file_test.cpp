@@ -16,8 +16,13 @@ namespace {
 const std::string kDevices = std::string(DRIFTLAB_SOURCE_DIR) + "/devices/";
 const std::string kFixtures = std::string(DRIFTLAB_TEST_DATA) + "/devices/";
 constexpr double kDph = kRadPerSecPerDph;
+// A decimal from the file through a unit factor (or the up direction normalised): rounding only.
+// Absolute: a few ulps of the O(1) values (0.6, 0.8), many ulps of the 1e-5 .. 1e-2 ones (measured: 0
+// or below 5e-19).
+constexpr double kConverted = 1e-15;
 
 TEST(DeviceFile, LoadsTheFmvmgWithThePapersNumbers) {
+  constexpr double kRoundTrip = 1e-9;  // deg/h: converted to rad/s on loading and back here
   const DeviceDefinition d = load_device_file(kDevices + "fmvmg.yaml");
   EXPECT_EQ(d.name, "fmvmg");
   EXPECT_DOUBLE_EQ(d.physics.drive.frequency_hz, 30740.0);
@@ -25,17 +30,17 @@ TEST(DeviceFile, LoadsTheFmvmgWithThePapersNumbers) {
   EXPECT_DOUBLE_EQ(d.physics.structure.youngs_modulus_pa, 169e9);
   EXPECT_DOUBLE_EQ(d.physics.structure.poisson_ratio, 0.27);
   EXPECT_DOUBLE_EQ(d.physics.structure.density_kg_m3, 2328.3);
-  EXPECT_NEAR(d.physics.structure.length_m, 3015e-6, 1e-15);
-  EXPECT_NEAR(d.physics.structure.width_m, 2331e-6, 1e-15);
-  EXPECT_NEAR(d.physics.structure.thickness_m, 60e-6, 1e-15);
+  EXPECT_NEAR(d.physics.structure.length_m, 3015e-6, kConverted);
+  EXPECT_NEAR(d.physics.structure.width_m, 2331e-6, kConverted);
+  EXPECT_NEAR(d.physics.structure.thickness_m, 60e-6, kConverted);
   EXPECT_THAT(d.notes, ::testing::HasSubstr("5.8 Hz"));
   ASSERT_NE(d.find_channel("rate"), nullptr);
   ASSERT_NE(d.find_channel("temperature"), nullptr);
   ASSERT_NE(d.find_channel("drive_frequency"), nullptr);
-  EXPECT_NEAR(d.error_model.noise.arw_rad_sqrt_s / kDph, 99.6, 1e-9);
+  EXPECT_NEAR(d.error_model.noise.arw_rad_sqrt_s / kDph, 99.6, kRoundTrip);
   // The paper's raw B (34.66) is the temperature-driven bias; the intrinsic B stays well below the
   // compensated 3.589 (devices/fmvmg.yaml explains both).
-  EXPECT_NEAR(d.error_model.noise.bias_instability_rad_s / kDph, 1.0, 1e-9);
+  EXPECT_NEAR(d.error_model.noise.bias_instability_rad_s / kDph, 1.0, kRoundTrip);
   EXPECT_FALSE(d.error_model.effects.any());
 }
 
@@ -47,6 +52,7 @@ TEST(DeviceFile, LoadsEveryShippedDevice) {
 
 TEST(DeviceFile, LoadsTheWholeImuWithBothInstancesInInternalUnits) {
   constexpr double kMilliG = 1e-3 * kStandardGravity, kMicroG = 1e-6 * kStandardGravity;
+  constexpr double kPpm = 1e-18;  // 150 ppm from the file's ppm: the same roundings on a 1.5e-4 value
   const DeviceDefinition d = load_device_file(kDevices + "imu3.yaml");
   ASSERT_TRUE(d.imu.has_value());
   EXPECT_TRUE(d.channels.empty());
@@ -57,13 +63,13 @@ TEST(DeviceFile, LoadsTheWholeImuWithBothInstancesInInternalUnits) {
   const ImuInstance& first = imu.instances[0];
   EXPECT_FALSE(first.device_id.has_value());
   EXPECT_EQ(first.die_time_constant_s, 240.0);
-  EXPECT_NEAR(first.gyro.axes[0].bias_polynomial.at(1), 0.021 * kRadPerDeg, 1e-15);
-  EXPECT_NEAR(first.gyro.axes[1].noise.arw_rad_sqrt_s, 14.4 * kDph, 1e-15);  // the sensor's noise
+  EXPECT_NEAR(first.gyro.axes[0].bias_polynomial.at(1), 0.021 * kRadPerDeg, kConverted);
+  EXPECT_NEAR(first.gyro.axes[1].noise.arw_rad_sqrt_s, 14.4 * kDph, kConverted);  // the sensor's noise
   EXPECT_EQ(first.gyro.axes[2].lag_s, 20.0);
-  EXPECT_NEAR(first.accel.axes[2].bias_polynomial.at(1), 0.8 * kMilliG, 1e-15);
-  EXPECT_NEAR(first.accel.axes[0].noise.arw_rad_sqrt_s, 100 * kMicroG, 1e-15);
-  EXPECT_NEAR(first.accel.axes[0].noise.rate_random_walk_rad_s_sqrt_s, 100 * kMicroG / 60.0, 1e-15);
-  EXPECT_NEAR(first.accel.axes[0].scale_factor_polynomial.at(0), 150e-6, 1e-18);
+  EXPECT_NEAR(first.accel.axes[2].bias_polynomial.at(1), 0.8 * kMilliG, kConverted);
+  EXPECT_NEAR(first.accel.axes[0].noise.arw_rad_sqrt_s, 100 * kMicroG, kConverted);
+  EXPECT_NEAR(first.accel.axes[0].noise.rate_random_walk_rad_s_sqrt_s, 100 * kMicroG / 60.0, kConverted);
+  EXPECT_NEAR(first.accel.axes[0].scale_factor_polynomial.at(0), 150e-6, kPpm);
   EXPECT_EQ(imu.instances[1].temperature_resolution_c, 0.125);
 }
 
@@ -84,19 +90,20 @@ imu:
   const DeviceDefinition d = parse_device(text, "inline.yaml");
   const ImuInstance& instance = d.imu->instances.at(0);
   EXPECT_EQ(instance.device_id, 2490378.0);
-  EXPECT_NEAR(instance.gyro.axes[0].noise.arw_rad_sqrt_s, 10 * kDph, 1e-15);
-  EXPECT_NEAR(instance.gyro.axes[1].noise.arw_rad_sqrt_s, 2 * kDph, 1e-15);
-  EXPECT_NEAR(d.imu->up[1], 0.6, 1e-15);  // normalized
-  EXPECT_NEAR(d.imu->up[2], 0.8, 1e-15);
+  EXPECT_NEAR(instance.gyro.axes[0].noise.arw_rad_sqrt_s, 10 * kDph, kConverted);
+  EXPECT_NEAR(instance.gyro.axes[1].noise.arw_rad_sqrt_s, 2 * kDph, kConverted);
+  EXPECT_NEAR(d.imu->up[1], 0.6, kConverted);  // normalized
+  EXPECT_NEAR(d.imu->up[2], 0.8, kConverted);
 }
 
 TEST(DeviceFile, ConvertsChannelUnitsToInternalUnits) {
+  constexpr double kRange = 1e-12;  // rad/s: 125 deg/s converted, the same roundings on a 2.2-rad/s value
   const DeviceDefinition d = load_device_file(kDevices + "lsm6dsm.yaml");
   const ChannelSpec* rate = d.find_channel("rate");
   ASSERT_NE(rate, nullptr);
-  EXPECT_NEAR(rate->range_max, 125.0 * kRadPerDeg, 1e-12);
-  EXPECT_NEAR(rate->resolution, 0.004375 * kRadPerDeg, 1e-15);
-  EXPECT_NEAR(d.error_model.bias_polynomial_rad_s.at(1), 0.0299 * kRadPerDeg, 1e-15);
+  EXPECT_NEAR(rate->range_max, 125.0 * kRadPerDeg, kRange);
+  EXPECT_NEAR(rate->resolution, 0.004375 * kRadPerDeg, kConverted);
+  EXPECT_NEAR(d.error_model.bias_polynomial_rad_s.at(1), 0.0299 * kRadPerDeg, kConverted);
 }
 
 TEST(DeviceFile, Lsm6dsmBiasModelMatchesTheMeasuredCoolingRun) {

@@ -81,12 +81,13 @@ TEST(DeviceModel, SenseAmplitudeFollowsTheComplexTransferFunctionOverSplitAndQ) 
 }
 
 TEST(DeviceModel, SenseAmplitudeReachesTheMatchedAndWideSplitLimits) {
+  constexpr double kRoundingTolerance = 1e-12;  // a zero split makes the general form the matched one
   constexpr double kLimitTolerance = 3e-3;  // wide split: neglected df / (2 f) = 2.4e-3 and f / (Q df)
   constexpr double kX0 = 5e-6;
   const double f = 30740.0, q = 2500.0;
   const SenseResponse matched = DeviceModel::sense_response(f, f, q, kX0);
-  EXPECT_NEAR(matched.amplitude_m_per_rad_s / (2.0 * kX0 * q / (kTwoPi * f)), 1.0, 1e-12);
-  EXPECT_NEAR(matched.phase_lag_rad, std::numbers::pi / 2, 1e-12);
+  EXPECT_NEAR(matched.amplitude_m_per_rad_s / (2.0 * kX0 * q / (kTwoPi * f)), 1.0, kRoundingTolerance);
+  EXPECT_NEAR(matched.phase_lag_rad, std::numbers::pi / 2, kRoundingTolerance);
   const double split = 146.0;
   const SenseResponse wide = DeviceModel::sense_response(f, f + split, 1e7, kX0);
   EXPECT_NEAR(wide.amplitude_m_per_rad_s / (kX0 / (kTwoPi * split)), 1.0, kLimitTolerance);
@@ -107,18 +108,20 @@ TEST(DeviceModel, FrequenciesMoveWithTheConfiguredCoefficients) {
   }
   // The split drifts by f_s a_s - f_d a_d per kelvin (linear part).
   const double slope = (model.split_hz(26.0) - model.split_hz(24.0)) / 2.0;
-  EXPECT_NEAR(slope, s.frequency_hz * s.frequency_tc_per_k - d.frequency_hz * d.frequency_tc_per_k, 1e-9);
+  EXPECT_NEAR(slope, s.frequency_hz * s.frequency_tc_per_k - d.frequency_hz * d.frequency_tc_per_k,
+              kRoundingTolerance);
   EXPECT_LT(slope, 0.0);  // the FMVMG file gives the sense mode the larger coefficient
 }
 
 TEST(DeviceModel, QualityFactorFallsWithTemperature) {
+  constexpr double kRoundingTolerance = 1e-9;  // on a Q of 2000 .. 2500: one power, rounding
   const DeviceModel model(fmvmg_physics());
   const auto& sense = model.config().sense;
   EXPECT_DOUBLE_EQ(model.quality_factor(sense, 25.0), sense.quality_factor);
   EXPECT_GT(model.quality_factor(sense, -30.0), model.quality_factor(sense, 0.0));
   EXPECT_GT(model.quality_factor(sense, 0.0), model.quality_factor(sense, 60.0));
   EXPECT_NEAR(model.quality_factor(sense, 60.0),
-              sense.quality_factor * std::pow(298.15 / 333.15, sense.quality_factor_exponent), 1e-9);
+              sense.quality_factor * std::pow(298.15 / 333.15, sense.quality_factor_exponent), kRoundingTolerance);
 }
 
 TEST(DeviceModel, ScaleFactorAndBiasFollowSplitQAndPhaseErrorByTheClosedForm) {

@@ -116,6 +116,9 @@ TEST(ImuSimulator, RateTableTurnsAboutTheUpDirection) {
 }
 
 TEST(ImuSimulator, AnOrientationScheduleCyclesTheUpDirectionThroughGravityAndTheTableRate) {
+  // The normalised up direction (0, 0.6, 0.8) times g or the table rate: rounding, about an ulp
+  // (ulp(0.6 g) = 8.9e-16).
+  constexpr double kNormalised = 1e-15;
   SimulationProfile profile = parse_profile(
       "format: driftlab-profile/1\n"
       "rate: {start_dps: 30}\n"
@@ -132,8 +135,8 @@ TEST(ImuSimulator, AnOrientationScheduleCyclesTheUpDirectionThroughGravityAndThe
   EXPECT_EQ(accel[0].truth[2], -g);
   EXPECT_EQ(gyro[0].truth[3], -w);
   EXPECT_EQ(gyro[2].truth[3], 0.0);
-  EXPECT_NEAR(accel[1].truth[4], 0.6 * g, 1e-15);
-  EXPECT_NEAR(gyro[2].truth[5], 0.8 * w, 1e-15);
+  EXPECT_NEAR(accel[1].truth[4], 0.6 * g, kNormalised);
+  EXPECT_NEAR(gyro[2].truth[5], 0.8 * w, kNormalised);
   EXPECT_EQ(accel[2].truth[6], g);
 }
 

@@ -157,6 +157,8 @@ TEST(Simulator, ThermalLagEffectMakesTheDieLagTheSensor) {
 }
 
 TEST(Simulator, RateTableProfileIsScaledByTheScaleFactor) {
+  constexpr double kRounding = 1e-12;             // rad/s: the profile's 100 deg/s converted
+  constexpr double kRateLsb = 1e-5 * kRadPerDeg;  // the FMVMG rate channel's resolution: quantisation
   DeviceDefinition device = fmvmg();
   device.error_model.noise = {};
   const SimulationProfile profile = parse_profile(
@@ -167,9 +169,9 @@ TEST(Simulator, RateTableProfileIsScaledByTheScaleFactor) {
   const DeviceModel model(device.physics);
   const double s = model.response(60.0).scale_factor * error_model::empirical_scale_factor(device.error_model, 60.0);
   const double bias = error_model::systematic_rate(device.error_model, model.response(60.0), 60.0, 0.0);
-  EXPECT_NEAR(r.true_rate_rad_s[150], 100.0 * kRadPerDeg, 1e-12);
-  EXPECT_NEAR(r.rate_rad_s[150], s * 100.0 * kRadPerDeg + bias, 1e-5 * kRadPerDeg);
-  EXPECT_NEAR(r.rate_rad_s[50], bias, 1e-5 * kRadPerDeg);
+  EXPECT_NEAR(r.true_rate_rad_s[150], 100.0 * kRadPerDeg, kRounding);
+  EXPECT_NEAR(r.rate_rad_s[150], s * 100.0 * kRadPerDeg + bias, kRateLsb);
+  EXPECT_NEAR(r.rate_rad_s[50], bias, kRateLsb);
 }
 
 TEST(Simulator, DefaultOvenProfileCyclesMinus30ToPlus60) {

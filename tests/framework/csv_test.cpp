@@ -19,14 +19,16 @@ const std::filesystem::path kCsvDir = std::filesystem::path(DRIFTLAB_TEST_DATA) 
 constexpr double kUnitConversionTolerance = 1e-12;  // a couple of double roundings
 
 TEST(CsvReader, ReadsDefaultColumnsAndConvertsToInternalUnits) {
+  constexpr double kSixDecimals = 1e-6 * kRadPerDeg;  // good.csv prints the rate in deg/s with 6 decimals
+  constexpr double kRateFromTimes = 1e-9;             // Hz: 10 Hz from decimal time stamps, to rounding
   const auto record = read_csv(kCsvDir / "good.csv");
   ASSERT_EQ(record.size(), 50);
   EXPECT_DOUBLE_EQ(record.time()[1], 0.1);
   EXPECT_EQ(record.channel("rate").unit, "rad/s");
-  EXPECT_NEAR(record.channel("rate").values[7], 0.01 * std::sin(1.0) * kRadPerDeg, 1e-6 * kRadPerDeg);
+  EXPECT_NEAR(record.channel("rate").values[7], 0.01 * std::sin(1.0) * kRadPerDeg, kSixDecimals);
   EXPECT_EQ(record.channel("temperature").unit, "degC");
   EXPECT_NEAR(record.channel("temperature").values[10], 25.01, kUnitConversionTolerance);
-  EXPECT_NEAR(record.sample_rate_hz(), 10.0, 1e-9);
+  EXPECT_NEAR(record.sample_rate_hz(), 10.0, kRateFromTimes);
 }
 
 TEST(CsvReader, ReadsOtherFilesThroughExplicitMappings) {

@@ -20,6 +20,9 @@ namespace driftlab::calibration {
 namespace {
 
 constexpr double kRounding = 1e-12;  // double evaluation of the same expression
+// A fitted coefficient against its truth: kSigmas of its own standard error, plus a floor (rad/s,
+// rad/s/K, rad/s/K^2) that keeps the bound open should a standard error come out 0.
+constexpr double kSigmas = 5.0, kSigmaFloor = 1e-12;
 
 std::filesystem::path scratch(const std::string& name) {
   const auto dir = std::filesystem::temp_directory_path() / ("driftlab_calmodel_" + std::to_string(::getpid()));
@@ -233,11 +236,14 @@ double after_ramp(const CalibrationModel& m, double rate_c_per_min) {
 }
 
 TEST(CausalCompensator, EvaluatesTheRbfNetworkInsideTheRangeOfItsFittingData) {
+  // rad/s: the network sees the same clamped dT/dt; only the hysteresis term's remainder differs,
+  // 2e-5 rad/s x exp(-30 K / 1.5 K) = 4e-14 (measured 6e-14).
+  constexpr double kSameEdge = 1e-12;
   CalibrationModel m = testing::example_full_model();  // dT/dt range +-0.02 K/s = +-1.2 degC/min
   m.temperature_rate_rad_s_per_k_s = 0.0;               // only the network sees dT/dt
   m.lag_tau_s = 0.0;                                    // the same model temperature on both ramps
   // 1.5 and 2.4 degC/min are both beyond the range: the network sees its edge both times.
-  EXPECT_NEAR(after_ramp(m, 1.5), after_ramp(m, 2.4), 1e-12);
+  EXPECT_NEAR(after_ramp(m, 1.5), after_ramp(m, 2.4), kSameEdge);
   m.rbf->input_min.clear();
   m.rbf->input_max.clear();
   EXPECT_GT(std::abs(after_ramp(m, 1.5) - after_ramp(m, 2.4)), 1e-10) << "without the range the network extrapolates";
@@ -251,13 +257,19 @@ TEST(CausalCompensator, RejectsTimeThatDoesNotIncrease) {
 
 TEST(CausalState, TracksARampWithTheLagAndEstimatesItsRate) {
   constexpr double kRamp = 0.02;  // K/s
+  // K/s: the 10-s derivative filter has run 200 time constants; rounding of 0.1-s differences of
+  // ~60-degC values remains (measured 3e-14).
+  constexpr double kRateSettled = 1e-9;
+  // 40 K of heating is 40 widths (exp(-40)), but with 0.002-K steps the update stalls where a step
+  // moves the state by less than half an ulp: 2^-54 / (0.002 K / 1 K) = 2.8e-14 from the branch.
+  constexpr double kOnTheBranch = 1e-9;
   CausalState s(100.0, 10.0, 1.0);
   for (int i = 0; i <= 20000; ++i) s.step(0.1 * i, 20.0 + kRamp * 0.1 * i);
   const double t = 2000.0;
   constexpr double kSettled = 1e-7;  // the 2 K start transient decays to 2 K x exp(-20) = 4e-9 K
   EXPECT_NEAR(s.model_temp_c(), 20.0 + kRamp * (t - 100.0), kSettled) << "a first-order lag delays a ramp by tau";
-  EXPECT_NEAR(s.temp_rate_k_s(), kRamp, 1e-9);
-  EXPECT_NEAR(s.hysteresis_state(), 1.0, 1e-9) << "heating branch";
+  EXPECT_NEAR(s.temp_rate_k_s(), kRamp, kRateSettled);
+  EXPECT_NEAR(s.hysteresis_state(), 1.0, kOnTheBranch) << "heating branch";
 }
 
 TEST(CausalCompensator, BatchEqualsStepByStep) {
@@ -291,11 +303,15 @@ Record synthetic_record(std::uint64_t seed, const std::vector<double>& truth, do
 const std::vector<double> kTruth{2e-3, -4e-5, 6e-7};
 
 TEST(FitCalibration, RecoversAPolynomialBiasFromANoisyRecordOfBothDirections) {
+  // degC: the valid range is the extremes of the 10-s bin means, just inside the sine's -20 / 50
+  // peaks (measured 2e-4).
+  constexpr double kRangeEdge = 0.01;
   const CalibrationModel m = fit_calibration({synthetic_record(11, kTruth, 0.0)}, FitOptions{});
   EXPECT_GE(m.order(), 2);
-  for (int i = 0; i <= 2; ++i) EXPECT_NEAR(m.bias_rad_s[i], kTruth[i], 5 * m.bias_sigma_rad_s[i] + 1e-12) << i;
-  EXPECT_NEAR(m.valid_min_c, -20.0, 0.01);
-  EXPECT_NEAR(m.valid_max_c, 50.0, 0.01);
+  for (int i = 0; i <= 2; ++i)
+    EXPECT_NEAR(m.bias_rad_s[i], kTruth[i], kSigmas * m.bias_sigma_rad_s[i] + kSigmaFloor) << i;
+  EXPECT_NEAR(m.valid_min_c, -20.0, kRangeEdge);
+  EXPECT_NEAR(m.valid_max_c, 50.0, kRangeEdge);
 }
 
 TEST(FitCalibration, CombinesSeveralRecordsOfOneGyro) {
@@ -304,7 +320,8 @@ TEST(FitCalibration, CombinesSeveralRecordsOfOneGyro) {
       fit_calibration({synthetic_record(11, kTruth, 0.0), synthetic_record(12, kTruth, 1.0)}, FitOptions{});
   EXPECT_EQ(two.fit.records.size(), 2u);
   EXPECT_EQ(two.fit.samples, 2 * one.fit.samples);
-  for (int i = 0; i <= 2; ++i) EXPECT_NEAR(two.bias_rad_s[i], kTruth[i], 5 * two.bias_sigma_rad_s[i] + 1e-12) << i;
+  for (int i = 0; i <= 2; ++i)
+    EXPECT_NEAR(two.bias_rad_s[i], kTruth[i], kSigmas * two.bias_sigma_rad_s[i] + kSigmaFloor) << i;
   EXPECT_EQ(two.fit.holdout_blocks, one.fit.holdout_blocks) << "each record is cut into its own held-out blocks";
 }
 

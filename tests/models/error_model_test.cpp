@@ -23,6 +23,8 @@ TEST(ErrorModel, PolynomialIsEvaluatedInAscendingPowers) {
 }
 
 TEST(ErrorModel, FlickerComponentsShareTheVarianceOfTheBToGaussMarkovMapping) {
+  constexpr double kLastPole = 1e-9;  // s: the last of the 10^(k/2)-s poles lands on 1000 s to rounding
+  constexpr double kSigma = 1e-18;    // rad/s on 6e-5: the closed form to rounding (relative 2e-14)
   NoiseTerms terms;
   terms.bias_instability_rad_s = 1e-4;
   terms.flicker_tau_min_s = 1.0;
@@ -31,9 +33,9 @@ TEST(ErrorModel, FlickerComponentsShareTheVarianceOfTheBToGaussMarkovMapping) {
   const auto components = flicker_components(terms);
   ASSERT_EQ(components.size(), 7u);  // ceil(2 * 3) + 1
   EXPECT_DOUBLE_EQ(components.front().tau_s, 1.0);
-  EXPECT_NEAR(components.back().tau_s, 1000.0, 1e-9);
+  EXPECT_NEAR(components.back().tau_s, 1000.0, kLastPole);
   for (const auto& c : components)
-    EXPECT_NEAR(c.sigma_rad_s, 1e-4 * std::sqrt(std::numbers::ln10 / (std::numbers::pi * 2.0)), 1e-18);
+    EXPECT_NEAR(c.sigma_rad_s, 1e-4 * std::sqrt(std::numbers::ln10 / (std::numbers::pi * 2.0)), kSigma);
 }
 
 TEST(ErrorModel, WhiteNoiseHasTheAllanSignatureOfN) {
@@ -124,13 +126,15 @@ TEST(ErrorModel, AdditiveEffectsFollowTheirDefinitions) {
 }
 
 TEST(ErrorModel, SystematicRateCombinesDevicePhysicsAndPolynomials) {
+  constexpr double kRoundingTolerance = 1e-15;  // rad/s: a few products and sums on a 0.5-rad/s value
   Config c;
   c.reference_temp_c = 25.0;
   c.bias_polynomial_rad_s = {1e-3, 1e-5};
   c.scale_factor_polynomial = {1e-4};
   const DeviceResponse device{1.01, 2e-4, 30000.0};
   const double t = 35.0, w = 0.5;
-  EXPECT_NEAR(systematic_rate(c, device, t, w), 1.01 * (1 + 1e-4 * 10) * w + 2e-4 + 1e-3 + 1e-5 * 10, 1e-15);
+  EXPECT_NEAR(systematic_rate(c, device, t, w), 1.01 * (1 + 1e-4 * 10) * w + 2e-4 + 1e-3 + 1e-5 * 10,
+              kRoundingTolerance);
 }
 
 }  // namespace

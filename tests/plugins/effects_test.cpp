@@ -28,13 +28,14 @@ Eigen::VectorXd seconds(Eigen::Index n, double dt) {
 }
 
 TEST(EffectKernels, LagOfARampTrailsByTauOnceTheTransientHasDecayed) {
+  constexpr double kExactDiscretization = 1e-10;  // the step is exact for inputs linear between samples
   const double tau = 50.0, slope = 0.02;
   const Eigen::VectorXd t = seconds(2001, 0.5);
   const Eigen::VectorXd ramp = slope * t;
   const Eigen::VectorXd lagged = effects::lagged_temperature(t, ramp, tau);
   // Closed form of y' = (x - y)/tau, x = s t, y(0) = 0: y = s (t - tau (1 - exp(-t/tau))).
   for (Eigen::Index k = 0; k < t.size(); k += 97)
-    EXPECT_NEAR(lagged[k], slope * (t[k] - tau * (1.0 - std::exp(-t[k] / tau))), 1e-10) << t[k];
+    EXPECT_NEAR(lagged[k], slope * (t[k] - tau * (1.0 - std::exp(-t[k] / tau))), kExactDiscretization) << t[k];
 }
 
 TEST(EffectKernels, TemperatureRateOfARampIsItsSlope) {
@@ -53,19 +54,26 @@ TEST(EffectKernels, PlayOperatorIgnoresReversalsInsideItsDeadband) {
 }
 
 TEST(EffectKernels, HysteresisBasisSaturatesAtHalfTheHeightAndKeepsItThroughNoise) {
+  constexpr double kSteps = 1e-9;  // 199 exponential steps against one exp of their sum: rounding
+  // Held: the noise's last 0.12 K of play travel moves the saturated basis by 1.4e-6, while without
+  // the deadband the reversals drag it by more than 0.2.
+  constexpr double kHeld = 1e-4;
   // Heat by 20 K, then hold with +-0.02 K sensor noise: the branch stays at -1/2 (heating).
   const int n = 400;
   Eigen::VectorXd temp(n);
   for (int k = 0; k < n; ++k) temp[k] = k < 200 ? 0.1 * k : 20.0 + (k % 2 ? 0.02 : -0.02);
   const Eigen::VectorXd with_deadband = effects::hysteresis_basis(temp, 2.0, 0.05);
   // The play output trails the input by the half-width: 19.85 K of travel by sample 199.
-  EXPECT_NEAR(with_deadband[199], -0.5 * (1.0 - std::exp(-19.85 / 2.0)), 1e-9);
-  EXPECT_NEAR(with_deadband[n - 1], with_deadband[199], 1e-4);
+  EXPECT_NEAR(with_deadband[199], -0.5 * (1.0 - std::exp(-19.85 / 2.0)), kSteps);
+  EXPECT_NEAR(with_deadband[n - 1], with_deadband[199], kHeld);
   // Without the play operator the noise reversals drag the state towards 0.
   EXPECT_GT(effects::hysteresis_basis(temp, 2.0, 0.0)[n - 1], -0.3);
 }
 
 TEST(EffectKernels, PeriodicBasisRecoversTheSimulatorsAmplitudeAndPhase) {
+  // Least squares on an exact sinusoid: rounding only (relative 4e-12 of the amplitude; the phase
+  // through atan2).
+  constexpr double kAmplitude = 1e-15, kPhase = 1e-10;  // rad/s, rad
   const Eigen::VectorXd t = seconds(3000, 1.0);
   error_model::Effects e;
   e.periodic_disturbance = error_model::PeriodicDisturbance{2.5e-4, 377.0, -2.2};
@@ -73,8 +81,8 @@ TEST(EffectKernels, PeriodicBasisRecoversTheSimulatorsAmplitudeAndPhase) {
   const Eigen::MatrixXd basis = effects::periodic_basis(t, 377.0);
   const Eigen::Vector2d c = basis.colPivHouseholderQr().solve(signal);
   const auto s = effects::sinusoid_from_coefficients(c[0], c[1]);
-  EXPECT_NEAR(s.amplitude, 2.5e-4, 1e-15);
-  EXPECT_NEAR(s.phase_rad, -2.2, 1e-10);
+  EXPECT_NEAR(s.amplitude, 2.5e-4, kAmplitude);
+  EXPECT_NEAR(s.phase_rad, -2.2, kPhase);
 }
 
 TEST(EffectKernels, WarmupBasisTimesAmplitudeIsTheSimulatorsTransient) {
@@ -98,6 +106,7 @@ TEST(EffectKernels, ScaleFactorBasisTimesCoefficientsIsTheSimulatorsExtraScaleFa
 }
 
 TEST(EffectKernels, ResonatorTemperatureInvertsTheDriveFrequencyLine) {
+  constexpr double kExactLine = 1e-9;  // Hz/K: a line fitted through points exactly on it: rounding
   const Eigen::VectorXd temp = Eigen::VectorXd::LinSpaced(40, -30.0, 60.0);
   const Eigen::VectorXd resonator = temp.array() - 1.5;  // the resonator runs 1.5 K colder
   const double f0 = 30740.0, slope = -0.9222;
@@ -106,7 +115,7 @@ TEST(EffectKernels, ResonatorTemperatureInvertsTheDriveFrequencyLine) {
   EXPECT_LT((known.temperature_c - resonator).cwiseAbs().maxCoeff(), 1e-9);
   // Fitted line: the constant offset is absorbed into f_ref, the slope is exact.
   const auto fitted = effects::resonator_temperature(temp, f, 25.0);
-  EXPECT_NEAR(fitted.slope_hz_per_k, slope, 1e-9);
+  EXPECT_NEAR(fitted.slope_hz_per_k, slope, kExactLine);
   EXPECT_LT((fitted.temperature_c - temp).cwiseAbs().maxCoeff(), 1e-8);
   EXPECT_THROW(effects::resonator_temperature(Eigen::VectorXd::Constant(5, 20.0), f.head(5), 25.0),
                std::invalid_argument);
@@ -174,17 +183,19 @@ TEST_F(EffectPlugins, ReportTheDeviceFileKeysOfTheEffectsTheSimulatorKnows) {
 }
 
 TEST_F(EffectPlugins, ReportTemperatureRateAndHysteresisInDeviceFileUnits) {
+  constexpr double kUnitRoundTrip = 1e-9;  // deg/h: given in rad/s here, reported in device-file units
+  constexpr double kAsGiven = 0.0;         // the width is reported as it was given, unconverted
   const TimeSeries record = oven_record();
   const double rad_s_per_dph = kRadPerSecPerDph;
   const auto rate = make("effect/temperature_rate")
                         ->describe(record, {}, {}, Eigen::VectorXd::Constant(1, 60.0 * rad_s_per_dph * 60.0));
-  EXPECT_NEAR(rate[0].values[0], 60.0, 1e-9);  // 60 deg/h per degC/min
+  EXPECT_NEAR(rate[0].values[0], 60.0, kUnitRoundTrip);  // 60 deg/h per degC/min
   Eigen::VectorXd width(1);
   width << 2.5;
   const auto hysteresis =
       make("effect/hysteresis")->describe(record, {}, width, Eigen::VectorXd::Constant(1, 150.0 * rad_s_per_dph));
-  EXPECT_NEAR(hysteresis[0].values[0], 150.0, 1e-9);
-  EXPECT_NEAR(hysteresis[1].values[0], 2.5, 0.0);
+  EXPECT_NEAR(hysteresis[0].values[0], 150.0, kUnitRoundTrip);
+  EXPECT_NEAR(hysteresis[1].values[0], 2.5, kAsGiven);
 }
 
 TEST_F(EffectPlugins, RefuseToRunAsPipelineSteps) {

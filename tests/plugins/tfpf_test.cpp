@@ -51,6 +51,8 @@ TEST(Tfpf, ConstantSignalsPassUnchanged) {
 
 TEST(Tfpf, RaisesTheSnrOfASlowSineInWhiteNoise) {
   // Period 400 samples, amplitude 1, noise sigma 0.5: input SNR 3 dB.
+  // dB: the noise power of 4000 samples scatters by sqrt(2 / 4000) = 2.2 % = 0.1 dB; 3 sigma.
+  constexpr double kInputSnrDb = 0.3;
   const Eigen::Index n = 4000;
   const Eigen::VectorXd clean = sampled(n, [](double i) { return std::sin(2.0 * kPi * i / 400.0); });
   const Eigen::VectorXd noisy = clean + 0.5 * standard_normal(n, 1);
@@ -61,7 +63,7 @@ TEST(Tfpf, RaisesTheSnrOfASlowSineInWhiteNoise) {
   RecordProperty("snr_fixed41_db", std::to_string(snr_db(clean, fixed.filtered)));
   RecordProperty("snr_adaptive_db", std::to_string(snr_db(clean, adaptive.filtered)));
   RecordProperty("adaptive_window", std::to_string(adaptive.window));
-  EXPECT_NEAR(in, 3.0, 0.3);
+  EXPECT_NEAR(in, 3.0, kInputSnrDb);
   // A window of L samples averages the noise's phase increments over up to L lags; measured (seed 1):
   // L = 41: 3.1 -> 17.5 dB (+14.4 dB); the noise rule picks L = 15 for this noise share (sigma^2 /
   // var = 0.33): 3.1 -> 13.8 dB (+10.7 dB). Bounds leave ~3 dB for other seeds.
@@ -86,6 +88,9 @@ TEST(Tfpf, TracksALinearChirpInWhiteNoise) {
 }
 
 TEST(Tfpf, LongerWindowsForNoisierInputsByTheDocumentedRule) {
+  // Noise estimate (below): sigma within 3 x the MAD's ~2 % relative standard error (6 % of 2.0);
+  // the share sigma^2 / var (clamped at 1) doubles that error (4 %): 2.5 sigmas (measured 0.1 %, 0.4 %).
+  constexpr double kNoiseSigma = 0.12, kNoiseShare = 0.1;
   EXPECT_EQ(tfpf::window_for_noise_share(0.05, 9, 65, 10000), 9);
   EXPECT_EQ(tfpf::window_for_noise_share(0.95, 9, 65, 10000), 65);
   // Midway (share 0.5): 9 * (65 / 9)^0.5 = 24.19 -> nearest odd 25.
@@ -94,8 +99,8 @@ TEST(Tfpf, LongerWindowsForNoisierInputsByTheDocumentedRule) {
   // Noise estimate: MAD of first differences / sqrt(2) on white noise of sigma 2 (3-sigma band of the
   // MAD's ~2 % relative standard error on 20000 samples).
   const tfpf::NoiseEstimate white = tfpf::estimate_noise(2.0 * standard_normal(20000, 5));
-  EXPECT_NEAR(white.sigma, 2.0, 0.12);
-  EXPECT_NEAR(white.share, 1.0, 0.1);
+  EXPECT_NEAR(white.sigma, 2.0, kNoiseSigma);
+  EXPECT_NEAR(white.share, 1.0, kNoiseShare);
   // A clean slow sine has almost no noise: the short window.
   const Eigen::VectorXd slow = sampled(2000, [](double i) { return std::sin(2.0 * kPi * i / 500.0); });
   EXPECT_LT(tfpf::estimate_noise(slow).share, 0.01);
@@ -114,6 +119,7 @@ TEST(Tfpf, RejectsBadConfigurationAndBadData) {
 }
 
 TEST(TfpfPlugin, FiltersThroughTheRegistryAndReportsTheWindow) {
+  constexpr double kWindowSeconds = 1e-9;  // s: 21 samples at the rate of the time stamps, to rounding
   Registry registry;
   register_builtin_plugins(registry);
   EXPECT_THROW(params_from_assignments(registry, "filter/tfpf", {"window=30"}), ConfigError);
@@ -126,7 +132,7 @@ TEST(TfpfPlugin, FiltersThroughTheRegistryAndReportsTheWindow) {
   const Eigen::VectorXd out = filter->filter(clean + 0.3 * standard_normal(1000, 8), ctx);
   EXPECT_GT(snr_db(clean, out), snr_db(clean, clean + 0.3 * standard_normal(1000, 8)) + 6.0);
   EXPECT_EQ(ctx.diagnostics["window_samples"].get<int>(), 21);
-  EXPECT_NEAR(ctx.diagnostics["window_s"].get<double>(), 2.1, 1e-9);
+  EXPECT_NEAR(ctx.diagnostics["window_s"].get<double>(), 2.1, kWindowSeconds);
   EXPECT_THROW(filter->filter(Eigen::VectorXd::Ones(2), ctx), DataError);
 }
 

@@ -19,6 +19,8 @@ namespace {
 using testing_noise::kPi;
 using testing_noise::standard_normal;
 
+constexpr double kClosedForm = 1e-12;  // a closed form on O(1) values, evaluated another way: rounding
+
 double mse(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return (a - b).squaredNorm() / static_cast<double>(a.size());
 }
@@ -53,24 +55,26 @@ Eigen::VectorXd test_function(const std::string& name, Eigen::Index n) {
 }
 
 TEST(WaveletThresholds, MatchTheirClosedForms) {
+  constexpr double kSameFormula = 1e-15;  // sqrt(2 ln n) both sides: an ulp or two of ~3.7 (ulp 4.4e-16)
+  constexpr double kTenDigits = 1e-9;     // the reference value is printed with 10 digits (+-5e-10)
   // Universal: sqrt(2 ln n).
-  EXPECT_NEAR(wavelet::universal_threshold(1024), std::sqrt(2.0 * std::log(1024.0)), 1e-15);
-  EXPECT_NEAR(wavelet::universal_threshold(1024), 3.723297411, 1e-9);
+  EXPECT_NEAR(wavelet::universal_threshold(1024), std::sqrt(2.0 * std::log(1024.0)), kSameFormula);
+  EXPECT_NEAR(wavelet::universal_threshold(1024), 3.723297411, kTenDigits);
   // MAD: median(|c|) / 0.6745 (the median of |Z|, Z standard normal: 0.674489750...).
-  EXPECT_NEAR(wavelet::mad_sigma({1.0, -2.0, 3.0, -4.0, 5.0}), 3.0 / 0.6744897501960817, 1e-12);
-  EXPECT_NEAR(wavelet::mad_sigma({-1.0, 2.0, -3.0, 4.0}), 2.5 / 0.6744897501960817, 1e-12);
+  EXPECT_NEAR(wavelet::mad_sigma({1.0, -2.0, 3.0, -4.0, 5.0}), 3.0 / 0.6744897501960817, kClosedForm);
+  EXPECT_NEAR(wavelet::mad_sigma({-1.0, 2.0, -3.0, 4.0}), 2.5 / 0.6744897501960817, kClosedForm);
   // SURE on y = (0.1, -0.5, 3, 4): SURE(t) = 4 - 2 #{|y| <= t} + sum min(|y|, t)^2;
   // t = 0: 4, t = 0.1: 2.04, t = 0.5: 0.76, t = 3: 16.26 -> 0.5 (below the cap sqrt(2 ln 4) = 1.665).
   const std::vector<double> y{0.1, -0.5, 3.0, 4.0};
-  EXPECT_NEAR(wavelet::sure_risk(y, 0.0), 4.0, 1e-12);
-  EXPECT_NEAR(wavelet::sure_risk(y, 0.1), 2.04, 1e-12);
-  EXPECT_NEAR(wavelet::sure_risk(y, 0.5), 0.76, 1e-12);
-  EXPECT_NEAR(wavelet::sure_risk(y, 1.0), 4.0 - 4.0 + 0.01 + 0.25 + 1.0 + 1.0, 1e-12);
+  EXPECT_NEAR(wavelet::sure_risk(y, 0.0), 4.0, kClosedForm);
+  EXPECT_NEAR(wavelet::sure_risk(y, 0.1), 2.04, kClosedForm);
+  EXPECT_NEAR(wavelet::sure_risk(y, 0.5), 0.76, kClosedForm);
+  EXPECT_NEAR(wavelet::sure_risk(y, 1.0), 4.0 - 4.0 + 0.01 + 0.25 + 1.0 + 1.0, kClosedForm);
   EXPECT_DOUBLE_EQ(wavelet::sure_threshold(y), 0.5);
   // Hybrid: s^2 = (sum y^2 - n) / n = (25.26 - 4) / 4 = 5.315 > (log2 4)^1.5 / sqrt(4) = 1.414: SURE.
   EXPECT_DOUBLE_EQ(wavelet::hybrid_sure_threshold(y), 0.5);
   // A sparse level (energy below n): universal sqrt(2 ln 4).
-  EXPECT_NEAR(wavelet::hybrid_sure_threshold({0.1, 0.2, -0.1, 0.3}), std::sqrt(2.0 * std::log(4.0)), 1e-15);
+  EXPECT_NEAR(wavelet::hybrid_sure_threshold({0.1, 0.2, -0.1, 0.3}), std::sqrt(2.0 * std::log(4.0)), kSameFormula);
   // Shrinkage rules.
   EXPECT_DOUBLE_EQ(wavelet::soft(3.0, 1.0), 2.0);
   EXPECT_DOUBLE_EQ(wavelet::soft(-3.0, 1.0), -2.0);
@@ -80,13 +84,14 @@ TEST(WaveletThresholds, MatchTheirClosedForms) {
 }
 
 TEST(WaveletDenoise, EstimatesTheWhiteNoiseLevelFromTheFinestDetails) {
+  // MAD of 2048 Gaussian coefficients: relative standard error ~1.166 / sqrt(2048) = 2.6 %; 3 sigma.
+  constexpr double kMadSpread = 0.08;  // relative: 3 x 2.6 %
   const Eigen::VectorXd noise = 2.0 * standard_normal(4096, 1);
   const wavelet::Result r = wavelet::denoise(noise, {});
   ASSERT_EQ(r.levels, 5);
-  // MAD of 2048 Gaussian coefficients: relative standard error ~1.166 / sqrt(2048) = 2.6 %; 3 sigma.
-  EXPECT_NEAR(r.sigma[0], 2.0, 2.0 * 0.08);
+  EXPECT_NEAR(r.sigma[0], 2.0, 2.0 * kMadSpread);
   // Universal threshold in signal units.
-  EXPECT_NEAR(r.thresholds[0], r.sigma[0] * std::sqrt(2.0 * std::log(4096.0)), 1e-12);
+  EXPECT_NEAR(r.thresholds[0], r.sigma[0] * std::sqrt(2.0 * std::log(4096.0)), kClosedForm);
 }
 
 TEST(WaveletDenoise, PureNoiseIsRemovedByTheUniversalThreshold) {

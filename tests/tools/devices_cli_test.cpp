@@ -108,6 +108,8 @@ TEST(DevicesCli, SimulatesAWholeImuWithEveryChannelInTheImuNames) {
 }
 
 TEST(DevicesCli, SimulatesAProfileFile) {
+  // rad/s: through the CSV's deg/s text (shortest round trip) and back, against a 15-digit pi.
+  constexpr double kCsvRoundTrip = 1e-9;
   const auto dir = scratch_dir("simulate_profile");
   {
     std::ofstream profile(dir / "table.yaml");
@@ -119,7 +121,7 @@ TEST(DevicesCli, SimulatesAProfileFile) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const TimeSeries record = read_csv(dir / "sim.csv", {.required_roles = {"rate", "true_rate"}});
   EXPECT_EQ(record.size(), 300);
-  EXPECT_NEAR(record.channel("true_rate").values[250], 50.0 * 3.14159265358979 / 180.0, 1e-9);
+  EXPECT_NEAR(record.channel("true_rate").values[250], 50.0 * 3.14159265358979 / 180.0, kCsvRoundTrip);
 }
 
 }  // namespace

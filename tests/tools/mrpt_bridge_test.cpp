@@ -279,6 +279,7 @@ TEST(MrptBridge, CompensationChangesOnlyTheImuRateByExactlyTheCorrection) {
 TEST(MrptBridge, CompensateCommandAppliesTheCalibrationModelsCorrectionExactly) {
   SKIP_WITHOUT_MRPT();
 #if DRIFTLAB_HAVE_MRPT
+  constexpr double kSubtraction = 1e-17;  // rad/s: rounding of rate - correction (measured 5e-20)
   const auto dir = scratch_dir("mrpt_compensate_cli");
   export_test_rawlog(dir, 400, true);  // temperatures -10 .. -6 degC, inside the range below
   driftlab::calibration::CalibrationModel model;
@@ -299,7 +300,9 @@ TEST(MrptBridge, CompensateCommandAppliesTheCalibrationModelsCorrectionExactly) 
     const double expected = reference.step(t, before[i]->get(mrpt::obs::IMU_WZ), before[i]->get(mrpt::obs::IMU_TEMPERATURE));
     ASSERT_EQ(after[i]->get(mrpt::obs::IMU_WZ), expected) << i;
     // the change is the model's bias (to rounding of the subtraction: 1e-18 rad/s on 1e-3 rad/s)
-    ASSERT_NEAR(before[i]->get(mrpt::obs::IMU_WZ) - after[i]->get(mrpt::obs::IMU_WZ), reference.last_bias_rad_s(), 1e-17) << i;
+    ASSERT_NEAR(before[i]->get(mrpt::obs::IMU_WZ) - after[i]->get(mrpt::obs::IMU_WZ), reference.last_bias_rad_s(),
+                kSubtraction)
+        << i;
     after[i]->set(mrpt::obs::IMU_WZ, before[i]->get(mrpt::obs::IMU_WZ));
     ASSERT_EQ(after[i]->rawMeasurements, before[i]->rawMeasurements) << i;
     ASSERT_EQ(after[i]->dataIsPresent, before[i]->dataIsPresent) << i;
@@ -639,6 +642,7 @@ TEST(MrptBridge, SeveralImuSensorsNeedALabelChoice) {
 TEST(MrptNavEkf, EstimatesAKnownConstantGyroBiasWithinTwoSigma) {
   SKIP_WITHOUT_MRPT();
 #if DRIFTLAB_HAVE_MRPT
+  constexpr double kSigmas = 2.0;  // the estimate against the truth, in the filter's own standard deviations
   // 20 min at 20 Hz, 10 m/s, weaving turns; the gyro reads true rate + 200 deg/h + white noise;
   // a position fix (sigma 2 m) every 2 s. The bias is observable through the position track.
   const double fs = 20.0, dt = 1.0 / fs, bias = 200.0 * driftlab::kRadPerSecPerDph;
@@ -670,20 +674,21 @@ TEST(MrptNavEkf, EstimatesAKnownConstantGyroBiasWithinTwoSigma) {
   const auto s = ekf.state();
   const double sigma = std::sqrt(s.covariance(3, 3));
   EXPECT_LT(sigma, 0.25 * bias) << "the bias must be well observed for the test to mean something";
-  EXPECT_NEAR(s.bias_rad_s, bias, 2.0 * sigma) << "estimate " << s.bias_rad_s * driftlab::kDphPerRadPerSec
-                                               << " deg/h, sigma " << sigma * driftlab::kDphPerRadPerSec << " deg/h";
+  EXPECT_NEAR(s.bias_rad_s, bias, kSigmas * sigma) << "estimate " << s.bias_rad_s * driftlab::kDphPerRadPerSec
+                                                   << " deg/h, sigma " << sigma * driftlab::kDphPerRadPerSec << " deg/h";
 #endif
 }
 
 TEST(MrptNavEkf, HeadingIsWrappedIntoMinusPiToPi) {
   SKIP_WITHOUT_MRPT();
 #if DRIFTLAB_HAVE_MRPT
+  constexpr double kTurning = 1e-12;  // rad: 100 steps of 0.1 rad summed, then wrapped (measured 5e-15)
   EXPECT_DOUBLE_EQ(wrap_angle(3 * M_PI / 2), -M_PI / 2);
   EXPECT_DOUBLE_EQ(wrap_angle(-M_PI), M_PI);
   EXPECT_DOUBLE_EQ(wrap_angle(M_PI), M_PI);
   NavEkf ekf(NavNoise{}, NavState{});
   for (int k = 0; k < 100; ++k) ekf.step(0.1, 1.0, 0.0);  // 10 rad of turning
-  EXPECT_NEAR(ekf.state().heading_rad, wrap_angle(10.0), 1e-12);
+  EXPECT_NEAR(ekf.state().heading_rad, wrap_angle(10.0), kTurning);
 #endif
 }
 
@@ -923,6 +928,9 @@ TEST(MrptNav, ARecordNeedsOdometryATemperatureAndAModel) {
 
 #if DRIFTLAB_HAVE_MRPT
 TEST(MrptNavRecord, TheReferenceComposesTheOdometryAndTheSpeedIsTheChordWithoutVelocities) {
+  // m: the EKF's midpoint steps against the composed chords, rounding over 90 steps on the 10-m
+  // quarter circle (measured 1.5e-13).
+  constexpr double kMidpointTrack = 1e-9;
   // A quarter circle of radius 10 m in 90 steps of 1 s: each increment is the chord of 1 degree.
   ImuTable table;
   const int n = 91;
@@ -944,8 +952,8 @@ TEST(MrptNavRecord, TheReferenceComposesTheOdometryAndTheSpeedIsTheChordWithoutV
   EXPECT_NEAR(record.input.step_speed_mps[1], chord, kRounding);
   // the EKF on the exact rate follows the reference (midpoint rule = chord along the mid heading)
   const auto track = run_nav(record.input, table.values("rate_rps"), NavNoise{}, false, 0.0);
-  EXPECT_NEAR(track.position_error_m[n - 1], 0.0, 1e-9);
-  EXPECT_NEAR(track.heading_error_rad[n - 1], 0.0, 1e-12);
+  EXPECT_NEAR(track.position_error_m[n - 1], 0.0, kMidpointTrack);
+  EXPECT_NEAR(track.heading_error_rad[n - 1], 0.0, kRounding);
   // no odometry: an error naming the columns
   table.columns.resize(1);
   EXPECT_THROW(record_nav_input(table, "test"), driftlab::DataError);
