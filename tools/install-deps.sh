@@ -13,6 +13,7 @@ packages=(
   libfftw3-dev libgsl-dev
   libpagmo-dev libdlib-dev   # optimizer/pagmo, regressor/svr
   clang libclang-rt-14-dev   # libFuzzer harnesses of tests/fuzz (ASan + UBSan runtimes)
+  clang-format               # the format check (tools/check-format.sh, .clang-format)
   pybind11-dev python3-pybind11 python3-dev python3-pytest   # the Python module (python/) and its tests
   # ROS bag readers (framework/rosbag.hpp); python3-rosbag and python3-sensor-msgs write the ROS 1
   # bags of the tests (an independent writer), sqlite3 gives the reference counts of .db3 fixtures.

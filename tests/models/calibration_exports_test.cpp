@@ -327,7 +327,9 @@ TEST(CalibrationExports, KalibrYamlWritesAnUnresolvedTermOnlyAsAMarkedBound) {
   for (const auto& c : back.channels) {
     const bool bounded = c.id == imu::ChannelId{Sensor::Gyro, 'x', 0};
     EXPECT_EQ(c.model.noise.rate_random_walk_upper.has_value(), bounded) << c.id.role();
-    if (bounded) EXPECT_EQ(*c.model.noise.rate_random_walk_upper, 1e-12);
+    if (bounded) {
+      EXPECT_EQ(*c.model.noise.rate_random_walk_upper, 1e-12);
+    }
   }
 }
 
