@@ -22,10 +22,14 @@ Quantity quantity_of_role(const std::string& role) {
 
 std::string quantity_name(Quantity q) {
   switch (q) {
-    case Quantity::AngularRate: return "an angular-rate unit (deg/s, rad/s, deg/h)";
-    case Quantity::Temperature: return "a temperature unit (degC, K)";
-    case Quantity::Frequency: return "a frequency unit (Hz, kHz)";
-    default: return "a unit";
+    case Quantity::AngularRate:
+      return "an angular-rate unit (deg/s, rad/s, deg/h)";
+    case Quantity::Temperature:
+      return "a temperature unit (degC, K)";
+    case Quantity::Frequency:
+      return "a frequency unit (Hz, kHz)";
+    default:
+      return "a unit";
   }
 }
 
@@ -38,14 +42,15 @@ struct NoiseKeys {
   const char* gauss_markov_sigma;  // key of a Gauss-Markov term's std, in the instability's unit
   double white_scale, instability_scale, random_walk_scale;
 };
-const NoiseKeys kGyroNoise{"arw_dph_rthz", "bias_instability_dph", "rate_random_walk_dph_rth", "sigma_dph",
-                           kRadPerSecPerDph, kRadPerSecPerDph, kRadPerSecPerDph / 60.0};
+const NoiseKeys kGyroNoise{"arw_dph_rthz",   "bias_instability_dph", "rate_random_walk_dph_rth", "sigma_dph",
+                           kRadPerSecPerDph, kRadPerSecPerDph,       kRadPerSecPerDph / 60.0};
 constexpr double kMicroG = 1e-6 * kStandardGravity;  // m/s^2
-const NoiseKeys kAccelNoise{"vrw_ug_rthz", "bias_instability_ug", "acceleration_random_walk_ug_rth", "sigma_ug",
-                            kMicroG, kMicroG, kMicroG / 60.0};
+const NoiseKeys kAccelNoise{
+    "vrw_ug_rthz", "bias_instability_ug", "acceleration_random_walk_ug_rth", "sigma_ug", kMicroG,
+    kMicroG,       kMicroG / 60.0};
 
 // The single-axis sections a whole-IMU file leaves out (its instances describe themselves).
-const std::vector<std::string> kSingleAxisSections{"structure", "modes",    "electronics", "thermal",
+const std::vector<std::string> kSingleAxisSections{"structure", "modes",       "electronics", "thermal",
                                                    "channels",  "error_model", "effects"};
 
 class DeviceReader {
@@ -55,8 +60,9 @@ class DeviceReader {
   DeviceDefinition read(const YAML::Node& root) {
     DeviceDefinition d;
     d.source = y_.file();
-    if (!y_.map(root, "", {"format", "identity", "reference_temp_c", "structure", "modes", "electronics",
-                           "thermal", "channels", "error_model", "effects", "imu"}))
+    if (!y_.map(root, "",
+                {"format", "identity", "reference_temp_c", "structure", "modes", "electronics", "thermal", "channels",
+                 "error_model", "effects", "imu"}))
       return d;
     if (auto format = y_.text(root, "", "format", true); format && *format != kDeviceFormat)
       y_.problem(y_.child(root, "", "format", false), "format",
@@ -88,8 +94,7 @@ class DeviceReader {
 
  private:
   void read_identity(const YAML::Node& node, DeviceDefinition& d) {
-    if (!node.IsDefined() || !y_.map(node, "identity", {"name", "title", "manufacturer", "reference", "notes"}))
-      return;
+    if (!node.IsDefined() || !y_.map(node, "identity", {"name", "title", "manufacturer", "reference", "notes"})) return;
     d.name = y_.text(node, "identity", "name", true).value_or("");
     d.title = y_.text(node, "identity", "title", false).value_or(d.name);
     d.manufacturer = y_.text(node, "identity", "manufacturer", false).value_or("");
@@ -100,9 +105,9 @@ class DeviceReader {
   void read_structure(const YAML::Node& node, Structure& s) {
     const std::string p = "structure";
     if (!node.IsDefined() ||
-        !y_.map(node, p, {"material", "youngs_modulus_gpa", "youngs_modulus_tc_ppm_per_k", "poisson_ratio",
-                          "density_kg_m3", "length_um", "width_um", "thickness_um", "proof_mass_area_fraction",
-                          "suspension"}))
+        !y_.map(node, p,
+                {"material", "youngs_modulus_gpa", "youngs_modulus_tc_ppm_per_k", "poisson_ratio", "density_kg_m3",
+                 "length_um", "width_um", "thickness_um", "proof_mass_area_fraction", "suspension"}))
       return;
     y_.text(node, p, "material", false);
     s.youngs_modulus_pa = y_.number(node, p, "youngs_modulus_gpa", true, Bounds::positive()).value_or(1.0) * 1e9;
@@ -112,8 +117,7 @@ class DeviceReader {
     s.length_m = y_.number(node, p, "length_um", true, Bounds::positive()).value_or(1.0) * 1e-6;
     s.width_m = y_.number(node, p, "width_um", true, Bounds::positive()).value_or(1.0) * 1e-6;
     s.thickness_m = y_.number(node, p, "thickness_um", true, Bounds::positive()).value_or(1.0) * 1e-6;
-    s.proof_mass_area_fraction =
-        y_.number(node, p, "proof_mass_area_fraction", true, {0.0, 1.0, true}).value_or(0.5);
+    s.proof_mass_area_fraction = y_.number(node, p, "proof_mass_area_fraction", true, {0.0, 1.0, true}).value_or(0.5);
     const YAML::Node suspension = y_.child(node, p, "suspension", false);
     if (suspension.IsDefined() && y_.map(suspension, p + ".suspension", {"beams_per_mode", "beam_width_um"})) {
       const std::string sp = p + ".suspension";
@@ -128,8 +132,9 @@ class DeviceReader {
   }
 
   void read_mode(const YAML::Node& node, const std::string& p, double tce, Mode& m) {
-    if (!node.IsDefined() || !y_.map(node, p, {"frequency_hz", "quality_factor", "frequency_tc_ppm_per_k",
-                                               "frequency_tc2_ppb_per_k2", "quality_factor_exponent"}))
+    if (!node.IsDefined() || !y_.map(node, p,
+                                     {"frequency_hz", "quality_factor", "frequency_tc_ppm_per_k",
+                                      "frequency_tc2_ppb_per_k2", "quality_factor_exponent"}))
       return;
     m.frequency_hz = y_.number(node, p, "frequency_hz", true, Bounds::positive()).value_or(1.0);
     m.quality_factor = y_.number(node, p, "quality_factor", true, Bounds::positive()).value_or(1.0);
@@ -151,8 +156,9 @@ class DeviceReader {
 
   void read_electronics(const YAML::Node& node, Electronics& e) {
     const std::string p = "electronics";
-    if (!node.IsDefined() || !y_.map(node, p, {"drive_amplitude_um", "quadrature_dps", "quadrature_tc_ppm_per_k",
-                                               "demodulation_phase_error_mrad"}))
+    if (!node.IsDefined() ||
+        !y_.map(node, p,
+                {"drive_amplitude_um", "quadrature_dps", "quadrature_tc_ppm_per_k", "demodulation_phase_error_mrad"}))
       return;
     e.drive_amplitude_m = y_.number(node, p, "drive_amplitude_um", true, Bounds::positive()).value_or(1.0) * 1e-6;
     e.quadrature_rad_s = y_.number_or(node, p, "quadrature_dps", 0.0) * kRadPerDeg;
@@ -177,8 +183,7 @@ class DeviceReader {
     for (std::size_t i = 0; i < node.size(); ++i) {
       const YAML::Node c = node[i];
       const std::string p = "channels[" + std::to_string(i) + "]";
-      if (!y_.map(c, p, {"name", "role", "unit", "range", "resolution", "noise", "scale_factor_mv_per_dps"}))
-        continue;
+      if (!y_.map(c, p, {"name", "role", "unit", "range", "resolution", "noise", "scale_factor_mv_per_dps"})) continue;
       ChannelSpec spec;
       spec.name = y_.text(c, p, "name", true).value_or("");
       spec.role = y_.text(c, p, "role", true).value_or("");
@@ -197,8 +202,9 @@ class DeviceReader {
       const auto unit = find_unit(spec.unit);
       const Quantity quantity = quantity_of_role(spec.role);
       if (!unit || unit->quantity != quantity) {
-        y_.problem(y_.child(c, p, "unit", false), p + ".unit",
-                   "unit '" + spec.unit + "' does not fit role '" + spec.role + "'; expected " + quantity_name(quantity));
+        y_.problem(
+            y_.child(c, p, "unit", false), p + ".unit",
+            "unit '" + spec.unit + "' does not fit role '" + spec.role + "'; expected " + quantity_name(quantity));
         continue;
       }
       if (auto range = y_.numbers(c, p, "range", false)) {
@@ -242,10 +248,10 @@ class DeviceReader {
       read_noise(noise, p + ".noise", kGyroNoise, config.noise);
   }
 
-  void read_noise(const YAML::Node& noise, const std::string& np, const NoiseKeys& keys,
-                  error_model::NoiseTerms& n) {
-    if (!y_.map(noise, np, {keys.white, keys.instability, keys.random_walk, "flicker_correlation_times_s",
-                            "flicker_poles_per_decade", "gauss_markov"}))
+  void read_noise(const YAML::Node& noise, const std::string& np, const NoiseKeys& keys, error_model::NoiseTerms& n) {
+    if (!y_.map(noise, np,
+                {keys.white, keys.instability, keys.random_walk, "flicker_correlation_times_s",
+                 "flicker_poles_per_decade", "gauss_markov"}))
       return;
     if (const YAML::Node gm = y_.child(noise, np, "gauss_markov", false); gm.IsDefined()) {
       const std::string expected = std::string("expected a list of {") + keys.gauss_markov_sigma + ": S, tau_s: T}";
@@ -370,8 +376,8 @@ class DeviceReader {
         const double f = model.frequency_hz(*mode, t), q = model.quality_factor(*mode, t);
         if (!(f > 0.0) || !std::isfinite(f) || !(q > 0.0) || !std::isfinite(q)) {
           std::ostringstream msg;
-          msg << "at " << t << " degC (inside the device's temperature range [" << lo << ", " << hi
-              << "] degC) the " << name << " mode would have frequency " << f << " Hz and Q " << q
+          msg << "at " << t << " degC (inside the device's temperature range [" << lo << ", " << hi << "] degC) the "
+              << name << " mode would have frequency " << f << " Hz and Q " << q
               << "; its temperature coefficients are not physical";
           const YAML::Node m = y_.child(modes, "modes", name, false);
           y_.problem(m.IsDefined() ? m : root, "modes." + name, msg.str());
@@ -403,8 +409,8 @@ class DeviceReader {
         const double beam = model.implied_beam_length_m(*mode);
         if (beam > die_size) {
           std::ostringstream msg;
-          msg << "the " << (mode == &d.physics.drive ? "drive" : "sense") << " stiffness k = "
-              << model.stiffness_n_per_m(*mode) << " N/m needs suspension beams " << beam * 1e6
+          msg << "the " << (mode == &d.physics.drive ? "drive" : "sense")
+              << " stiffness k = " << model.stiffness_n_per_m(*mode) << " N/m needs suspension beams " << beam * 1e6
               << " um long, longer than the die (" << die_size * 1e6
               << " um); use fewer or narrower beams or a larger proof-mass fraction";
           y_.problem(suspension.IsDefined() ? suspension : structure, "structure.suspension", msg.str());
@@ -470,7 +476,8 @@ DeviceDefinition load_device_file(const std::filesystem::path& path) {
 
 std::vector<std::filesystem::path> list_device_files(const std::filesystem::path& dir) {
   if (!std::filesystem::is_directory(dir))
-    throw ConfigError({dir.string(), 0, ""}, "devices directory does not exist (use --devices-dir or DRIFTLAB_DEVICES_DIR)");
+    throw ConfigError({dir.string(), 0, ""},
+                      "devices directory does not exist (use --devices-dir or DRIFTLAB_DEVICES_DIR)");
   std::vector<std::filesystem::path> files;
   for (const auto& entry : std::filesystem::directory_iterator(dir))
     if (entry.is_regular_file() && entry.path().extension() == ".yaml") files.push_back(entry.path());
@@ -536,8 +543,10 @@ void apply_effect_option(const std::string& text, error_model::Effects& effects)
     for (char ch : text.substr(colon + 1)) {
       if (ch == '[') ++depth;
       if (ch == ']') --depth;
-      if (ch == ',' && depth == 0) flush();
-      else item += ch;
+      if (ch == ',' && depth == 0)
+        flush();
+      else
+        item += ch;
     }
     if (!item.empty()) flush();
   }

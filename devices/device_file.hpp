@@ -72,12 +72,12 @@ inline constexpr const char* kDeviceFormat = "driftlab-device/1";
 
 struct ChannelSpec {
   std::string name;
-  std::string role;   // rate | temperature | drive_frequency
-  std::string unit;   // as written in the file (e.g. "deg/s")
+  std::string role;                                             // rate | temperature | drive_frequency
+  std::string unit;                                             // as written in the file (e.g. "deg/s")
   double range_min = -std::numeric_limits<double>::infinity();  // internal units
   double range_max = std::numeric_limits<double>::infinity();
-  double resolution = 0.0;  // LSB, internal units; 0 = not quantized
-  double noise = 0.0;       // white noise std per sample, internal units (temperature, frequency)
+  double resolution = 0.0;               // LSB, internal units; 0 = not quantized
+  double noise = 0.0;                    // white noise std per sample, internal units (temperature, frequency)
   double scale_factor_mv_per_dps = 0.0;  // rate channel: analogue scale factor, informative
 };
 

@@ -41,7 +41,8 @@ std::string effect_line(const NamedEffect& e, const std::string& file) {
   std::string line = e.name + ": {";
   for (std::size_t i = 0; i < info->keys.size(); ++i) {
     const auto& key = info->keys[i];
-    const auto value = std::find_if(e.values.begin(), e.values.end(), [&](const EffectValue& v) { return v.key == key.key; });
+    const auto value =
+        std::find_if(e.values.begin(), e.values.end(), [&](const EffectValue& v) { return v.key == key.key; });
     if (value == e.values.end() || value->values.empty())
       throw ConfigError({file, 0, "effects." + e.name + "." + key.key}, "no value for this key");
     std::string text;
@@ -61,9 +62,8 @@ std::string add_effects_to_device_text(const std::string& text, const std::strin
   std::vector<std::string> new_lines;
   for (const auto& e : effects) new_lines.push_back(effect_line(e, file));
 
-  const auto section = std::find_if(lines.begin(), lines.end(), [](const std::string& l) {
-    return l.rfind("effects:", 0) == 0;
-  });
+  const auto section =
+      std::find_if(lines.begin(), lines.end(), [](const std::string& l) { return l.rfind("effects:", 0) == 0; });
   if (section == lines.end()) {
     if (!lines.empty() && !lines.back().empty()) lines.push_back("");
     if (!note.empty()) lines.push_back("# " + note);
@@ -110,12 +110,15 @@ std::string add_effects_to_device_text(const std::string& text, const std::strin
           while (stop < end && (lines[stop].find_first_not_of(' ') == std::string::npos ||
                                 indent_of(lines[stop]).size() > indent.size()))
             ++stop;
-          lines.erase(lines.begin() + static_cast<std::ptrdiff_t>(k + 1), lines.begin() + static_cast<std::ptrdiff_t>(stop));
+          lines.erase(lines.begin() + static_cast<std::ptrdiff_t>(k + 1),
+                      lines.begin() + static_cast<std::ptrdiff_t>(stop));
           lines[k] = indent + new_lines[i];
           const std::size_t removed = stop - k - 1;
           end -= removed;
-          if (last_content >= stop) last_content -= removed;
-          else if (last_content > k) last_content = k;
+          if (last_content >= stop)
+            last_content -= removed;
+          else if (last_content > k)
+            last_content = k;
         } else {
           lines.insert(lines.begin() + static_cast<std::ptrdiff_t>(last_content + 1), indent + new_lines[i]);
           ++last_content;

@@ -56,8 +56,7 @@ double DeviceModel::stiffness_n_per_m(const Mode& mode) const {
 
 double DeviceModel::implied_beam_length_m(const Mode& mode) const {
   const Structure& s = config_.structure;
-  const double per_length_cubed =
-      s.beams_per_mode * s.youngs_modulus_pa * s.thickness_m * std::pow(s.beam_width_m, 3);
+  const double per_length_cubed = s.beams_per_mode * s.youngs_modulus_pa * s.thickness_m * std::pow(s.beam_width_m, 3);
   return std::cbrt(per_length_cubed / stiffness_n_per_m(mode));
 }
 
@@ -76,8 +75,7 @@ double DeviceModel::quality_factor(const Mode& mode, double temp_c) const {
   return mode.quality_factor * std::pow(ratio, mode.quality_factor_exponent);
 }
 
-SenseResponse DeviceModel::sense_response(double drive_hz, double sense_hz, double sense_q,
-                                          double drive_amplitude_m) {
+SenseResponse DeviceModel::sense_response(double drive_hz, double sense_hz, double sense_q, double drive_amplitude_m) {
   const double wd = kTwoPi * drive_hz;
   const double wy = kTwoPi * sense_hz;
   const double detuning = wy * wy - wd * wd;
@@ -86,13 +84,12 @@ SenseResponse DeviceModel::sense_response(double drive_hz, double sense_hz, doub
 }
 
 SenseResponse DeviceModel::sense_response(double temp_c) const {
-  return sense_response(drive_frequency_hz(temp_c), sense_frequency_hz(temp_c),
-                        quality_factor(config_.sense, temp_c), config_.electronics.drive_amplitude_m);
+  return sense_response(drive_frequency_hz(temp_c), sense_frequency_hz(temp_c), quality_factor(config_.sense, temp_c),
+                        config_.electronics.drive_amplitude_m);
 }
 
 double DeviceModel::demodulation_phase_error_rad(double temp_c) const {
-  return config_.electronics.demodulation_phase_error_rad + reference_phase_ -
-         sense_response(temp_c).phase_lag_rad;
+  return config_.electronics.demodulation_phase_error_rad + reference_phase_ - sense_response(temp_c).phase_lag_rad;
 }
 
 double DeviceModel::quadrature_rad_s(double temp_c) const {
@@ -102,12 +99,12 @@ double DeviceModel::quadrature_rad_s(double temp_c) const {
 
 error_model::DeviceResponse DeviceModel::response(double temp_c) const {
   const double drive_hz = drive_frequency_hz(temp_c);
-  const SenseResponse sense = sense_response(drive_hz, sense_frequency_hz(temp_c),
-                                             quality_factor(config_.sense, temp_c),
-                                             config_.electronics.drive_amplitude_m);
+  const SenseResponse sense =
+      sense_response(drive_hz, sense_frequency_hz(temp_c), quality_factor(config_.sense, temp_c),
+                     config_.electronics.drive_amplitude_m);
   const double theta = config_.electronics.demodulation_phase_error_rad + reference_phase_ - sense.phase_lag_rad;
-  const double gain = sense.amplitude_m_per_rad_s /
-                      (reference_amplitude_ * std::cos(config_.electronics.demodulation_phase_error_rad));
+  const double gain =
+      sense.amplitude_m_per_rad_s / (reference_amplitude_ * std::cos(config_.electronics.demodulation_phase_error_rad));
   return {gain * std::cos(theta), gain * quadrature_rad_s(temp_c) * std::sin(theta), drive_hz};
 }
 

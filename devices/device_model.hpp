@@ -51,17 +51,17 @@ struct Structure {
 };
 
 struct Mode {
-  double frequency_hz = 0.0;                 // f0 at T0
-  double quality_factor = 0.0;               // Q0 at T0
-  double frequency_tc_per_k = -30e-6;        // a1, 1/K
-  double frequency_tc2_per_k2 = 0.0;         // a2, 1/K^2
-  double quality_factor_exponent = 1.0;      // n in Q(T) = Q0 (T0_K / T_K)^n
+  double frequency_hz = 0.0;             // f0 at T0
+  double quality_factor = 0.0;           // Q0 at T0
+  double frequency_tc_per_k = -30e-6;    // a1, 1/K
+  double frequency_tc2_per_k2 = 0.0;     // a2, 1/K^2
+  double quality_factor_exponent = 1.0;  // n in Q(T) = Q0 (T0_K / T_K)^n
 };
 
 struct Electronics {
-  double drive_amplitude_m = 5e-6;           // X0
-  double quadrature_rad_s = 0.0;             // W_q at T0, rad/s equivalent rate
-  double quadrature_tc_per_k = 0.0;          // c_q, 1/K
+  double drive_amplitude_m = 5e-6;            // X0
+  double quadrature_rad_s = 0.0;              // W_q at T0, rad/s equivalent rate
+  double quadrature_tc_per_k = 0.0;           // c_q, 1/K
   double demodulation_phase_error_rad = 0.0;  // theta_e
 };
 
@@ -87,9 +87,9 @@ class DeviceModel {
   const PhysicsConfig& config() const { return config_; }
 
   double proof_mass_kg() const;
-  double stiffness_n_per_m(const Mode& mode) const;            // k = m (2 pi f0)^2
-  double implied_beam_length_m(const Mode& mode) const;        // (n E t w^3 / k)^(1/3)
-  double drive_force_n(double temp_c) const;                   // k_x X0 / Q_x(T) at resonance
+  double stiffness_n_per_m(const Mode& mode) const;      // k = m (2 pi f0)^2
+  double implied_beam_length_m(const Mode& mode) const;  // (n E t w^3 / k)^(1/3)
+  double drive_force_n(double temp_c) const;             // k_x X0 / Q_x(T) at resonance
 
   double frequency_hz(const Mode& mode, double temp_c) const;
   double quality_factor(const Mode& mode, double temp_c) const;
@@ -98,8 +98,7 @@ class DeviceModel {
   double split_hz(double temp_c) const { return sense_frequency_hz(temp_c) - drive_frequency_hz(temp_c); }
 
   // The closed form above for given modes (also used directly by tests and describe).
-  static SenseResponse sense_response(double drive_hz, double sense_hz, double sense_q,
-                                      double drive_amplitude_m);
+  static SenseResponse sense_response(double drive_hz, double sense_hz, double sense_q, double drive_amplitude_m);
   SenseResponse sense_response(double temp_c) const;
 
   double demodulation_phase_error_rad(double temp_c) const;  // theta(T)

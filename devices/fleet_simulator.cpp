@@ -35,13 +35,20 @@ void spread_axis(ImuAxis& axis, const FleetSpread& s, error_model::NormalStream&
 
 std::string to_string(FaultKind kind) {
   switch (kind) {
-    case FaultKind::Hysteresis: return "hysteresis";
-    case FaultKind::BiasStep: return "bias_step";
-    case FaultKind::Noisy: return "noisy";
-    case FaultKind::Truncated: return "truncated";
-    case FaultKind::Lag: return "lag";
-    case FaultKind::DeadAxis: return "dead_axis";
-    case FaultKind::Lsb: return "lsb";
+    case FaultKind::Hysteresis:
+      return "hysteresis";
+    case FaultKind::BiasStep:
+      return "bias_step";
+    case FaultKind::Noisy:
+      return "noisy";
+    case FaultKind::Truncated:
+      return "truncated";
+    case FaultKind::Lag:
+      return "lag";
+    case FaultKind::DeadAxis:
+      return "dead_axis";
+    case FaultKind::Lsb:
+      return "lsb";
   }
   return "";
 }
@@ -115,13 +122,20 @@ std::vector<FaultCount> parse_fault_plan(const std::string& spec) {
 
 ExpectedFinding expected_finding(FaultKind kind) {
   switch (kind) {
-    case FaultKind::Hysteresis: return {"gyro_x", "hysteresis"};
-    case FaultKind::BiasStep: return {"gyro_y", "holdout"};
-    case FaultKind::Noisy: return {"gyro1_x", "N"};
-    case FaultKind::Truncated: return {"", "failed"};
-    case FaultKind::Lag: return {"gyro_z", "hysteresis"};
-    case FaultKind::DeadAxis: return {"gyro1_z", "N"};
-    case FaultKind::Lsb: return {"gyro1_x", "quantisation"};
+    case FaultKind::Hysteresis:
+      return {"gyro_x", "hysteresis"};
+    case FaultKind::BiasStep:
+      return {"gyro_y", "holdout"};
+    case FaultKind::Noisy:
+      return {"gyro1_x", "N"};
+    case FaultKind::Truncated:
+      return {"", "failed"};
+    case FaultKind::Lag:
+      return {"gyro_z", "hysteresis"};
+    case FaultKind::DeadAxis:
+      return {"gyro1_z", "N"};
+    case FaultKind::Lsb:
+      return {"gyro1_x", "quantisation"};
   }
   return {};
 }
@@ -191,9 +205,11 @@ std::vector<FleetUnit> plan_fleet(const ImuDefinition& nominal, std::size_t unit
   }
   std::size_t next = 0;
   for (const auto& f : faults) {
-    const bool second_instance = f.kind == FaultKind::Noisy || f.kind == FaultKind::DeadAxis || f.kind == FaultKind::Lsb;
+    const bool second_instance =
+        f.kind == FaultKind::Noisy || f.kind == FaultKind::DeadAxis || f.kind == FaultKind::Lsb;
     if (f.count > 0 && second_instance && nominal.instances.size() < 2)
-      throw ConfigError({"", 0, "--device"}, "the planted " + to_string(f.kind) + " fault needs a device with 2 IMU instances");
+      throw ConfigError({"", 0, "--device"},
+                        "the planted " + to_string(f.kind) + " fault needs a device with 2 IMU instances");
     for (std::size_t c = 0; c < f.count; ++c) {
       FleetUnit& unit = fleet[order[next++]];
       unit.fault = f.kind;

@@ -66,14 +66,14 @@ inline constexpr const char* kDefaultOutliers = "hysteresis:1,bias_step:1,noisy:
 // no fault). ConfigError naming --outliers and the kinds otherwise.
 std::vector<FaultCount> parse_fault_plan(const std::string& spec);
 
-inline constexpr double kHysteresisDph = 150.0;     // branch offset coefficient, deg/h
-inline constexpr double kHysteresisWidthK = 2.0;    // saturation width, K
-inline constexpr double kBiasStepDps = 0.05;        // 180 deg/h
-inline constexpr double kNoisyFactor = 5.0;         // on N
-inline constexpr double kTruncatedFraction = 0.4;   // of the CSV's bytes kept
-inline constexpr double kLagSlopeDphPerK = 20.0;    // bias per K of (lagged - die) temperature, deg/h/K
-inline constexpr double kLagTauS = 900.0;           // the sensing element's extra lag, s
-inline constexpr double kLsbDps = 0.05;             // coarse output LSB (180 deg/h), deg/s
+inline constexpr double kHysteresisDph = 150.0;    // branch offset coefficient, deg/h
+inline constexpr double kHysteresisWidthK = 2.0;   // saturation width, K
+inline constexpr double kBiasStepDps = 0.05;       // 180 deg/h
+inline constexpr double kNoisyFactor = 5.0;        // on N
+inline constexpr double kTruncatedFraction = 0.4;  // of the CSV's bytes kept
+inline constexpr double kLagSlopeDphPerK = 20.0;   // bias per K of (lagged - die) temperature, deg/h/K
+inline constexpr double kLagTauS = 900.0;          // the sensing element's extra lag, s
+inline constexpr double kLsbDps = 0.05;            // coarse output LSB (180 deg/h), deg/s
 
 struct ExpectedFinding {
   std::string channel;  // "gyro_x"; empty for a failed unit
@@ -83,9 +83,9 @@ ExpectedFinding expected_finding(FaultKind kind);
 std::string describe(FaultKind kind);  // the fault in words, with its size
 
 struct FleetUnit {
-  std::string id;       // "unit001": zero-padded to the width of the fleet size, at least 3 digits
-  std::uint64_t seed;   // of its record's noise
-  ImuDefinition imu;    // the spread device
+  std::string id;      // "unit001": zero-padded to the width of the fleet size, at least 3 digits
+  std::uint64_t seed;  // of its record's noise
+  ImuDefinition imu;   // the spread device
   std::optional<FaultKind> fault;
 };
 

@@ -37,9 +37,9 @@ struct ImuSensor {
 };
 
 struct ImuInstance {
-  std::optional<double> device_id;  // numeric identity (PX4 device_id style), when the file gives one
-  double die_time_constant_s = 0.0;     // die lags the chamber air, s
-  double sensor_time_constant_s = 0.0;  // temperature sensor lags the die, s
+  std::optional<double> device_id;        // numeric identity (PX4 device_id style), when the file gives one
+  double die_time_constant_s = 0.0;       // die lags the chamber air, s
+  double sensor_time_constant_s = 0.0;    // temperature sensor lags the die, s
   double temperature_noise_c = 0.0;       // white noise std per sample, K
   double temperature_resolution_c = 0.0;  // LSB of the temperature output, K (0: not quantized)
   ImuSensor gyro, accel;

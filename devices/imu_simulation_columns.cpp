@@ -37,7 +37,8 @@ std::vector<ImuSimulationColumn> imu_simulation_columns(const ImuDefinition& imu
     add("", &ImuAxisRecord::measured);
     // degC is the internal temperature unit: the snapped values are the written ones.
     const std::string temp = "temp" + digit + "_c";
-    columns.push_back({temp, temp, "degC", written_values(instance.temp_c, "degC", imu.instances[i].temperature_resolution_c)});
+    columns.push_back(
+        {temp, temp, "degC", written_values(instance.temp_c, "degC", imu.instances[i].temperature_resolution_c)});
     if (instance.device_id)
       columns.push_back({"device_id" + digit, "device_id" + digit, "1",
                          Eigen::VectorXd::Constant(record.time_s.size(), *instance.device_id)});

@@ -14,13 +14,12 @@ constexpr int kTemperatureSource = 6;
 constexpr std::uint64_t kImuStreamBase = 0x494D550000000000ULL;  // "IMU": apart from simulator.cpp's streams
 
 std::uint64_t source_seed(std::uint64_t seed, std::size_t instance, int source) {
-  return splitmix64(splitmix64(seed) ^ splitmix64(kImuStreamBase + instance * kSourcesPerInstance +
-                                                  static_cast<std::uint64_t>(source)));
+  return splitmix64(splitmix64(seed) ^
+                    splitmix64(kImuStreamBase + instance * kSourcesPerInstance + static_cast<std::uint64_t>(source)));
 }
 
 ImuAxisRecord simulate_axis(const ImuAxis& axis, double reference_temp_c, const Eigen::VectorXd& time_s,
-                            const Eigen::VectorXd& die_temp_c, Eigen::VectorXd truth, double fs,
-                            std::uint64_t seed) {
+                            const Eigen::VectorXd& die_temp_c, Eigen::VectorXd truth, double fs, std::uint64_t seed) {
   const Eigen::VectorXd temp = signal::first_order_lag(time_s, die_temp_c, axis.lag_s);
   ImuAxisRecord r;
   r.systematic.resize(time_s.size());
@@ -57,8 +56,7 @@ ImuSimulationRecord simulate_imu(const ImuDefinition& imu, const SimulationProfi
       out.gyro[a] = simulate_axis(spec.gyro.axes[a], imu.reference_temp_c, r.time_s, out.die_temp_c,
                                   table_rate.cwiseProduct(up.col(a)), fs, source_seed(options.seed, i, a));
       out.accel[a] = simulate_axis(spec.accel.axes[a], imu.reference_temp_c, r.time_s, out.die_temp_c,
-                                   imu.gravity_mps2 * up.col(a), fs,
-                                   source_seed(options.seed, i, 3 + a));
+                                   imu.gravity_mps2 * up.col(a), fs, source_seed(options.seed, i, 3 + a));
     }
     out.temp_c = signal::first_order_lag(r.time_s, out.die_temp_c, spec.sensor_time_constant_s);
     error_model::NormalStream noise(source_seed(options.seed, i, kTemperatureSource), 0);

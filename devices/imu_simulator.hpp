@@ -39,10 +39,10 @@ struct ImuAxisRecord {
 };
 
 struct ImuInstanceRecord {
-  std::optional<double> device_id;  // the instance's, when the file gives one
+  std::optional<double> device_id;           // the instance's, when the file gives one
   std::array<ImuAxisRecord, 3> gyro, accel;  // x, y, z
-  Eigen::VectorXd temp_c;      // the instance's temperature output, degC
-  Eigen::VectorXd die_temp_c;  // its die, degC
+  Eigen::VectorXd temp_c;                    // the instance's temperature output, degC
+  Eigen::VectorXd die_temp_c;                // its die, degC
 };
 
 struct ImuSimulationRecord {

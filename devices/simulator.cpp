@@ -103,8 +103,10 @@ Profile read_profile_section(YamlFields& y, const YAML::Node& node, const std::s
 
 Profile::Profile(double start, std::vector<ProfileSegment> segments) : values_{start} {
   for (const auto& s : segments) {
-    if (s.target) ramp_to(*s.target, s.duration_s);
-    else hold(s.duration_s);
+    if (s.target)
+      ramp_to(*s.target, s.duration_s);
+    else
+      hold(s.duration_s);
   }
 }
 
@@ -209,8 +211,8 @@ SimulationRecord simulate(const DeviceDefinition& device, const SimulationProfil
                           const SimulationOptions& options) {
   require_single_axis(device);
   if (profile.orientation)
-    throw ConfigError({profile.source, 0, "orientation"},
-                      "an orientation schedule needs a whole-IMU device (imu:); '" + device.name + "' is a single-axis gyro");
+    throw ConfigError({profile.source, 0, "orientation"}, "an orientation schedule needs a whole-IMU device (imu:); '" +
+                                                              device.name + "' is a single-axis gyro");
   const double fs = options.sample_rate_hz;
   const error_model::Config& config = device.error_model;
 

@@ -35,8 +35,8 @@ namespace driftlab::devices {
 
 // A piecewise-linear profile: a start value, then segments that hold or move linearly to a target.
 struct ProfileSegment {
-  double duration_s = 0.0;         // >= 0; 0 makes a step
-  std::optional<double> target;    // end value; absent = hold the current value
+  double duration_s = 0.0;       // >= 0; 0 makes a step
+  std::optional<double> target;  // end value; absent = hold the current value
 };
 
 class Profile {
@@ -71,8 +71,8 @@ struct OrientationSchedule {
 };
 
 struct SimulationProfile {
-  Profile chamber_c{25.0};   // degC
-  Profile true_rate{0.0};    // rad/s
+  Profile chamber_c{25.0};  // degC
+  Profile true_rate{0.0};   // rad/s
   // Whole-IMU devices only: replaces the device's fixed up direction (the table turns about 'up').
   std::optional<OrientationSchedule> orientation;
   std::string source = "static 25 degC";  // for messages and describe
@@ -105,8 +105,7 @@ class YamlFields;
 // Bounds::absolute_temperature_c()).
 struct Bounds;
 Profile read_profile_section(YamlFields& y, const YAML::Node& node, const std::string& path,
-                             const std::string& unit_suffix, double scale, double fallback_start,
-                             const Bounds& values);
+                             const std::string& unit_suffix, double scale, double fallback_start, const Bounds& values);
 
 struct SimulationOptions {
   double sample_rate_hz = 100.0;

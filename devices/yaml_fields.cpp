@@ -18,9 +18,12 @@ std::string joined(const std::vector<std::string>& items) {
 
 std::string bounds_text(const Bounds& b) {
   std::ostringstream out;
-  if (b.min && b.max) out << "in " << (b.min_exclusive ? "(" : "[") << *b.min << ", " << *b.max << "]";
-  else if (b.min) out << (b.min_exclusive ? "> " : ">= ") << *b.min;
-  else if (b.max) out << "<= " << *b.max;
+  if (b.min && b.max)
+    out << "in " << (b.min_exclusive ? "(" : "[") << *b.min << ", " << *b.max << "]";
+  else if (b.min)
+    out << (b.min_exclusive ? "> " : ">= ") << *b.min;
+  else if (b.max)
+    out << "<= " << *b.max;
   return out.str();
 }
 
@@ -57,8 +60,7 @@ bool YamlFields::map(const YAML::Node& node, const std::string& path, const std:
   return true;
 }
 
-YAML::Node YamlFields::child(const YAML::Node& parent, const std::string& path, const std::string& key,
-                             bool required) {
+YAML::Node YamlFields::child(const YAML::Node& parent, const std::string& path, const std::string& key, bool required) {
   if (!parent.IsMap()) return YAML::Node(YAML::NodeType::Undefined);
   for (const auto& kv : parent)
     if (kv.first.Scalar() == key) return kv.second;
@@ -66,8 +68,8 @@ YAML::Node YamlFields::child(const YAML::Node& parent, const std::string& path, 
   return YAML::Node(YAML::NodeType::Undefined);
 }
 
-std::optional<double> YamlFields::number(const YAML::Node& parent, const std::string& path,
-                                         const std::string& key, bool required, Bounds bounds) {
+std::optional<double> YamlFields::number(const YAML::Node& parent, const std::string& path, const std::string& key,
+                                         bool required, Bounds bounds) {
   const YAML::Node node = child(parent, path, key, required);
   if (!node.IsDefined()) return std::nullopt;
   const std::string field = join(path, key);
@@ -90,8 +92,8 @@ std::optional<double> YamlFields::number(const YAML::Node& parent, const std::st
   return value;
 }
 
-double YamlFields::number_or(const YAML::Node& parent, const std::string& path, const std::string& key,
-                             double fallback, Bounds bounds) {
+double YamlFields::number_or(const YAML::Node& parent, const std::string& path, const std::string& key, double fallback,
+                             Bounds bounds) {
   return number(parent, path, key, false, bounds).value_or(fallback);
 }
 
@@ -120,8 +122,8 @@ std::uint64_t YamlFields::whole_number_or(const YAML::Node& parent, const std::s
   return whole_number(parent, path, key, false, max).value_or(fallback);
 }
 
-std::optional<std::string> YamlFields::text(const YAML::Node& parent, const std::string& path,
-                                            const std::string& key, bool required) {
+std::optional<std::string> YamlFields::text(const YAML::Node& parent, const std::string& path, const std::string& key,
+                                            bool required) {
   const YAML::Node node = child(parent, path, key, required);
   if (!node.IsDefined()) return std::nullopt;
   if (!node.IsScalar() || node.Scalar().empty()) {

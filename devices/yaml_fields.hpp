@@ -27,8 +27,7 @@ struct Bounds {
 
 class YamlFields {
  public:
-  YamlFields(std::string file, std::vector<Diagnostic>& problems)
-      : file_(std::move(file)), problems_(problems) {}
+  YamlFields(std::string file, std::vector<Diagnostic>& problems) : file_(std::move(file)), problems_(problems) {}
 
   static int line_of(const YAML::Node& node);
   static std::string join(const std::string& path, const std::string& key);
@@ -42,10 +41,10 @@ class YamlFields {
   YAML::Node child(const YAML::Node& parent, const std::string& path, const std::string& key, bool required);
 
   // A finite number within bounds; nullopt (with a problem when required or malformed) otherwise.
-  std::optional<double> number(const YAML::Node& parent, const std::string& path, const std::string& key,
-                               bool required, Bounds bounds = {});
-  double number_or(const YAML::Node& parent, const std::string& path, const std::string& key,
-                   double fallback, Bounds bounds = {});
+  std::optional<double> number(const YAML::Node& parent, const std::string& path, const std::string& key, bool required,
+                               Bounds bounds = {});
+  double number_or(const YAML::Node& parent, const std::string& path, const std::string& key, double fallback,
+                   Bounds bounds = {});
   // A whole number written as digits, from 0 to `max` (a seed, a count): "1e30", "1.5" and "-1" are
   // refused (a cast would turn them into 0, 1 or 2^64 - 1 without a word).
   std::optional<std::uint64_t> whole_number(const YAML::Node& parent, const std::string& path, const std::string& key,
@@ -55,8 +54,8 @@ class YamlFields {
   std::optional<std::string> text(const YAML::Node& parent, const std::string& path, const std::string& key,
                                   bool required);
   // A list of finite numbers (a single number is a list of one).
-  std::optional<std::vector<double>> numbers(const YAML::Node& parent, const std::string& path,
-                                             const std::string& key, bool required);
+  std::optional<std::vector<double>> numbers(const YAML::Node& parent, const std::string& path, const std::string& key,
+                                             bool required);
 
  private:
   std::string file_;

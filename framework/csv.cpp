@@ -26,7 +26,7 @@ struct Suffix {
   std::string_view unit;
 };
 constexpr Suffix kSuffixes[] = {{"_dps", "deg/s"}, {"_rps", "rad/s"}, {"_dph", "deg/h"}, {"_c", "degC"},
-                                {"_k", "K"},       {"_hz", "Hz"},     {"_s", "s"},     {"_mps2", "m/s^2"}};
+                                {"_k", "K"},       {"_hz", "Hz"},     {"_s", "s"},       {"_mps2", "m/s^2"}};
 
 std::string role_of_stem(const std::string& stem) {
   if (stem == "temp") return role::kTemperature;
@@ -42,9 +42,8 @@ std::optional<ColumnMapping> time_mapping_of(const std::string& column) {
   std::string h(column);
   std::transform(h.begin(), h.end(), h.begin(), [](unsigned char c) { return std::tolower(c); });
   static const std::pair<std::string_view, std::string_view> known[] = {
-      {"t_s", "s"},        {"time_s", "s"},       {"time", "s"},  {"time_ms", "ms"},
-      {"time_us", "us"},   {"timeus", "us"},      {"timestamp", "us"}, {"timestamp_us", "us"},
-      {"time_ns", "ns"},   {"timestamp_ns", "ns"}};
+      {"t_s", "s"},     {"time_s", "s"},     {"time", "s"},          {"time_ms", "ms"}, {"time_us", "us"},
+      {"timeus", "us"}, {"timestamp", "us"}, {"timestamp_us", "us"}, {"time_ns", "ns"}, {"timestamp_ns", "ns"}};
   for (const auto& [name, unit] : known)
     if (h == name) return ColumnMapping{"time", column, std::string(unit)};
   return std::nullopt;
@@ -57,7 +56,8 @@ std::optional<int> device_id_instance(std::string_view role) {
   if (role.empty()) return 0;
   int instance = 0;
   const auto res = std::from_chars(role.data(), role.data() + role.size(), instance);
-  if (res.ec != std::errc() || res.ptr != role.data() + role.size() || instance < 1 || instance > 99) return std::nullopt;
+  if (res.ec != std::errc() || res.ptr != role.data() + role.size() || instance < 1 || instance > 99)
+    return std::nullopt;
   return instance;
 }
 
@@ -97,7 +97,6 @@ bool parse_number(std::string_view cell, double& value) {
   return res.ec == std::errc() && res.ptr == cell.data() + cell.size();
 }
 
-
 // A column that is read, and its values.
 struct Wanted : PlannedColumn {
   std::vector<double> values;
@@ -105,12 +104,18 @@ struct Wanted : PlannedColumn {
 
 std::string quantity_text(Quantity q) {
   switch (q) {
-    case Quantity::AngularRate: return "an angular-rate unit (rad/s, deg/s, deg/h, mrad/s, mdps)";
-    case Quantity::Acceleration: return "an acceleration unit (m/s^2, g, mg)";
-    case Quantity::Temperature: return "a temperature unit (degC, K)";
-    case Quantity::Time: return "a time unit (s, ms, us, ns, h)";
-    case Quantity::Frequency: return "a frequency unit (Hz, kHz)";
-    case Quantity::Dimensionless: return "unit 1";
+    case Quantity::AngularRate:
+      return "an angular-rate unit (rad/s, deg/s, deg/h, mrad/s, mdps)";
+    case Quantity::Acceleration:
+      return "an acceleration unit (m/s^2, g, mg)";
+    case Quantity::Temperature:
+      return "a temperature unit (degC, K)";
+    case Quantity::Time:
+      return "a time unit (s, ms, us, ns, h)";
+    case Quantity::Frequency:
+      return "a frequency unit (Hz, kHz)";
+    case Quantity::Dimensionless:
+      return "unit 1";
   }
   return "a unit";
 }
@@ -138,7 +143,6 @@ std::string names_excerpt(const std::vector<std::string_view>& names) {
   }
   return out;
 }
-
 
 }  // namespace
 
@@ -176,9 +180,10 @@ ColumnMapping parse_column_mapping(const std::string& text) {
     m.unit = s->unit;
     if (m.role.empty()) m.role = s->role;
   } else {
-    throw ConfigError(where, "expected role=column:unit, column:lsb*FACTOR:unit, column:unit or a column name "
-                             "with a unit suffix (_dps, _rps, _dph, _c, _k, _hz, _s) or an IMU name (gyro_x, "
-                             "accel_z_mps2, temp, ...)");
+    throw ConfigError(where,
+                      "expected role=column:unit, column:lsb*FACTOR:unit, column:unit or a column name "
+                      "with a unit suffix (_dps, _rps, _dph, _c, _k, _hz, _s) or an IMU name (gyro_x, "
+                      "accel_z_mps2, temp, ...)");
   }
   if (m.role.empty()) m.role = m.column;
   if (m.column.empty()) throw ConfigError(where, "empty column name");
@@ -225,14 +230,13 @@ std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& hea
   for (std::size_t i = 0; i < header.size(); ++i) {
     if (header[i].empty()) continue;
     if (!index_of.emplace(header[i], i).second)
-      throw DataError({file, header_line, ""}, "duplicated column name " + quoted_excerpt(header[i]) +
-                                                   " (columns " + std::to_string(index_of[header[i]] + 1) + " and " +
+      throw DataError({file, header_line, ""}, "duplicated column name " + quoted_excerpt(header[i]) + " (columns " +
+                                                   std::to_string(index_of[header[i]] + 1) + " and " +
                                                    std::to_string(i + 1) + ")");
   }
   const auto find_index = [&](const std::string& column, bool required) -> std::optional<std::size_t> {
     if (auto it = index_of.find(column); it != index_of.end()) return it->second;
-    if (required)
-      throw DataError({file, header_line, column}, "missing column (the header has: " + available + ")");
+    if (required) throw DataError({file, header_line, column}, "missing column (the header has: " + available + ")");
     return std::nullopt;
   };
 
@@ -253,12 +257,13 @@ std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& hea
     for (const auto& w : wanted) {
       if (w.mapping.role == m.role)
         throw ConfigError({file, header_line, m.column},
-                          "the '" + m.role + "' channel is claimed by two columns: " + quoted_excerpt(w.mapping.column) +
-                              " and " + quoted_excerpt(m.column) + " (map one of them with --column)");
+                          "the '" + m.role +
+                              "' channel is claimed by two columns: " + quoted_excerpt(w.mapping.column) + " and " +
+                              quoted_excerpt(m.column) + " (map one of them with --column)");
       if (w.mapping.column == m.column)
-        throw ConfigError({file, header_line, m.column},
-                          "column " + quoted_excerpt(m.column) + " is claimed by two channels: '" + w.mapping.role +
-                              "' and '" + m.role + "'");
+        throw ConfigError({file, header_line, m.column}, "column " + quoted_excerpt(m.column) +
+                                                             " is claimed by two channels: '" + w.mapping.role +
+                                                             "' and '" + m.role + "'");
     }
   };
   if (options.columns.empty()) {
@@ -285,15 +290,15 @@ std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& hea
     }
   }
   if (!time_mapping && options.sample_rate_hz <= 0.0)
-    throw DataError({file, header_line, "t_s"},
-                    "missing time column (the header has: " + available + "); give one with --column "
-                    "time=NAME:UNIT or a sample rate with --fs");
+    throw DataError({file, header_line, "t_s"}, "missing time column (the header has: " + available +
+                                                    "); give one with --column "
+                                                    "time=NAME:UNIT or a sample rate with --fs");
   for (const auto& r : options.required_roles) {
-    const bool found = std::any_of(wanted.begin(), wanted.end(), [&](const PlannedColumn& w) { return w.mapping.role == r; });
+    const bool found =
+        std::any_of(wanted.begin(), wanted.end(), [&](const PlannedColumn& w) { return w.mapping.role == r; });
     if (!found)
-      throw DataError({file, header_line, r},
-                      "no column for the '" + r + "' channel (the header has: " + available +
-                          "); name one with --column " + r + "=COLUMN:UNIT");
+      throw DataError({file, header_line, r}, "no column for the '" + r + "' channel (the header has: " + available +
+                                                  "); name one with --column " + r + "=COLUMN:UNIT");
   }
   if (time_mapping && options.sample_rate_hz > 0.0)
     throw ConfigError({file, header_line, time_mapping->column}, "the file has a time column; do not also give --fs");
@@ -337,7 +342,8 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
   }
   std::vector<Wanted> wanted;
   for (auto& p : plan_columns(header, options, file, header_line)) wanted.push_back({std::move(p), {}});
-  const auto time_it = std::find_if(wanted.begin(), wanted.end(), [](const Wanted& w) { return w.mapping.role == "time"; });
+  const auto time_it =
+      std::find_if(wanted.begin(), wanted.end(), [](const Wanted& w) { return w.mapping.role == "time"; });
   const std::optional<ColumnMapping> time_mapping =
       time_it == wanted.end() ? std::nullopt : std::optional<ColumnMapping>(time_it->mapping);
 
@@ -363,12 +369,14 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
         if (!parse_number(cell, v))
           throw DataError({file, lineno, w.mapping.column}, "expected a number, got " + quoted_excerpt(cell));
         if (!std::isfinite(v))
-          throw DataError({file, lineno, w.mapping.column}, "value is " + quoted_excerpt(cell) + " (NaN/Inf not allowed)");
+          throw DataError({file, lineno, w.mapping.column},
+                          "value is " + quoted_excerpt(cell) + " (NaN/Inf not allowed)");
         const double internal = to_internal(v, w.unit);
         if (!(std::abs(internal) <= kMaxMagnitude))
-          throw DataError({file, lineno, w.mapping.column},
-                          "value " + quoted_excerpt(cell) + " is too large to compute with (at most 1e100 " +
-                              internal_unit_symbol(w.unit.quantity) + " in magnitude; its squares and sums would overflow)");
+          throw DataError({file, lineno, w.mapping.column}, "value " + quoted_excerpt(cell) +
+                                                                " is too large to compute with (at most 1e100 " +
+                                                                internal_unit_symbol(w.unit.quantity) +
+                                                                " in magnitude; its squares and sums would overflow)");
         w.values.push_back(internal);
         ++next_wanted;
       }
@@ -386,16 +394,17 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
 
   Eigen::VectorXd time(static_cast<Eigen::Index>(rows));
   if (time_mapping) {
-    const auto& tv = std::find_if(wanted.begin(), wanted.end(), [](const Wanted& w) { return w.mapping.role == "time"; })->values;
+    const auto& tv =
+        std::find_if(wanted.begin(), wanted.end(), [](const Wanted& w) { return w.mapping.role == "time"; })->values;
     std::copy(tv.begin(), tv.end(), time.data());
     for (std::size_t i = 1; i < rows; ++i) {
       if (tv[i] == tv[i - 1])
         throw DataError({file, line_of_row[i], time_mapping->column},
                         "duplicated time stamp (same as line " + std::to_string(line_of_row[i - 1]) + ")");
       if (tv[i] < tv[i - 1])
-        throw DataError({file, line_of_row[i], time_mapping->column},
-                        "time stamps must increase (this one is earlier than line " +
-                            std::to_string(line_of_row[i - 1]) + ")");
+        throw DataError(
+            {file, line_of_row[i], time_mapping->column},
+            "time stamps must increase (this one is earlier than line " + std::to_string(line_of_row[i - 1]) + ")");
       if (tv[i] - tv[i - 1] < kMinTimeStep)
         throw DataError({file, line_of_row[i], time_mapping->column},
                         "time step of " + std::to_string(tv[i] - tv[i - 1]) + " s after line " +
@@ -403,8 +412,8 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
                             " is below 1 ns (a sample rate above 1 GHz; its rates and deviations would overflow)");
     }
     if (options.max_gap_factor > 0.0) {
-      const auto facts = sampling::facts_of(Eigen::Map<const Eigen::VectorXd>(tv.data(), static_cast<Eigen::Index>(rows)),
-                                            options.max_gap_factor);
+      const auto facts = sampling::facts_of(
+          Eigen::Map<const Eigen::VectorXd>(tv.data(), static_cast<Eigen::Index>(rows)), options.max_gap_factor);
       if (!facts.evenly_sampled()) {
         const auto i = static_cast<std::size_t>(facts.first_gap_index);
         throw DataError({file, line_of_row[i + 1], time_mapping->column},
@@ -415,7 +424,8 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
       }
     }
   } else {
-    for (std::size_t i = 0; i < rows; ++i) time[static_cast<Eigen::Index>(i)] = static_cast<double>(i) / options.sample_rate_hz;
+    for (std::size_t i = 0; i < rows; ++i)
+      time[static_cast<Eigen::Index>(i)] = static_cast<double>(i) / options.sample_rate_hz;
   }
 
   TimeSeries series(std::move(time));
@@ -444,8 +454,8 @@ std::string format_csv(const std::vector<CsvColumn>& columns, const std::string&
   Eigen::Index rows = columns.empty() ? 0 : columns.front().values.size();
   std::unordered_map<std::string_view, std::size_t> seen;
   for (const auto& c : columns) {
-    const auto bad = c.name.empty() || c.name.find_first_of(",\"\r\n") != std::string::npos ||
-                     c.name.front() == ' ' || c.name.back() == ' ' || c.name.front() == '#';
+    const auto bad = c.name.empty() || c.name.find_first_of(",\"\r\n") != std::string::npos || c.name.front() == ' ' ||
+                     c.name.back() == ' ' || c.name.front() == '#';
     if (bad)
       throw ConfigError({label, 0, ""}, "column name " + quoted_excerpt(c.name) +
                                             " is not a valid CSV header cell (empty, a comma, quote or line "
@@ -454,8 +464,7 @@ std::string format_csv(const std::vector<CsvColumn>& columns, const std::string&
       throw ConfigError({label, 0, c.name}, "two output columns have this name; column names must be unique");
     auto u = find_unit(c.unit);
     if (!u) throw ConfigError({label, 0, c.name}, "unknown output unit '" + c.unit + "'");
-    if (c.values.size() != rows)
-      throw DataError({label, 0, c.name}, "column length differs from the first column");
+    if (c.values.size() != rows) throw DataError({label, 0, c.name}, "column length differs from the first column");
     units.push_back(*u);
   }
   std::string out;

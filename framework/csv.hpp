@@ -72,7 +72,7 @@ struct CsvReadOptions {
 class CsvLineCursor {
  public:
   explicit CsvLineCursor(const std::string& text);
-  bool next(std::string_view& line);  // the next line (without its end); false at the end
+  bool next(std::string_view& line);         // the next line (without its end); false at the end
   int line_number() const { return line_; }  // 1-based number of the last line returned
 
  private:

@@ -26,13 +26,35 @@ constexpr const char* kFmtColumns = "Type,Length,Name,Format,Columns";
 
 std::size_t format_size(char c) {
   switch (c) {
-    case 'b': case 'B': case 'M': return 1;
-    case 'h': case 'H': case 'c': case 'C': case 'g': return 2;
-    case 'i': case 'I': case 'f': case 'e': case 'E': case 'L': case 'n': return 4;
-    case 'd': case 'q': case 'Q': return 8;
-    case 'N': return 16;
-    case 'Z': case 'a': return 64;
-    default: return 0;
+    case 'b':
+    case 'B':
+    case 'M':
+      return 1;
+    case 'h':
+    case 'H':
+    case 'c':
+    case 'C':
+    case 'g':
+      return 2;
+    case 'i':
+    case 'I':
+    case 'f':
+    case 'e':
+    case 'E':
+    case 'L':
+    case 'n':
+      return 4;
+    case 'd':
+    case 'q':
+    case 'Q':
+      return 8;
+    case 'N':
+      return 16;
+    case 'Z':
+    case 'a':
+      return 64;
+    default:
+      return 0;
   }
 }
 
@@ -47,24 +69,42 @@ double half_float(std::uint16_t bits) {
 
 double decode(char c, const unsigned char* p) {
   switch (c) {
-    case 'b': return static_cast<std::int8_t>(p[0]);
-    case 'B': case 'M': return p[0];
-    case 'h': return static_cast<std::int16_t>(load<2>(p));
-    case 'H': return static_cast<double>(load<2>(p));
-    case 'i': return static_cast<std::int32_t>(load<4>(p));
-    case 'I': return static_cast<double>(load<4>(p));
-    case 'q': return static_cast<double>(static_cast<std::int64_t>(load<8>(p)));
-    case 'Q': return static_cast<double>(load<8>(p));
-    case 'f': return binary::load_float(p);
-    case 'd': return binary::load_double(p);
-    case 'g': return half_float(static_cast<std::uint16_t>(load<2>(p)));
+    case 'b':
+      return static_cast<std::int8_t>(p[0]);
+    case 'B':
+    case 'M':
+      return p[0];
+    case 'h':
+      return static_cast<std::int16_t>(load<2>(p));
+    case 'H':
+      return static_cast<double>(load<2>(p));
+    case 'i':
+      return static_cast<std::int32_t>(load<4>(p));
+    case 'I':
+      return static_cast<double>(load<4>(p));
+    case 'q':
+      return static_cast<double>(static_cast<std::int64_t>(load<8>(p)));
+    case 'Q':
+      return static_cast<double>(load<8>(p));
+    case 'f':
+      return binary::load_float(p);
+    case 'd':
+      return binary::load_double(p);
+    case 'g':
+      return half_float(static_cast<std::uint16_t>(load<2>(p)));
     // Divided rather than multiplied by 0.01 / 1e-7: the nearest double to the decimal value.
-    case 'c': return static_cast<std::int16_t>(load<2>(p)) / 100.0;
-    case 'C': return static_cast<double>(load<2>(p)) / 100.0;
-    case 'e': return static_cast<std::int32_t>(load<4>(p)) / 100.0;
-    case 'E': return static_cast<double>(load<4>(p)) / 100.0;
-    case 'L': return static_cast<std::int32_t>(load<4>(p)) / 1e7;
-    default: return 0.0;
+    case 'c':
+      return static_cast<std::int16_t>(load<2>(p)) / 100.0;
+    case 'C':
+      return static_cast<double>(load<2>(p)) / 100.0;
+    case 'e':
+      return static_cast<std::int32_t>(load<4>(p)) / 100.0;
+    case 'E':
+      return static_cast<double>(load<4>(p)) / 100.0;
+    case 'L':
+      return static_cast<std::int32_t>(load<4>(p)) / 1e7;
+    default:
+      return 0.0;
   }
 }
 
@@ -205,12 +245,18 @@ class Parser {
       for (std::size_t i = 0; i < t.columns.size(); ++i)
         if (t.columns[i].numeric()) t.values[i].push_back(decode(t.columns[i].format, p + t.columns[i].offset));
     switch (roles_[index]) {
-      case Role::Data: return;
-      case Role::Fmt: return fmt(at, p);
-      case Role::Fmtu: return fmtu(t, p);
-      case Role::Unit: return unit(t, p);
-      case Role::Mult: return mult(t, p);
-      case Role::Parm: return parm(t, p);
+      case Role::Data:
+        return;
+      case Role::Fmt:
+        return fmt(at, p);
+      case Role::Fmtu:
+        return fmtu(t, p);
+      case Role::Unit:
+        return unit(t, p);
+      case Role::Mult:
+        return mult(t, p);
+      case Role::Parm:
+        return parm(t, p);
     }
   }
 
@@ -225,8 +271,8 @@ class Parser {
     for (const char c : format) {
       const std::size_t n = format_size(c);
       if (n == 0)
-        fail(at, what + ": unknown format character " + quoted_excerpt(std::string(1, c)) + " in " + quoted_excerpt(format) +
-                     " (known: a b B c C d e E f g h H i I L M n N q Q Z)");
+        fail(at, what + ": unknown format character " + quoted_excerpt(std::string(1, c)) + " in " +
+                     quoted_excerpt(format) + " (known: a b B c C d e E f g h H i I L M n N q Q Z)");
       size += n;
     }
     if (length != size)
@@ -248,9 +294,9 @@ class Parser {
       for (const auto& c : old.columns) old_columns += (old_columns.empty() ? "" : ",") + c.name;
       if (old.name == name && old.format == format && old_columns == columns) return;
       if (old.count > 0)
-        fail(at, what + " redefines type " + std::to_string(type) + " ('" + old.name + "' " + quoted_excerpt(old.format) +
-                     ", defined at byte " + std::to_string(old.defined_at) + ") after " + std::to_string(old.count) +
-                     " messages of it");
+        fail(at, what + " redefines type " + std::to_string(type) + " ('" + old.name + "' " +
+                     quoted_excerpt(old.format) + ", defined at byte " + std::to_string(old.defined_at) + ") after " +
+                     std::to_string(old.count) + " messages of it");
     }
     define(at, type, name, format, columns, length);
   }
@@ -312,7 +358,8 @@ class Parser {
         }
         if (i < ids.second.size()) {
           columns[i].multiplier_id = ids.second[i];
-          if (const auto m = log_.multipliers.find(ids.second[i]); m != log_.multipliers.end()) columns[i].multiplier = m->second;
+          if (const auto m = log_.multipliers.find(ids.second[i]); m != log_.multipliers.end())
+            columns[i].multiplier = m->second;
         }
       }
     }
@@ -321,8 +368,8 @@ class Parser {
   Input& in_;
   Log& log_;
   const ReadOptions& options_;
-  std::array<std::int16_t, 256> index_{};  // type -> index into log_.types, -1: no FMT yet
-  std::vector<Role> roles_;                // parallel to log_.types
+  std::array<std::int16_t, 256> index_{};                             // type -> index into log_.types, -1: no FMT yet
+  std::vector<Role> roles_;                                           // parallel to log_.types
   std::map<std::uint8_t, std::pair<std::string, std::string>> fmtu_;  // type -> (unit ids, multiplier ids)
 };
 
@@ -351,7 +398,8 @@ std::optional<std::size_t> MessageType::column_index(std::string_view column) co
 const std::vector<double>& MessageType::column(std::string_view column_name) const {
   const std::string field = name + "." + std::string(column_name);
   const auto i = column_index(column_name);
-  if (!i) throw DataError({"", 0, field}, "message type '" + name + "' has no column '" + std::string(column_name) + "'");
+  if (!i)
+    throw DataError({"", 0, field}, "message type '" + name + "' has no column '" + std::string(column_name) + "'");
   if (!kept) throw DataError({"", 0, field}, "the values of message type '" + name + "' were not kept (ReadOptions)");
   if (!columns[*i].numeric()) throw DataError({"", 0, field}, "column '" + field + "' holds text, not numbers");
   return values[*i];

@@ -60,14 +60,14 @@ bool has_magic(std::string_view first_bytes);
 // One column of a message type, as its FMT (and FMTU, UNIT, MULT) define it.
 struct Column {
   std::string name;
-  char format = 'f';             // the format character (table above)
-  std::size_t offset = 0;        // bytes from the start of the payload (after the 3-byte header)
-  std::size_t size = 0;          // bytes
-  char unit_id = 0;              // FMTU unit character (0: no FMTU); '#': the instance column
-  std::string unit;              // its UNIT label ("rad/s", "degC"); "" when unknown
-  char multiplier_id = 0;        // FMTU multiplier character (0: no FMTU)
+  char format = 'f';                 // the format character (table above)
+  std::size_t offset = 0;            // bytes from the start of the payload (after the 3-byte header)
+  std::size_t size = 0;              // bytes
+  char unit_id = 0;                  // FMTU unit character (0: no FMTU); '#': the instance column
+  std::string unit;                  // its UNIT label ("rad/s", "degC"); "" when unknown
+  char multiplier_id = 0;            // FMTU multiplier character (0: no FMTU)
   std::optional<double> multiplier;  // its MULT value, when the log defines it
-  bool numeric() const;          // false for text (n N Z) and int16 arrays (a)
+  bool numeric() const;              // false for text (n N Z) and int16 arrays (a)
 };
 
 // A message type: its definition, counts, and (when kept) its values.
@@ -76,14 +76,14 @@ struct MessageType {
   std::string name;
   std::string format;
   std::vector<Column> columns;
-  std::size_t length = 0;             // bytes of one message, the 3-byte header included
-  std::uint64_t defined_at = 0;       // byte offset of its FMT
-  bool timed = false;                 // first column TimeUS or TimeMS
-  std::uint64_t count = 0;            // messages
+  std::size_t length = 0;                             // bytes of one message, the 3-byte header included
+  std::uint64_t defined_at = 0;                       // byte offset of its FMT
+  bool timed = false;                                 // first column TimeUS or TimeMS
+  std::uint64_t count = 0;                            // messages
   std::uint64_t first_time_us = 0, last_time_us = 0;  // of the first / last message in the file (timed types)
-  bool kept = false;                  // values stored (ReadOptions)
-  std::vector<std::uint64_t> time_us;        // per message in file order, when kept and timed
-  std::vector<std::vector<double>> values;   // per column, per message, when kept (empty for text columns)
+  bool kept = false;                                  // values stored (ReadOptions)
+  std::vector<std::uint64_t> time_us;                 // per message in file order, when kept and timed
+  std::vector<std::vector<double>> values;            // per column, per message, when kept (empty for text columns)
 
   std::optional<std::size_t> column_index(std::string_view column) const;
   bool has_column(std::string_view column) const { return column_index(column).has_value(); }
@@ -114,7 +114,7 @@ struct Log {
   std::uint64_t skipped_runs = 0;       // places where garbage began
   std::uint64_t first_skip_offset = 0;  // byte where the first run began (when skipped_runs > 0)
   std::map<std::uint8_t, UnknownType> unknown_types;
-  std::uint64_t truncated_bytes = 0;    // an incomplete last message (0: the file ends cleanly)
+  std::uint64_t truncated_bytes = 0;  // an incomplete last message (0: the file ends cleanly)
 
   const MessageType* find(std::string_view name) const;
   // The first logged value of a parameter (the value at boot), if the log has it.

@@ -67,8 +67,8 @@ std::optional<std::uint32_t> device_id(const Log& log, imu::Sensor sensor, int i
 // INS_TCALn of one IMU instance (n = instance + 1), as first logged.
 struct TemperatureCalibration {
   int instance = 0;
-  double enable = 0.0;                       // INS_TCALn_ENABLE: 0 off, 1 on, 2 learning
-  double tmin = 0.0, tmax = 0.0;             // degC
+  double enable = 0.0;                                   // INS_TCALn_ENABLE: 0 off, 1 on, 2 learning
+  double tmin = 0.0, tmax = 0.0;                         // degC
   std::array<std::array<double, 3>, 3> gyro{}, accel{};  // [order - 1][axis x y z], as logged (x 1e6)
   double gyro_cal_temp = 0.0, accel_cal_temp = 0.0;      // INS_GYRn_CALTEMP, INS_ACCn_CALTEMP (degC)
 };

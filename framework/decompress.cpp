@@ -26,16 +26,20 @@ std::size_t grow(std::string& out, std::size_t used, std::optional<std::uint64_t
   return out.size() - used;
 }
 
-void check_size(std::size_t used, std::optional<std::uint64_t> expected, const Location& where, const std::string& what) {
+void check_size(std::size_t used, std::optional<std::uint64_t> expected, const Location& where,
+                const std::string& what) {
   if (expected && used != *expected)
-    fail(where, what, "decompressed to " + std::string(used > *expected ? "more than " : "") + std::to_string(used) +
-                          " bytes, not the " + std::to_string(*expected) + " its record states");
+    fail(where, what,
+         "decompressed to " + std::string(used > *expected ? "more than " : "") + std::to_string(used) +
+             " bytes, not the " + std::to_string(*expected) + " its record states");
 }
 
 #if DRIFTLAB_HAVE_ZSTD
-std::string zstd(std::string_view input, std::optional<std::uint64_t> expected, const Location& where, const std::string& what) {
+std::string zstd(std::string_view input, std::optional<std::uint64_t> expected, const Location& where,
+                 const std::string& what) {
   // One decompression context per thread, reset for each input: a bag holds thousands of chunks.
-  thread_local std::unique_ptr<ZSTD_DStream, decltype(&ZSTD_freeDStream)> stream(ZSTD_createDStream(), ZSTD_freeDStream);
+  thread_local std::unique_ptr<ZSTD_DStream, decltype(&ZSTD_freeDStream)> stream(ZSTD_createDStream(),
+                                                                                 ZSTD_freeDStream);
   if (!stream) fail(where, what, "out of memory for a zstd stream");
   ZSTD_DCtx_reset(stream.get(), ZSTD_reset_session_only);
   ZSTD_inBuffer in{input.data(), input.size(), 0};
@@ -58,11 +62,14 @@ std::string zstd(std::string_view input, std::optional<std::uint64_t> expected, 
 #endif
 
 #if DRIFTLAB_HAVE_LZ4
-std::string lz4(std::string_view input, std::optional<std::uint64_t> expected, const Location& where, const std::string& what) {
-  thread_local std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> context(nullptr, LZ4F_freeDecompressionContext);
+std::string lz4(std::string_view input, std::optional<std::uint64_t> expected, const Location& where,
+                const std::string& what) {
+  thread_local std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> context(
+      nullptr, LZ4F_freeDecompressionContext);
   if (!context) {
     LZ4F_dctx* raw = nullptr;
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&raw, LZ4F_VERSION))) fail(where, what, "out of memory for an lz4 context");
+    if (LZ4F_isError(LZ4F_createDecompressionContext(&raw, LZ4F_VERSION)))
+      fail(where, what, "out of memory for an lz4 context");
     context.reset(raw);
   }
   LZ4F_resetDecompressionContext(context.get());
@@ -78,7 +85,8 @@ std::string lz4(std::string_view input, std::optional<std::uint64_t> expected, c
     if (expected && used > *expected) check_size(used, expected, where, what);
     if (hint != 0 && room == 0 && in_size == 0) fail(where, what, "lz4 data ends inside a frame");
   }
-  if (consumed != input.size()) fail(where, what, std::to_string(input.size() - consumed) + " bytes after the lz4 frame");
+  if (consumed != input.size())
+    fail(where, what, std::to_string(input.size() - consumed) + " bytes after the lz4 frame");
   out.resize(used);
   check_size(used, expected, where, what);
   return out;

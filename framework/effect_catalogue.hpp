@@ -28,8 +28,8 @@ struct EffectKeyInfo {
 };
 
 struct EffectInfo {
-  std::string name;  // e.g. "thermal_lag"; the plugin is effect/<name>
-  std::string doc;   // one line: what it adds to the model
+  std::string name;                 // e.g. "thermal_lag"; the plugin is effect/<name>
+  std::string doc;                  // one line: what it adds to the model
   std::vector<EffectKeyInfo> keys;  // all required in a device file
 };
 

@@ -12,8 +12,8 @@ namespace driftlab {
 // Where a problem was found: any part may be empty / zero when it does not apply.
 struct Location {
   std::string file;
-  int line = 0;        // 1-based; 0 = unknown
-  std::string field;   // column name, YAML key path or parameter name
+  int line = 0;       // 1-based; 0 = unknown
+  std::string field;  // column name, YAML key path or parameter name
 };
 
 // One problem, with its location. Validation collects many of these before throwing.

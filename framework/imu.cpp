@@ -20,11 +20,10 @@ struct UnitSuffix {
   std::string_view suffix, unit;
 };
 // Longest first: "_mdps" before "_dps", "_mg" before "_g".
-constexpr UnitSuffix kRateSuffixes[] = {{"_rad_s", "rad/s"}, {"_rads", "rad/s"}, {"_rps", "rad/s"},
-                                        {"_mdps", "mdps"},   {"_deg_s", "deg/s"}, {"_dps", "deg/s"},
-                                        {"_dph", "deg/h"}};
-constexpr UnitSuffix kAccelSuffixes[] = {{"_m_s2", "m/s^2"}, {"_mps2", "m/s^2"}, {"_ms2", "m/s^2"},
-                                         {"_mg", "mg"},       {"_g", "g"}};
+constexpr UnitSuffix kRateSuffixes[] = {{"_rad_s", "rad/s"}, {"_rads", "rad/s"}, {"_rps", "rad/s"}, {"_mdps", "mdps"},
+                                        {"_deg_s", "deg/s"}, {"_dps", "deg/s"},  {"_dph", "deg/h"}};
+constexpr UnitSuffix kAccelSuffixes[] = {
+    {"_m_s2", "m/s^2"}, {"_mps2", "m/s^2"}, {"_ms2", "m/s^2"}, {"_mg", "mg"}, {"_g", "g"}};
 constexpr UnitSuffix kTempSuffixes[] = {{"_degc", "degC"}, {"_c", "degC"}, {"_k", "K"}};
 
 // Splits a known unit suffix off `stem`; the unit, or `fallback` when there is none.
@@ -84,8 +83,7 @@ std::optional<ColumnMatch> recognize_imu_column(std::string_view header) {
   std::string stem = lower(header);
   // Instance digits may sit after the sensor (gyro1_x, accel_2_z) or after the axis (GyrX1, gx_1);
   // a second instance number is not a recognised name.
-  static const std::regex sensor_axis(
-      "^(gyro|gyr|g|accel|acc|a)(?:_?([0-9]))?_?([xyz])(?:_?([0-9]))?$");
+  static const std::regex sensor_axis("^(gyro|gyr|g|accel|acc|a)(?:_?([0-9]))?_?([xyz])(?:_?([0-9]))?$");
   for (const bool gyro : {true, false}) {
     std::string s = stem;
     const std::string unit = gyro ? strip_suffix(s, kRateSuffixes, "rad/s") : strip_suffix(s, kAccelSuffixes, "m/s^2");
@@ -136,8 +134,9 @@ Selection parse_selection(const std::string& text, const std::string& option) {
     item.erase(0, item.find_first_not_of(' '));
     item.erase(item.find_last_not_of(' ') + 1);
     if (!std::regex_match(item, item_pattern))
-      throw ConfigError({"", 0, option}, "'" + item + "' names no channel (expected e.g. gyro, accel, gyro1, gyro_x, "
-                                                      "accel1_z or all, comma-separated)");
+      throw ConfigError({"", 0, option}, "'" + item +
+                                             "' names no channel (expected e.g. gyro, accel, gyro1, gyro_x, "
+                                             "accel1_z or all, comma-separated)");
     sel.items.push_back(item);
     if (comma == std::string::npos) break;
     start = comma + 1;

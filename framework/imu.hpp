@@ -52,10 +52,10 @@ struct ChannelId {
 // names it); empty for any other role.
 std::optional<ChannelId> parse_role(std::string_view role, std::string_view prefix = "");
 
-std::string temperature_role(int instance);                    // "temperature", "temperature1"
+std::string temperature_role(int instance);                        // "temperature", "temperature1"
 std::optional<int> parse_temperature_role(std::string_view role);  // inverse (nullopt otherwise)
-std::string truth_role(const ChannelId& id);                   // "true_gyro_x"
-std::string systematic_role(const ChannelId& id);              // "systematic_gyro_x"
+std::string truth_role(const ChannelId& id);                       // "true_gyro_x"
+std::string systematic_role(const ChannelId& id);                  // "systematic_gyro_x"
 
 // Internal unit of a sensor's channels ("rad/s", "m/s^2").
 std::string internal_unit(Sensor sensor);

@@ -14,7 +14,8 @@ constexpr char kAxes[3] = {'x', 'y', 'z'};
 constexpr std::int64_t kExactTicks = std::int64_t{1} << 53;  // converted to double without rounding
 
 double seconds(std::int64_t ticks, std::int64_t ticks_per_second) {
-  if (ticks > -kExactTicks && ticks < kExactTicks) return static_cast<double>(ticks) / static_cast<double>(ticks_per_second);
+  if (ticks > -kExactTicks && ticks < kExactTicks)
+    return static_cast<double>(ticks) / static_cast<double>(ticks_per_second);
   return static_cast<double>(ticks / ticks_per_second) +
          static_cast<double>(ticks % ticks_per_second) / static_cast<double>(ticks_per_second);
 }
@@ -36,16 +37,20 @@ Eigen::VectorXd resample(const std::vector<std::int64_t>& time, const std::vecto
 }
 
 bool selects_any_axis(const Selection& sel, Sensor sensor, int instance) {
-  return std::any_of(std::begin(kAxes), std::end(kAxes), [&](char axis) { return sel.selects({sensor, axis, instance}); });
+  return std::any_of(std::begin(kAxes), std::end(kAxes), [&](char axis) {
+    return sel.selects({sensor, axis, instance});
+  });
 }
 
 void require_samples(const std::string& file, const std::string& source, const std::string& label, std::size_t n) {
-  if (n < 2) throw DataError({file, 0, source}, label + " has " + std::to_string(n) + " samples; a record needs at least 2");
+  if (n < 2)
+    throw DataError({file, 0, source}, label + " has " + std::to_string(n) + " samples; a record needs at least 2");
 }
 
 void require_instance(const std::string& file, const std::string& source, int instance) {
   if (instance < 0 || instance > kMaxInstance)
-    throw DataError({file, 0, source}, "instance " + std::to_string(instance) + " is beyond the IMU role names (0 to 99)");
+    throw DataError({file, 0, source},
+                    "instance " + std::to_string(instance) + " is beyond the IMU role names (0 to 99)");
 }
 
 }  // namespace
@@ -64,9 +69,11 @@ std::vector<std::size_t> repaired_order(const std::vector<std::int64_t>& time, c
     if (kept.empty() || time[kept.back()] != time[i]) kept.push_back(i);
   const std::size_t duplicates = order.size() - kept.size();
   if (notes && out_of_order > 0)
-    notes->push_back(label + ": " + std::to_string(out_of_order) + " samples earlier than the one before; sorted by time");
+    notes->push_back(label + ": " + std::to_string(out_of_order) +
+                     " samples earlier than the one before; sorted by time");
   if (notes && duplicates > 0)
-    notes->push_back(label + ": " + std::to_string(duplicates) + " repeated time stamps; the first sample of each kept");
+    notes->push_back(label + ": " + std::to_string(duplicates) +
+                     " repeated time stamps; the first sample of each kept");
   return kept;
 }
 
@@ -76,8 +83,8 @@ std::string unusable_value(double v) { return std::isfinite(v) ? "value beyond 1
 
 void check_temperature(std::vector<double>& values, const std::string& file, const std::string& field,
                        const std::string& label, std::vector<std::string>* notes) {
-  const auto missing = static_cast<std::size_t>(
-      std::count_if(values.begin(), values.end(), [](double v) { return !usable_value(v); }));
+  const auto missing =
+      static_cast<std::size_t>(std::count_if(values.begin(), values.end(), [](double v) { return !usable_value(v); }));
   if (missing == 0) return;
   if (missing < values.size())
     throw DataError({file, 0, field}, std::to_string(missing) + " of " + std::to_string(values.size()) +
@@ -108,8 +115,9 @@ std::vector<double> pick(const std::string& file, const SensorStream& s, const s
   for (std::size_t i = 0; i < out.size(); ++i) {
     out[i] = values[order.message[i]];
     if (!usable_value(out[i]))
-      throw DataError({file, 0, s.source + "." + field}, unusable_value(out[i]) + " at time stamp " +
-                                                             std::to_string(order.time_us[i]) + " us (" + s.label + ")");
+      throw DataError(
+          {file, 0, s.source + "." + field},
+          unusable_value(out[i]) + " at time stamp " + std::to_string(order.time_us[i]) + " us (" + s.label + ")");
   }
   return out;
 }
@@ -142,7 +150,8 @@ TimeSeries assemble(std::vector<SensorStream> sensors, std::vector<TemperatureSt
                     "the selection (instance " +
                         (selection.instance >= 0 ? std::to_string(selection.instance) : std::string("any")) +
                         ", sensor '" + (selection.sensor.empty() ? std::string("all") : selection.sensor) +
-                        "') matches no stream of the log (it has: " + (have.empty() ? std::string("none") : have) + ")");
+                        "') matches no stream of the log (it has: " + (have.empty() ? std::string("none") : have) +
+                        ")");
   // Gyros first, then accelerometers; by instance within each.
   std::stable_sort(streams.begin(), streams.end(), [](const SensorStream& a, const SensorStream& b) {
     return std::pair(a.sensor != Sensor::Gyro, a.instance) < std::pair(b.sensor != Sensor::Gyro, b.instance);
@@ -152,7 +161,8 @@ TimeSeries assemble(std::vector<SensorStream> sensors, std::vector<TemperatureSt
   std::vector<const SensorStream*> carried(kMaxInstance + 1, nullptr);
   std::vector<const TemperatureStream*> separate(kMaxInstance + 1, nullptr);
   for (const auto& s : streams)
-    if (!s.temperature.empty() && !carried[static_cast<std::size_t>(s.instance)]) carried[static_cast<std::size_t>(s.instance)] = &s;
+    if (!s.temperature.empty() && !carried[static_cast<std::size_t>(s.instance)])
+      carried[static_cast<std::size_t>(s.instance)] = &s;
   for (const auto& s : streams) {
     const auto instance = static_cast<std::size_t>(s.instance);
     if (carried[instance] || separate[instance]) continue;
@@ -177,19 +187,23 @@ TimeSeries assemble(std::vector<SensorStream> sensors, std::vector<TemperatureSt
   for (const auto t : base.time)
     if (t >= from && t <= to) base_time.push_back(t);
   if (base_time.size() < 2)
-    throw DataError({file, 0, base.source},
-                    "the selected streams overlap in time at fewer than 2 samples of the time base (" + base.label + ")");
-  const std::size_t others = streams.size() - 1 + static_cast<std::size_t>(std::count_if(
-                                                        separate.begin(), separate.end(), [](const auto* t) { return t != nullptr; }));
+    throw DataError(
+        {file, 0, base.source},
+        "the selected streams overlap in time at fewer than 2 samples of the time base (" + base.label + ")");
+  const std::size_t others = streams.size() - 1 +
+                             static_cast<std::size_t>(std::count_if(separate.begin(), separate.end(),
+                                                                    [](const auto* t) { return t != nullptr; }));
   if (notes && others > 0) {
-    notes->push_back("time base: " + base.label + "; " + std::to_string(others) + " other streams linearly interpolated onto it");
+    notes->push_back("time base: " + base.label + "; " + std::to_string(others) +
+                     " other streams linearly interpolated onto it");
     if (base_time.size() < base.time.size())
-      notes->push_back(std::to_string(base.time.size() - base_time.size()) + " samples of the time base outside the span " +
-                       "every selected stream covers were dropped");
+      notes->push_back(std::to_string(base.time.size() - base_time.size()) +
+                       " samples of the time base outside the span " + "every selected stream covers were dropped");
   }
 
   Eigen::VectorXd time(static_cast<Eigen::Index>(base_time.size()));
-  for (std::size_t i = 0; i < base_time.size(); ++i) time[static_cast<Eigen::Index>(i)] = seconds(base_time[i], ticks_per_second);
+  for (std::size_t i = 0; i < base_time.size(); ++i)
+    time[static_cast<Eigen::Index>(i)] = seconds(base_time[i], ticks_per_second);
   TimeSeries record(std::move(time));
   std::vector<bool> has_temperature(kMaxInstance + 1, false), has_device(kMaxInstance + 1, false);
   for (const auto& s : streams) {
@@ -203,9 +217,11 @@ TimeSeries assemble(std::vector<SensorStream> sensors, std::vector<TemperatureSt
     if (!has_temperature[instance]) {
       has_temperature[instance] = true;
       if (const auto* c = carried[instance])
-        record.set_channel({temperature_role(s.instance), "degC", c->source, resample(c->time, c->temperature, base_time), "degC"});
+        record.set_channel(
+            {temperature_role(s.instance), "degC", c->source, resample(c->time, c->temperature, base_time), "degC"});
       else if (const auto* t = separate[instance])
-        record.set_channel({temperature_role(s.instance), "degC", t->source, resample(t->time, t->values, base_time), "degC"});
+        record.set_channel(
+            {temperature_role(s.instance), "degC", t->source, resample(t->time, t->values, base_time), "degC"});
     }
     if (!s.device_id.empty() && !has_device[instance]) {
       has_device[instance] = true;

@@ -15,13 +15,19 @@ namespace driftlab::mcap {
 namespace {
 
 constexpr unsigned char kMagic[kMagicSize] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
-constexpr std::size_t kOpeningSize = 9;       // opcode + uint64 length
+constexpr std::size_t kOpeningSize = 9;         // opcode + uint64 length
 constexpr std::size_t kFooterSize = 8 + 8 + 4;  // summary_start, summary_offset_start, summary_crc
 constexpr std::size_t kBlockSize = std::size_t{1} << 20;
 
 enum Opcode : std::uint8_t {
-  kHeader = 0x01, kFooter = 0x02, kSchema = 0x03, kChannel = 0x04, kMessage = 0x05, kChunk = 0x06,
-  kStatistics = 0x0B, kDataEnd = 0x0F,
+  kHeader = 0x01,
+  kFooter = 0x02,
+  kSchema = 0x03,
+  kChannel = 0x04,
+  kMessage = 0x05,
+  kChunk = 0x06,
+  kStatistics = 0x0B,
+  kDataEnd = 0x0F,
 };
 
 std::uint32_t crc32(std::string_view bytes) {
@@ -88,7 +94,8 @@ class Fields {
 // The file or the memory being parsed: views of byte ranges, read in blocks.
 class Input {
  public:
-  Input(std::string_view memory, std::string file) : memory_(memory), file_name_(std::move(file)), size_(memory.size()) {}
+  Input(std::string_view memory, std::string file)
+      : memory_(memory), file_name_(std::move(file)), size_(memory.size()) {}
   Input(const std::filesystem::path& path, std::string file) : file_name_(std::move(file)) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec))
@@ -143,9 +150,10 @@ class Parser {
     while (!footer) {
       const Place place{Place::kNoChunk, pos};
       if (in_.size() - pos < kOpeningSize)
-        throw DataError({file_.file, 0, ""}, place.text() + ": the file ends " +
-                                                 (pos == in_.size() ? std::string("without a footer") : "inside a record's opening") +
-                                                 " (truncated: the writer did not finish it)");
+        throw DataError({file_.file, 0, ""},
+                        place.text() + ": the file ends " +
+                            (pos == in_.size() ? std::string("without a footer") : "inside a record's opening") +
+                            " (truncated: the writer did not finish it)");
       Fields opening(in_.view(pos, kOpeningSize), file_.file, place);
       const std::uint8_t opcode = opening.u8();
       const std::uint64_t length = opening.u64();
@@ -170,17 +178,21 @@ class Parser {
           record(opcode, f);
           break;
         }
-        case kChunk: chunk(view(), place); break;
+        case kChunk:
+          chunk(view(), place);
+          break;
         case kFooter: {
           Fields f(view(), file_.file, place, "Footer");
-          if (length != kFooterSize) f.fail("a Footer of " + std::to_string(length) + " bytes, not " + std::to_string(kFooterSize));
+          if (length != kFooterSize)
+            f.fail("a Footer of " + std::to_string(length) + " bytes, not " + std::to_string(kFooterSize));
           file_.has_summary = f.u64() != 0;
           if (in_.size() - content - length != kMagicSize || !has_magic(in_.view(content + length, kMagicSize)))
             f.fail("the Footer is not followed by the closing magic and the end of the file");
           footer = true;
           break;
         }
-        default: break;  // indexes, attachments, metadata, summary offsets, data end, reserved
+        default:
+          break;  // indexes, attachments, metadata, summary offsets, data end, reserved
       }
       pos = content + length;
     }
@@ -191,11 +203,20 @@ class Parser {
  private:
   void record(std::uint8_t opcode, Fields& f) {
     switch (opcode) {
-      case kSchema: schema(f); break;
-      case kChannel: channel(f); break;
-      case kMessage: message(f); break;
-      case kStatistics: statistics(f); break;
-      default: f.fail("opcode " + hex(opcode) + " inside a chunk (only Schema, Channel and Message belong there)");
+      case kSchema:
+        schema(f);
+        break;
+      case kChannel:
+        channel(f);
+        break;
+      case kMessage:
+        message(f);
+        break;
+      case kStatistics:
+        statistics(f);
+        break;
+      default:
+        f.fail("opcode " + hex(opcode) + " inside a chunk (only Schema, Channel and Message belong there)");
     }
   }
 
@@ -208,7 +229,8 @@ class Parser {
     if (s.id == 0) f.fail("schema id 0 is reserved (\"no schema\")");
     if (const Schema* known = file_.find_schema(s.id)) {
       if (known->name != s.name || known->encoding != s.encoding)
-        f.fail("schema id " + std::to_string(s.id) + " redefined ('" + known->name + "', now " + quoted_excerpt(s.name) + ")");
+        f.fail("schema id " + std::to_string(s.id) + " redefined ('" + known->name + "', now " +
+               quoted_excerpt(s.name) + ")");
       return;
     }
     file_.schemas.push_back(std::move(s));
@@ -227,11 +249,13 @@ class Parser {
     }
     const Schema* schema = c.schema_id ? file_.find_schema(c.schema_id) : nullptr;
     if (c.schema_id && !schema)
-      f.fail("channel " + std::to_string(c.id) + " names schema " + std::to_string(c.schema_id) + ", not defined before it");
+      f.fail("channel " + std::to_string(c.id) + " names schema " + std::to_string(c.schema_id) +
+             ", not defined before it");
     if (const int known = channel_index(c.id); known >= 0) {
       const Channel& k = file_.channels[static_cast<std::size_t>(known)];
       if (k.topic != c.topic || k.schema_id != c.schema_id || k.message_encoding != c.message_encoding)
-        f.fail("channel id " + std::to_string(c.id) + " redefined ('" + k.topic + "', now " + quoted_excerpt(c.topic) + ")");
+        f.fail("channel id " + std::to_string(c.id) + " redefined ('" + k.topic + "', now " + quoted_excerpt(c.topic) +
+               ")");
       return;
     }
     if (channel_index_.size() <= c.id) channel_index_.resize(std::size_t{c.id} + 1, -1);
@@ -269,10 +293,10 @@ class Parser {
   void statistics(Fields& f) {
     file_.has_statistics = true;
     statistics_messages_ = f.u64();
-    f.u16();  // schema_count
+    f.u16();                              // schema_count
     for (int i = 0; i < 4; ++i) f.u32();  // channel, attachment, metadata, chunk counts
-    f.u64();  // message_start_time
-    f.u64();  // message_end_time
+    f.u64();                              // message_start_time
+    f.u64();                              // message_end_time
     Fields map(f.bytes(f.u32(), "channel message counts"), file_.file, f.place(), "Statistics");
     while (map.remaining() > 0) {
       const std::uint16_t id = map.u16();
@@ -283,16 +307,18 @@ class Parser {
   void check_statistics() const {
     if (!file_.has_statistics) return;
     const auto fail = [&](const std::string& message) {
-      throw DataError({file_.file, 0, ""}, "the summary's Statistics " + message + " (the summary or the data is corrupt)");
+      throw DataError({file_.file, 0, ""},
+                      "the summary's Statistics " + message + " (the summary or the data is corrupt)");
     };
     if (statistics_messages_ != file_.messages)
-      fail("count " + std::to_string(statistics_messages_) + " messages; the data section holds " + std::to_string(file_.messages));
+      fail("count " + std::to_string(statistics_messages_) + " messages; the data section holds " +
+           std::to_string(file_.messages));
     for (const auto& [id, count] : statistics_counts_) {
       const int index = channel_index(id);
       const std::uint64_t have = index < 0 ? 0 : file_.channels[static_cast<std::size_t>(index)].count;
       if (have != count)
-        fail("count " + std::to_string(count) + " messages on channel " + std::to_string(id) + "; the data section holds " +
-             std::to_string(have));
+        fail("count " + std::to_string(count) + " messages on channel " + std::to_string(id) +
+             "; the data section holds " + std::to_string(have));
     }
   }
 
@@ -304,7 +330,8 @@ class Parser {
     const std::uint32_t crc = f.u32();
     const std::string compression = f.string("compression");
     const std::string_view compressed = f.bytes(f.u64(), "chunk records");
-    const std::string records = decompress(compression, compressed, uncompressed_size, {file_.file, 0, ""}, place.text() + " (Chunk)");
+    const std::string records =
+        decompress(compression, compressed, uncompressed_size, {file_.file, 0, ""}, place.text() + " (Chunk)");
     if (crc != 0 && crc32(records) != crc) f.fail("the CRC-32 of its records differs from the one it states (corrupt)");
     ++file_.chunks;
     ++file_.chunk_compression[compression];
@@ -318,8 +345,8 @@ class Parser {
       const std::uint8_t opcode = opening.u8();
       const std::uint64_t length = opening.u64();
       if (length > all.size() - pos - kOpeningSize)
-        opening.fail("a record of " + std::to_string(length) + " bytes, but " + std::to_string(all.size() - pos - kOpeningSize) +
-                     " remain in the chunk");
+        opening.fail("a record of " + std::to_string(length) + " bytes, but " +
+                     std::to_string(all.size() - pos - kOpeningSize) + " remain in the chunk");
       if (opcode == kStatistics) opening.fail("a Statistics record inside a chunk");
       Fields fields(all.substr(pos + kOpeningSize, static_cast<std::size_t>(length)), file_.file, inner);
       record(opcode, fields);

@@ -67,7 +67,7 @@ struct Channel {
   std::string topic;
   std::string message_encoding;  // "cdr", "ros1", ...
   std::map<std::string, std::string> metadata;
-  std::uint64_t count = 0;                                // messages in the data section
+  std::uint64_t count = 0;                              // messages in the data section
   std::uint64_t first_log_time = 0, last_log_time = 0;  // ns, of the first / last message in file order
   std::uint64_t min_log_time = 0, max_log_time = 0;     // ns, over all its messages
 };
@@ -98,7 +98,7 @@ struct File {
   std::vector<Channel> channels;  // in order of their first record
   std::uint64_t messages = 0;
   std::uint64_t chunks = 0;
-  std::map<std::string, std::uint64_t> chunk_compression;  // chunks per compression ("" = none)
+  std::map<std::string, std::uint64_t> chunk_compression;      // chunks per compression ("" = none)
   std::uint64_t compressed_bytes = 0, uncompressed_bytes = 0;  // of the chunks' records
   bool has_summary = false;
   bool has_statistics = false;

@@ -26,14 +26,19 @@ const T& get_as(const ParamValues& values, const std::string& key, const char* e
 std::string type_mismatch(const ParamSpec& spec, const ParamValue& value) {
   const bool ok = [&] {
     switch (spec.type) {
-      case ParamType::Integer: return std::holds_alternative<std::int64_t>(value);
+      case ParamType::Integer:
+        return std::holds_alternative<std::int64_t>(value);
       case ParamType::Real:
         return std::holds_alternative<double>(value) || std::holds_alternative<std::int64_t>(value);
-      case ParamType::Boolean: return std::holds_alternative<bool>(value);
+      case ParamType::Boolean:
+        return std::holds_alternative<bool>(value);
       case ParamType::Text:
-      case ParamType::Choice: return std::holds_alternative<std::string>(value);
-      case ParamType::RealList: return std::holds_alternative<std::vector<double>>(value);
-      case ParamType::Plugin: return std::holds_alternative<std::shared_ptr<const PluginSpec>>(value);
+      case ParamType::Choice:
+        return std::holds_alternative<std::string>(value);
+      case ParamType::RealList:
+        return std::holds_alternative<std::vector<double>>(value);
+      case ParamType::Plugin:
+        return std::holds_alternative<std::shared_ptr<const PluginSpec>>(value);
     }
     return false;
   }();
@@ -52,13 +57,20 @@ std::string bound_violation(const ParamSpec& spec, double v) {
 
 std::string to_string(ParamType type) {
   switch (type) {
-    case ParamType::Integer: return "integer";
-    case ParamType::Real: return "real";
-    case ParamType::Boolean: return "boolean";
-    case ParamType::Text: return "text";
-    case ParamType::Choice: return "choice";
-    case ParamType::RealList: return "list of reals";
-    case ParamType::Plugin: return "plugin";
+    case ParamType::Integer:
+      return "integer";
+    case ParamType::Real:
+      return "real";
+    case ParamType::Boolean:
+      return "boolean";
+    case ParamType::Text:
+      return "text";
+    case ParamType::Choice:
+      return "choice";
+    case ParamType::RealList:
+      return "list of reals";
+    case ParamType::Plugin:
+      return "plugin";
   }
   return "?";
 }
@@ -81,9 +93,7 @@ double ParamValues::real(const std::string& key) const {
 
 bool ParamValues::boolean(const std::string& key) const { return get_as<bool>(*this, key, "a boolean"); }
 
-const std::string& ParamValues::text(const std::string& key) const {
-  return get_as<std::string>(*this, key, "text");
-}
+const std::string& ParamValues::text(const std::string& key) const { return get_as<std::string>(*this, key, "text"); }
 
 const std::vector<double>& ParamValues::reals(const std::string& key) const {
   return get_as<std::vector<double>>(*this, key, "a list of reals");
@@ -128,9 +138,8 @@ std::string ParamSpec::check(const ParamValue& value) const {
         return msg;
       break;
     case ParamType::Real: {
-      const double v = std::holds_alternative<double>(value)
-                           ? std::get<double>(value)
-                           : static_cast<double>(std::get<std::int64_t>(value));
+      const double v = std::holds_alternative<double>(value) ? std::get<double>(value)
+                                                             : static_cast<double>(std::get<std::int64_t>(value));
       if (auto msg = bound_violation(*this, v); !msg.empty()) return msg;
       break;
     }
@@ -145,7 +154,8 @@ std::string ParamSpec::check(const ParamValue& value) const {
       if (!found) return "'" + s + "' is not " + constraint_text();
       break;
     }
-    default: break;
+    default:
+      break;
   }
   if (predicate)
     if (auto msg = predicate(value); !msg.empty()) return msg;
@@ -203,8 +213,7 @@ ParamSpec nested(std::string key, std::string kind, std::string default_plugin, 
 }
 
 ParamSpec seed() {
-  return integer("seed", 1, "1", "random seed; pipelines fill it from the pipeline seed when absent")
-      .at_least(0);
+  return integer("seed", 1, "1", "random seed; pipelines fill it from the pipeline seed when absent").at_least(0);
 }
 
 }  // namespace param
@@ -246,8 +255,8 @@ std::vector<InvalidExample> invalid_examples(const ParamSpec& spec) {
     if (spec.type == ParamType::RealList) return std::vector<double>{v};
     return v;
   };
-  const bool is_numeric = spec.type == ParamType::Integer || spec.type == ParamType::Real ||
-                          spec.type == ParamType::RealList;
+  const bool is_numeric =
+      spec.type == ParamType::Integer || spec.type == ParamType::Real || spec.type == ParamType::RealList;
   if (is_numeric && spec.min) {
     const double below = spec.min_exclusive ? *spec.min : *spec.min - 1.0;
     out.push_back({numeric(below), "below the minimum"});

@@ -32,8 +32,8 @@ class ParamValues;
 
 // A parameter value. Integer parameters hold int64, Real hold double, Text and Choice hold string,
 // RealList holds a vector, Plugin holds a nested plugin spec.
-using ParamValue = std::variant<std::int64_t, double, bool, std::string, std::vector<double>,
-                                std::shared_ptr<const PluginSpec>>;
+using ParamValue =
+    std::variant<std::int64_t, double, bool, std::string, std::vector<double>, std::shared_ptr<const PluginSpec>>;
 
 // Validated values of one plugin's parameters, every declared key present.
 class ParamValues {
@@ -43,7 +43,7 @@ class ParamValues {
   const ParamValue& at(const std::string& key) const;  // throws ConfigError when absent
 
   std::int64_t integer(const std::string& key) const;
-  double real(const std::string& key) const;            // Integer values convert
+  double real(const std::string& key) const;  // Integer values convert
   bool boolean(const std::string& key) const;
   const std::string& text(const std::string& key) const;  // Text and Choice
   const std::vector<double>& reals(const std::string& key) const;
@@ -63,8 +63,8 @@ struct PluginSpec {
 
 // A cross-parameter rule: `holds` returns false when the combination is invalid.
 struct CrossRule {
-  std::string description;          // e.g. "min_imfs <= max_imfs"
-  std::vector<std::string> keys;    // parameters it involves, named in the error
+  std::string description;        // e.g. "min_imfs <= max_imfs"
+  std::vector<std::string> keys;  // parameters it involves, named in the error
   std::function<bool(const ParamValues&)> holds;
 };
 
@@ -74,23 +74,38 @@ struct ParamSpec {
   ParamValue default_value;
   std::string unit = "1";
   std::string doc;
-  std::optional<double> min, max;     // numeric bounds (Integer, Real, each RealList element)
+  std::optional<double> min, max;  // numeric bounds (Integer, Real, each RealList element)
   bool min_exclusive = false, max_exclusive = false;
-  std::vector<std::string> choices;   // Choice
-  std::string plugin_kind;            // Plugin: required kind of the nested plugin
+  std::vector<std::string> choices;  // Choice
+  std::string plugin_kind;           // Plugin: required kind of the nested plugin
   // Extra predicate; returns an error message or empty string when the value is fine.
   std::function<std::string(const ParamValue&)> predicate;
-  std::string predicate_doc;          // what the predicate demands, for describe
+  std::string predicate_doc;  // what the predicate demands, for describe
   // A value that breaks the predicate (used by the generated invalid-value test).
   std::optional<ParamValue> predicate_counterexample;
 
   // Fluent constraint setters.
-  ParamSpec& at_least(double v) { min = v; min_exclusive = false; return *this; }
-  ParamSpec& greater_than(double v) { min = v; min_exclusive = true; return *this; }
-  ParamSpec& at_most(double v) { max = v; max_exclusive = false; return *this; }
-  ParamSpec& less_than(double v) { max = v; max_exclusive = true; return *this; }
-  ParamSpec& must(std::string doc_text, std::function<std::string(const ParamValue&)> check,
-                  ParamValue counterexample);
+  ParamSpec& at_least(double v) {
+    min = v;
+    min_exclusive = false;
+    return *this;
+  }
+  ParamSpec& greater_than(double v) {
+    min = v;
+    min_exclusive = true;
+    return *this;
+  }
+  ParamSpec& at_most(double v) {
+    max = v;
+    max_exclusive = false;
+    return *this;
+  }
+  ParamSpec& less_than(double v) {
+    max = v;
+    max_exclusive = true;
+    return *this;
+  }
+  ParamSpec& must(std::string doc_text, std::function<std::string(const ParamValue&)> check, ParamValue counterexample);
 
   // Human-readable constraint, e.g. "> 0", "in [1, 50]", "one of: mirror, linear".
   std::string constraint_text() const;

@@ -61,7 +61,8 @@ std::string convert(const ParamSpec& spec, const YAML::Node& node, ParamValue& o
         out = std::move(v);
         return "";
       }
-      case ParamType::Plugin: return "nested plugins are converted separately";
+      case ParamType::Plugin:
+        return "nested plugins are converted separately";
     }
   } catch (const YAML::Exception&) {
     return "expected " + to_string(spec.type) + ", got " + yaml_shape(node);
@@ -83,25 +84,28 @@ ParamValue resolve_nested(const Registry& registry, const ParamSpec& spec, const
           if (const auto text = scalar_text(kv.second)) {
             name = *text;
           } else {
-            problems.push_back({{file, line_of(kv.second), path + ".plugin"},
-                                "expected a plugin name (" + spec.plugin_kind + "/NAME), got " + yaml_shape(kv.second)});
+            problems.push_back(
+                {{file, line_of(kv.second), path + ".plugin"},
+                 "expected a plugin name (" + spec.plugin_kind + "/NAME), got " + yaml_shape(kv.second)});
             return std::make_shared<const PluginSpec>(PluginSpec{name, {}});
           }
         } else if (k == "params") {
           params = kv.second;
-        }
-        else problems.push_back({{file, line_of(kv.first), path + "." + k}, "unknown key (expected plugin, params)"});
+        } else
+          problems.push_back({{file, line_of(kv.first), path + "." + k}, "unknown key (expected plugin, params)"});
       }
     } else {
-      problems.push_back({{file, line_of(node), path}, "expected {plugin: " + spec.plugin_kind + "/NAME, params: {...}}"});
+      problems.push_back(
+          {{file, line_of(node), path}, "expected {plugin: " + spec.plugin_kind + "/NAME, params: {...}}"});
     }
   }
   const int line = node ? line_of(node) : 0;
   if (!registry.contains(name)) {
     std::string known;
     for (const auto* info : registry.list(spec.plugin_kind)) known += (known.empty() ? "" : ", ") + info->name;
-    problems.push_back({{file, line, path}, "unknown plugin '" + name + "' (known " + spec.plugin_kind + " plugins: " +
-                                                 (known.empty() ? "none" : known) + ")"});
+    problems.push_back({{file, line, path},
+                        "unknown plugin '" + name + "' (known " + spec.plugin_kind +
+                            " plugins: " + (known.empty() ? "none" : known) + ")"});
     return std::make_shared<const PluginSpec>(PluginSpec{name, {}});
   }
   if (registry.info(name).kind() != spec.plugin_kind) {
@@ -114,8 +118,7 @@ ParamValue resolve_nested(const Registry& registry, const ParamSpec& spec, const
 }  // namespace
 
 ParamValues resolve_params(const Registry& registry, const std::string& plugin, const YAML::Node& node,
-                           const std::string& file, const std::string& key_prefix,
-                           std::vector<Diagnostic>& problems) {
+                           const std::string& file, const std::string& key_prefix, std::vector<Diagnostic>& problems) {
   const auto& table = registry.info(plugin).params;
   const auto path_of = [&](const std::string& key) { return key_prefix.empty() ? key : key_prefix + "." + key; };
   ParamValues values;

@@ -19,8 +19,7 @@ class Registry;
 // table of `plugin`. Every problem is appended to `problems` (file, 1-based line, key path under
 // `key_prefix`); unknown keys list the valid ones. Returns the values that could be resolved.
 ParamValues resolve_params(const Registry& registry, const std::string& plugin, const YAML::Node& node,
-                           const std::string& file, const std::string& key_prefix,
-                           std::vector<Diagnostic>& problems);
+                           const std::string& file, const std::string& key_prefix, std::vector<Diagnostic>& problems);
 
 // Resolves `key=value` assignments (value parsed as YAML, so `optimizer={plugin: optimizer/ga}`
 // works). Throws ConfigError listing every problem.

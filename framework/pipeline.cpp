@@ -19,8 +19,9 @@ int line_of(const YAML::Node& node) { return yaml_line(node); }
 // Output names become CSV columns (name + unit suffix) that driftlab must read back: identifiers,
 // and none that would read back as the record's own channels.
 const std::set<std::string>& reserved_output_names() {
-  static const std::set<std::string> names{"t",    "time",     "rate",     "true_rate", "temperature",
-                                           "temp", "die_temp", "die_temperature", "drive_freq", "drive_frequency"};
+  static const std::set<std::string> names{"t",           "time",           "rate",     "true_rate",
+                                           "temperature", "temp",           "die_temp", "die_temperature",
+                                           "drive_freq",  "drive_frequency"};
   return names;
 }
 
@@ -54,10 +55,12 @@ class Parser {
         problem(kv.first, key, "unknown key (expected format, seed, inputs, steps, outputs, stages)");
     }
     const auto format = root["format"];
-    if (!format) problem(root, "format", std::string("missing (expected ") + kPipelineFormat + ")");
+    if (!format)
+      problem(root, "format", std::string("missing (expected ") + kPipelineFormat + ")");
     else if (!format.IsScalar() || format.Scalar() != kPipelineFormat)
-      problem(format, "format", "unsupported format '" + (format.IsScalar() ? format.Scalar() : std::string("?")) +
-                                    "' (expected " + kPipelineFormat + ")");
+      problem(format, "format",
+              "unsupported format '" + (format.IsScalar() ? format.Scalar() : std::string("?")) + "' (expected " +
+                  kPipelineFormat + ")");
     if (const auto seed = root["seed"]) {
       try {
         p.seed = seed.as<std::int64_t>();
@@ -183,12 +186,13 @@ class Parser {
     if (inputs && inputs.IsMap()) {
       for (const auto& kv : inputs) {
         const auto port = scalar_text(kv.first).value_or("?");
-        const auto spec = std::find_if(ports.inputs.begin(), ports.inputs.end(),
-                                       [&](const PortSpec& ps) { return ps.name == port; });
+        const auto spec =
+            std::find_if(ports.inputs.begin(), ports.inputs.end(), [&](const PortSpec& ps) { return ps.name == port; });
         if (spec == ports.inputs.end()) {
           std::string valid;
           for (const auto& ps : ports.inputs) valid += (valid.empty() ? "" : ", ") + ps.name;
-          problem(kv.first, label + ".inputs." + port, "unknown input port of a " + info.kind() + " step (valid: " + valid + ")");
+          problem(kv.first, label + ".inputs." + port,
+                  "unknown input port of a " + info.kind() + " step (valid: " + valid + ")");
           continue;
         }
         if (kv.second.IsSequence() && !spec->many)
@@ -225,8 +229,9 @@ class Parser {
     for (const auto& kv : node) {
       const auto name = scalar_text(kv.first);
       if (!name || !std::regex_match(*name, name_re)) {
-        problem(kv.first, "outputs", "output name " + yaml_shape(kv.first) +
-                                         " must be an identifier (letters, digits, _): it becomes a CSV column");
+        problem(kv.first, "outputs",
+                "output name " + yaml_shape(kv.first) +
+                    " must be an identifier (letters, digits, _): it becomes a CSV column");
         continue;
       }
       if (reserved_output_names().count(*name)) {
@@ -281,7 +286,9 @@ class Parser {
       if (!p.inputs.count(ref) && ref != "time") {
         std::string names = "time";
         for (const auto& [n, r] : p.inputs) names += ", " + n;
-        problems_.push_back({{file_, line, key}, "dangling reference '" + ref + "': no pipeline input of that name (inputs: " + names + ")"});
+        problems_.push_back(
+            {{file_, line, key},
+             "dangling reference '" + ref + "': no pipeline input of that name (inputs: " + names + ")"});
       }
       return;
     }
@@ -292,7 +299,8 @@ class Parser {
     } else if (outs.front() != "*" && std::find(outs.begin(), outs.end(), output) == outs.end()) {
       std::string valid;
       for (const auto& o : outs) valid += (valid.empty() ? "" : ", ") + o;
-      problems_.push_back({{file_, line, key}, "dangling reference '" + ref + "': step '" + step + "' has outputs " + valid});
+      problems_.push_back(
+          {{file_, line, key}, "dangling reference '" + ref + "': step '" + step + "' has outputs " + valid});
     }
   }
 
@@ -417,9 +425,8 @@ std::string effective_pipeline_yaml(const Pipeline& pipeline, const Registry& re
   return std::string(out.c_str()) + "\n";
 }
 
-std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Registry& registry,
-                                           const TimeSeries& record, const PipelineRunOptions& options,
-                                           nlohmann::json& report) {
+std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Registry& registry, const TimeSeries& record,
+                                           const PipelineRunOptions& options, nlohmann::json& report) {
   std::map<std::string, Signal> inputs;
   inputs["time"] = Signal::single(record.time(), "time", "s");
   for (const auto& [name, role] : pipeline.inputs) {
@@ -434,7 +441,8 @@ std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Regis
   std::map<std::string, std::map<std::string, Signal>> produced;
   for (std::size_t i = 0; i < pipeline.steps.size(); ++i) {
     const auto& step = pipeline.steps[i];
-    nlohmann::json entry{{"name", step.name}, {"plugin", step.plugin.empty() ? "sum" : step.plugin}, {"status", "running"}};
+    nlohmann::json entry{
+        {"name", step.name}, {"plugin", step.plugin.empty() ? "sum" : step.plugin}, {"status", "running"}};
     report["steps"].push_back(entry);
     auto& slot = report["steps"].back();
     const auto start = std::chrono::steady_clock::now();
@@ -442,8 +450,7 @@ std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Regis
     ctx.threads = options.threads;
     ctx.time_s = record.time();
     ctx.seed = static_cast<std::uint64_t>(derived_seed(pipeline.seed, step.name));
-    if (options.progress)
-      ctx.progress = [&, i](double f) { options.progress(i, pipeline.steps.size(), step.name, f); };
+    if (options.progress) ctx.progress = [&, i](double f) { options.progress(i, pipeline.steps.size(), step.name, f); };
     std::map<std::string, Signal> port_values;
     for (const auto& [port, refs] : step.inputs) {
       std::vector<Signal> parts;

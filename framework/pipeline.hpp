@@ -45,9 +45,9 @@ inline constexpr const char* kPipelineFormat = "driftlab-pipeline/1";
 
 struct PipelineStep {
   std::string name;
-  std::string plugin;  // "kind/name"; empty for the built-in sum
+  std::string plugin;                                      // "kind/name"; empty for the built-in sum
   std::map<std::string, std::vector<std::string>> inputs;  // port -> references
-  ParamValues params;  // resolved, defaults and seed filled in
+  ParamValues params;                                      // resolved, defaults and seed filled in
   int line = 0;
 };
 
@@ -85,8 +85,7 @@ struct PipelineRunOptions {
 // Runs the steps on a record. `report` is filled as steps complete (status, seconds,
 // diagnostics per step), so it is useful even when a step throws. Throws DataError when a
 // pipeline input's role is missing from the record; other errors propagate from plugins.
-std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Registry& registry,
-                                           const TimeSeries& record, const PipelineRunOptions& options,
-                                           nlohmann::json& report);
+std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Registry& registry, const TimeSeries& record,
+                                           const PipelineRunOptions& options, nlohmann::json& report);
 
 }  // namespace driftlab

@@ -47,9 +47,12 @@ Signal Signal::single(Eigen::VectorXd values, std::string label, std::string uni
 
 std::string to_string(ImfGroup group) {
   switch (group) {
-    case ImfGroup::Noise: return "noise";
-    case ImfGroup::Mixed: return "mixed";
-    case ImfGroup::Drift: return "drift";
+    case ImfGroup::Noise:
+      return "noise";
+    case ImfGroup::Mixed:
+      return "mixed";
+    case ImfGroup::Drift:
+      return "drift";
   }
   return "?";
 }
@@ -92,7 +95,8 @@ SignalMap Regressor::run(const SignalMap& inputs, RunContext& ctx) {
   fit(X, y, ctx);
   Eigen::VectorXd fitted = predict(X);
   Eigen::VectorXd residual = y - fitted;
-  ctx.diagnostics["rms_residual"] = std::sqrt(residual.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, y.size())));
+  ctx.diagnostics["rms_residual"] =
+      std::sqrt(residual.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, y.size())));
   return {{"fitted", Signal::single(std::move(fitted), "fitted", target.unit)},
           {"residual", Signal::single(std::move(residual), "residual", target.unit)}};
 }

@@ -21,8 +21,8 @@ namespace driftlab {
 class Registry;
 
 struct PluginInfo {
-  std::string name;     // "kind/name"
-  std::string summary;  // one line
+  std::string name;       // "kind/name"
+  std::string summary;    // one line
   std::string reference;  // paper or standard it implements, may be empty
   ParamTable params;
   std::function<std::unique_ptr<Plugin>(const ParamValues&, const Registry&)> make;

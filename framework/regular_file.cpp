@@ -27,13 +27,20 @@ std::string non_regular_kind(const fs::path& path) {
   switch (fs::status(path, ec).type()) {
     case fs::file_type::none:  // the status could not be read: opening will say why
     case fs::file_type::not_found:
-    case fs::file_type::regular: return "";
-    case fs::file_type::directory: return "a directory";
-    case fs::file_type::fifo: return "a FIFO (named pipe)";
-    case fs::file_type::socket: return "a socket";
-    case fs::file_type::character: return "a character device";
-    case fs::file_type::block: return "a block device";
-    default: return "not a regular file";
+    case fs::file_type::regular:
+      return "";
+    case fs::file_type::directory:
+      return "a directory";
+    case fs::file_type::fifo:
+      return "a FIFO (named pipe)";
+    case fs::file_type::socket:
+      return "a socket";
+    case fs::file_type::character:
+      return "a character device";
+    case fs::file_type::block:
+      return "a block device";
+    default:
+      return "not a regular file";
   }
 }
 
@@ -74,7 +81,8 @@ std::string read_stdin_text(const std::string& what, std::uintmax_t max_bytes) {
 std::string read_config_text(const fs::path& path, const std::string& what) {
   if (is_stdin(path)) return read_stdin_text(what, kMaxTextInputBytes);
   const Location where{path.string(), 0, ""};
-  if (const auto problem = input_problem(path); !problem.empty()) throw ConfigError(where, "cannot read the " + what + ": it " + problem);
+  if (const auto problem = input_problem(path); !problem.empty())
+    throw ConfigError(where, "cannot read the " + what + ": it " + problem);
   std::error_code ec;
   const auto size = fs::file_size(path, ec);
   if (ec) throw ConfigError(where, "cannot read the " + what + ": " + ec.message());

@@ -39,8 +39,9 @@ void check_memory_estimate(double bytes, const Location& where, const std::strin
   char text[320];
   std::snprintf(text, sizeof text, "%s: about %.3g MB needed, above the limit of %.0f MB (%s)", what.c_str(),
                 bytes / 1048576.0, limit / 1048576.0,
-                std::getenv("DRIFTLAB_MEMORY_LIMIT_MB") ? "DRIFTLAB_MEMORY_LIMIT_MB"
-                                                        : "half the physical memory; DRIFTLAB_MEMORY_LIMIT_MB changes it");
+                std::getenv("DRIFTLAB_MEMORY_LIMIT_MB")
+                    ? "DRIFTLAB_MEMORY_LIMIT_MB"
+                    : "half the physical memory; DRIFTLAB_MEMORY_LIMIT_MB changes it");
   throw ConfigError(where, text);
 }
 
@@ -48,10 +49,10 @@ void check_time_estimate(double seconds, const Location& where, const std::strin
   const double limit = time_limit_s();
   if (std::isfinite(seconds) && seconds <= limit) return;
   char text[320];
-  std::snprintf(text, sizeof text, "%s: about %.3g s (%.3g h) of computing, above the budget of %.3g h (%s)",
-                what.c_str(), seconds, seconds / 3600.0, limit / 3600.0,
-                std::getenv("DRIFTLAB_TIME_LIMIT_S") ? "DRIFTLAB_TIME_LIMIT_S"
-                                                     : "the default; DRIFTLAB_TIME_LIMIT_S raises it");
+  std::snprintf(
+      text, sizeof text, "%s: about %.3g s (%.3g h) of computing, above the budget of %.3g h (%s)", what.c_str(),
+      seconds, seconds / 3600.0, limit / 3600.0,
+      std::getenv("DRIFTLAB_TIME_LIMIT_S") ? "DRIFTLAB_TIME_LIMIT_S" : "the default; DRIFTLAB_TIME_LIMIT_S raises it");
   throw ConfigError(where, text);
 }
 

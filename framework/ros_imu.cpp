@@ -31,7 +31,8 @@ bool is_temperature(const rosbag::Topic& t, bool named) {
   if (type != MessageType::Float32 && type != MessageType::Float64) return false;
   if (named) return true;
   std::string name = last_part(t.name);
-  std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(name.begin(), name.end(), name.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return name.find("temp") != std::string::npos;
 }
 
@@ -64,12 +65,12 @@ std::string imu_topic_list(const rosbag::Bag& bag) {
 Encoding encoding_of(const std::string& file, const rosbag::Topic& t) {
   if (t.encoding != "ros1" && t.encoding != "cdr")
     throw DataError({file, 0, t.name}, "topic '" + t.name + "' is encoded as " + quoted_excerpt(t.encoding, 40) +
-                                               "; driftlab decodes ros1 and cdr messages");
+                                           "; driftlab decodes ros1 and cdr messages");
   const auto type = message_type(t.type);
   if (t.encoding == "ros1" && !t.md5.empty() && type && t.md5 != ros1_md5(*type))
     throw DataError({file, 0, t.name}, "topic '" + t.name + "': " + t.type + " with md5sum " + t.md5 +
-                                               " is another version of the message than the one driftlab reads (md5sum " +
-                                               std::string(ros1_md5(*type)) + ")");
+                                           " is another version of the message than the one driftlab reads (md5sum " +
+                                           std::string(ros1_md5(*type)) + ")");
   return t.encoding == "ros1" ? Encoding::Ros1 : Encoding::Cdr;
 }
 
@@ -86,28 +87,31 @@ struct Raw {
 };
 
 std::vector<std::int64_t> stamps(Raw& r, std::vector<std::string>* notes) {
-  const bool empty_headers = !r.stamp.empty() && std::all_of(r.stamp.begin(), r.stamp.end(), [](std::int64_t s) { return s == 0; });
+  const bool empty_headers =
+      !r.stamp.empty() && std::all_of(r.stamp.begin(), r.stamp.end(), [](std::int64_t s) { return s == 0; });
   if (!empty_headers) return r.stamp;
   if (notes) notes->push_back(r.topic->name + ": every header stamp is 0; the bag's message times are used instead");
   return r.time;
 }
 
-void check_value(const std::string& file, const Raw& r, const std::string& part, int axis, double v, std::int64_t stamp) {
+void check_value(const std::string& file, const Raw& r, const std::string& part, int axis, double v,
+                 std::int64_t stamp) {
   if (imu::usable_value(v)) return;
   throw DataError({file, 0, r.topic->name + "." + part + "." + "xyz"[axis]},
-                  imu::unusable_value(v) + " at stamp " +
-                      std::to_string(stamp) + " ns");
+                  imu::unusable_value(v) + " at stamp " + std::to_string(stamp) + " ns");
 }
 
 void add_sensor(const std::string& file, const Raw& r, imu::Sensor sensor, const std::vector<std::int64_t>& time,
-                const std::vector<std::size_t>& order, std::vector<imu::SensorStream>& out, std::vector<std::string>* notes) {
+                const std::vector<std::size_t>& order, std::vector<imu::SensorStream>& out,
+                std::vector<std::string>* notes) {
   const bool gyro = sensor == imu::Sensor::Gyro;
   const auto& values = gyro ? r.gyro : r.accel;
   const auto& cov0 = gyro ? r.gyro_cov0 : r.accel_cov0;
   const std::string part = gyro ? "angular_velocity" : "linear_acceleration";
   if (!cov0.empty() && std::all_of(cov0.begin(), cov0.end(), [](double c) { return c == -1.0; })) {
-    if (notes) notes->push_back(r.topic->name + ": " + part + "_covariance[0] is -1 in every message (not provided); no " +
-                                imu::to_string(sensor) + " from it");
+    if (notes)
+      notes->push_back(r.topic->name + ": " + part + "_covariance[0] is -1 in every message (not provided); no " +
+                       imu::to_string(sensor) + " from it");
     return;
   }
   imu::SensorStream s;
@@ -132,27 +136,36 @@ ImuLayout imu_layout(const rosbag::Bag& bag, const std::string& topic_option) {
   std::vector<const rosbag::Topic*> imus, temperatures;
   if (topic_option.empty()) {
     for (const auto& t : bag.topics) {  // sorted by name
-      if (is_imu(t)) imus.push_back(&t);
-      else if (is_temperature(t, false)) temperatures.push_back(&t);
+      if (is_imu(t))
+        imus.push_back(&t);
+      else if (is_temperature(t, false))
+        temperatures.push_back(&t);
     }
   } else {
     for (const auto& name : split(topic_option)) {
       const rosbag::Topic* t = bag.find(name);
-      if (!t) throw DataError({bag.file, 0, "--topic"}, "topic '" + name + "' is not in the bag (IMU topics it has: " + imu_topic_list(bag) + ")");
-      if (is_imu(*t)) imus.push_back(t);
-      else if (is_temperature(*t, true)) temperatures.push_back(t);
+      if (!t)
+        throw DataError({bag.file, 0, "--topic"},
+                        "topic '" + name + "' is not in the bag (IMU topics it has: " + imu_topic_list(bag) + ")");
+      if (is_imu(*t))
+        imus.push_back(t);
+      else if (is_temperature(*t, true))
+        temperatures.push_back(t);
       else
         throw DataError({bag.file, 0, "--topic"}, "topic '" + name + "' is " + t->type +
                                                       ", neither an IMU (sensor_msgs/Imu) nor a temperature topic");
     }
-    if (imus.empty()) throw DataError({bag.file, 0, "--topic"}, "--topic names no sensor_msgs/Imu topic (IMU topics: " + imu_topic_list(bag) + ")");
+    if (imus.empty())
+      throw DataError({bag.file, 0, "--topic"},
+                      "--topic names no sensor_msgs/Imu topic (IMU topics: " + imu_topic_list(bag) + ")");
   }
   for (std::size_t i = 0; i < imus.size(); ++i) layout.instances.push_back({static_cast<int>(i), imus[i]->name, ""});
   for (const auto* t : temperatures) {
     std::vector<ImuInstance*> matches;
     for (auto& instance : layout.instances)
       if (namespace_of(instance.imu_topic) == namespace_of(t->name)) matches.push_back(&instance);
-    if (matches.empty() && !topic_option.empty() && layout.instances.size() == 1) matches.push_back(&layout.instances.front());
+    if (matches.empty() && !topic_option.empty() && layout.instances.size() == 1)
+      matches.push_back(&layout.instances.front());
     if (matches.size() == 1 && matches.front()->temperature_topic.empty())
       matches.front()->temperature_topic = t->name;
     else
@@ -161,7 +174,8 @@ ImuLayout imu_layout(const rosbag::Bag& bag, const std::string& topic_option) {
   return layout;
 }
 
-ImuStreams read_streams(const std::filesystem::path& path, const std::string& topic_option, std::vector<std::string>* notes) {
+ImuStreams read_streams(const std::filesystem::path& path, const std::string& topic_option,
+                        std::vector<std::string>* notes) {
   // One pass: every topic that may become an instance or its temperature is decoded as it comes; a
   // topic's decoding error is kept and thrown only if the layout then selects the topic.
   const std::vector<std::string> listed = split(topic_option);
@@ -203,7 +217,9 @@ ImuStreams read_streams(const std::filesystem::path& path, const std::string& to
       });
   out.layout = imu_layout(out.bag, topic_option);
   for (const auto& name : out.layout.unpaired_temperatures)
-    if (notes) notes->push_back(name + ": a temperature topic that pairs with no IMU topic by namespace; name both with --topic to use it");
+    if (notes)
+      notes->push_back(
+          name + ": a temperature topic that pairs with no IMU topic by namespace; name both with --topic to use it");
 
   for (const auto& instance : out.layout.instances) {
     for (const auto& name : {instance.imu_topic, instance.temperature_topic}) {
@@ -237,9 +253,11 @@ TimeSeries read_imu(const std::filesystem::path& path, const LogSelection& selec
   if (!selection.sensor.empty()) imu::parse_selection(selection.sensor, "--sensor");  // reported before the bag is read
   ImuStreams s = read_streams(path, selection.topic, notes);
   if (s.layout.instances.empty())
-    throw DataError({s.bag.file, 0, "--topic"}, "no sensor_msgs/Imu topic in the bag (its " + std::to_string(s.bag.topics.size()) +
+    throw DataError({s.bag.file, 0, "--topic"}, "no sensor_msgs/Imu topic in the bag (its " +
+                                                    std::to_string(s.bag.topics.size()) +
                                                     " topics: " + topic_list(s.bag) + ")");
-  return imu::assemble(std::move(s.sensors), std::move(s.temperatures), selection, kNanosecondsPerSecond, s.bag.file, notes);
+  return imu::assemble(std::move(s.sensors), std::move(s.temperatures), selection, kNanosecondsPerSecond, s.bag.file,
+                       notes);
 }
 
 }  // namespace driftlab::ros

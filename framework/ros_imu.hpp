@@ -67,6 +67,7 @@ ImuStreams read_streams(const std::filesystem::path& path, const std::string& to
 
 // read_streams, then imu::assemble with `selection`'s instance and sensor; DataError when the bag
 // has no IMU topic.
-TimeSeries read_imu(const std::filesystem::path& path, const LogSelection& selection, std::vector<std::string>* notes = nullptr);
+TimeSeries read_imu(const std::filesystem::path& path, const LogSelection& selection,
+                    std::vector<std::string>* notes = nullptr);
 
 }  // namespace driftlab::ros

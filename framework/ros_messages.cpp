@@ -47,7 +47,8 @@ class Cursor {
     const std::size_t at = pos_;
     const std::int64_t sec = signed_seconds ? i32() : static_cast<std::int64_t>(u32());
     const std::uint32_t nsec = u32();
-    if (nsec >= kNanosecondsPerSecond) fail(at, "header stamp nanoseconds " + std::to_string(nsec) + " are not below 10^9");
+    if (nsec >= kNanosecondsPerSecond)
+      fail(at, "header stamp nanoseconds " + std::to_string(nsec) + " are not below 10^9");
     return sec * kNanosecondsPerSecond + nsec;
   }
   void finish() const {
@@ -70,7 +71,8 @@ class Cursor {
       fail(pos_, "message ends after " + std::to_string(bytes_.size()) + " bytes; its type needs more");
     std::uint64_t v = 0;
     const auto* p = reinterpret_cast<const unsigned char*>(bytes_.data() + pos_);
-    for (std::size_t i = 0; i < size; ++i) v |= static_cast<std::uint64_t>(p[big_endian_ ? size - 1 - i : i]) << (8 * i);
+    for (std::size_t i = 0; i < size; ++i)
+      v |= static_cast<std::uint64_t>(p[big_endian_ ? size - 1 - i : i]) << (8 * i);
     pos_ += size;
     return v;
   }
@@ -107,7 +109,8 @@ std::array<double, 3> vector3(Cursor& in) {
 
 std::optional<MessageType> message_type(std::string_view type_name) {
   if (type_name == "sensor_msgs/Imu" || type_name == "sensor_msgs/msg/Imu") return MessageType::Imu;
-  if (type_name == "sensor_msgs/Temperature" || type_name == "sensor_msgs/msg/Temperature") return MessageType::Temperature;
+  if (type_name == "sensor_msgs/Temperature" || type_name == "sensor_msgs/msg/Temperature")
+    return MessageType::Temperature;
   if (type_name == "std_msgs/Float32" || type_name == "std_msgs/msg/Float32") return MessageType::Float32;
   if (type_name == "std_msgs/Float64" || type_name == "std_msgs/msg/Float64") return MessageType::Float64;
   return std::nullopt;
@@ -115,10 +118,14 @@ std::optional<MessageType> message_type(std::string_view type_name) {
 
 std::string_view ros1_md5(MessageType type) {
   switch (type) {
-    case MessageType::Imu: return "6a62c6daae103f4ff57a132d6f95cec2";
-    case MessageType::Temperature: return "ff71b307acdbe7c871a5a6d7ed359100";
-    case MessageType::Float32: return "73fcbf46b49191e672908e50842a83d4";
-    case MessageType::Float64: return "fdb28210bfa9d7c91146260178d9a584";
+    case MessageType::Imu:
+      return "6a62c6daae103f4ff57a132d6f95cec2";
+    case MessageType::Temperature:
+      return "ff71b307acdbe7c871a5a6d7ed359100";
+    case MessageType::Float32:
+      return "73fcbf46b49191e672908e50842a83d4";
+    case MessageType::Float64:
+      return "fdb28210bfa9d7c91146260178d9a584";
   }
   return {};
 }
@@ -148,9 +155,14 @@ Temperature decode_temperature(std::string_view bytes, MessageType type, Encodin
       m.degc = in.f64();
       in.f64();  // variance
       break;
-    case MessageType::Float32: m.degc = in.f32(); break;
-    case MessageType::Float64: m.degc = in.f64(); break;
-    case MessageType::Imu: throw DataError(where, what() + ": an Imu message is not a temperature");
+    case MessageType::Float32:
+      m.degc = in.f32();
+      break;
+    case MessageType::Float64:
+      m.degc = in.f64();
+      break;
+    case MessageType::Imu:
+      throw DataError(where, what() + ": an Imu message is not a temperature");
   }
   in.finish();
   return m;

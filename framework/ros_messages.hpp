@@ -49,7 +49,7 @@ std::optional<MessageType> message_type(std::string_view type_name);
 std::string_view ros1_md5(MessageType type);
 
 struct Imu {
-  std::int64_t stamp_ns = 0;  // header.stamp, ns since the epoch of the sender's clock
+  std::int64_t stamp_ns = 0;                    // header.stamp, ns since the epoch of the sender's clock
   std::array<double, 3> angular_velocity{};     // rad/s
   std::array<double, 3> linear_acceleration{};  // m/s^2
   // [0] of each covariance: -1 says "no such estimate" (the message's own convention).

@@ -20,7 +20,8 @@ constexpr const char* kMetadataFile = "metadata.yaml";
 
 std::string describe_compression(const std::map<std::string, std::uint64_t>& chunks) {
   std::string out;
-  for (const auto& [codec, n] : chunks) out += (out.empty() ? "" : " and ") + (codec.empty() ? std::string("uncompressed") : codec);
+  for (const auto& [codec, n] : chunks)
+    out += (out.empty() ? "" : " and ") + (codec.empty() ? std::string("uncompressed") : codec);
   return out.empty() ? "no chunks" : out + " chunks";
 }
 
@@ -37,7 +38,8 @@ void read_mcap(const std::filesystem::path& path, const Wanted& wanted, const Vi
         return wanted(t);
       },
       [&](const mcap::Message& m) {
-        visit({&by_channel.at(m.channel->id), static_cast<std::int64_t>(m.log_time), m.data, [&m] { return m.place.text(); }});
+        visit({&by_channel.at(m.channel->id), static_cast<std::int64_t>(m.log_time), m.data,
+               [&m] { return m.place.text(); }});
       });
   bag.container = "MCAP (profile " + (f.profile.empty() ? std::string("none") : f.profile) + ", " +
                   describe_compression(f.chunk_compression) + (f.has_summary ? ", summary" : ", no summary") + ")";
@@ -60,8 +62,8 @@ void merge_topics(Bag& bag) {
     if (fresh) continue;
     Topic& m = it->second;
     if (m.type != t.type || m.encoding != t.encoding || m.md5 != t.md5)
-      throw DataError({bag.file, 0, t.name}, "topic '" + t.name + "' has two types: " + m.type + " (" + m.encoding + ") and " +
-                                                 t.type + " (" + t.encoding + ")");
+      throw DataError({bag.file, 0, t.name}, "topic '" + t.name + "' has two types: " + m.type + " (" + m.encoding +
+                                                 ") and " + t.type + " (" + t.encoding + ")");
     if (t.count == 0) continue;
     if (m.count == 0) {
       m.first_ns = t.first_ns;
@@ -78,10 +80,17 @@ void merge_topics(Bag& bag) {
 
 void read_file(const std::filesystem::path& path, Format format, const Wanted& wanted, const Visitor& visit, Bag& bag) {
   switch (format) {
-    case Format::Ros1: detail::read_ros1(path, wanted, visit, bag); break;
-    case Format::Sqlite3: detail::read_sqlite3(path, wanted, visit, bag); break;
-    case Format::Mcap: read_mcap(path, wanted, visit, bag); break;
-    case Format::Directory: break;
+    case Format::Ros1:
+      detail::read_ros1(path, wanted, visit, bag);
+      break;
+    case Format::Sqlite3:
+      detail::read_sqlite3(path, wanted, visit, bag);
+      break;
+    case Format::Mcap:
+      read_mcap(path, wanted, visit, bag);
+      break;
+    case Format::Directory:
+      break;
   }
 }
 
@@ -99,17 +108,18 @@ void read_directory(const std::filesystem::path& dir, const Wanted& wanted, cons
     throw DataError({metadata_file, 0, ""}, e.what());
   }
   const YAML::Node info = root.IsMap() ? root["rosbag2_bagfile_information"] : YAML::Node();
-  if (!info.IsMap()) throw DataError({metadata_file, 0, ""}, "not a rosbag2 metadata.yaml (no rosbag2_bagfile_information map)");
+  if (!info.IsMap())
+    throw DataError({metadata_file, 0, ""}, "not a rosbag2 metadata.yaml (no rosbag2_bagfile_information map)");
   const std::string storage = text(info["storage_identifier"]);
   if (storage != "sqlite3" && storage != "mcap")
-    throw DataError({metadata_file, 0, "storage_identifier"}, "storage " + quoted_excerpt(storage) +
-                                                                  ": driftlab reads the sqlite3 and mcap storages");
+    throw DataError({metadata_file, 0, "storage_identifier"},
+                    "storage " + quoted_excerpt(storage) + ": driftlab reads the sqlite3 and mcap storages");
   const std::string mode = text(info["compression_mode"]);
   const std::string codec = text(info["compression_format"]);
   if (mode == "FILE" || mode == "file")
-    throw DataError({metadata_file, 0, "compression_mode"},
-                    "the bag's files are compressed whole (" + codec + "); decompress them first (zstd -d FILE), "
-                    "then read the files themselves");
+    throw DataError({metadata_file, 0, "compression_mode"}, "the bag's files are compressed whole (" + codec +
+                                                                "); decompress them first (zstd -d FILE), "
+                                                                "then read the files themselves");
   const bool per_message = !mode.empty() && mode != "NONE" && mode != "none" && !codec.empty();
   const YAML::Node paths = info["relative_file_paths"];
   if (!paths.IsSequence() || paths.size() == 0)
@@ -122,12 +132,14 @@ void read_directory(const std::filesystem::path& dir, const Wanted& wanted, cons
   for (const auto& p : paths) {
     std::filesystem::path file = dir / text(p);
     // rosbag2 before Foxy wrote paths relative to the directory's parent ("bag/bag_0.db3").
-    if (!std::filesystem::exists(file) && std::filesystem::exists(dir.parent_path() / text(p))) file = dir.parent_path() / text(p);
+    if (!std::filesystem::exists(file) && std::filesystem::exists(dir.parent_path() / text(p)))
+      file = dir.parent_path() / text(p);
     const auto format = sniff(file);
     if (!format || *format == Format::Directory || *format == Format::Ros1)
       throw DataError({metadata_file, 0, "relative_file_paths"},
-                      quoted_excerpt(text(p)) + " is " + (std::filesystem::exists(file) ? "not a " + storage + " file" : "missing") +
-                          " (" + file.string() + ")");
+                      quoted_excerpt(text(p)) + " is " +
+                          (std::filesystem::exists(file) ? "not a " + storage + " file" : "missing") + " (" +
+                          file.string() + ")");
     Bag part;
     part.file = file.string();
     const std::string name = file.filename().string();
@@ -173,9 +185,10 @@ Bag read(const std::filesystem::path& path, const Wanted& wanted, const Visitor&
   const auto format = sniff(path);
   if (!format) {
     std::error_code ec;
-    throw DataError({bag.file, 0, ""}, std::filesystem::exists(path, ec)
-                                           ? "not a ROS bag (ROS 1 bag, rosbag2 sqlite3 or MCAP file, or a directory with metadata.yaml)"
-                                           : "no such file");
+    throw DataError({bag.file, 0, ""},
+                    std::filesystem::exists(path, ec)
+                        ? "not a ROS bag (ROS 1 bag, rosbag2 sqlite3 or MCAP file, or a directory with metadata.yaml)"
+                        : "no such file");
   }
   bag.format = *format;
   const Wanted& w = visit && wanted ? wanted : Wanted([](const Topic&) { return false; });

@@ -49,7 +49,8 @@ extern "C" __attribute__((visibility("default"))) void driftlab_read_ros1(const 
       message = 0;
       for (const ::rosbag::MessageInstance& m : view) {
         buffer.resize(m.size());
-        ros::serialization::OStream stream(reinterpret_cast<std::uint8_t*>(buffer.data()), static_cast<std::uint32_t>(buffer.size()));
+        ros::serialization::OStream stream(reinterpret_cast<std::uint8_t*>(buffer.data()),
+                                           static_cast<std::uint32_t>(buffer.size()));
         m.write(stream);
         const std::uint64_t index = (*message)++;
         visit({&by_topic.at(m.getTopic()), static_cast<std::int64_t>(m.getTime().toNSec()), buffer,

@@ -19,7 +19,8 @@ using Statement = std::unique_ptr<sqlite3_stmt, Finalize>;
 
 std::string column_text(sqlite3_stmt* s, int column) {
   const auto* p = sqlite3_column_text(s, column);
-  return p ? std::string(reinterpret_cast<const char*>(p), static_cast<std::size_t>(sqlite3_column_bytes(s, column))) : "";
+  return p ? std::string(reinterpret_cast<const char*>(p), static_cast<std::size_t>(sqlite3_column_bytes(s, column)))
+           : "";
 }
 
 // A path as the path part of an sqlite URI: '?', '#' and '%' (and non-ASCII bytes) percent-encoded.
@@ -47,9 +48,11 @@ class Database {
   explicit Database(const std::filesystem::path& path) : file_(path.string()) {
     std::error_code ec;
     const bool wal = std::filesystem::exists(file_ + "-wal", ec);
-    const std::string uri = "file:" + percent_encoded(std::filesystem::absolute(path, ec).string()) + (wal ? "?mode=ro" : "?immutable=1");
+    const std::string uri =
+        "file:" + percent_encoded(std::filesystem::absolute(path, ec).string()) + (wal ? "?mode=ro" : "?immutable=1");
     sqlite3* db = nullptr;
-    const int rc = sqlite3_open_v2(uri.c_str(), &db, SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX | SQLITE_OPEN_URI, nullptr);
+    const int rc =
+        sqlite3_open_v2(uri.c_str(), &db, SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX | SQLITE_OPEN_URI, nullptr);
     db_.reset(db);
     if (rc != SQLITE_OK) fail("cannot open it as an sqlite3 database");
   }
@@ -70,7 +73,8 @@ class Database {
   }
 
   [[noreturn]] void fail(const std::string& message) const {
-    throw DataError({file_, 0, ""}, message + " (sqlite3: " + (db_ ? sqlite3_errmsg(db_.get()) : "out of memory") + ")");
+    throw DataError({file_, 0, ""},
+                    message + " (sqlite3: " + (db_ ? sqlite3_errmsg(db_.get()) : "out of memory") + ")");
   }
 
   const std::string& file() const { return file_; }
@@ -98,16 +102,19 @@ void read_sqlite3(const std::filesystem::path& path, const Wanted& wanted, const
       const std::int64_t id = sqlite3_column_int64(s.get(), 0);
       Topic t{column_text(s.get(), 1), column_text(s.get(), 2), column_text(s.get(), 3), "", 0, 0, 0};
       if (wanted(t)) wanted_ids += (wanted_ids.empty() ? "" : ",") + std::to_string(id);
-      if (!by_id.try_emplace(id, std::move(t)).second) db.fail("topic id " + std::to_string(id) + " appears twice in its topics table");
+      if (!by_id.try_emplace(id, std::move(t)).second)
+        db.fail("topic id " + std::to_string(id) + " appears twice in its topics table");
     }
   }
   {
     const std::string purpose = "the counts of its messages table";
-    auto s = db.prepare("SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages GROUP BY topic_id", purpose);
+    auto s = db.prepare("SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages GROUP BY topic_id",
+                        purpose);
     while (db.step(s.get(), purpose)) {
       const std::int64_t id = sqlite3_column_int64(s.get(), 0);
       const auto it = by_id.find(id);
-      if (it == by_id.end()) db.fail("messages of topic id " + std::to_string(id) + ", which its topics table does not list");
+      if (it == by_id.end())
+        db.fail("messages of topic id " + std::to_string(id) + ", which its topics table does not list");
       it->second.count = static_cast<std::uint64_t>(sqlite3_column_int64(s.get(), 1));
       it->second.first_ns = sqlite3_column_int64(s.get(), 2);
       it->second.last_ns = sqlite3_column_int64(s.get(), 3);
@@ -115,7 +122,9 @@ void read_sqlite3(const std::filesystem::path& path, const Wanted& wanted, const
   }
   if (!wanted_ids.empty()) {
     const std::string purpose = "its messages table";
-    auto s = db.prepare("SELECT topic_id, timestamp, data, id FROM messages WHERE topic_id IN (" + wanted_ids + ") ORDER BY id", purpose);
+    auto s = db.prepare(
+        "SELECT topic_id, timestamp, data, id FROM messages WHERE topic_id IN (" + wanted_ids + ") ORDER BY id",
+        purpose);
     while (db.step(s.get(), purpose)) {
       const Topic& t = by_id.at(sqlite3_column_int64(s.get(), 0));
       const auto* data = static_cast<const char*>(sqlite3_column_blob(s.get(), 2));

@@ -56,30 +56,36 @@ double rate_within_segments_hz(const Eigen::VectorXd& time_s, const Facts& facts
 std::string describe(const Facts& facts, const Eigen::VectorXd& time_s) {
   const double fs = rate_within_segments_hz(time_s, facts);
   switch (facts.layout()) {
-    case Layout::Even: return "evenly sampled at " + message_number(fs) + " Hz";
+    case Layout::Even:
+      return "evenly sampled at " + message_number(fs) + " Hz";
     case Layout::RegularBursts: {
       Eigen::Index fewest = facts.segments.front().samples, most = fewest;
       for (const auto& s : facts.segments) {
         fewest = std::min(fewest, s.samples);
         most = std::max(most, s.samples);
       }
-      const std::string count = fewest == most ? std::to_string(fewest) : std::to_string(fewest) + " .. " + std::to_string(most);
-      return std::to_string(facts.segments.size()) + " regular bursts of " + count + " samples at " + message_number(fs) +
-             " Hz, one every " + message_number(facts.shortest_period_s) + " .. " + message_number(facts.longest_period_s) + " s";
+      const std::string count =
+          fewest == most ? std::to_string(fewest) : std::to_string(fewest) + " .. " + std::to_string(most);
+      return std::to_string(facts.segments.size()) + " regular bursts of " + count + " samples at " +
+             message_number(fs) + " Hz, one every " + message_number(facts.shortest_period_s) + " .. " +
+             message_number(facts.longest_period_s) + " s";
     }
-    case Layout::Irregular: break;
+    case Layout::Irregular:
+      break;
   }
   if (facts.gaps == 1) return "irregular: one gap, no regular bursts";
-  return "irregular: " + std::to_string(facts.gaps) + " gaps, not at a regular period (" + message_number(facts.shortest_period_s) +
-         " .. " + message_number(facts.longest_period_s) + " s from one segment's start to the next)";
+  return "irregular: " + std::to_string(facts.gaps) + " gaps, not at a regular period (" +
+         message_number(facts.shortest_period_s) + " .. " + message_number(facts.longest_period_s) +
+         " s from one segment's start to the next)";
 }
 
 DataError uneven_sampling_error(const Facts& facts, const Eigen::VectorXd& time_s, const std::string& file,
                                 std::string_view analysis, std::string_view hint) {
   std::string message = std::string(analysis) + " assumes even sampling, and this record has " +
                         std::to_string(facts.gaps) + " gap(s) (steps longer than " + message_number(facts.gap_factor) +
-                        " x the median step of " + message_number(facts.median_step_s) + " s, see --max-gap): the first of " +
-                        message_number(facts.first_gap_s) + " s after t = " + message_number(facts.first_gap_time_s) + " s (sample " +
+                        " x the median step of " + message_number(facts.median_step_s) +
+                        " s, see --max-gap): the first of " + message_number(facts.first_gap_s) +
+                        " s after t = " + message_number(facts.first_gap_time_s) + " s (sample " +
                         std::to_string(facts.first_gap_index + 1) + "). The record is " + describe(facts, time_s) +
                         ". Resample it onto an even grid with a stated method (e.g. linear interpolation) and give " +
                         "that file, split it at its gaps, or analyse the segments one by one";

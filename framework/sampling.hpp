@@ -32,7 +32,7 @@ inline constexpr double kRegularBurstSpread = 1.5;
 enum class Layout { Even, RegularBursts, Irregular };
 
 struct Segment {
-  Eigen::Index first = 0;    // index of its first sample
+  Eigen::Index first = 0;  // index of its first sample
   Eigen::Index samples = 0;
 };
 
@@ -42,11 +42,11 @@ struct Facts {
   double mean_rate_hz = 0.0;       // (samples - 1) / span; 0 for fewer than 2 samples or a zero span
   double gap_factor = kGapFactor;  // a step longer than gap_factor x median_step_s is a gap
   int gaps = 0;
-  double first_gap_time_s = 0.0;   // time stamp before the first gap
-  Eigen::Index first_gap_index = 0;  // index of the sample before the first gap
-  double first_gap_s = 0.0;        // length of the first gap's time step
+  double first_gap_time_s = 0.0;                           // time stamp before the first gap
+  Eigen::Index first_gap_index = 0;                        // index of the sample before the first gap
+  double first_gap_s = 0.0;                                // length of the first gap's time step
   double shortest_period_s = 0.0, longest_period_s = 0.0;  // burst start to burst start (with gaps)
-  std::vector<Segment> segments;   // the runs between gaps, in time order (empty for no samples)
+  std::vector<Segment> segments;  // the runs between gaps, in time order (empty for no samples)
   bool evenly_sampled() const { return gaps == 0; }
   bool regular_bursts() const { return gaps >= 2 && longest_period_s <= kRegularBurstSpread * shortest_period_s; }
   Layout layout() const {

@@ -28,8 +28,8 @@ class SeededRandom {
 
   // Uniform integer in [0, n), unbiased (rejection of the incomplete top range).
   std::size_t index(std::size_t n) {
-    const std::uint64_t limit = std::numeric_limits<std::uint64_t>::max() -
-                                std::numeric_limits<std::uint64_t>::max() % n;
+    const std::uint64_t limit =
+        std::numeric_limits<std::uint64_t>::max() - std::numeric_limits<std::uint64_t>::max() % n;
     std::uint64_t draw = engine_();
     while (draw >= limit) draw = engine_();
     return static_cast<std::size_t>(draw % n);

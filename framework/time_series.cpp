@@ -9,9 +9,8 @@ double TimeSeries::sample_rate_hz() const { return sampling::mean_rate_hz(time_)
 
 void TimeSeries::set_channel(Channel channel) {
   if (channel.values.size() != time_.size())
-    throw DataError({channel.source, 0, channel.role},
-                    "channel has " + std::to_string(channel.values.size()) + " samples, time has " +
-                        std::to_string(time_.size()));
+    throw DataError({channel.source, 0, channel.role}, "channel has " + std::to_string(channel.values.size()) +
+                                                           " samples, time has " + std::to_string(time_.size()));
   for (auto& c : channels_)
     if (c.role == channel.role) {
       c = std::move(channel);
@@ -31,8 +30,8 @@ const Channel& TimeSeries::channel(const std::string& role) const {
     if (c.role == role) return c;
   std::string roles;
   for (const auto& c : channels_) roles += (roles.empty() ? "" : ", ") + c.role;
-  throw DataError({"", 0, role}, "no channel with this role (the record has: " +
-                                     (roles.empty() ? std::string("none") : roles) + ")");
+  throw DataError({"", 0, role},
+                  "no channel with this role (the record has: " + (roles.empty() ? std::string("none") : roles) + ")");
 }
 
 }  // namespace driftlab

@@ -20,9 +20,9 @@ inline constexpr const char* kDriveFrequency = "drive_frequency";  // Hz
 }  // namespace role
 
 struct Channel {
-  std::string role;      // "rate", "temperature", "gyro_x", ... (IMU roles: framework/imu.hpp)
-  std::string unit;      // internal unit symbol ("rad/s", "m/s^2", "degC", "Hz", "s", "1")
-  std::string source;    // where it came from (CSV column name), for messages
+  std::string role;    // "rate", "temperature", "gyro_x", ... (IMU roles: framework/imu.hpp)
+  std::string unit;    // internal unit symbol ("rad/s", "m/s^2", "degC", "Hz", "s", "1")
+  std::string source;  // where it came from (CSV column name), for messages
   Eigen::VectorXd values;
   std::string read_unit = {};  // the unit spelling the source holds it in (outputs are written back in it)
 };

@@ -31,12 +31,11 @@ struct BaseType {
   Type type;
   std::size_t size;
 };
-constexpr BaseType kBaseTypes[] = {{"int8_t", Type::Int8, 1},     {"uint8_t", Type::UInt8, 1},
-                                   {"int16_t", Type::Int16, 2},   {"uint16_t", Type::UInt16, 2},
-                                   {"int32_t", Type::Int32, 4},   {"uint32_t", Type::UInt32, 4},
-                                   {"int64_t", Type::Int64, 8},   {"uint64_t", Type::UInt64, 8},
-                                   {"float", Type::Float, 4},     {"double", Type::Double, 8},
-                                   {"bool", Type::Bool, 1},       {"char", Type::Char, 1}};
+constexpr BaseType kBaseTypes[] = {
+    {"int8_t", Type::Int8, 1},     {"uint8_t", Type::UInt8, 1},   {"int16_t", Type::Int16, 2},
+    {"uint16_t", Type::UInt16, 2}, {"int32_t", Type::Int32, 4},   {"uint32_t", Type::UInt32, 4},
+    {"int64_t", Type::Int64, 8},   {"uint64_t", Type::UInt64, 8}, {"float", Type::Float, 4},
+    {"double", Type::Double, 8},   {"bool", Type::Bool, 1},       {"char", Type::Char, 1}};
 
 const BaseType* base_type(std::string_view name) {
   for (const auto& b : kBaseTypes)
@@ -52,19 +51,31 @@ std::size_t base_size(Type type) {
 
 double decode(Type type, const unsigned char* p) {
   switch (type) {
-    case Type::Int8: return static_cast<std::int8_t>(p[0]);
+    case Type::Int8:
+      return static_cast<std::int8_t>(p[0]);
     case Type::UInt8:
-    case Type::Char: return p[0];
-    case Type::Bool: return p[0] != 0 ? 1.0 : 0.0;
-    case Type::Int16: return static_cast<std::int16_t>(load<2>(p));
-    case Type::UInt16: return static_cast<double>(load<2>(p));
-    case Type::Int32: return static_cast<std::int32_t>(load<4>(p));
-    case Type::UInt32: return static_cast<double>(load<4>(p));
-    case Type::Int64: return static_cast<double>(static_cast<std::int64_t>(load<8>(p)));
-    case Type::UInt64: return static_cast<double>(load<8>(p));
-    case Type::Float: return binary::load_float(p);
-    case Type::Double: return binary::load_double(p);
-    case Type::Nested: break;
+    case Type::Char:
+      return p[0];
+    case Type::Bool:
+      return p[0] != 0 ? 1.0 : 0.0;
+    case Type::Int16:
+      return static_cast<std::int16_t>(load<2>(p));
+    case Type::UInt16:
+      return static_cast<double>(load<2>(p));
+    case Type::Int32:
+      return static_cast<std::int32_t>(load<4>(p));
+    case Type::UInt32:
+      return static_cast<double>(load<4>(p));
+    case Type::Int64:
+      return static_cast<double>(static_cast<std::int64_t>(load<8>(p)));
+    case Type::UInt64:
+      return static_cast<double>(load<8>(p));
+    case Type::Float:
+      return binary::load_float(p);
+    case Type::Double:
+      return binary::load_double(p);
+    case Type::Nested:
+      break;
   }
   return 0.0;
 }
@@ -149,8 +160,8 @@ class Parser {
       const std::uint8_t type = h[2];
       if (msg_size > remain - kMessageHeaderSize) {
         if (!before_appended)
-          fail(at, "truncated: message " + type_text(type) + " declares " + std::to_string(msg_size) +
-                       " bytes, " + std::to_string(remain - kMessageHeaderSize) + " remain in the file");
+          fail(at, "truncated: message " + type_text(type) + " declares " + std::to_string(msg_size) + " bytes, " +
+                       std::to_string(remain - kMessageHeaderSize) + " remain in the file");
         skip_to(at, end);
         continue;
       }
@@ -206,14 +217,24 @@ class Parser {
 
   void message(std::uint64_t at, std::uint8_t type, const unsigned char* p, std::size_t n) {
     switch (type) {
-      case 'F': return format(at, p, n);
-      case 'I': return info(at, p, n);
-      case 'M': return info_multiple(at, p, n);
-      case 'P': return parameter(at, p, n);
-      case 'Q': return default_parameter(at, p, n);
-      case 'A': in_data_ = true; return add(at, p, n);
-      case 'R': in_data_ = true; return remove(at, p, n);
-      case 'D': return data(at, p, n);
+      case 'F':
+        return format(at, p, n);
+      case 'I':
+        return info(at, p, n);
+      case 'M':
+        return info_multiple(at, p, n);
+      case 'P':
+        return parameter(at, p, n);
+      case 'Q':
+        return default_parameter(at, p, n);
+      case 'A':
+        in_data_ = true;
+        return add(at, p, n);
+      case 'R':
+        in_data_ = true;
+        return remove(at, p, n);
+      case 'D':
+        return data(at, p, n);
       case 'L':
         in_data_ = true;
         need(at, n, 9, "logged string 'L'");
@@ -368,7 +389,8 @@ class Parser {
       t.fields = l.fields;
       t.message_size = l.size;
       TopicState s;
-      const auto ts = std::find_if(l.fields.begin(), l.fields.end(), [](const Field& f) { return f.name == "timestamp"; });
+      const auto ts =
+          std::find_if(l.fields.begin(), l.fields.end(), [](const Field& f) { return f.name == "timestamp"; });
       if (ts == l.fields.end() || ts->type != Type::UInt64 || ts->array_length != 0)
         fail(at, "format '" + name + "' has no 'uint64_t timestamp' field (every logged format needs one)");
       s.timestamp_offset = ts->offset;
@@ -388,7 +410,8 @@ class Parser {
       states_.push_back(s);
     } else if (log_.topics[it->second].message_size != l.size) {
       fail(at, "topic '" + name + "' multi_id " + std::to_string(multi_id) + " added again with a format of " +
-                   std::to_string(l.size) + " bytes (it had " + std::to_string(log_.topics[it->second].message_size) + ")");
+                   std::to_string(l.size) + " bytes (it had " + std::to_string(log_.topics[it->second].message_size) +
+                   ")");
     }
     subscribed_[msg_id] = static_cast<std::int32_t>(it->second);
   }
@@ -411,8 +434,9 @@ class Parser {
     if (payload < s.min_payload || payload > t.message_size)
       fail(at, "data 'D' of '" + t.name + "' multi_id " + std::to_string(t.multi_id) + " has " +
                    std::to_string(payload) + " bytes; its format needs " +
-                   (s.min_payload == t.message_size ? std::to_string(t.message_size)
-                                                    : std::to_string(s.min_payload) + " to " + std::to_string(t.message_size)));
+                   (s.min_payload == t.message_size
+                        ? std::to_string(t.message_size)
+                        : std::to_string(s.min_payload) + " to " + std::to_string(t.message_size)));
     const unsigned char* d = p + 2;
     const std::uint64_t timestamp = load<8>(d + s.timestamp_offset);
     if (t.count == 0) t.first_timestamp_us = timestamp;
@@ -422,7 +446,8 @@ class Parser {
     last_timestamp_ = timestamp;
     if (!t.kept) return;
     t.timestamp_us.push_back(timestamp);
-    for (std::size_t c = 0; c < t.columns.size(); ++c) t.values[c].push_back(decode(t.columns[c].type, d + t.columns[c].offset));
+    for (std::size_t c = 0; c < t.columns.size(); ++c)
+      t.values[c].push_back(decode(t.columns[c].type, d + t.columns[c].offset));
   }
 
   struct Key {
@@ -438,7 +463,9 @@ class Parser {
     k.type = parse_type(at, text.substr(0, space), what, true);
     k.type.name = text.substr(space + 1);
     const auto* b = base_type(k.type.type_name);
-    if (!b) fail(at, std::string(what) + " '" + k.type.name + "': type " + quoted_excerpt(k.type.type_name) + " is not a base type");
+    if (!b)
+      fail(at, std::string(what) + " '" + k.type.name + "': type " + quoted_excerpt(k.type.type_name) +
+                   " is not a base type");
     k.base = b->type;
     const std::size_t expected = b->size * k.type.array_length.value_or(1);
     if (value_size != expected)
@@ -448,11 +475,13 @@ class Parser {
   }
 
   // key_len, key, value from `p` (n bytes); the value as text.
-  std::pair<Key, std::string> key_value(std::uint64_t at, const unsigned char* p, std::size_t n, const char* what) const {
+  std::pair<Key, std::string> key_value(std::uint64_t at, const unsigned char* p, std::size_t n,
+                                        const char* what) const {
     need(at, n, 1, what);
     const std::size_t key_len = p[0];
     if (key_len > n - 1)
-      fail(at, std::string(what) + ": key of " + std::to_string(key_len) + " bytes, " + std::to_string(n - 1) + " remain");
+      fail(at,
+           std::string(what) + ": key of " + std::to_string(key_len) + " bytes, " + std::to_string(n - 1) + " remain");
     const std::string_view key_text(reinterpret_cast<const char*>(p + 1), key_len);
     const unsigned char* value = p + 1 + key_len;
     const std::size_t value_size = n - 1 - key_len;

@@ -56,16 +56,30 @@ namespace driftlab::ulog {
 bool has_magic(std::string_view first_bytes);
 inline constexpr std::size_t kMagicSize = 7;
 
-enum class Type : std::uint8_t { Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, UInt64, Float, Double, Bool, Char, Nested };
+enum class Type : std::uint8_t {
+  Int8,
+  UInt8,
+  Int16,
+  UInt16,
+  Int32,
+  UInt32,
+  Int64,
+  UInt64,
+  Float,
+  Double,
+  Bool,
+  Char,
+  Nested
+};
 
 // A field of a format, as defined ("float[3] gyro_rad"), with its place in the message.
 struct Field {
-  std::string type_name;          // "float", "uint64_t", or a nested format's name
+  std::string type_name;  // "float", "uint64_t", or a nested format's name
   Type type = Type::UInt8;
-  std::size_t array_length = 0;   // 0: a scalar
+  std::size_t array_length = 0;  // 0: a scalar
   std::string name;
-  std::size_t offset = 0;         // bytes from the start of the message (after msg_id)
-  std::size_t size = 0;           // bytes, array included
+  std::size_t offset = 0;  // bytes from the start of the message (after msg_id)
+  std::size_t size = 0;    // bytes, array included
   bool padding() const { return name.starts_with("_padding"); }
 };
 
@@ -87,9 +101,9 @@ struct Topic {
   std::uint64_t count = 0;       // data messages
   std::uint64_t data_bytes = 0;  // their payload bytes as logged (msg_id excluded, trailing padding as written)
   std::uint64_t first_timestamp_us = 0, last_timestamp_us = 0;  // of the first / last message in the file
-  bool kept = false;             // values stored (ReadOptions)
-  std::vector<std::uint64_t> timestamp_us;  // per message in file order, when kept
-  std::vector<std::vector<double>> values;  // per column, per message, when kept
+  bool kept = false;                                            // values stored (ReadOptions)
+  std::vector<std::uint64_t> timestamp_us;                      // per message in file order, when kept
+  std::vector<std::vector<double>> values;                      // per column, per message, when kept
 
   bool has_column(std::string_view column) const;
   // Values of a column; DataError naming the topic and the column when it is absent or not kept.
@@ -115,8 +129,8 @@ struct Dropout {
   std::uint16_t duration_ms = 0;
 };
 struct LoggedString {
-  std::uint8_t level = 0;              // syslog level, as the ASCII digit '0'..'7' PX4 writes
-  std::optional<std::uint16_t> tag;    // 'C' messages
+  std::uint8_t level = 0;            // syslog level, as the ASCII digit '0'..'7' PX4 writes
+  std::optional<std::uint16_t> tag;  // 'C' messages
   std::uint64_t timestamp_us = 0;
   std::string text;
 };
@@ -133,10 +147,10 @@ struct Log {
   // 'I' of the same key replaces the value.
   std::map<std::string, std::string> info;
   std::map<std::string, std::vector<std::string>> info_multiple;  // 'M', continued parts joined
-  std::vector<Parameter> parameters;                  // definitions section, file order
-  std::vector<ParameterChange> parameter_changes;     // data section
+  std::vector<Parameter> parameters;                              // definitions section, file order
+  std::vector<ParameterChange> parameter_changes;                 // data section
   std::vector<DefaultParameter> default_parameters;
-  std::vector<Topic> topics;                          // in order of first subscription
+  std::vector<Topic> topics;  // in order of first subscription
   std::vector<Dropout> dropouts;
   std::vector<LoggedString> logged;
   std::uint64_t sync_messages = 0;

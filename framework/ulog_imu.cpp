@@ -21,14 +21,16 @@ using Stream = imu::SensorStream;
 std::string imu_topic_list(const Log& log) {
   std::string out;
   for (const auto& name : imu_topics())
-    for (const auto* t : log.instances(name)) out += (out.empty() ? "" : ", ") + t->name + "[" + std::to_string(t->multi_id) + "]";
+    for (const auto* t : log.instances(name))
+      out += (out.empty() ? "" : ", ") + t->name + "[" + std::to_string(t->multi_id) + "]";
   return out.empty() ? "none" : out;
 }
 
 // A field's values, DataError naming the file when the topic's format lacks it.
 const std::vector<double>& field(const Log& log, const Topic& t, const std::string& name) {
   if (!t.has_column(name))
-    fail(log, t.name + "." + name, "topic '" + t.name + "' multi_id " + std::to_string(t.multi_id) + " has no field '" + name + "'");
+    fail(log, t.name + "." + name,
+         "topic '" + t.name + "' multi_id " + std::to_string(t.multi_id) + " has no field '" + name + "'");
   return t.column(name);
 }
 
@@ -44,9 +46,11 @@ void sensor_streams(const Log& log, const std::string& topic, imu::Sensor sensor
     s.label = topic + " multi_id " + std::to_string(t->multi_id);
     s.source = topic + "[" + std::to_string(t->multi_id) + "]";
     imu::SampleOrder raw;
-    const std::vector<double>* sample_time = t->has_column("timestamp_sample") ? &t->column("timestamp_sample") : nullptr;
+    const std::vector<double>* sample_time =
+        t->has_column("timestamp_sample") ? &t->column("timestamp_sample") : nullptr;
     for (std::size_t i = 0; i < t->timestamp_us.size(); ++i) {
-      raw.time_us.push_back(imu::time_stamp_us(log.file, s.source, sample_time ? (*sample_time)[i] : static_cast<double>(t->timestamp_us[i])));
+      raw.time_us.push_back(imu::time_stamp_us(
+          log.file, s.source, sample_time ? (*sample_time)[i] : static_cast<double>(t->timestamp_us[i])));
       raw.message.push_back(i);
     }
     imu::repair_order(raw, s.label, notes);
@@ -55,14 +59,16 @@ void sensor_streams(const Log& log, const std::string& topic, imu::Sensor sensor
       const std::string axis(1, kAxes[a]);
       s.axes[a] = imu::pick(log.file, s, field(log, *t, axis), raw, axis);
     }
-    if (t->has_column("temperature")) s.temperature = imu::pick_temperature(log.file, s, t->column("temperature"), raw, notes);
+    if (t->has_column("temperature"))
+      s.temperature = imu::pick_temperature(log.file, s, t->column("temperature"), raw, notes);
     if (t->has_column("device_id") && !raw.message.empty()) {
       const auto& ids = t->column("device_id");
       s.device_id = device_text(ids[raw.message.front()]);
       for (const auto i : raw.message)
         if (ids[i] != ids[raw.message.front()]) {
-          if (notes) notes->push_back(s.label + ": device_id changes within the log (" + s.device_id + " to " +
-                                      device_text(ids[i]) + "); the first is the record's");
+          if (notes)
+            notes->push_back(s.label + ": device_id changes within the log (" + s.device_id + " to " +
+                             device_text(ids[i]) + "); the first is the record's");
           break;
         }
     }
@@ -100,11 +106,13 @@ void combined_streams(const Log& log, std::vector<Stream>& out, std::vector<std:
         ++invalid;
         continue;
       }
-      raw.time_us.push_back(imu::time_stamp_us(log.file, s.source, static_cast<double>(t->timestamp_us[i]) + relative[i]));
+      raw.time_us.push_back(
+          imu::time_stamp_us(log.file, s.source, static_cast<double>(t->timestamp_us[i]) + relative[i]));
       raw.message.push_back(i);
     }
     if (notes && invalid > 0)
-      notes->push_back(s.label + ": " + std::to_string(invalid) + " samples with an invalid relative time stamp left out");
+      notes->push_back(s.label + ": " + std::to_string(invalid) +
+                       " samples with an invalid relative time stamp left out");
     imu::repair_order(raw, s.label, notes);
     s.time = raw.time_us;
     for (int a = 0; a < 3; ++a) {
@@ -154,11 +162,13 @@ void integrated_streams(const Log& log, std::vector<Stream>& out, std::vector<st
         s.axes[a] = imu::pick(log.file, s, rate, raw, name);
       }
       const std::string device = gyro ? "gyro_device_id" : "accel_device_id";
-      if (t->has_column(device) && !raw.message.empty()) s.device_id = device_text(t->column(device)[raw.message.front()]);
+      if (t->has_column(device) && !raw.message.empty())
+        s.device_id = device_text(t->column(device)[raw.message.front()]);
       out.push_back(std::move(s));
     }
   }
-  if (notes && !out.empty()) notes->push_back("vehicle_imu carries no IMU temperature: the record has no temperature channel");
+  if (notes && !out.empty())
+    notes->push_back("vehicle_imu carries no IMU temperature: the record has no temperature channel");
 }
 
 }  // namespace
@@ -180,11 +190,13 @@ TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector
     } else if (log.find("sensor_combined", 0)) {
       topic = "sensor_combined";
     } else {
-      fail(log, "--topic", "no IMU topic in the log (looked for sensor_gyro, sensor_accel, vehicle_imu, sensor_combined)");
+      fail(log, "--topic",
+           "no IMU topic in the log (looked for sensor_gyro, sensor_accel, vehicle_imu, sensor_combined)");
     }
   } else if (std::find(imu_topics().begin(), imu_topics().end(), topic) == imu_topics().end()) {
-    throw ConfigError({"", 0, "--topic"},
-                      "'" + topic + "': a ULog's IMU is read from sensor_gyro, sensor_accel, vehicle_imu or sensor_combined");
+    throw ConfigError(
+        {"", 0, "--topic"},
+        "'" + topic + "': a ULog's IMU is read from sensor_gyro, sensor_accel, vehicle_imu or sensor_combined");
   } else if (log.instances(topic).empty()) {
     fail(log, "--topic", "topic '" + topic + "' is not in the log (IMU topics it has: " + imu_topic_list(log) + ")");
   }

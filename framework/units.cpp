@@ -32,12 +32,12 @@ const std::vector<Spelling>& spellings() {
     const Unit khz{"kHz", Quantity::Frequency, 1e3, 0.0};
     const Unit one{"1", Quantity::Dimensionless, 1.0, 0.0};
     return std::vector<Spelling>{
-        {"rad/s", rad_s}, {"rps", rad_s},   {"deg/s", deg_s}, {"dps", deg_s},  {"°/s", deg_s},
-        {"deg/h", deg_h}, {"°/h", deg_h},   {"dph", deg_h},   {"mrad/s", mrad_s}, {"mdeg/s", mdeg_s},
-        {"mdps", mdeg_s}, {"m/s^2", m_s2},  {"m/s2", m_s2},   {"mps2", m_s2},  {"g", gee},  {"mg", mgee},
-        {"degC", deg_c},  {"C", deg_c},     {"°C", deg_c},    {"celsius", deg_c}, {"K", kelvin},
-        {"s", sec},       {"ms", msec},     {"us", usec},     {"ns", nsec},    {"h", hour},
-        {"Hz", hz},       {"kHz", khz},     {"1", one},
+        {"rad/s", rad_s}, {"rps", rad_s},  {"deg/s", deg_s}, {"dps", deg_s},     {"°/s", deg_s},
+        {"deg/h", deg_h}, {"°/h", deg_h},  {"dph", deg_h},   {"mrad/s", mrad_s}, {"mdeg/s", mdeg_s},
+        {"mdps", mdeg_s}, {"m/s^2", m_s2}, {"m/s2", m_s2},   {"mps2", m_s2},     {"g", gee},
+        {"mg", mgee},     {"degC", deg_c}, {"C", deg_c},     {"°C", deg_c},      {"celsius", deg_c},
+        {"K", kelvin},    {"s", sec},      {"ms", msec},     {"us", usec},       {"ns", nsec},
+        {"h", hour},      {"Hz", hz},      {"kHz", khz},     {"1", one},
     };
   }();
   return table;
@@ -74,12 +74,18 @@ std::vector<std::string> known_unit_spellings() {
 
 std::string internal_unit_symbol(Quantity q) {
   switch (q) {
-    case Quantity::AngularRate: return "rad/s";
-    case Quantity::Acceleration: return "m/s^2";
-    case Quantity::Temperature: return "degC";
-    case Quantity::Time: return "s";
-    case Quantity::Frequency: return "Hz";
-    case Quantity::Dimensionless: return "1";
+    case Quantity::AngularRate:
+      return "rad/s";
+    case Quantity::Acceleration:
+      return "m/s^2";
+    case Quantity::Temperature:
+      return "degC";
+    case Quantity::Time:
+      return "s";
+    case Quantity::Frequency:
+      return "Hz";
+    case Quantity::Dimensionless:
+      return "1";
   }
   return "1";
 }

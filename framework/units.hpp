@@ -13,9 +13,9 @@ namespace driftlab {
 enum class Quantity { AngularRate, Acceleration, Temperature, Time, Frequency, Dimensionless };
 
 struct Unit {
-  std::string symbol;   // canonical spelling, e.g. "deg/s"
+  std::string symbol;  // canonical spelling, e.g. "deg/s"
   Quantity quantity;
-  double scale;         // internal = value * scale + offset
+  double scale;  // internal = value * scale + offset
   double offset;
 };
 
@@ -42,9 +42,9 @@ constexpr double kDegPerRad = 180.0 / kPi;
 constexpr double kRadPerDeg = kPi / 180.0;
 constexpr double kSecondsPerHour = 3600.0;
 constexpr double kRadPerSecPerDph = kRadPerDeg / kSecondsPerHour;  // rad/s per deg/h (gyro bias unit)
-constexpr double kDphPerRadPerSec = 1.0 / kRadPerSecPerDph;         // deg/h per rad/s
-constexpr double kPpm = 1e-6;                                        // parts per million
-constexpr double kStandardGravity = 9.80665;                         // m/s^2 per g (CGPM 1901)
+constexpr double kDphPerRadPerSec = 1.0 / kRadPerSecPerDph;        // deg/h per rad/s
+constexpr double kPpm = 1e-6;                                      // parts per million
+constexpr double kStandardGravity = 9.80665;                       // m/s^2 per g (CGPM 1901)
 // The physical range of an absolute temperature a file may give, degC: absolute zero to 1000 degC,
 // far beyond any sensor (calibration models, simulator chamber and nav cabin profiles).
 constexpr double kMinTemperatureC = -273.15, kMaxTemperatureC = 1000.0;

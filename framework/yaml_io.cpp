@@ -14,9 +14,9 @@ struct DuplicateFinder {
 
   void walk(const YAML::Node& node, const std::string& path) {
     if (++visited > kMaxYamlNodes)
-      throw ConfigError({file, yaml_line(node), path},
-                        "document too large: more than " + std::to_string(kMaxYamlNodes) +
-                            " YAML nodes (after expanding aliases); refused");
+      throw ConfigError({file, yaml_line(node), path}, "document too large: more than " +
+                                                           std::to_string(kMaxYamlNodes) +
+                                                           " YAML nodes (after expanding aliases); refused");
     if (node.IsMap()) {
       std::set<std::string> seen;
       for (const auto& kv : node) {
@@ -24,8 +24,8 @@ struct DuplicateFinder {
         const std::string label = key ? *key : "?";
         const std::string child = path.empty() ? label : path + "." + label;
         if (key && !seen.insert(*key).second)
-          problems.push_back({{file, yaml_line(kv.first), child},
-                              "duplicate key (each key may appear once in a mapping)"});
+          problems.push_back(
+              {{file, yaml_line(kv.first), child}, "duplicate key (each key may appear once in a mapping)"});
         walk(kv.second, child);
       }
     } else if (node.IsSequence()) {
@@ -37,9 +37,7 @@ struct DuplicateFinder {
 
 }  // namespace
 
-int yaml_line(const YAML::Node& node) {
-  return node.IsDefined() && node.Mark().line >= 0 ? node.Mark().line + 1 : 0;
-}
+int yaml_line(const YAML::Node& node) { return node.IsDefined() && node.Mark().line >= 0 ? node.Mark().line + 1 : 0; }
 
 void find_duplicate_keys(const YAML::Node& node, const std::string& file, std::vector<Diagnostic>& problems) {
   DuplicateFinder finder{file, problems};
@@ -57,8 +55,10 @@ YAML::Node load_yaml_checked(const std::string& text, const std::string& file, s
   }
   std::vector<Diagnostic> found;
   find_duplicate_keys(root, file, found);
-  if (problems) problems->insert(problems->end(), found.begin(), found.end());
-  else if (!found.empty()) throw ConfigError(found);
+  if (problems)
+    problems->insert(problems->end(), found.begin(), found.end());
+  else if (!found.empty())
+    throw ConfigError(found);
   return root;
 }
 

@@ -41,8 +41,12 @@ FloorReading flat_floor(const std::vector<Estimate>& curve, double min_tau_s) {
   const auto rising_or_flat = [&](const Estimate& neighbour) { return neighbour.dev_hi >= e.dev_lo; };
   const bool resolved =
       best > 0 && best + 1 < curve.size() && rising_or_flat(curve[best - 1]) && rising_or_flat(curve[best + 1]);
-  return {resolved, e.dev / kFlickerFloorFactor, e.dev_lo / kFlickerFloorFactor, e.dev_hi / kFlickerFloorFactor,
-          e.tau, curve.back().tau};
+  return {resolved,
+          e.dev / kFlickerFloorFactor,
+          e.dev_lo / kFlickerFloorFactor,
+          e.dev_hi / kFlickerFloorFactor,
+          e.tau,
+          curve.back().tau};
 }
 
 // The readings and the fit of a curve already estimated.

@@ -52,28 +52,28 @@ namespace driftlab::allan {
 inline constexpr double kFlickerFloorFactor = 0.6642824702679600;
 
 struct FloorReading {
-  bool resolved = false;     // the minimum is a floor (see above): value is B; otherwise B < high
-  double value = 0.0;        // min sigma / 0.664, rad/s
-  double low = 0.0;          // interval of the point at the minimum, scaled by 1 / 0.664
+  bool resolved = false;  // the minimum is a floor (see above): value is B; otherwise B < high
+  double value = 0.0;     // min sigma / 0.664, rad/s
+  double low = 0.0;       // interval of the point at the minimum, scaled by 1 / 0.664
   double high = 0.0;
-  double tau_s = 0.0;        // tau of the minimum
+  double tau_s = 0.0;          // tau of the minimum
   double longest_tau_s = 0.0;  // the curve's longest tau: an unresolved B is bounded within tau <= this
 };
 
 struct AnalysisOptions {
   double min_tau_s = 0.0;  // B is read at tau >= this (the output's correlation time)
   double confidence = kDefaultConfidence;
-  bool fit_terms = true;   // also run the least-squares Q/N/B/K/R fit
+  bool fit_terms = true;  // also run the least-squares Q/N/B/K/R fit
 };
 
 struct Analysis {
-  std::vector<Estimate> curve;          // OADEV on the octave grid, rad/s
-  FloorReading bias_instability;        // B read as the flat floor
-  double arw_rad_sqrt_s = 0.0;          // N read from the -1/2 line at tau = 1 s
-  std::optional<NoiseFit> fit;          // the least-squares terms (absent when the fit failed)
+  std::vector<Estimate> curve;    // OADEV on the octave grid, rad/s
+  FloorReading bias_instability;  // B read as the flat floor
+  double arw_rad_sqrt_s = 0.0;    // N read from the -1/2 line at tau = 1 s
+  std::optional<NoiseFit> fit;    // the least-squares terms (absent when the fit failed)
   double sample_rate_hz = 0.0;
   std::size_t samples = 0;
-  std::size_t segments = 1;             // bursts pooled (analyze_segments); 1 for one contiguous record
+  std::size_t segments = 1;  // bursts pooled (analyze_segments); 1 for one contiguous record
 };
 
 // Throws DataError when the record is too short for an Allan curve (fewer than 9 samples) or has
@@ -88,8 +88,9 @@ Analysis analyze_angle(const Eigen::Ref<const Eigen::VectorXd>& angle_rad, doubl
 // The same for a record of bursts: rate_rad_s holds every burst's samples, `segments` says where each
 // burst is (framework/sampling.hpp), all sampled at sample_rate_hz. Throws DataError when the median
 // burst has fewer than 9 samples.
-Analysis analyze_segments(const Eigen::Ref<const Eigen::VectorXd>& rate_rad_s, std::span<const sampling::Segment> segments,
-                          double sample_rate_hz, const AnalysisOptions& options = {});
+Analysis analyze_segments(const Eigen::Ref<const Eigen::VectorXd>& rate_rad_s,
+                          std::span<const sampling::Segment> segments, double sample_rate_hz,
+                          const AnalysisOptions& options = {});
 
 // One-sided equivalent noise bandwidth (Hz) of `output` relative to white noise of level
 // reference_arw_rad_sqrt_s (see above). Throws DataError for fewer than 64 samples.

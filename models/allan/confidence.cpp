@@ -18,16 +18,13 @@ namespace {
 constexpr std::size_t kMinLag1Points = 30;
 constexpr double kJMax = 100.0;
 
-Eigen::VectorXd differenced(const Eigen::VectorXd& z) {
-  return z.tail(z.size() - 1) - z.head(z.size() - 1);
-}
+Eigen::VectorXd differenced(const Eigen::VectorXd& z) { return z.tail(z.size() - 1) - z.head(z.size() - 1); }
 
 Eigen::VectorXd averaged_rates(const Eigen::Ref<const Eigen::VectorXd>& x, std::size_t m) {
   const std::size_t count = (static_cast<std::size_t>(x.size()) - 1) / m;
   Eigen::VectorXd z(static_cast<Eigen::Index>(count));
   for (std::size_t k = 0; k < count; ++k) {
-    z(static_cast<Eigen::Index>(k)) =
-        x(static_cast<Eigen::Index>((k + 1) * m)) - x(static_cast<Eigen::Index>(k * m));
+    z(static_cast<Eigen::Index>(k)) = x(static_cast<Eigen::Index>((k + 1) * m)) - x(static_cast<Eigen::Index>(k * m));
   }
   return z;
 }
@@ -58,8 +55,8 @@ int alpha_from_b1_ratio(const Eigen::Ref<const Eigen::VectorXd>& x, std::size_t 
   if (!(adev > 0.0)) return 2;
   const double ratio = (mdev * mdev) / (adev * adev);
   const double white = 1.0 / static_cast<double>(m);
-  const double flicker = 1.5 * std::log(256.0 / 27.0) /
-                         (1.038 + 3.0 * std::log(std::numbers::pi * static_cast<double>(m)));
+  const double flicker =
+      1.5 * std::log(256.0 / 27.0) / (1.038 + 3.0 * std::log(std::numbers::pi * static_cast<double>(m)));
   return ratio < std::sqrt(white * flicker) ? 2 : 1;
 }
 
@@ -67,13 +64,20 @@ int alpha_from_b1_ratio(const Eigen::Ref<const Eigen::VectorXd>& x, std::size_t 
 long double sw(long double t, int alpha) {
   const long double a = std::fabs(t);
   switch (alpha) {
-    case 2: return -a;
-    case 1: return a == 0 ? 0.0L : t * t * std::log(a);
-    case 0: return a * a * a;
-    case -1: return a == 0 ? 0.0L : t * t * t * t * std::log(a);
-    case -2: return a * a * a * a * a;
-    case -3: return a == 0 ? 0.0L : std::pow(t, 6) * std::log(a);
-    case -4: return std::pow(a, 7);
+    case 2:
+      return -a;
+    case 1:
+      return a == 0 ? 0.0L : t * t * std::log(a);
+    case 0:
+      return a * a * a;
+    case -1:
+      return a == 0 ? 0.0L : t * t * t * t * std::log(a);
+    case -2:
+      return a * a * a * a * a;
+    case -3:
+      return a == 0 ? 0.0L : std::pow(t, 6) * std::log(a);
+    case -4:
+      return std::pow(a, 7);
   }
   throw ConfigError({}, "noise type alpha=" + std::to_string(alpha) + " outside -4..2");
 }
@@ -99,8 +103,7 @@ long double sz(long double t, long double f, int alpha, int d) {
 }
 
 // Eq. (10).
-long double basic_sum(long double j_count, long double m_count, long double s, long double f,
-                      int alpha, int d) {
+long double basic_sum(long double j_count, long double m_count, long double s, long double f, int alpha, int d) {
   const long double z0 = sz(0.0L, f, alpha, d);
   const long double zj = sz(j_count / s, f, alpha, d);
   long double sum = z0 * z0 + (1.0L - j_count / m_count) * zj * zj;
@@ -168,8 +171,7 @@ double lag1_autocorrelation(const Eigen::Ref<const Eigen::VectorXd>& z) {
 
 int min_alpha(Kind kind) { return is_hadamard(kind) ? -4 : -2; }
 
-NoiseEstimate identify_noise(const Eigen::Ref<const Eigen::VectorXd>& x, std::size_t m, Kind kind,
-                             InputType input) {
+NoiseEstimate identify_noise(const Eigen::Ref<const Eigen::VectorXd>& x, std::size_t m, Kind kind, InputType input) {
   if (m == 0 || static_cast<std::size_t>(x.size()) < 2 * m + 1) {
     throw DataError({}, "noise identification needs at least 2 averaging intervals");
   }
@@ -197,8 +199,7 @@ NoiseEstimate identify_noise(const Eigen::Ref<const Eigen::VectorXd>& x, std::si
     const double delta = r1 / (1.0 + r1);
     if (delta < 0.25 || d >= d_max || z.size() < 3) {
       result.alpha_estimate = 2.0 - 2.0 * (delta + d);
-      result.alpha = std::clamp(2 - 2 * d - static_cast<int>(std::lround(2.0 * delta)), lowest,
-                                kMaxAlpha);
+      result.alpha = std::clamp(2 - 2 * d - static_cast<int>(std::lround(2.0 * delta)), lowest, kMaxAlpha);
       return result;
     }
     z = differenced(z);
@@ -206,11 +207,10 @@ NoiseEstimate identify_noise(const Eigen::Ref<const Eigen::VectorXd>& x, std::si
   }
 }
 
-double greenhall_edf(int alpha, int d, std::size_t m_factor, std::size_t n_angle,
-                     bool overlapping, bool modified) {
+double greenhall_edf(int alpha, int d, std::size_t m_factor, std::size_t n_angle, bool overlapping, bool modified) {
   if (d < 1 || d > 3 || alpha + 2 * d <= 1 || alpha > 2) {
-    throw ConfigError({}, "edf undefined for alpha=" + std::to_string(alpha) +
-                              " with difference order " + std::to_string(d));
+    throw ConfigError(
+        {}, "edf undefined for alpha=" + std::to_string(alpha) + " with difference order " + std::to_string(d));
   }
   const auto m = static_cast<long double>(m_factor);
   const auto n = static_cast<long double>(n_angle);
@@ -273,30 +273,32 @@ double simple_edf(int alpha, std::size_t n_angle, std::size_t m_factor) {
   const auto n = static_cast<double>(n_angle);
   const auto m = static_cast<double>(m_factor);
   switch (alpha) {
-    case 2: return (n + 1.0) * (n - 2.0 * m) / (2.0 * (n - m));
+    case 2:
+      return (n + 1.0) * (n - 2.0 * m) / (2.0 * (n - m));
     case 1:
-      return std::exp(
-          std::sqrt(std::log((n - 1.0) / (2.0 * m)) * std::log((2.0 * m + 1.0) * (n - 1.0) / 4.0)));
+      return std::exp(std::sqrt(std::log((n - 1.0) / (2.0 * m)) * std::log((2.0 * m + 1.0) * (n - 1.0) / 4.0)));
     case 0:
-      return (3.0 * (n - 1.0) / (2.0 * m) - 2.0 * (n - 2.0) / n) * (4.0 * m * m) /
-             (4.0 * m * m + 5.0);
+      return (3.0 * (n - 1.0) / (2.0 * m) - 2.0 * (n - 2.0) / n) * (4.0 * m * m) / (4.0 * m * m + 5.0);
     case -1:
-      return m_factor == 1 ? 2.0 * (n - 2.0) / (2.3 * n - 4.9)
-                           : 5.0 * n * n / (4.0 * m * (n + 3.0 * m));
+      return m_factor == 1 ? 2.0 * (n - 2.0) / (2.3 * n - 4.9) : 5.0 * n * n / (4.0 * m * (n + 3.0 * m));
     case -2:
-      return (n - 2.0) / (m * (n - 3.0) * (n - 3.0)) *
-             ((n - 1.0) * (n - 1.0) - 3.0 * m * (n - 1.0) + 4.0 * m * m);
+      return (n - 2.0) / (m * (n - 3.0) * (n - 3.0)) * ((n - 1.0) * (n - 1.0) - 3.0 * m * (n - 1.0) + 4.0 * m * m);
   }
   throw ConfigError({}, "simple edf undefined for alpha=" + std::to_string(alpha));
 }
 
 double equivalent_dof(Kind kind, int alpha, std::size_t n, std::size_t m) {
   switch (kind) {
-    case Kind::Adev: return greenhall_edf(alpha, 2, m, n, false, false);
-    case Kind::Oadev: return greenhall_edf(alpha, 2, m, n, true, false);
-    case Kind::Mdev: return greenhall_edf(alpha, 2, m, n, true, true);
-    case Kind::Hdev: return greenhall_edf(alpha, 3, m, n, false, false);
-    case Kind::Ohdev: return greenhall_edf(alpha, 3, m, n, true, false);
+    case Kind::Adev:
+      return greenhall_edf(alpha, 2, m, n, false, false);
+    case Kind::Oadev:
+      return greenhall_edf(alpha, 2, m, n, true, false);
+    case Kind::Mdev:
+      return greenhall_edf(alpha, 2, m, n, true, true);
+    case Kind::Hdev:
+      return greenhall_edf(alpha, 3, m, n, false, false);
+    case Kind::Ohdev:
+      return greenhall_edf(alpha, 3, m, n, true, false);
     case Kind::Totdev: {
       if (alpha > 0) return simple_edf(alpha, n, m);
       static constexpr std::array<Coefficients, 3> kHowe{{{1.50, 0.0}, {1.17, 0.22}, {0.93, 0.36}}};
@@ -319,9 +321,8 @@ Interval chi_square_interval(double dev, double edf, double confidence) {
   return {dev * std::sqrt(edf / chi2_hi), dev * std::sqrt(edf / chi2_lo)};
 }
 
-std::vector<Estimate> estimate(Kind kind, const Eigen::Ref<const Eigen::VectorXd>& angle,
-                               double tau0, InputType input, std::span<const std::size_t> factors,
-                               double confidence) {
+std::vector<Estimate> estimate(Kind kind, const Eigen::Ref<const Eigen::VectorXd>& angle, double tau0, InputType input,
+                               std::span<const std::size_t> factors, double confidence) {
   const auto devs = deviations(kind, angle, tau0, factors);
   const auto n = static_cast<std::size_t>(angle.size());
   std::vector<Estimate> out;
@@ -338,8 +339,8 @@ std::vector<Estimate> estimate(Kind kind, const Eigen::Ref<const Eigen::VectorXd
   return out;
 }
 
-std::vector<Estimate> estimate_bursts(Kind kind, std::span<const Eigen::VectorXd> angles, double tau0,
-                                      InputType input, std::span<const std::size_t> factors, double confidence) {
+std::vector<Estimate> estimate_bursts(Kind kind, std::span<const Eigen::VectorXd> angles, double tau0, InputType input,
+                                      std::span<const std::size_t> factors, double confidence) {
   std::vector<Estimate> out;
   out.reserve(factors.size());
   for (const std::size_t m : factors) {

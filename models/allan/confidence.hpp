@@ -60,15 +60,14 @@ enum class InputType { Rate, Angle };
 enum class NoiseMethod { Lag1Autocorrelation, B1Ratio };
 
 struct NoiseEstimate {
-  int alpha = 0;                      // clamped integer noise type
-  double alpha_estimate = 0.0;        // continuous estimate 2 - 2(delta + d) (lag-1 method only)
+  int alpha = 0;                // clamped integer noise type
+  double alpha_estimate = 0.0;  // continuous estimate 2 - 2(delta + d) (lag-1 method only)
   NoiseMethod method = NoiseMethod::Lag1Autocorrelation;
 };
 
 // Dominant power-law noise at averaging factor m of the angle series (see above). `input` says
 // whether the angle was integrated from a rate (rate-domain identification) or measured directly.
-NoiseEstimate identify_noise(const Eigen::Ref<const Eigen::VectorXd>& angle, std::size_t m,
-                             Kind kind, InputType input);
+NoiseEstimate identify_noise(const Eigen::Ref<const Eigen::VectorXd>& angle, std::size_t m, Kind kind, InputType input);
 
 // Lag-1 autocorrelation sum (z_i - mean)(z_{i+1} - mean) / sum (z_i - mean)^2 (Riley & Greenhall
 // eq. 2).
@@ -83,8 +82,7 @@ double equivalent_dof(Kind kind, int alpha, std::size_t n_angle, std::size_t m);
 
 // Greenhall & Riley's edf for a d-th difference variance with filter factor F (m or 1) and
 // stride S (1 or m).
-double greenhall_edf(int alpha, int d, std::size_t m, std::size_t n_angle, bool overlapping,
-                     bool modified);
+double greenhall_edf(int alpha, int d, std::size_t m, std::size_t n_angle, bool overlapping, bool modified);
 
 // Simple edf approximations of SP1065 Table 5 for alpha in -2..2.
 double simple_edf(int alpha, std::size_t n_angle, std::size_t m);
@@ -101,20 +99,19 @@ Interval chi_square_interval(double dev, double edf, double confidence = kDefaul
 
 struct Estimate {
   std::size_t m = 0;
-  double tau = 0.0;          // s
-  double dev = 0.0;          // unit of the rate
+  double tau = 0.0;  // s
+  double dev = 0.0;  // unit of the rate
   double dev_lo = 0.0;
   double dev_hi = 0.0;
   std::size_t terms = 0;
-  int alpha = 0;             // identified noise type
+  int alpha = 0;  // identified noise type
   double edf = 0.0;
 };
 
 // Deviations with identified noise type (at most the type of any shorter tau, see above), edf and
 // interval at each factor.
-std::vector<Estimate> estimate(Kind kind, const Eigen::Ref<const Eigen::VectorXd>& angle,
-                               double tau0, InputType input, std::span<const std::size_t> factors,
-                               double confidence = kDefaultConfidence);
+std::vector<Estimate> estimate(Kind kind, const Eigen::Ref<const Eigen::VectorXd>& angle, double tau0, InputType input,
+                               std::span<const std::size_t> factors, double confidence = kDefaultConfidence);
 
 // The same for a record of bursts (framework/sampling.hpp), each burst's angle integrated on its own
 // and spaced tau0 like the others. No difference spans a gap: at each factor the kind's squared
@@ -124,8 +121,7 @@ std::vector<Estimate> estimate(Kind kind, const Eigen::Ref<const Eigen::VectorXd
 // of the types identified on those bursts (then held from rising with tau as above); the bursts are
 // taken as independent, so their chi-square variables add: edf = sum_b edf(kind, alpha, n_b, m).
 // `terms` is sum_b T_b. Throws DataError when no burst has a term at a factor.
-std::vector<Estimate> estimate_bursts(Kind kind, std::span<const Eigen::VectorXd> angles, double tau0,
-                                      InputType input, std::span<const std::size_t> factors,
-                                      double confidence = kDefaultConfidence);
+std::vector<Estimate> estimate_bursts(Kind kind, std::span<const Eigen::VectorXd> angles, double tau0, InputType input,
+                                      std::span<const std::size_t> factors, double confidence = kDefaultConfidence);
 
 }  // namespace driftlab::allan

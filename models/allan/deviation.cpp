@@ -13,14 +13,15 @@
 namespace driftlab::allan {
 namespace {
 
-constexpr std::array<std::string_view, 6> kKindNames = {"adev", "oadev", "mdev",
-                                                        "hdev", "ohdev", "totdev"};
+constexpr std::array<std::string_view, 6> kKindNames = {"adev", "oadev", "mdev", "hdev", "ohdev", "totdev"};
 
 // Second (kOrder 2) or third (kOrder 3) difference of x at lag m, starting at x[0].
 template <int kOrder>
 [[gnu::always_inline]] inline double difference(const double* x, std::size_t m) {
-  if constexpr (kOrder == 2) return x[2 * m] - 2.0 * x[m] + x[0];
-  else return x[3 * m] - 3.0 * x[2 * m] + 3.0 * x[m] - x[0];
+  if constexpr (kOrder == 2)
+    return x[2 * m] - 2.0 * x[m] + x[0];
+  else
+    return x[3 * m] - 3.0 * x[2 * m] + 3.0 * x[m] - x[0];
 }
 
 // Partial sums of one overlapping estimate, kept apart so that the additions of consecutive
@@ -32,8 +33,7 @@ using Lanes = std::array<double, kLanes>;
 // lane loop is vectorized and the lane assignment does not depend on the clone, so every clone
 // gives the same bits.
 template <int kOrder>
-DRIFTLAB_SIMD_CLONES void accumulate_squares(const double* x, std::size_t count, std::size_t m,
-                                             Lanes& lanes) {
+DRIFTLAB_SIMD_CLONES void accumulate_squares(const double* x, std::size_t count, std::size_t m, Lanes& lanes) {
   Lanes sums = lanes;
   std::size_t i = 0;
   for (; i + kLanes <= count; i += kLanes) {
@@ -72,8 +72,7 @@ constexpr std::size_t kMaxRows = 512;
 constexpr std::size_t kMinRow = 2048;
 
 template <int kOrder>
-std::vector<double> overlapping_sums(const double* e, std::size_t length,
-                                     std::span<const OverlappingSum> sums) {
+std::vector<double> overlapping_sums(const double* e, std::size_t length, std::span<const OverlappingSum> sums) {
   const std::size_t row = std::max(kMinRow, std::bit_ceil(length / kMaxRows + 1));
   std::vector<Lanes> lanes(sums.size(), Lanes{});
   std::vector<std::size_t> swept, striped;
@@ -194,12 +193,18 @@ std::size_t term_count(Kind kind, std::size_t n, std::size_t m) {
   const auto sn = static_cast<std::ptrdiff_t>(n);
   const auto sm = static_cast<std::ptrdiff_t>(m);
   switch (kind) {
-    case Kind::Adev: return positive((sn - 1) / sm - 1);
-    case Kind::Oadev: return positive(sn - 2 * sm);
-    case Kind::Mdev: return positive(sn - 3 * sm + 1);
-    case Kind::Hdev: return positive((sn - 1) / sm - 2);
-    case Kind::Ohdev: return positive(sn - 3 * sm);
-    case Kind::Totdev: return m <= n - 1 && n >= 3 ? n - 2 : 0;
+    case Kind::Adev:
+      return positive((sn - 1) / sm - 1);
+    case Kind::Oadev:
+      return positive(sn - 2 * sm);
+    case Kind::Mdev:
+      return positive(sn - 3 * sm + 1);
+    case Kind::Hdev:
+      return positive((sn - 1) / sm - 2);
+    case Kind::Ohdev:
+      return positive(sn - 3 * sm);
+    case Kind::Totdev:
+      return m <= n - 1 && n >= 3 ? n - 2 : 0;
   }
   return 0;
 }
@@ -207,32 +212,34 @@ std::size_t term_count(Kind kind, std::size_t n, std::size_t m) {
 std::size_t max_factor(Kind kind, std::size_t n) {
   switch (kind) {
     case Kind::Adev:
-    case Kind::Oadev: return n >= 3 ? (n - 1) / 2 : 0;
-    case Kind::Mdev: return n >= 3 ? n / 3 : 0;
+    case Kind::Oadev:
+      return n >= 3 ? (n - 1) / 2 : 0;
+    case Kind::Mdev:
+      return n >= 3 ? n / 3 : 0;
     case Kind::Ohdev:
-    case Kind::Hdev: return n >= 4 ? (n - 1) / 3 : 0;
-    case Kind::Totdev: return n >= 3 ? n - 1 : 0;
+    case Kind::Hdev:
+      return n >= 4 ? (n - 1) / 3 : 0;
+    case Kind::Totdev:
+      return n >= 3 ? n - 1 : 0;
   }
   return 0;
 }
 
-std::vector<Deviation> deviations(Kind kind, const Eigen::Ref<const Eigen::VectorXd>& angle,
-                                  double tau0, std::span<const std::size_t> factors) {
+std::vector<Deviation> deviations(Kind kind, const Eigen::Ref<const Eigen::VectorXd>& angle, double tau0,
+                                  std::span<const std::size_t> factors) {
   const auto n = static_cast<std::size_t>(angle.size());
   const std::size_t needed = is_hadamard(kind) ? 4 : 3;
   if (n < needed) {
-    throw DataError({}, std::string(kind_name(kind)) + " needs at least " +
-                            std::to_string(needed) + " angle samples, got " + std::to_string(n));
+    throw DataError({}, std::string(kind_name(kind)) + " needs at least " + std::to_string(needed) +
+                            " angle samples, got " + std::to_string(n));
   }
   if (!(tau0 > 0.0)) throw DataError({}, "sample interval tau0 must be positive");
   const std::size_t limit = max_factor(kind, n);
   std::vector<std::size_t> counts(factors.size());
   for (std::size_t k = 0; k < factors.size(); ++k) {
     if (factors[k] == 0 || factors[k] > limit) {
-      throw DataError({}, std::string(kind_name(kind)) + ": averaging factor " +
-                              std::to_string(factors[k]) + " outside 1.." +
-                              std::to_string(limit) + " for " + std::to_string(n) +
-                              " angle samples");
+      throw DataError({}, std::string(kind_name(kind)) + ": averaging factor " + std::to_string(factors[k]) +
+                              " outside 1.." + std::to_string(limit) + " for " + std::to_string(n) + " angle samples");
     }
     counts[k] = term_count(kind, n, factors[k]);
   }
@@ -243,8 +250,7 @@ std::vector<Deviation> deviations(Kind kind, const Eigen::Ref<const Eigen::Vecto
   if (kind == Kind::Oadev || kind == Kind::Ohdev) {
     std::vector<OverlappingSum> overlapping(factors.size());
     for (std::size_t k = 0; k < factors.size(); ++k) overlapping[k] = {factors[k], 0, counts[k]};
-    sums = kind == Kind::Oadev ? overlapping_sums<2>(x, n, overlapping)
-                               : overlapping_sums<3>(x, n, overlapping);
+    sums = kind == Kind::Oadev ? overlapping_sums<2>(x, n, overlapping) : overlapping_sums<3>(x, n, overlapping);
   } else if (kind == Kind::Totdev) {
     extended = reflected(angle);
     std::vector<OverlappingSum> overlapping(factors.size());
@@ -252,12 +258,13 @@ std::vector<Deviation> deviations(Kind kind, const Eigen::Ref<const Eigen::Vecto
       const std::size_t begin = (n - 2) + 1 - factors[k];
       overlapping[k] = {factors[k], begin, begin + counts[k]};
     }
-    sums = overlapping_sums<2>(extended.data(), static_cast<std::size_t>(extended.size()),
-                               overlapping);
+    sums = overlapping_sums<2>(extended.data(), static_cast<std::size_t>(extended.size()), overlapping);
   } else {
     for (std::size_t k = 0; k < factors.size(); ++k) {
-      if (kind == Kind::Mdev) sums[k] = modified_sum(x, counts[k], factors[k]);
-      else sums[k] = strided_sum(x, counts[k], factors[k], kind == Kind::Hdev ? 3 : 2);
+      if (kind == Kind::Mdev)
+        sums[k] = modified_sum(x, counts[k], factors[k]);
+      else
+        sums[k] = strided_sum(x, counts[k], factors[k], kind == Kind::Hdev ? 3 : 2);
     }
   }
 
@@ -270,10 +277,16 @@ std::vector<Deviation> deviations(Kind kind, const Eigen::Ref<const Eigen::Vecto
     switch (kind) {
       case Kind::Adev:
       case Kind::Oadev:
-      case Kind::Totdev: variance = sums[k] / (2.0 * terms * tau * tau); break;
-      case Kind::Mdev: variance = sums[k] / (2.0 * m * m * tau * tau * terms); break;
+      case Kind::Totdev:
+        variance = sums[k] / (2.0 * terms * tau * tau);
+        break;
+      case Kind::Mdev:
+        variance = sums[k] / (2.0 * m * m * tau * tau * terms);
+        break;
       case Kind::Hdev:
-      case Kind::Ohdev: variance = sums[k] / (6.0 * terms * tau * tau); break;
+      case Kind::Ohdev:
+        variance = sums[k] / (6.0 * terms * tau * tau);
+        break;
     }
     out[k] = {factors[k], tau, std::sqrt(variance), counts[k]};
   }

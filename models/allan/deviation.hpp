@@ -65,15 +65,15 @@ std::size_t term_count(Kind kind, std::size_t n_angle, std::size_t m);
 std::size_t max_factor(Kind kind, std::size_t n_angle);
 
 struct Deviation {
-  std::size_t m = 0;       // averaging factor
-  double tau = 0.0;        // s
-  double dev = 0.0;        // unit of the rate
-  std::size_t terms = 0;   // number of terms summed
+  std::size_t m = 0;      // averaging factor
+  double tau = 0.0;       // s
+  double dev = 0.0;       // unit of the rate
+  std::size_t terms = 0;  // number of terms summed
 };
 
 // Deviation at each averaging factor (in the given order). Throws driftlab::DataError when a
 // factor is 0 or exceeds max_factor, or the record has fewer than 3 angle samples (4 for Hadamard).
-std::vector<Deviation> deviations(Kind kind, const Eigen::Ref<const Eigen::VectorXd>& angle,
-                                  double tau0, std::span<const std::size_t> factors);
+std::vector<Deviation> deviations(Kind kind, const Eigen::Ref<const Eigen::VectorXd>& angle, double tau0,
+                                  std::span<const std::size_t> factors);
 
 }  // namespace driftlab::allan

@@ -120,10 +120,18 @@ std::vector<Eigen::VectorXd> starts(const std::vector<Process>& model, const std
   int at = 0, gm = 0;
   for (const Process p : model) {
     switch (p) {
-      case Process::WhiteNoise: base[at] = std::log(first.variance * tau1); break;
-      case Process::Quantization: base[at] = std::log(first.variance * tau1 * tau1 / 3.0); break;
-      case Process::RandomWalk: base[at] = std::log(3.0 * last.variance / tau_n); break;
-      case Process::Drift: base[at] = std::log(2.0 * last.variance / (tau_n * tau_n)); break;
+      case Process::WhiteNoise:
+        base[at] = std::log(first.variance * tau1);
+        break;
+      case Process::Quantization:
+        base[at] = std::log(first.variance * tau1 * tau1 / 3.0);
+        break;
+      case Process::RandomWalk:
+        base[at] = std::log(3.0 * last.variance / tau_n);
+        break;
+      case Process::Drift:
+        base[at] = std::log(2.0 * last.variance / (tau_n * tau_n));
+        break;
       case Process::GaussMarkov: {
         const double t = gm_times[static_cast<std::size_t>(gm++)];
         // The Allan variance of a Gauss-Markov process peaks near tau = 1.9 T at about 0.2 sigma^2.
@@ -159,18 +167,24 @@ std::vector<Eigen::VectorXd> starts(const std::vector<Process>& model, const std
 
 std::string to_string(Process p) {
   switch (p) {
-    case Process::WhiteNoise: return "wn";
-    case Process::Quantization: return "qn";
-    case Process::RandomWalk: return "rw";
-    case Process::Drift: return "dr";
-    case Process::GaussMarkov: return "gm";
+    case Process::WhiteNoise:
+      return "wn";
+    case Process::Quantization:
+      return "qn";
+    case Process::RandomWalk:
+      return "rw";
+    case Process::Drift:
+      return "dr";
+    case Process::GaussMarkov:
+      return "gm";
   }
   return "?";
 }
 
 std::vector<Process> parse_model(const std::string& text, const std::string& field) {
-  const std::string expected = "expected processes joined by '+', from wn (white noise), qn (quantization), "
-                               "rw (rate random walk), dr (rate ramp), gm (Gauss-Markov, may repeat), e.g. wn+rw+gm";
+  const std::string expected =
+      "expected processes joined by '+', from wn (white noise), qn (quantization), "
+      "rw (rate random walk), dr (rate ramp), gm (Gauss-Markov, may repeat), e.g. wn+rw+gm";
   std::vector<Process> model;
   std::size_t from = 0;
   while (from <= text.size()) {
@@ -178,8 +192,8 @@ std::vector<Process> parse_model(const std::string& text, const std::string& fie
     const std::string name = text.substr(from, plus - from);
     Process p{};
     bool known = false;
-    for (const Process q : {Process::WhiteNoise, Process::Quantization, Process::RandomWalk, Process::Drift,
-                            Process::GaussMarkov})
+    for (const Process q :
+         {Process::WhiteNoise, Process::Quantization, Process::RandomWalk, Process::Drift, Process::GaussMarkov})
       if (to_string(q) == name) {
         p = q;
         known = true;
@@ -202,10 +216,14 @@ std::string to_string(const std::vector<Process>& model) {
 double process_variance(Process p, std::span<const double> v, double m, double dt) {
   const double tau = m * dt;
   switch (p) {
-    case Process::WhiteNoise: return v[0] * v[0] / tau;
-    case Process::Quantization: return 3.0 * v[0] * v[0] / (tau * tau);
-    case Process::RandomWalk: return v[0] * v[0] * (2.0 * tau * tau + dt * dt) / (6.0 * tau);
-    case Process::Drift: return v[0] * v[0] * tau * tau / 2.0;
+    case Process::WhiteNoise:
+      return v[0] * v[0] / tau;
+    case Process::Quantization:
+      return 3.0 * v[0] * v[0] / (tau * tau);
+    case Process::RandomWalk:
+      return v[0] * v[0] * (2.0 * tau * tau + dt * dt) / (6.0 * tau);
+    case Process::Drift:
+      return v[0] * v[0] * tau * tau / 2.0;
     case Process::GaussMarkov: {
       const double s2 = v[0] * v[0], phi = std::exp(-dt / v[1]);
       const double one = 1.0 - phi, phi_m = std::pow(phi, m);
@@ -303,8 +321,8 @@ Fit fit(std::span<const Estimate> curve, double sample_rate_hz, const std::vecto
   for (const Process p : model) {
     Component c{p, {}};
     const auto values = si_parameters(p, best.data() + at);
-    const bool at_bound = p == Process::GaussMarkov &&
-                          (best[at + 1] <= f.log_t_min + 1e-9 || best[at + 1] >= f.log_t_max - 1e-9);
+    const bool at_bound =
+        p == Process::GaussMarkov && (best[at + 1] <= f.log_t_min + 1e-9 || best[at + 1] >= f.log_t_max - 1e-9);
     c.observable = visible(values, p) && !at_bound;
     for (int k = 0; k < parameter_count(p); ++k) {
       // value = exp(u / 2) for the coefficients (log of a square), exp(u) for T.
@@ -312,11 +330,21 @@ Fit fit(std::span<const Estimate> curve, double sample_rate_hz, const std::vecto
       const double sigma_log = per_log * std::sqrt(std::max(covariance(at + k, at + k), 0.0));
       Parameter q;
       switch (p) {
-        case Process::WhiteNoise: q.name = "N", q.unit = "rad/sqrt(s)"; break;
-        case Process::Quantization: q.name = "Q", q.unit = "rad"; break;
-        case Process::RandomWalk: q.name = "K", q.unit = "rad/s/sqrt(s)"; break;
-        case Process::Drift: q.name = "R", q.unit = "rad/s^2"; break;
-        case Process::GaussMarkov: q.name = k == 0 ? "sigma" : "T", q.unit = k == 0 ? "rad/s" : "s"; break;
+        case Process::WhiteNoise:
+          q.name = "N", q.unit = "rad/sqrt(s)";
+          break;
+        case Process::Quantization:
+          q.name = "Q", q.unit = "rad";
+          break;
+        case Process::RandomWalk:
+          q.name = "K", q.unit = "rad/s/sqrt(s)";
+          break;
+        case Process::Drift:
+          q.name = "R", q.unit = "rad/s^2";
+          break;
+        case Process::GaussMarkov:
+          q.name = k == 0 ? "sigma" : "T", q.unit = k == 0 ? "rad/s" : "s";
+          break;
       }
       q.value = values[static_cast<std::size_t>(k)];
       q.low = q.value * std::exp(-sigma_log);
@@ -341,8 +369,9 @@ Fit fit(std::span<const Estimate> curve, double sample_rate_hz, const std::vecto
       slots.push_back(i);
       gms.push_back(out.components[i]);
     }
-  std::stable_sort(gms.begin(), gms.end(),
-                   [](const Component& a, const Component& b) { return a.parameters[1].value < b.parameters[1].value; });
+  std::stable_sort(gms.begin(), gms.end(), [](const Component& a, const Component& b) {
+    return a.parameters[1].value < b.parameters[1].value;
+  });
   for (std::size_t k = 0; k < slots.size(); ++k) out.components[slots[k]] = gms[k];
   return out;
 }
@@ -392,17 +421,17 @@ Eigen::VectorXd simulate(const std::vector<Component>& components, double fs, Ei
   return x;
 }
 
-Fit bootstrap(const Fit& estimate, Eigen::Index samples, std::size_t replicates, std::uint64_t seed,
-              unsigned threads) {
+Fit bootstrap(const Fit& estimate, Eigen::Index samples, std::size_t replicates, std::uint64_t seed, unsigned threads) {
   if (replicates < 2) throw ConfigError({"", 0, "gmwm bootstrap"}, "the bootstrap needs at least 2 replicates");
   std::vector<Process> model;
   for (const auto& c : estimate.components) model.push_back(c.process);
   std::vector<std::optional<Fit>> fits(replicates);
   parallel_for(replicates, threads, [&](std::size_t r) {
-    const Eigen::VectorXd x =
-        simulate(estimate.components, estimate.sample_rate_hz, samples, splitmix64(seed ^ splitmix64(kBootstrapStream + r)));
+    const Eigen::VectorXd x = simulate(estimate.components, estimate.sample_rate_hz, samples,
+                                       splitmix64(seed ^ splitmix64(kBootstrapStream + r)));
     try {
-      fits[r] = fit(analyze_rate(x, estimate.sample_rate_hz, {.fit_terms = false}).curve, estimate.sample_rate_hz, model);
+      fits[r] =
+          fit(analyze_rate(x, estimate.sample_rate_hz, {.fit_terms = false}).curve, estimate.sample_rate_hz, model);
     } catch (const Error&) {
       fits[r].reset();
     }

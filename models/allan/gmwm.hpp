@@ -76,8 +76,8 @@ std::vector<Process> parse_model(const std::string& text, const std::string& fie
 std::string to_string(const std::vector<Process>& model);  // "wn+rw+gm"
 
 struct Parameter {
-  std::string name;   // "N", "Q", "K", "R", "sigma", "T"
-  std::string unit;   // SI: "rad/sqrt(s)", "rad", "rad/s/sqrt(s)", "rad/s^2", "rad/s", "s"
+  std::string name;  // "N", "Q", "K", "R", "sigma", "T"
+  std::string unit;  // SI: "rad/sqrt(s)", "rad", "rad/s/sqrt(s)", "rad/s^2", "rad/s", "s"
   double value = 0.0;
   double low = 0.0, high = 0.0;  // one-sigma interval (68.3 %)
   bool resolved = false;
@@ -93,7 +93,7 @@ struct Fit {
   std::vector<Component> components;  // in the model's order (gm components by increasing T)
   double chi2 = 0.0;                  // weighted residual sum at the solution
   std::size_t points = 0, dof = 0;
-  double scale = 1.0;                 // max(1, chi2 / dof), applied to the covariance
+  double scale = 1.0;  // max(1, chi2 / dof), applied to the covariance
   double sample_rate_hz = 0.0;
   std::string intervals = "asymptotic";  // or "bootstrap, R replicates"
   double reduced_chi2() const { return dof > 0 ? chi2 / static_cast<double>(dof) : 0.0; }
@@ -120,7 +120,6 @@ Eigen::VectorXd simulate(const std::vector<Component>& components, double sample
 // `estimate` (a fit of a record of `samples` samples) with bootstrap intervals (above). Throws
 // ConfigError for fewer than 2 replicates; a replicate whose fit fails counts against the interval
 // (it is left out and the number kept is stated in Fit::intervals).
-Fit bootstrap(const Fit& estimate, Eigen::Index samples, std::size_t replicates, std::uint64_t seed,
-              unsigned threads);
+Fit bootstrap(const Fit& estimate, Eigen::Index samples, std::size_t replicates, std::uint64_t seed, unsigned threads);
 
 }  // namespace driftlab::allan::gmwm

@@ -28,8 +28,8 @@ constexpr int kReweightings = 4;
 constexpr double kModelTolerance = 0.05;
 
 struct SubsetFit {
-  Eigen::VectorXd c;            // coefficients of the subset's terms
-  Eigen::MatrixXd covariance;   // unscaled (A^T W A)^-1
+  Eigen::VectorXd c;           // coefficients of the subset's terms
+  Eigen::MatrixXd covariance;  // unscaled (A^T W A)^-1
   double chi2 = std::numeric_limits<double>::infinity();
   bool ok = false;
 };
@@ -66,8 +66,7 @@ SubsetFit solve(const std::vector<Point>& points, unsigned mask) {
 }
 
 // Standard deviation of coefficient `term` in the fit of `best` plus that term.
-double coefficient_sigma(std::span<const SubsetFit> fits, unsigned best, std::size_t term,
-                         double scale) {
+double coefficient_sigma(std::span<const SubsetFit> fits, unsigned best, std::size_t term, double scale) {
   const unsigned with = best | (1u << term);
   const SubsetFit& fit = fits[with];
   if (fit.covariance.size() == 0) return 0.0;
@@ -79,11 +78,16 @@ double coefficient_sigma(std::span<const SubsetFit> fits, unsigned best, std::si
 
 double term_basis(Term t, double tau) {
   switch (t) {
-    case Term::Q: return 3.0 / (tau * tau);
-    case Term::N: return 1.0 / tau;
-    case Term::B: return 2.0 * std::numbers::ln2 / std::numbers::pi;
-    case Term::K: return tau / 3.0;
-    case Term::R: return tau * tau / 2.0;
+    case Term::Q:
+      return 3.0 / (tau * tau);
+    case Term::N:
+      return 1.0 / tau;
+    case Term::B:
+      return 2.0 * std::numbers::ln2 / std::numbers::pi;
+    case Term::K:
+      return tau / 3.0;
+    case Term::R:
+      return tau * tau / 2.0;
   }
   return 0.0;
 }
@@ -112,8 +116,8 @@ NoiseFit fit_noise_terms(std::span<const Estimate> curve) {
     }
   }
   if (points.size() < 2) {
-    throw DataError({}, "noise-term fit needs at least 2 points with a confidence interval, got " +
-                            std::to_string(points.size()));
+    throw DataError(
+        {}, "noise-term fit needs at least 2 points with a confidence interval, got " + std::to_string(points.size()));
   }
   constexpr unsigned kSubsets = 1u << kTermCount;
   std::vector<SubsetFit> fits(kSubsets);
@@ -125,8 +129,7 @@ NoiseFit fit_noise_terms(std::span<const Estimate> curve) {
         std::size_t index = 0;
         for (std::size_t t = 0; t < kTermCount; ++t) {
           if (best & (1u << t)) {
-            model += fits[best].c(static_cast<Eigen::Index>(index++)) *
-                     term_basis(static_cast<Term>(t), p.tau);
+            model += fits[best].c(static_cast<Eigen::Index>(index++)) * term_basis(static_cast<Term>(t), p.tau);
           }
         }
         p.sigma = p.relative_sigma * model;
@@ -154,8 +157,8 @@ NoiseFit fit_noise_terms(std::span<const Estimate> curve) {
       const auto k = static_cast<Eigen::Index>(index++);
       const double c = fits[best].c(k);
       const double sigma_c = std::sqrt(fits[best].covariance(k, k) * result.scale);
-      term = {std::sqrt(c), sigma_c / (2.0 * std::sqrt(c)), true, c > sigma_c, std::sqrt(std::max(c - sigma_c, 0.0)),
-              std::sqrt(c + sigma_c)};
+      term = {std::sqrt(c), sigma_c / (2.0 * std::sqrt(c)),        true,
+              c > sigma_c,  std::sqrt(std::max(c - sigma_c, 0.0)), std::sqrt(c + sigma_c)};
     } else {
       const double sigma_c = coefficient_sigma(fits, best, t, result.scale);
       term = {0.0, std::sqrt(sigma_c), false, false, 0.0, std::sqrt(sigma_c)};

@@ -54,20 +54,20 @@ enum class Term { Q, N, B, K, R };
 constexpr std::size_t kTermCount = 5;
 
 struct TermEstimate {
-  double value = 0.0;   // SI (see above)
+  double value = 0.0;  // SI (see above)
   double sigma = 0.0;
-  bool fitted = false;  // false: the constrained fit set this term to zero
+  bool fitted = false;    // false: the constrained fit set this term to zero
   bool resolved = false;  // fitted and c > sigma_c (see above)
-  double low = 0.0;     // one-sigma interval of the value; an unresolved term is only "< high"
+  double low = 0.0;       // one-sigma interval of the value; an unresolved term is only "< high"
   double high = 0.0;
 };
 
 struct NoiseFit {
   std::array<TermEstimate, kTermCount> terms{};
-  double chi2 = 0.0;          // weighted residual sum of the kept terms
+  double chi2 = 0.0;  // weighted residual sum of the kept terms
   std::size_t points = 0;
-  std::size_t dof = 0;        // points - kept terms
-  double scale = 1.0;         // factor applied to the covariance, max(1, chi2/dof)
+  std::size_t dof = 0;  // points - kept terms
+  double scale = 1.0;   // factor applied to the covariance, max(1, chi2/dof)
   double reduced_chi2() const { return dof > 0 ? chi2 / static_cast<double>(dof) : 0.0; }  // chi2/dof (0: no dof)
 
   const TermEstimate& operator[](Term t) const { return terms[static_cast<std::size_t>(t)]; }
@@ -90,19 +90,17 @@ struct UnitConversion {
   double factor;  // reported = SI value * factor
 };
 
-
 // The usual gyro units for a rate input: Q deg, N deg/sqrt(h), B deg/h, K deg/h/sqrt(h), R deg/h/h.
 constexpr std::array<UnitConversion, kTermCount> kIeee952Units{{
     {Term::Q, "Q", "deg", kDegPerRad},
     {Term::N, "N", "deg/sqrt(h)", kDegPerRad * 60.0},
-    {Term::B, "B", "deg/h", kDegPerRad * kSecondsPerHour},
-    {Term::K, "K", "deg/h/sqrt(h)", kDegPerRad * kSecondsPerHour * 60.0},
-    {Term::R, "R", "deg/h/h", kDegPerRad * kSecondsPerHour * kSecondsPerHour},
+    {Term::B, "B", "deg/h", kDegPerRad* kSecondsPerHour},
+    {Term::K, "K", "deg/h/sqrt(h)", kDegPerRad* kSecondsPerHour * 60.0},
+    {Term::R, "R", "deg/h/h", kDegPerRad* kSecondsPerHour* kSecondsPerHour},
 }};
 
 // N as a noise density in deg/h/sqrt(Hz) (the paper's Table 2 unit).
-constexpr UnitConversion kNoiseDensityDegPerHour{Term::N, "N_density", "deg/h/sqrt(Hz)",
-                                                 kDegPerRad * kSecondsPerHour};
+constexpr UnitConversion kNoiseDensityDegPerHour{Term::N, "N_density", "deg/h/sqrt(Hz)", kDegPerRad* kSecondsPerHour};
 
 // Kalibr's names, SI.
 constexpr std::array<UnitConversion, 2> kKalibrUnits{{

@@ -66,38 +66,39 @@ std::size_t grid_limit(Kind kind, std::size_t n) {
   if (n < 2) return 0;
   switch (kind) {
     case Kind::Adev:
-    case Kind::Hdev: return (n - 1) / 5;
+    case Kind::Hdev:
+      return (n - 1) / 5;
     case Kind::Oadev:
     case Kind::Mdev:
-    case Kind::Ohdev: return (n - 1) / 4;
-    case Kind::Totdev: return (n - 1) / 2;
+    case Kind::Ohdev:
+      return (n - 1) / 4;
+    case Kind::Totdev:
+      return (n - 1) / 2;
   }
   return 0;
 }
 
-std::vector<std::size_t> averaging_factors(const TauGrid& grid, Kind kind, std::size_t n,
-                                           double tau0) {
+std::vector<std::size_t> averaging_factors(const TauGrid& grid, Kind kind, std::size_t n, double tau0) {
   std::vector<std::size_t> factors;
   if (grid.kind == GridKind::Explicit) {
     const std::size_t limit = max_factor(kind, n);
     for (const double tau : grid.taus_s) {
       const double m = std::round(tau / tau0);
       if (m < 1.0) {
-        throw grid_error("tau " + seconds(tau) + " is shorter than the sample interval " +
-                         seconds(tau0));
+        throw grid_error("tau " + seconds(tau) + " is shorter than the sample interval " + seconds(tau0));
       }
       if (m > static_cast<double>(limit)) {
         throw grid_error("tau " + seconds(tau) + " is longer than this record supports for " +
-                         std::string(kind_name(kind)) + " (at most " +
-                         seconds(static_cast<double>(limit) * tau0) + ")");
+                         std::string(kind_name(kind)) + " (at most " + seconds(static_cast<double>(limit) * tau0) +
+                         ")");
       }
       factors.push_back(static_cast<std::size_t>(m));
     }
   } else {
     const std::size_t limit = std::max<std::size_t>(grid_limit(kind, n), 1);
     if (max_factor(kind, n) == 0) {
-      throw DataError({}, "record of " + std::to_string(n) + " angle samples is too short for " +
-                              std::string(kind_name(kind)));
+      throw DataError(
+          {}, "record of " + std::to_string(n) + " angle samples is too short for " + std::string(kind_name(kind)));
     }
     if (grid.kind == GridKind::Octave) {
       for (std::size_t m = 1; m <= limit; m *= 2) factors.push_back(m);

@@ -23,8 +23,8 @@ enum class GridKind { Octave, Decade, Dense, Explicit };
 
 struct TauGrid {
   GridKind kind = GridKind::Octave;
-  int points_per_decade = 10;   // Dense only
-  std::vector<double> taus_s;   // Explicit only, s
+  int points_per_decade = 10;  // Dense only
+  std::vector<double> taus_s;  // Explicit only, s
 };
 
 // "octave", "decade", "dense", "dense:P" (P points per decade) or a comma-separated list of taus
@@ -37,7 +37,6 @@ std::size_t grid_limit(Kind kind, std::size_t n_angle);
 // Increasing, distinct averaging factors of the grid for n angle samples spaced tau0 s. Throws
 // driftlab::ConfigError for an explicit tau shorter than tau0/2 or longer than the record supports,
 // and driftlab::DataError when the record is too short for any factor.
-std::vector<std::size_t> averaging_factors(const TauGrid& grid, Kind kind, std::size_t n_angle,
-                                           double tau0);
+std::vector<std::size_t> averaging_factors(const TauGrid& grid, Kind kind, std::size_t n_angle, double tau0);
 
 }  // namespace driftlab::allan

@@ -15,18 +15,24 @@ namespace driftlab::calibration {
 
 std::string to_string(ModelKind kind) {
   switch (kind) {
-    case ModelKind::Polynomial: return "poly";
-    case ModelKind::Physical: return "physical";
-    case ModelKind::Rbf: return "rbf";
+    case ModelKind::Polynomial:
+      return "poly";
+    case ModelKind::Physical:
+      return "physical";
+    case ModelKind::Rbf:
+      return "rbf";
   }
   return "poly";
 }
 
 std::string to_string(Extrapolation policy) {
   switch (policy) {
-    case Extrapolation::Clamp: return "clamp";
-    case Extrapolation::Linear: return "linear";
-    case Extrapolation::Evaluate: return "evaluate";
+    case Extrapolation::Clamp:
+      return "clamp";
+    case Extrapolation::Linear:
+      return "linear";
+    case Extrapolation::Evaluate:
+      return "evaluate";
   }
   return "clamp";
 }
@@ -62,10 +68,12 @@ double CalibrationModel::polynomial_bias_rad_s(double temp_c) const {
   if (temp_c < valid_min_c || temp_c > valid_max_c) {
     const double edge = temp_c < valid_min_c ? valid_min_c : valid_max_c;
     switch (extrapolation) {
-      case Extrapolation::Clamp: return horner(bias_rad_s, edge - t0);
+      case Extrapolation::Clamp:
+        return horner(bias_rad_s, edge - t0);
       case Extrapolation::Linear:
         return horner(bias_rad_s, edge - t0) + horner_derivative(bias_rad_s, edge - t0) * (temp_c - edge);
-      case Extrapolation::Evaluate: break;
+      case Extrapolation::Evaluate:
+        break;
     }
   }
   return horner(bias_rad_s, temp_c - t0);
@@ -86,7 +94,8 @@ void CalibrationModel::validate() const {
     return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
   };
   const auto temperature = [](double t) { return t >= kMinTemperatureC && t <= kMaxTemperatureC; };
-  const std::string temperatures = "[" + message_number(kMinTemperatureC) + ", " + message_number(kMaxTemperatureC) + "] degC";
+  const std::string temperatures =
+      "[" + message_number(kMinTemperatureC) + ", " + message_number(kMaxTemperatureC) + "] degC";
   if (bias_rad_s.empty()) bad("bias.polynomial_rad_s_per_k_i", "needs at least one coefficient");
   if (bias_rad_s.size() > kMaxPolynomialTerms || scale_factor_per_k.size() > kMaxPolynomialTerms) {
     bad(bias_rad_s.size() > kMaxPolynomialTerms ? "bias.polynomial_rad_s_per_k_i" : "scale_factor.polynomial_per_k_j",
@@ -100,8 +109,10 @@ void CalibrationModel::validate() const {
   }
   if (!temperature(reference_temp_c)) bad("reference_temp_c", "expected a temperature within " + temperatures);
   if (!(lag_tau_s >= 0 && std::isfinite(lag_tau_s))) bad("physical.lag_tau_s", "must be finite and >= 0 s");
-  if (!(derivative_tau_s > 0 && std::isfinite(derivative_tau_s))) bad("physical.derivative_tau_s", "must be finite and > 0 s");
-  if (!(hysteresis_width_k >= 0 && std::isfinite(hysteresis_width_k))) bad("physical.hysteresis_width_k", "must be finite and >= 0 K");
+  if (!(derivative_tau_s > 0 && std::isfinite(derivative_tau_s)))
+    bad("physical.derivative_tau_s", "must be finite and > 0 s");
+  if (!(hysteresis_width_k >= 0 && std::isfinite(hysteresis_width_k)))
+    bad("physical.hysteresis_width_k", "must be finite and >= 0 K");
   if (!finite(bias_rad_s)) bad("bias.polynomial_rad_s_per_k_i", "non-finite coefficient");
   if (!finite(bias_sigma_rad_s)) bad("bias.sigma_rad_s_per_k_i", "non-finite value");
   if (!finite(scale_factor_per_k)) bad("scale_factor.polynomial_per_k_j", "non-finite coefficient");
@@ -121,15 +132,17 @@ void CalibrationModel::validate() const {
       bad("rbf.weights_rad_s", "needs one weight per centre");
     }
     if (!(rbf->sigma >= kMinRbfSigma && rbf->sigma <= kMaxRbfSigma))
-      bad("rbf.sigma", "expected a width within [" + message_number(kMinRbfSigma) + ", " + message_number(kMaxRbfSigma) +
-                           "] (standardized units)");
-    if (!finite(rbf->mean) || !std::all_of(rbf->scale.begin(), rbf->scale.end(), [](double x) { return x > 0 && std::isfinite(x); }))
+      bad("rbf.sigma", "expected a width within [" + message_number(kMinRbfSigma) + ", " +
+                           message_number(kMaxRbfSigma) + "] (standardized units)");
+    if (!finite(rbf->mean) ||
+        !std::all_of(rbf->scale.begin(), rbf->scale.end(), [](double x) { return x > 0 && std::isfinite(x); }))
       bad("rbf.scale", "mean and scale must be finite, scale > 0");
     if (!rbf->centres.allFinite() || !finite(rbf->weights_rad_s) || !std::isfinite(rbf->bias_rad_s))
       bad("rbf.weights_rad_s", "centres, weights and bias must be finite");
     double bound = std::abs(rbf->bias_rad_s);  // |rbf(x)| <= |bias| + sum |w_k|
     for (double w : rbf->weights_rad_s) bound += std::abs(w);
-    if (!std::isfinite(bound)) bad("rbf.weights_rad_s", "the network's output overflows (|bias| + sum |w| is not finite)");
+    if (!std::isfinite(bound))
+      bad("rbf.weights_rad_s", "the network's output overflows (|bias| + sum |w| is not finite)");
     if (!rbf->input_min.empty() || !rbf->input_max.empty()) {
       if (rbf->input_min.size() != 3 || rbf->input_max.size() != 3) {
         bad("rbf.input_min", "needs 3 values (and rbf.input_max too), or neither");
@@ -148,9 +161,11 @@ void CalibrationModel::validate() const {
     for (int i = 0; i <= kGrid; ++i) {
       const double t = lo + (hi - lo) * i / kGrid;
       if (!std::isfinite(polynomial_bias_rad_s(t))) {
-        bad("bias.polynomial_rad_s_per_k_i", "the bias is not finite at " + message_number(t) +
-                                                 " degC; expected a finite bias over the valid range" +
-                                                 (margin > 0 ? " and " + message_number(margin) + " K beyond it (extrapolation " + to_string(extrapolation) + ")" : std::string()));
+        bad("bias.polynomial_rad_s_per_k_i",
+            "the bias is not finite at " + message_number(t) + " degC; expected a finite bias over the valid range" +
+                (margin > 0 ? " and " + message_number(margin) + " K beyond it (extrapolation " +
+                                  to_string(extrapolation) + ")"
+                            : std::string()));
         break;
       }
     }
@@ -158,9 +173,9 @@ void CalibrationModel::validate() const {
       const double t = valid_min_c + (valid_max_c - valid_min_c) * i / kGrid;
       const double sf = scale_factor(t);
       if (!(sf >= kMinScaleFactor && sf <= kMaxScaleFactor)) {
-        bad("scale_factor.polynomial_per_k_j", "the scale factor is " + message_number(sf) + " at " + message_number(t) +
-                                                   " degC; expected " + message_number(kMinScaleFactor) + " to " +
-                                                   message_number(kMaxScaleFactor) + " over the valid range");
+        bad("scale_factor.polynomial_per_k_j",
+            "the scale factor is " + message_number(sf) + " at " + message_number(t) + " degC; expected " +
+                message_number(kMinScaleFactor) + " to " + message_number(kMaxScaleFactor) + " over the valid range");
         break;
       }
     }
@@ -194,13 +209,16 @@ nlohmann::json model_body(const CalibrationModel& m, imu::Sensor sensor) {
   const KeyUnits& u = key_units(sensor);
   json j;
   j["kind"] = to_string(m.kind);
-  j["units"] = {{"value", u.unit}, {"temperature", "degC"}, {"time", "s"},
+  j["units"] = {{"value", u.unit},
+                {"temperature", "degC"},
+                {"time", "s"},
                 {"bias", "bias(T) = sum_i a_i (T - reference_temp_c)^i, a_i in " + u.unit + "/K^i"},
                 {"compensated", "(measured - bias) / (1 + sum_j k_j (T - reference_temp_c)^j)"}};
   j["reference_temp_c"] = m.reference_temp_c;
   j["valid_range_c"] = {m.valid_min_c, m.valid_max_c};
   j["extrapolation"] = to_string(m.extrapolation);
-  j["bias"] = {{"polynomial_" + u.value + "_per_k_i", m.bias_rad_s}, {"sigma_" + u.value + "_per_k_i", m.bias_sigma_rad_s}};
+  j["bias"] = {{"polynomial_" + u.value + "_per_k_i", m.bias_rad_s},
+               {"sigma_" + u.value + "_per_k_i", m.bias_sigma_rad_s}};
   j["physical"] = {{"lag_tau_s", m.lag_tau_s},
                    {"derivative_tau_s", m.derivative_tau_s},
                    {"temperature_rate_" + u.value + "_per_k_s", m.temperature_rate_rad_s_per_k_s},
@@ -233,8 +251,9 @@ nlohmann::json model_body(const CalibrationModel& m, imu::Sensor sensor) {
                 {u.random_walk, m.noise.rate_random_walk_rad_s_sqrt_s},
                 {"sample_rate_hz", m.noise.sample_rate_hz}};
   nlohmann::json unresolved = nlohmann::json::object();
-  for (const auto& [key, upper] : {std::pair{u.white, m.noise.arw_upper}, std::pair{u.instability, m.noise.bias_instability_upper},
-                                   std::pair{u.random_walk, m.noise.rate_random_walk_upper}})
+  for (const auto& [key, upper] :
+       {std::pair{u.white, m.noise.arw_upper}, std::pair{u.instability, m.noise.bias_instability_upper},
+        std::pair{u.random_walk, m.noise.rate_random_walk_upper}})
     if (upper) unresolved[key] = *upper;
   if (!unresolved.empty()) j["noise"]["unresolved_upper"] = unresolved;
   j["fit"] = {{"records", m.fit.records},
@@ -322,7 +341,6 @@ class Reader {
   std::string file_;
 };
 
-
 // The JSON text of a model file; a key repeated in one object is refused (ConfigError naming the file
 // and the key path), as the YAML readers refuse one: nlohmann::json would silently keep the last.
 nlohmann::json parse_unique_keys(const Reader& r, const std::string& text) {
@@ -350,7 +368,9 @@ nlohmann::json parse_unique_keys(const Reader& r, const std::string& text) {
         break;
       }
       case Event::object_end:
-      case Event::array_end: stack.pop_back(); break;
+      case Event::array_end:
+        stack.pop_back();
+        break;
       case Event::key: {
         Frame& top = stack.back();
         top.last_key = parsed.get<std::string>();
@@ -450,8 +470,9 @@ CalibrationModel read_model_body(const Reader& r, const nlohmann::json& j, const
     m.noise.sample_rate_hz = r.number_or(*n, na, "sample_rate_hz", 0.0);
     if (const auto* un = r.optional(*n, "unresolved_upper")) {
       const std::string ua = na + ".unresolved_upper";
-      for (auto [name, upper] : {std::pair{u.white, &m.noise.arw_upper}, std::pair{u.instability, &m.noise.bias_instability_upper},
-                                std::pair{u.random_walk, &m.noise.rate_random_walk_upper}})
+      for (auto [name, upper] :
+           {std::pair{u.white, &m.noise.arw_upper}, std::pair{u.instability, &m.noise.bias_instability_upper},
+            std::pair{u.random_walk, &m.noise.rate_random_walk_upper}})
         if (r.optional(*un, name)) *upper = r.number_or(*un, ua, name, 0.0);
     }
   }
@@ -507,7 +528,8 @@ void ImuCalibration::validate() const {
 ImuCalibration single_axis(CalibrationModel model, char axis, std::string device) {
   ImuCalibration out;
   out.device = std::move(device);
-  out.channels.push_back({{imu::Sensor::Gyro, axis, 0}, "rate", "rate", "rad/s", "temperature", "", true, std::move(model)});
+  out.channels.push_back(
+      {{imu::Sensor::Gyro, axis, 0}, "rate", "rate", "rad/s", "temperature", "", true, std::move(model)});
   return out;
 }
 
@@ -573,7 +595,8 @@ ImuCalibration read_calibration(const std::filesystem::path& path) {
     c.id.instance = static_cast<int>(instance);
     c.role = r.text(cj, at, "role");
     if (c.role != c.id.role() && !(c.role == "rate" && c.id.sensor == imu::Sensor::Gyro && c.id.instance == 0))
-      r.fail(at + ".role", "expected \"" + c.id.role() + "\" (or \"rate\" for a single-axis gyro), got \"" + c.role + "\"");
+      r.fail(at + ".role",
+             "expected \"" + c.id.role() + "\" (or \"rate\" for a single-axis gyro), got \"" + c.role + "\"");
     c.column = r.text(cj, at, "column");
     if (c.column.empty()) r.fail(at + ".column", "must not be empty");
     c.read_unit = r.text(cj, at, "read_unit");

@@ -76,11 +76,11 @@ inline constexpr double kMinScaleFactor = 0.1, kMaxScaleFactor = 10.0;
 inline constexpr double kExtrapolationMarginK = 50.0;  // beyond the valid range, where a policy evaluates
 
 enum class ModelKind { Polynomial, Physical, Rbf };
-std::string to_string(ModelKind kind);  // "poly", "physical", "rbf"
+std::string to_string(ModelKind kind);                               // "poly", "physical", "rbf"
 std::optional<ModelKind> parse_model_kind(const std::string& text);  // inverse of to_string
 
 enum class Extrapolation { Clamp, Linear, Evaluate };
-std::string to_string(Extrapolation policy);  // "clamp", "linear", "evaluate"
+std::string to_string(Extrapolation policy);                                // "clamp", "linear", "evaluate"
 std::optional<Extrapolation> parse_extrapolation(const std::string& text);  // inverse of to_string
 
 // Gaussian RBF network on standardized inputs u = (x - mean) / scale, x = (T_c degC, D K/s, s 1):
@@ -90,10 +90,10 @@ std::optional<Extrapolation> parse_extrapolation(const std::string& text);  // i
 // held-out profile ramping twice as fast as the calibration made an unclamped network worse than
 // none). Empty ranges (files written before they existed): no clamp.
 struct RbfTerm {
-  std::vector<double> mean, scale;  // per input (3)
+  std::vector<double> mean, scale;           // per input (3)
   std::vector<double> input_min, input_max;  // per input (3), x units; or both empty
-  Eigen::MatrixXd centres;          // K x 3, standardized units
-  double sigma = 1.0;               // standardized units
+  Eigen::MatrixXd centres;                   // K x 3, standardized units
+  double sigma = 1.0;                        // standardized units
   std::vector<double> weights_rad_s;
   double bias_rad_s = 0.0;
 };
@@ -130,20 +130,20 @@ struct FitSummary {
 
 struct CalibrationModel {
   ModelKind kind = ModelKind::Polynomial;
-  double reference_temp_c = 25.0;        // T0, degC
+  double reference_temp_c = 25.0;               // T0, degC
   double valid_min_c = 0.0, valid_max_c = 0.0;  // range of the calibration model temperature, degC
   Extrapolation extrapolation = Extrapolation::Clamp;
 
   std::vector<double> bias_rad_s;        // a_i, rad/s per K^i, i = 0..order
   std::vector<double> bias_sigma_rad_s;  // 1-sigma of a_i (same units)
 
-  double lag_tau_s = 0.0;                // 0: T_m = T
-  double derivative_tau_s = 30.0;        // smoothing of D and of the hysteresis path, s, > 0
+  double lag_tau_s = 0.0;                       // 0: T_m = T
+  double derivative_tau_s = 30.0;               // smoothing of D and of the hysteresis path, s, > 0
   double temperature_rate_rad_s_per_k_s = 0.0;  // coefficient of D, rad/s per K/s
   double temperature_rate_sigma = 0.0;
-  double hysteresis_rad_s = 0.0;         // coefficient of s (cooling branch: -s), rad/s
+  double hysteresis_rad_s = 0.0;  // coefficient of s (cooling branch: -s), rad/s
   double hysteresis_sigma_rad_s = 0.0;
-  double hysteresis_width_k = 0.0;       // 0: no hysteresis term
+  double hysteresis_width_k = 0.0;  // 0: no hysteresis term
   std::optional<RbfTerm> rbf;
 
   std::vector<double> scale_factor_per_k;  // k_j, 1/K^j, j = 0..; empty: no scale-factor model
@@ -152,8 +152,9 @@ struct CalibrationModel {
   FitSummary fit;
 
   int order() const { return static_cast<int>(bias_rad_s.size()) - 1; }
-  bool uses_state() const { return lag_tau_s > 0 || temperature_rate_rad_s_per_k_s != 0.0 ||
-                                   hysteresis_width_k > 0 || rbf.has_value(); }
+  bool uses_state() const {
+    return lag_tau_s > 0 || temperature_rate_rad_s_per_k_s != 0.0 || hysteresis_width_k > 0 || rbf.has_value();
+  }
   // Polynomial part of the bias at model temperature T (degC), with the extrapolation policy.
   double polynomial_bias_rad_s(double temp_c) const;
   // Scale factor sf at T (clamped to the valid range); 1 without a scale-factor model.
@@ -179,7 +180,7 @@ struct ChannelCalibration {
 };
 
 struct ImuCalibration {
-  std::string device;  // free text (device name or file)
+  std::string device;                        // free text (device name or file)
   std::vector<ChannelCalibration> channels;  // in the order gyro before accel, instance, axis
   const ChannelCalibration* find(const imu::ChannelId& id) const;
   void validate() const;  // every channel's model, and no channel twice (ConfigError)
@@ -216,7 +217,7 @@ class CausalCompensator {
   explicit CausalCompensator(const CalibrationModel& model);
   // time (s), measured rate (rad/s), case temperature (degC) -> compensated rate (rad/s)
   double step(double t_s, double rate_rad_s, double temp_c);
-  double last_bias_rad_s() const { return bias_; }    // the correction subtracted at the last step
+  double last_bias_rad_s() const { return bias_; }          // the correction subtracted at the last step
   bool last_extrapolated() const { return extrapolated_; }  // model temperature outside the range
 
  private:
@@ -236,7 +237,7 @@ struct Compensated {
   Eigen::VectorXd rate_rad_s, bias_rad_s;
   std::vector<char> extrapolated;
 };
-Compensated compensate(const CalibrationModel& model, const Eigen::VectorXd& time_s,
-                       const Eigen::VectorXd& rate_rad_s, const Eigen::VectorXd& temp_c);
+Compensated compensate(const CalibrationModel& model, const Eigen::VectorXd& time_s, const Eigen::VectorXd& rate_rad_s,
+                       const Eigen::VectorXd& temp_c);
 
 }  // namespace driftlab::calibration

@@ -96,8 +96,9 @@ std::map<Key, Channels> group(const ImuCalibration& model, KeyOf key_of) {
 // (appended to r.losses and r.notes); refused in strict mode when it is not exact. `difference_form`:
 // the firmware corrects p(T) - p(T_cal) and takes the constant from its own calibration at T_cal, so
 // the cubic's error enters twice.
-std::vector<double> firmware_cubic(const ChannelCalibration& c, double t_ref, const Block& block, const std::string& format,
-                                   bool difference_form, const ExportOptions& o, ExportResult& r) {
+std::vector<double> firmware_cubic(const ChannelCalibration& c, double t_ref, const Block& block,
+                                   const std::string& format, bool difference_form, const ExportOptions& o,
+                                   ExportResult& r) {
   const CalibrationModel& m = c.model;
   const std::string who = c.id.role();
   double cubic_error = 0.0;
@@ -121,7 +122,8 @@ std::vector<double> firmware_cubic(const ChannelCalibration& c, double t_ref, co
   const bool exact = m.order() <= 3 && clip_error == 0.0 && loss.dropped.empty();
   if (!exact && o.strict) {
     std::string why = m.order() > 3 ? "polynomial order " + std::to_string(m.order()) + " > 3" : "";
-    if (clip_error > 0) why += std::string(why.empty() ? "" : "; ") + "a valid range wider than the shared [TMIN, TMAX]";
+    if (clip_error > 0)
+      why += std::string(why.empty() ? "" : "; ") + "a valid range wider than the shared [TMIN, TMAX]";
     for (const auto& d : loss.dropped) why += (why.empty() ? "" : "; ") + d;
     throw ConfigError({"", 0, who}, format + " holds a cubic in temperature only; channel " + who + " has " + why +
                                         " (export without --strict for the best cubic with its stated error)");
@@ -131,12 +133,13 @@ std::vector<double> firmware_cubic(const ChannelCalibration& c, double t_ref, co
     note("order-" + std::to_string(m.order()) + " polynomial approximated by the least-squares cubic over " +
          short_num(m.valid_min_c) + " .. " + short_num(m.valid_max_c) + " degC: max error " +
          with_unit(cubic_error, c.id.sensor) +
-         (difference_form ? " (twice that on the correction, a difference to the firmware's calibration temperature)" : ""));
+         (difference_form ? " (twice that on the correction, a difference to the firmware's calibration temperature)"
+                          : ""));
   }
   if (clip_error > 0) {
-    note("valid range " + short_num(m.valid_min_c) + " .. " + short_num(m.valid_max_c) + " degC held at [TMIN, TMAX] = " +
-         short_num(block.tmin_c) + " .. " + short_num(block.tmax_c) + " degC (shared with " + roles(block.channels) +
-         "): up to " + with_unit(clip_error, c.id.sensor));
+    note("valid range " + short_num(m.valid_min_c) + " .. " + short_num(m.valid_max_c) +
+         " degC held at [TMIN, TMAX] = " + short_num(block.tmin_c) + " .. " + short_num(block.tmax_c) +
+         " degC (shared with " + roles(block.channels) + "): up to " + with_unit(clip_error, c.id.sensor));
   }
   for (const auto& d : loss.dropped) note("dropped (not representable in " + format + "): " + d);
   r.losses.push_back(std::move(loss));
@@ -160,13 +163,15 @@ DeviceId px4_device_id(const Channels& channels, const std::string& parameter) {
   for (const auto* c : channels) {
     if (c->device_id.empty()) continue;
     if (!id.empty() && c->device_id != id) {
-      throw ConfigError({"", 0, parameter}, roles(channels) + " share " + parameter + " but their device ids differ (\"" +
-                                                id + "\", \"" + c->device_id + "\")");
+      throw ConfigError({"", 0, parameter}, roles(channels) + " share " + parameter +
+                                                " but their device ids differ (\"" + id + "\", \"" + c->device_id +
+                                                "\")");
     }
     id = c->device_id;
   }
   if (id.empty()) return {0, "no device id in the model: set " + parameter + " to the sensor's device id"};
-  const bool digits = id.size() <= 10 && std::all_of(id.begin(), id.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
+  const bool digits =
+      id.size() <= 10 && std::all_of(id.begin(), id.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
   if (digits && std::stoll(id) <= std::numeric_limits<std::int32_t>::max()) return {std::stoll(id), ""};
   return {0, "device id \"" + one_line(id) + "\" is not a PX4 integer device id: set " + parameter +
                  " to the sensor's device id"};
@@ -208,14 +213,17 @@ std::vector<std::string> unrepresentable_terms(const CalibrationModel& m, imu::S
   const bool gyro = sensor == imu::Sensor::Gyro;
   const std::string unit = gyro ? "rad/s" : "m/s^2";
   std::vector<std::string> out;
-  if (m.lag_tau_s > 0) out.push_back("thermal lag tau = " + short_num(m.lag_tau_s) + " s (the cubic is applied to the sensor temperature)");
+  if (m.lag_tau_s > 0)
+    out.push_back("thermal lag tau = " + short_num(m.lag_tau_s) +
+                  " s (the cubic is applied to the sensor temperature)");
   if (m.temperature_rate_rad_s_per_k_s != 0.0) {
     const double per_k_min = m.temperature_rate_rad_s_per_k_s / 60.0;
     out.push_back("dT/dt term " + short_num(m.temperature_rate_rad_s_per_k_s) + " " + unit + " per K/s (" +
                   (gyro ? short_num(per_k_min * kDphPerRadPerSec) + " deg/h" : short_num(per_k_min) + " m/s^2") +
                   " at 1 K/min)");
   }
-  if (m.hysteresis_width_k > 0) out.push_back("hysteresis branch term +-" + with_unit(std::abs(m.hysteresis_rad_s), sensor));
+  if (m.hysteresis_width_k > 0)
+    out.push_back("hysteresis branch term +-" + with_unit(std::abs(m.hysteresis_rad_s), sensor));
   if (m.rbf && m.rbf->centres.rows() > 0) {
     out.push_back("RBF network of " + std::to_string(m.rbf->centres.rows()) + " centres on (T, dT/dt, branch)");
   }
@@ -227,11 +235,13 @@ ExportResult export_px4_params(const ImuCalibration& model, const ExportOptions&
   constexpr int kMaxInstance = 3;  // TC_G0..3, TC_A0..3
   for (const auto& c : model.channels) {
     if (c.id.instance > kMaxInstance) {
-      throw ConfigError({"", 0, c.id.role()}, "PX4 holds TC_G0..3 / TC_A0..3; channel " + c.id.role() + " is of instance " +
-                                                  std::to_string(c.id.instance));
+      throw ConfigError({"", 0, c.id.role()}, "PX4 holds TC_G0..3 / TC_A0..3; channel " + c.id.role() +
+                                                  " is of instance " + std::to_string(c.id.instance));
     }
   }
-  const auto blocks = group<std::pair<imu::Sensor, int>>(model, [](const auto& c) { return std::pair{c.id.sensor, c.id.instance}; });
+  const auto blocks = group<std::pair<imu::Sensor, int>>(model, [](const auto& c) {
+    return std::pair{c.id.sensor, c.id.instance};
+  });
   ExportResult r;
   std::ostringstream body;
   const auto line = [&](const std::string& name, const std::string& value, int type) {
@@ -269,7 +279,8 @@ ExportResult export_px4_params(const ImuCalibration& model, const ExportOptions&
     if (!is_gyro) {
       for (const auto* c : block.channels) {
         if (!c->offset_observable) {
-          body << "# " << c->id.role() << ": offset not observable (no reference): X0 is relative to " << short_num(c->model.reference_temp_c)
+          body << "# " << c->id.role() << ": offset not observable (no reference): X0 is relative to "
+               << short_num(c->model.reference_temp_c)
                << " degC; PX4's accelerometer calibration sets X0 (run it after loading, inside TMIN..TMAX)\n";
         }
       }
@@ -308,19 +319,22 @@ ExportResult export_ardupilot_params(const ImuCalibration& model, const ExportOp
   constexpr int kMaxInstance = 2;      // INS_TCAL1..3
   for (const auto& c : model.channels) {
     if (c.id.instance > kMaxInstance) {
-      throw ConfigError({"", 0, c.id.role()}, "ArduPilot holds INS_TCAL1..3; channel " + c.id.role() + " is of instance " +
-                                                  std::to_string(c.id.instance));
+      throw ConfigError({"", 0, c.id.role()}, "ArduPilot holds INS_TCAL1..3; channel " + c.id.role() +
+                                                  " is of instance " + std::to_string(c.id.instance));
     }
   }
   const auto instances = group<int>(model, [](const auto& c) { return c.id.instance; });
   ExportResult r;
   std::ostringstream s;
-  s << "# ArduPilot IMU temperature calibration from driftlab (" << kImuFormat << ", device \"" << one_line(model.device)
-    << "\")\n"
-    << "# INS_TCALn_GYRk_* / _ACCk_* = 1e6 x the coefficient of (T - 35 degC)^k, k = 1..3 (rad/s, m/s^2); T clamped to\n"
+  s << "# ArduPilot IMU temperature calibration from driftlab (" << kImuFormat << ", device \""
+    << one_line(model.device) << "\")\n"
+    << "# INS_TCALn_GYRk_* / _ACCk_* = 1e6 x the coefficient of (T - 35 degC)^k, k = 1..3 (rad/s, m/s^2); T clamped "
+       "to\n"
     << "# [TMIN, TMAX]. ArduPilot subtracts p(T - 35) - p(CALTEMP - 35) and then the sensor offset. Gyro: the offset\n"
-    << "# INS_GYROFFS_* (INS_GYRnOFFS_*) is the model at INS_GYRn_CALTEMP (a boot-time gyro calibration replaces both).\n"
-    << "# Accelerometer: no constant term is written; ArduPilot's accelerometer calibration measures INS_ACC*OFFS_* and\n"
+    << "# INS_GYROFFS_* (INS_GYRnOFFS_*) is the model at INS_GYRn_CALTEMP (a boot-time gyro calibration replaces "
+       "both).\n"
+    << "# Accelerometer: no constant term is written; ArduPilot's accelerometer calibration measures INS_ACC*OFFS_* "
+       "and\n"
     << "# INS_ACCn_CALTEMP: run it after loading, inside [TMIN, TMAX].\n";
   for (const auto& [instance, channels] : instances) {
     const int n = instance + 1;
@@ -331,8 +345,8 @@ ExportResult export_ardupilot_params(const ImuCalibration& model, const ExportOp
     bool present[2][3] = {};
     std::string axis_role[2][3];
     for (const auto* c : block.channels) {
-      const auto cubic = firmware_cubic(*c, kReference, block, "ArduPilot " + p + "*",
-                                        c->id.sensor == imu::Sensor::Accel, o, r);
+      const auto cubic =
+          firmware_cubic(*c, kReference, block, "ArduPilot " + p + "*", c->id.sensor == imu::Sensor::Accel, o, r);
       const int sidx = c->id.sensor == imu::Sensor::Gyro ? 0 : 1;
       present[sidx][axis_index(c->id.axis)] = true;
       axis_role[sidx][axis_index(c->id.axis)] = c->id.role();
@@ -346,8 +360,8 @@ ExportResult export_ardupilot_params(const ImuCalibration& model, const ExportOp
       for (int a = 0; a < 3; ++a) {
         if (!present[sidx][a]) {
           absent += (absent.empty() ? "" : ", ") + imu::ChannelId{sidx == 0 ? imu::Sensor::Gyro : imu::Sensor::Accel,
-                                                                 static_cast<char>('x' + a), instance}
-                                                        .role();
+                                                                  static_cast<char>('x' + a), instance}
+                                                       .role();
         }
       }
     }
@@ -361,7 +375,8 @@ ExportResult export_ardupilot_params(const ImuCalibration& model, const ExportOp
       for (int k = 1; k <= 3; ++k) {
         for (int a = 0; a < 3; ++a) {
           const std::string name = p + (sidx == 0 ? "GYR" : "ACC") + std::to_string(k) + "_" + char('X' + a);
-          s << name << "," << real32(kScale * coef[sidx][a][k], present[sidx][a] ? axis_role[sidx][a] : who, name) << "\n";
+          s << name << "," << real32(kScale * coef[sidx][a][k], present[sidx][a] ? axis_role[sidx][a] : who, name)
+            << "\n";
         }
       }
     }
@@ -391,10 +406,10 @@ ExportResult export_kalibr_imu_yaml(const ImuCalibration& model, const ExportOpt
   }
   const std::string which = "instance " + std::to_string(o.kalibr_instance);
   if (gyro.empty() || accel.empty()) {
-    throw ConfigError({"", 0, "channels"}, "Kalibr's imu.yaml needs gyroscope and accelerometer noise terms; the model has " +
-                                               std::string(gyro.empty() ? "no gyro" : "no accelerometer") +
-                                               " channel of " + which +
-                                               " (calibrate with --channels gyro,accel; choose the instance with --instance)");
+    throw ConfigError({"", 0, "channels"},
+                      "Kalibr's imu.yaml needs gyroscope and accelerometer noise terms; the model has " +
+                          std::string(gyro.empty() ? "no gyro" : "no accelerometer") + " channel of " + which +
+                          " (calibrate with --channels gyro,accel; choose the instance with --instance)");
   }
   Channels all = gyro;
   all.insert(all.end(), accel.begin(), accel.end());
@@ -402,10 +417,13 @@ ExportResult export_kalibr_imu_yaml(const ImuCalibration& model, const ExportOpt
   for (const auto* c : all) {
     const double fs = c->model.noise.sample_rate_hz;
     if (o.kalibr_update_rate_hz > 0) continue;
-    if (!(fs > 0)) throw ConfigError({"", 0, "noise.sample_rate_hz"}, c->id.role() + ": no sample rate in the model: give the update rate");
+    if (!(fs > 0))
+      throw ConfigError({"", 0, "noise.sample_rate_hz"},
+                        c->id.role() + ": no sample rate in the model: give the update rate");
     if (rate > 0 && std::abs(fs - rate) > 1e-9 * rate) {
-      throw ConfigError({"", 0, "noise.sample_rate_hz"}, "the channels of " + which + " were sampled at " + short_num(rate) +
-                                                             " and " + short_num(fs) + " Hz: give the update rate");
+      throw ConfigError({"", 0, "noise.sample_rate_hz"}, "the channels of " + which + " were sampled at " +
+                                                             short_num(rate) + " and " + short_num(fs) +
+                                                             " Hz: give the update rate");
     }
     rate = fs;
   }
@@ -425,30 +443,36 @@ ExportResult export_kalibr_imu_yaml(const ImuCalibration& model, const ExportOpt
       if (v > w.value) w = {v, bound ? c->id.role() : std::string()};
     }
     if (!(w.value > 0) || !std::isfinite(w.value)) {
-      throw ConfigError({"", 0, key}, roles(cs) + ": " + what + " is not measured on any axis (0; " +
-                                          (term == &ResidualNoise::arw_rad_sqrt_s
-                                               ? "recalibrate with driftlab calibrate, which fits it)"
-                                               : "the records are too short for the Allan deviation to reach its +1/2 slope)"));
+      throw ConfigError({"", 0, key},
+                        roles(cs) + ": " + what + " is not measured on any axis (0; " +
+                            (term == &ResidualNoise::arw_rad_sqrt_s
+                                 ? "recalibrate with driftlab calibrate, which fits it)"
+                                 : "the records are too short for the Allan deviation to reach its +1/2 slope)"));
     }
     if (!w.bound_of.empty() && !o.kalibr_allow_bounds) {
-      throw ConfigError({"", 0, key}, w.bound_of + ": " + what + " is not resolved by the calibration records, only bounded (< " +
-                                          short_num(w.value) + "; its Allan deviation does not show the term within the "
-                                          "record): Kalibr would take the bound as a measured value. Calibrate on longer "
-                                          "records, or allow the bound to be written (marked as one)");
+      throw ConfigError({"", 0, key},
+                        w.bound_of + ": " + what + " is not resolved by the calibration records, only bounded (< " +
+                            short_num(w.value) +
+                            "; its Allan deviation does not show the term within the "
+                            "record): Kalibr would take the bound as a measured value. Calibrate on longer "
+                            "records, or allow the bound to be written (marked as one)");
     }
     return w;
   };
-  const Written accel_n = largest(accel, &ResidualNoise::arw_rad_sqrt_s, &ResidualNoise::arw_upper, "accelerometer_noise_density", "the noise density N");
-  const Written accel_k = largest(accel, &ResidualNoise::rate_random_walk_rad_s_sqrt_s, &ResidualNoise::rate_random_walk_upper,
-                                  "accelerometer_random_walk", "the random walk K");
-  const Written gyro_n = largest(gyro, &ResidualNoise::arw_rad_sqrt_s, &ResidualNoise::arw_upper, "gyroscope_noise_density", "the noise density N");
-  const Written gyro_k = largest(gyro, &ResidualNoise::rate_random_walk_rad_s_sqrt_s, &ResidualNoise::rate_random_walk_upper,
-                                 "gyroscope_random_walk", "the random walk K");
+  const Written accel_n = largest(accel, &ResidualNoise::arw_rad_sqrt_s, &ResidualNoise::arw_upper,
+                                  "accelerometer_noise_density", "the noise density N");
+  const Written accel_k =
+      largest(accel, &ResidualNoise::rate_random_walk_rad_s_sqrt_s, &ResidualNoise::rate_random_walk_upper,
+              "accelerometer_random_walk", "the random walk K");
+  const Written gyro_n = largest(gyro, &ResidualNoise::arw_rad_sqrt_s, &ResidualNoise::arw_upper,
+                                 "gyroscope_noise_density", "the noise density N");
+  const Written gyro_k = largest(gyro, &ResidualNoise::rate_random_walk_rad_s_sqrt_s,
+                                 &ResidualNoise::rate_random_walk_upper, "gyroscope_random_walk", "the random walk K");
   const auto line = [](const std::string& key, const Written& w, const std::string& unit) {
     return key + ": " + short_num(w.value) + "  # " + unit +
-           (w.bound_of.empty() ? std::string()
-                               : "; UPPER BOUND, not a measured value: not resolved by the calibration records (" +
-                                     w.bound_of + ")") +
+           (w.bound_of.empty()
+                ? std::string()
+                : "; UPPER BOUND, not a measured value: not resolved by the calibration records (" + w.bound_of + ")") +
            "\n";
   };
   // "N = 1e-4" for a resolved term, "N < 1e-4 (not resolved)" for a bound.
@@ -457,16 +481,18 @@ ExportResult export_kalibr_imu_yaml(const ImuCalibration& model, const ExportOpt
   };
   ExportResult r;
   std::ostringstream s;
-  s << "# Kalibr IMU noise model from driftlab (" << kImuFormat << ", device \"" << one_line(model.device) << "\", " << which
-    << "): Allan analysis of each channel's compensated calibration residual, continuous-time values.\n"
+  s << "# Kalibr IMU noise model from driftlab (" << kImuFormat << ", device \"" << one_line(model.device) << "\", "
+    << which << "): Allan analysis of each channel's compensated calibration residual, continuous-time values.\n"
     << "# Kalibr takes one value per sensor: each is the largest of the axes below (conservative; 0 = not measured).\n";
   for (const auto* c : all) {
     const bool g = c->id.sensor == imu::Sensor::Gyro;
     const auto& n = c->model.noise;
-    s << "#   " << c->id.role() << " (column " << one_line(c->column) << "): " << term_text("N", n.arw_rad_sqrt_s, n.arw_upper)
-      << (g ? " rad/s/sqrt(Hz)" : " m/s^2/sqrt(Hz)") << ", " << term_text("K", n.rate_random_walk_rad_s_sqrt_s, n.rate_random_walk_upper)
-      << (g ? " rad/s^2/sqrt(Hz)" : " m/s^3/sqrt(Hz)") << ", " << term_text("B", n.bias_instability_rad_s, n.bias_instability_upper)
-      << (g ? " rad/s" : " m/s^2") << " (B is not a Kalibr parameter)\n";
+    s << "#   " << c->id.role() << " (column " << one_line(c->column)
+      << "): " << term_text("N", n.arw_rad_sqrt_s, n.arw_upper) << (g ? " rad/s/sqrt(Hz)" : " m/s^2/sqrt(Hz)") << ", "
+      << term_text("K", n.rate_random_walk_rad_s_sqrt_s, n.rate_random_walk_upper)
+      << (g ? " rad/s^2/sqrt(Hz)" : " m/s^3/sqrt(Hz)") << ", "
+      << term_text("B", n.bias_instability_rad_s, n.bias_instability_upper) << (g ? " rad/s" : " m/s^2")
+      << " (B is not a Kalibr parameter)\n";
   }
   s << line("accelerometer_noise_density", accel_n, "m/s^2/sqrt(Hz)");
   s << line("accelerometer_random_walk", accel_k, "m/s^3/sqrt(Hz)");
@@ -489,8 +515,10 @@ void check_prefix(const std::string& p) {
             p.find("__") == std::string::npos;
   for (const char ch : p) ok = ok && (std::isalnum(static_cast<unsigned char>(ch)) || ch == '_');
   if (!ok) {
-    throw ConfigError({"", 0, "--prefix"}, "'" + p + "' is not a usable C identifier prefix (a letter, then letters, "
-                                               "digits and single underscores, not ending in '_', at most 32 characters)");
+    throw ConfigError({"", 0, "--prefix"},
+                      "'" + p +
+                          "' is not a usable C identifier prefix (a letter, then letters, "
+                          "digits and single underscores, not ending in '_', at most 32 characters)");
   }
 }
 
@@ -712,15 +740,16 @@ ExportResult export_c_header(const ImuCalibration& model, const ExportOptions& o
     << " *   the channel's extrapolation policy to its valid range; out = (x - bias) / sf.\n"
     << " * Usage: " << P << "_state st; " << P << "_init(&st); y = " << P << "_step(&" << P
     << "_<role>, &st, t, x, temp, &bias, &extrap);\n"
-    << " *    or " << P << "_imu_state st; " << P << "_imu_init(&st); " << P << "_imu_step(&st, t, in, temps, out, bias);\n"
+    << " *    or " << P << "_imu_state st; " << P << "_imu_init(&st); " << P
+    << "_imu_step(&st, t, in, temps, out, bias);\n"
     << " * Channels (role: column [read unit] -> internal unit, temperature column, model):\n";
   for (std::size_t k = 0; k < model.channels.size(); ++k) {
     const auto& c = model.channels[k];
     const auto& m = c.model;
-    s << " *   " << c.id.role() << ": " << c_comment(c.column) << " [" << c_comment(c.read_unit) << "] -> " << c.unit() << ", "
-      << c_comment(c.temperature_column) << ", " << to_string(m.kind) << " order " << m.order() << ", T0 "
-      << short_num(m.reference_temp_c) << " degC, valid " << short_num(m.valid_min_c) << " .. " << short_num(m.valid_max_c)
-      << " degC, '" << to_string(m.extrapolation) << "'"
+    s << " *   " << c.id.role() << ": " << c_comment(c.column) << " [" << c_comment(c.read_unit) << "] -> " << c.unit()
+      << ", " << c_comment(c.temperature_column) << ", " << to_string(m.kind) << " order " << m.order() << ", T0 "
+      << short_num(m.reference_temp_c) << " degC, valid " << short_num(m.valid_min_c) << " .. "
+      << short_num(m.valid_max_c) << " degC, '" << to_string(m.extrapolation) << "'"
       << (c.device_id.empty() ? "" : ", device id " + c_comment(c.device_id)) << "\n";
   }
   s << " */\n#ifndef " << guard << "\n#define " << guard << "\n\n#include <math.h>\n";
@@ -739,30 +768,34 @@ ExportResult export_c_header(const ImuCalibration& model, const ExportOptions& o
         for (int col = 0; col < 3; ++col) centres.push_back(m.rbf->centres(k, col));
       }
       s << c_array(name + "_rbf_mean", m.rbf->mean) << c_array(name + "_rbf_scale", m.rbf->scale);
-      if (ranged) s << c_array(name + "_rbf_input_min", m.rbf->input_min) << c_array(name + "_rbf_input_max", m.rbf->input_max);
+      if (ranged)
+        s << c_array(name + "_rbf_input_min", m.rbf->input_min) << c_array(name + "_rbf_input_max", m.rbf->input_max);
       s << c_array(name + "_rbf_centre", centres) << c_array(name + "_rbf_weight", m.rbf->weights_rad_s);
     }
     s << "static const " << P << "_model " << name << " = {\n"
       << "    .order = " << m.order() << ", .bias = " << name << "_bias,\n"
-      << "    .t0_c = " << num(m.reference_temp_c) << ", .tmin_c = " << num(m.valid_min_c) << ", .tmax_c = " << num(m.valid_max_c)
-      << ", .policy = " << static_cast<int>(m.extrapolation) << ",\n"
+      << "    .t0_c = " << num(m.reference_temp_c) << ", .tmin_c = " << num(m.valid_min_c)
+      << ", .tmax_c = " << num(m.valid_max_c) << ", .policy = " << static_cast<int>(m.extrapolation) << ",\n"
       << "    .lag_tau_s = " << num(m.lag_tau_s) << ", .deriv_tau_s = " << num(m.derivative_tau_s) << ",\n"
       << "    .rate_coef = " << num(m.temperature_rate_rad_s_per_k_s) << ", .hyst_coef = " << num(m.hysteresis_rad_s)
       << ", .hyst_width_k = " << num(m.hysteresis_width_k) << ",\n"
       << "    .stateful = " << (m.uses_state() ? 1 : 0);
-    if (!m.scale_factor_per_k.empty()) s << ",\n    .sf_terms = " << m.scale_factor_per_k.size() << ", .sf = " << name << "_sf";
+    if (!m.scale_factor_per_k.empty())
+      s << ",\n    .sf_terms = " << m.scale_factor_per_k.size() << ", .sf = " << name << "_sf";
     if (rbf) {
       s << ",\n    .rbf_centres = " << m.rbf->centres.rows() << ", .rbf_ranged = " << (ranged ? 1 : 0) << ",\n"
         << "    .rbf_mean = " << name << "_rbf_mean, .rbf_scale = " << name << "_rbf_scale,\n";
-      if (ranged) s << "    .rbf_input_min = " << name << "_rbf_input_min, .rbf_input_max = " << name << "_rbf_input_max,\n";
+      if (ranged)
+        s << "    .rbf_input_min = " << name << "_rbf_input_min, .rbf_input_max = " << name << "_rbf_input_max,\n";
       s << "    .rbf_centre = " << name << "_rbf_centre, .rbf_weight = " << name << "_rbf_weight,\n"
         << "    .rbf_sigma = " << num(m.rbf->sigma) << ", .rbf_bias = " << num(m.rbf->bias_rad_s);
     }
     s << "};\n\n";
   }
-  s << "/* The whole IMU: channel k of " << P << "_models is " << P << "_roles[k], read from " << P << "_columns[k]. */\n";
-  s << "enum { " << P << "_CHANNELS = " << model.channels.size() << ", " << P << "_TEMPERATURES = " << temperatures.size()
-    << " };\n";
+  s << "/* The whole IMU: channel k of " << P << "_models is " << P << "_roles[k], read from " << P
+    << "_columns[k]. */\n";
+  s << "enum { " << P << "_CHANNELS = " << model.channels.size() << ", " << P
+    << "_TEMPERATURES = " << temperatures.size() << " };\n";
   s << "enum {";
   for (std::size_t k = 0; k < model.channels.size(); ++k) {
     s << (k ? "," : "") << "\n  " << P << "_ch_" << model.channels[k].id.role() << " = " << k;

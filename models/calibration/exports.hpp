@@ -19,8 +19,9 @@
 //                corrected = raw - offset - CAL_* offset            (rad/s; m/s^2)
 //              TREF is the T0 of the block's first channel, so an accelerometer without a reference
 //              (offset not observable, a0 = 0) gets X0 = 0 when its axes share T0; PX4's accelerometer
-//              calibration (run after loading, TC_A_ENABLE = 1: it adjusts X0) supplies the constant. TC_s{i}_ID is the channel's device_id when it is a PX4 integer
-//              device id, else 0 with a comment asking to set it (PX4 matches sensors by that id).
+//              calibration (run after loading, TC_A_ENABLE = 1: it adjusts X0) supplies the constant. TC_s{i}_ID is the
+//              channel's device_id when it is a PX4 integer device id, else 0 with a comment asking to set it (PX4
+//              matches sensors by that id).
 //   ardupilot  Mission Planner .parm (NAME,VALUE). Per instance i (n = i + 1, 1..3): INS_TCAL{n}_ENABLE,
 //              _TMIN, _TMAX, _GYR{k}_{X,Y,Z}, _ACC{k}_{X,Y,Z} (k = 1..3). ArduPilot's correction
 //              (AP_InertialSensor_TCal::correct_sensor, float arithmetic; 35 degC TEMP_REFERENCE,
@@ -49,12 +50,12 @@
 // PX4 and ArduPilot hold, per channel, a cubic in temperature with one [TMIN, TMAX] per block (PX4:
 // sensor and instance; ArduPilot: instance, gyro and accelerometer together): the intersection of the
 // block's valid ranges. A channel they cannot represent (order > 3, lag, dT/dt, hysteresis, RBF terms,
-// a scale factor, the linear or evaluate extrapolation policy, a valid range wider than the block's) is exported as the least-squares cubic in T
-// over its valid range (201 points) of the model's polynomial part, and the export states per channel
-// the approximation's maximum error and every dropped term (ExportResult::losses and comments in the
-// file); with `strict` it is refused (ConfigError naming the channel) instead. Every value written is
-// checked to be a finite REAL32 number (ConfigError naming the channel and parameter otherwise); the
-// text carries 9 significant digits, which round-trips a float.
+// a scale factor, the linear or evaluate extrapolation policy, a valid range wider than the block's) is exported as the
+// least-squares cubic in T over its valid range (201 points) of the model's polynomial part, and the export states per
+// channel the approximation's maximum error and every dropped term (ExportResult::losses and comments in the file);
+// with `strict` it is refused (ConfigError naming the channel) instead. Every value written is checked to be a finite
+// REAL32 number (ConfigError naming the channel and parameter otherwise); the text carries 9 significant digits, which
+// round-trips a float.
 #pragma once
 
 #include <string>
@@ -71,7 +72,7 @@ struct ExportOptions {
   int kalibr_instance = 0;                     // the IMU instance of the Kalibr file
   double kalibr_update_rate_hz = 0.0;          // 0: the channels' noise sample rate
   std::string kalibr_topic = "/imu0";
-  bool kalibr_allow_bounds = false;            // write a noise value the records only bound as that bound, marked
+  bool kalibr_allow_bounds = false;  // write a noise value the records only bound as that bound, marked
 };
 
 // What the firmware's form drops for one channel.

@@ -18,8 +18,8 @@
 namespace driftlab::calibration {
 namespace {
 
-constexpr int kScaleFactorOrder = 2;        // k_0 + k_1 dT + k_2 dT^2
-constexpr double kVaryingTrueRate = 1e-3;   // rad/s: a true rate with a larger std drives a scale-factor fit
+constexpr int kScaleFactorOrder = 2;       // k_0 + k_1 dT + k_2 dT^2
+constexpr double kVaryingTrueRate = 1e-3;  // rad/s: a true rate with a larger std drives a scale-factor fit
 
 // Per-bin means of the causal features for one (lag, width) candidate.
 struct Features {
@@ -139,9 +139,12 @@ Determinable determinable(const std::vector<OvenRun>& runs) {
   Determinable d;
   d.rate_and_hysteresis = span && all.heating && all.cooling;
   d.max_lag_s = span ? all.longest_soak_s : 0.0;
-  if (!span) d.why_not = "span below " + std::to_string(static_cast<int>(kMinHistorySpanK)) + " K: no history terms";
-  else if (!(all.heating && all.cooling)) d.why_not = "one direction: no dT/dt or hysteresis term";
-  if (span && all.longest_soak_s < kMinSoakS) d.why_not += std::string(d.why_not.empty() ? "" : "; ") + "no soak: no lag term";
+  if (!span)
+    d.why_not = "span below " + std::to_string(static_cast<int>(kMinHistorySpanK)) + " K: no history terms";
+  else if (!(all.heating && all.cooling))
+    d.why_not = "one direction: no dT/dt or hysteresis term";
+  if (span && all.longest_soak_s < kMinSoakS)
+    d.why_not += std::string(d.why_not.empty() ? "" : "; ") + "no soak: no lag term";
   return d;
 }
 
@@ -170,7 +173,8 @@ double policy_cv_rmse(const Design& dz, const Eigen::VectorXd& tm, const Eigen::
   double ss = 0.0;
   for (int k = 0; k < count; ++k) {
     std::vector<Eigen::Index> train, test;
-    for (std::size_t i = 0; i < groups.size(); ++i) (groups[i] == k ? test : train).push_back(static_cast<Eigen::Index>(i));
+    for (std::size_t i = 0; i < groups.size(); ++i)
+      (groups[i] == k ? test : train).push_back(static_cast<Eigen::Index>(i));
     if (train.empty() || test.empty()) continue;
     polynomial::LinearFit lf;
     try {
@@ -211,7 +215,8 @@ std::string implausible(const Design& dz, const polynomial::LinearFit& lf, const
   };
   if (dz.rate_term) {
     if (!significant(c)) return "dT/dt term within 3 sigma of 0";
-    if (std::abs(lf.coefficients[c]) * d_rows.cwiseAbs().maxCoeff() > swing) return "dT/dt term larger than the bias swing";
+    if (std::abs(lf.coefficients[c]) * d_rows.cwiseAbs().maxCoeff() > swing)
+      return "dT/dt term larger than the bias swing";
     ++c;
   }
   if (dz.hysteresis) {
@@ -264,10 +269,12 @@ class Fitter {
             if (cv < best.cv && admissible(fs, dz)) best = c;
           }
         }
-        o_.progress(physical() ? "calibrate: physical model search" : "calibrate: polynomial order", double(++done) / total);
+        o_.progress(physical() ? "calibrate: physical model search" : "calibrate: polynomial order",
+                    double(++done) / total);
       }
     }
-    if (!std::isfinite(best.cv)) throw DataError({records_.front().name, 0, "rate"}, "no candidate model could be fitted");
+    if (!std::isfinite(best.cv))
+      throw DataError({records_.front().name, 0, "rate"}, "no candidate model could be fitted");
     return {best, simple};
   }
 
@@ -374,7 +381,8 @@ class Fitter {
       ++c;
     }
     if (with_sf_) {
-      for (int j = 0; j <= kScaleFactorOrder; ++j, ++c) m.scale_factor_per_k.push_back(lf.coefficients[c] / std::pow(dz.scale, j));
+      for (int j = 0; j <= kScaleFactorOrder; ++j, ++c)
+        m.scale_factor_per_k.push_back(lf.coefficients[c] / std::pow(dz.scale, j));
     }
 
     m.fit.bin_s = o_.bin_s;
@@ -389,8 +397,9 @@ class Fitter {
     }
     m.fit.holdout_design = holdout_design_;
     m.fit.uncompensated_rms_rad_s = std::sqrt(y_.squaredNorm() / static_cast<double>(y_.size()));
-    m.fit.selection = "order " + std::string(physical() ? "and history terms (lag_tau_s, dT/dt, hysteresis width) " : "") +
-                      "by held-out error over orders " + std::to_string(o_.min_order) + ".." + std::to_string(o_.max_order);
+    m.fit.selection =
+        "order " + std::string(physical() ? "and history terms (lag_tau_s, dT/dt, hysteresis width) " : "") +
+        "by held-out error over orders " + std::to_string(o_.min_order) + ".." + std::to_string(o_.max_order);
     if (physical() && !can_.why_not.empty()) m.fit.selection += "; " + can_.why_not;
     if (!rejected_.empty()) {
       m.fit.selection += "; candidates rejected:";
@@ -442,7 +451,8 @@ class Fitter {
     gc.seed = o_.seed;
     gc.threads = 1;  // one thread: the progress counter is not thread safe, and fits are seconds
     const double max_centres = std::min<double>(40.0, static_cast<double>(split.train.size()) / 4.0);
-    const auto result = ga::minimize(objective, {{0.1, 3.0, false}, {-8.0, -1.0, false}, {3.0, std::max(3.0, max_centres), true}}, gc);
+    const auto result =
+        ga::minimize(objective, {{0.1, 3.0, false}, {-8.0, -1.0, false}, {3.0, std::max(3.0, max_centres), true}}, gc);
     const double no_rbf = holdout::rmse(Eigen::VectorXd::Zero(rh.size()), rh);
     if (std::isfinite(result.best_value) && result.best_value < (1.0 - kTransferMargin) * no_rbf) {
       const auto net = rbf::fit(X, residual, decode(result.best)).network;
@@ -479,7 +489,7 @@ class Fitter {
     o_.progress("calibrate: Allan noise terms", 0.0);
     if (const auto n = fit_noise(err, rate_hz)) {
       m.noise = {n->arw_rad_sqrt_s, n->bias_instability_rad_s, n->rate_random_walk_rad_s_sqrt_s, rate_hz,
-                 n->arw_upper, n->bias_instability_upper, n->rate_random_walk_upper};
+                 n->arw_upper,      n->bias_instability_upper, n->rate_random_walk_upper};
     }
     o_.progress("calibrate: Allan noise terms", 1.0);
   }
@@ -512,13 +522,15 @@ class Fitter {
       const Binning& b = bins_.back();
       if (static_cast<std::size_t>(b.bins) < 2 * o_.holdout_blocks) {
         throw DataError({r.name, 0, "t_s"}, "record too short: " + std::to_string(b.bins) + " bins of " +
-                                                std::to_string(o_.bin_s) + " s for " + std::to_string(o_.holdout_blocks) +
+                                                std::to_string(o_.bin_s) + " s for " +
+                                                std::to_string(o_.holdout_blocks) +
                                                 " held-out blocks (need at least two bins per block)");
       }
       std::vector<double> y(static_cast<std::size_t>(b.bins), 0.0);
       for (Eigen::Index i = 0; i < r.time_s.size(); ++i) {
         const double w = r.true_rate_rad_s.size() ? r.true_rate_rad_s[i] : 0.0;
-        y[static_cast<std::size_t>(b.bin_of[static_cast<std::size_t>(i)])] += r.rate_rad_s[i] - w;  // rate - true = sf_dev w + bias
+        y[static_cast<std::size_t>(b.bin_of[static_cast<std::size_t>(i)])] +=
+            r.rate_rad_s[i] - w;  // rate - true = sf_dev w + bias
       }
       const Features f0 = features(r, b, 0.0, o_.derivative_tau_s, 0.0, t0_, false);
       for (int k = 0; k < b.bins; ++k) {
@@ -528,7 +540,8 @@ class Fitter {
       offset += b.bins;
       st_.group_ends.push_back(static_cast<Eigen::Index>(st_.rows.size()));
     }
-    const Eigen::VectorXd y_stack = Eigen::Map<const Eigen::VectorXd>(y_all.data(), static_cast<Eigen::Index>(y_all.size()));
+    const Eigen::VectorXd y_stack =
+        Eigen::Map<const Eigen::VectorXd>(y_all.data(), static_cast<Eigen::Index>(y_all.size()));
     y_ = y_stack(st_.rows);
     if (static_cast<std::size_t>(y_.size()) < 2 * o_.holdout_blocks * records_.size()) {
       throw DataError({records_.front().name, 0, "temperature"},
@@ -560,8 +573,8 @@ class Fitter {
     if (records_.size() >= 2) {
       for (std::size_t i = 0, at = 0; i < records_.size(); ++i)
         for (; at < static_cast<std::size_t>(st_.group_ends[i]); ++at) transfer_.push_back(static_cast<int>(i));
-      holdout_design_ += "; history terms also on whole runs (leave-one-run-out over " + std::to_string(records_.size()) +
-                         " records)";
+      holdout_design_ +=
+          "; history terms also on whole runs (leave-one-run-out over " + std::to_string(records_.size()) + " records)";
       return;
     }
     int heating_legs = 0, cooling_legs = 0, legs = 0;
@@ -574,12 +587,14 @@ class Fitter {
       std::vector<int> leg_of_bin;
       std::size_t leg = 0;
       for (const Eigen::Index first : bins_.front().first) {
-        while (leg + 1 < runs_.front().legs.size() && records_.front().time_s[first] > runs_.front().legs[leg].end_s) ++leg;
+        while (leg + 1 < runs_.front().legs.size() && records_.front().time_s[first] > runs_.front().legs[leg].end_s)
+          ++leg;
         leg_of_bin.push_back(static_cast<int>(leg));
       }
       for (const auto row : st_.rows) transfer_.push_back(leg_of_bin[static_cast<std::size_t>(row)]);
-      holdout_design_ += "; history terms also on whole legs (leave-one-leg-out over " + std::to_string(legs) + " legs: " +
-                         std::to_string(heating_legs) + " heating, " + std::to_string(cooling_legs) + " cooling)";
+      holdout_design_ += "; history terms also on whole legs (leave-one-leg-out over " + std::to_string(legs) +
+                         " legs: " + std::to_string(heating_legs) + " heating, " + std::to_string(cooling_legs) +
+                         " cooling)";
     } else {
       holdout_design_ += " (one record with fewer than two legs of a direction: whole legs cannot be held out)";
     }
@@ -604,8 +619,10 @@ class Fitter {
   bool admissible(const std::vector<Features>& fs, const Design& dz) const {
     if (!dz.rate_term && !dz.hysteresis) return true;
     try {
-      const auto why = implausible(dz, polynomial::least_squares(dz.A, y_), y_, stacked(fs, &Features::d)(st_.rows), blocks_);
-      if (!why.empty() && std::find(rejected_.begin(), rejected_.end(), why) == rejected_.end()) rejected_.push_back(why);
+      const auto why =
+          implausible(dz, polynomial::least_squares(dz.A, y_), y_, stacked(fs, &Features::d)(st_.rows), blocks_);
+      if (!why.empty() && std::find(rejected_.begin(), rejected_.end(), why) == rejected_.end())
+        rejected_.push_back(why);
       return why.empty();
     } catch (const std::invalid_argument&) {
       return false;

@@ -50,7 +50,7 @@
 namespace driftlab::calibration {
 
 struct Record {
-  std::string name;                  // file name, for the model's fit summary and messages
+  std::string name;  // file name, for the model's fit summary and messages
   Eigen::VectorXd time_s, rate_rad_s, temp_c;
   Eigen::VectorXd true_rate_rad_s;   // empty when unknown (static: 0)
   Eigen::VectorXd systematic_rad_s;  // empty, or the simulator's true systematic rate (evidence only)
@@ -63,16 +63,16 @@ Record slice(const Record& r, double from_s, double to_s);
 struct FitOptions {
   ModelKind kind = ModelKind::Polynomial;
 
-  double reference_temp_c = 25.0;            // T0, degC
+  double reference_temp_c = 25.0;  // T0, degC
   Extrapolation extrapolation = Extrapolation::Clamp;
-  int min_order = 1, max_order = 5;          // polynomial orders scored
-  std::size_t holdout_blocks = 8;            // contiguous held-out blocks per record
-  double bin_s = 10.0;                       // fitting bins, s
+  int min_order = 1, max_order = 5;  // polynomial orders scored
+  std::size_t holdout_blocks = 8;    // contiguous held-out blocks per record
+  double bin_s = 10.0;               // fitting bins, s
   bool heating_only = false;
-  double derivative_tau_s = 30.0;            // smoothing of dT/dt and of the hysteresis path, s
+  double derivative_tau_s = 30.0;  // smoothing of dT/dt and of the hysteresis path, s
   std::vector<double> lag_grid_s{0, 15, 30, 60, 120, 240, 480, 960};
   std::vector<double> hysteresis_width_grid_k{0, 0.5, 1, 2, 4, 8};
-  int refine_iterations = 12;                // golden-section steps per refined parameter (0: grid only)
+  int refine_iterations = 12;                           // golden-section steps per refined parameter (0: grid only)
   std::size_t ga_population = 16, ga_generations = 10;  // RBF tuning
   std::uint64_t seed = 1;
   // Progress: (stage label, fraction in [0, 1]).

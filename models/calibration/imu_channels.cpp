@@ -28,7 +28,8 @@ const Channel* temperature_of(const TimeSeries& ts, int instance) {
 }
 
 std::vector<ChannelRecords> channel_records(const std::vector<NamedSeries>& files, const ChannelSelection& s) {
-  const imu::Selection selection = s.channels.empty() ? imu::Selection{} : imu::parse_selection(s.channels, s.channels_field);
+  const imu::Selection selection =
+      s.channels.empty() ? imu::Selection{} : imu::parse_selection(s.channels, s.channels_field);
   if (files.empty()) throw ConfigError({"", 0, s.records_field}, "no record given");
 
   // The channels of the first file, in model order: gyro before accel, then instance, then axis.
@@ -55,7 +56,8 @@ std::vector<ChannelRecords> channel_records(const std::vector<NamedSeries>& file
     const imu::ChannelId id{imu::Sensor::Gyro, s.axis, 0};
     if (selection.selects(id)) {
       const auto& c = first.channel(role::kRate);
-      found.emplace(std::make_tuple(0, 0, id.axis), ChannelRecords{id, role::kRate, c.source, c.read_unit, "", "", false, {}});
+      found.emplace(std::make_tuple(0, 0, id.axis),
+                    ChannelRecords{id, role::kRate, c.source, c.read_unit, "", "", false, {}});
     }
   }
   if (found.empty())
@@ -68,7 +70,8 @@ std::vector<ChannelRecords> channel_records(const std::vector<NamedSeries>& file
   std::vector<ChannelRecords> out;
   for (auto& [key, cr] : found) {
     const std::string truth = cr.role == role::kRate ? std::string(role::kTrueRate) : imu::truth_role(cr.id);
-    const std::string systematic = cr.role == role::kRate ? std::string(role::kSystematic) : imu::systematic_role(cr.id);
+    const std::string systematic =
+        cr.role == role::kRate ? std::string(role::kSystematic) : imu::systematic_role(cr.id);
     cr.has_truth = first.has(truth);
     cr.device_id = first.device_id(cr.id.instance);
     for (const auto& f : files) {
@@ -86,10 +89,10 @@ std::vector<ChannelRecords> channel_records(const std::vector<NamedSeries>& file
       if (cr.temperature_column.empty()) cr.temperature_column = temp->source;
       const std::string& id = ts.device_id(cr.id.instance);
       if (!s.same_device && !id.empty() && !cr.device_id.empty() && id != cr.device_id)
-        throw ConfigError({f.name, 0, "device_id"},
-                          "instance " + std::to_string(cr.id.instance) + " has device id " + id + " here but " +
-                              cr.device_id + " in " + files.front().name +
-                              ": two devices are not calibrated as one (give " + s.same_device_field + " if they are one)");
+        throw ConfigError({f.name, 0, "device_id"}, "instance " + std::to_string(cr.id.instance) + " has device id " +
+                                                        id + " here but " + cr.device_id + " in " + files.front().name +
+                                                        ": two devices are not calibrated as one (give " +
+                                                        s.same_device_field + " if they are one)");
       Record r;
       r.name = f.name;
       r.time_s = ts.time();
@@ -108,8 +111,8 @@ std::vector<ChannelRecords> channel_records(const std::vector<NamedSeries>& file
                       d.difference_rms * shown.per_internal, shown.name, d.ratio);
         throw ConfigError({d.second, 0, cr.role},
                           "the " + cr.role + " bias of this record and of " + d.first + " differ by " + text +
-                              ": they look like two devices, which are not calibrated as one (give " + s.same_device_field +
-                              " if they are one)");
+                              ": they look like two devices, which are not calibrated as one (give " +
+                              s.same_device_field + " if they are one)");
       }
     }
     out.push_back(std::move(cr));
@@ -118,7 +121,7 @@ std::vector<ChannelRecords> channel_records(const std::vector<NamedSeries>& file
 }
 
 std::vector<Finding> run_quality_gate(const std::vector<ChannelRecords>& channels, double bin_s, bool strict,
-                                                  std::ostream* print) {
+                                      std::ostream* print) {
   std::vector<Finding> all;
   std::vector<std::string> seen_temperatures;
   for (const auto& ch : channels) {
@@ -134,16 +137,14 @@ std::vector<Finding> run_quality_gate(const std::vector<ChannelRecords>& channel
     }
   }
   for (const auto& f : all) {
-    if (f.severity == Finding::Severity::Error ||
-        (strict && f.severity == Finding::Severity::Warning))
+    if (f.severity == Finding::Severity::Error || (strict && f.severity == Finding::Severity::Warning))
       throw DataError({channels.front().records.front().name, 0, "temperature"},
                       "quality gate" + std::string(strict ? " (--strict)" : "") + ": " + f.message);
   }
   return all;
 }
 
-ChannelCalibration fit_channel(const ChannelRecords& ch, const std::vector<Record>& records,
-                                            const FitOptions& f) {
+ChannelCalibration fit_channel(const ChannelRecords& ch, const std::vector<Record>& records, const FitOptions& f) {
   ChannelCalibration c;
   c.id = ch.id;
   c.role = ch.role;

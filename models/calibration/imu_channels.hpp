@@ -20,8 +20,8 @@ namespace driftlab::calibration {
 // (signal in the channel's internal unit, its instance's temperature, the truth when the record has it).
 struct ChannelRecords {
   imu::ChannelId id;
-  std::string role;                 // record role: id.role(), or "rate" for a single-axis record
-  std::string column, read_unit;    // as in the first record
+  std::string role;               // record role: id.role(), or "rate" for a single-axis record
+  std::string column, read_unit;  // as in the first record
   std::string temperature_column;
   std::string device_id;
   bool has_truth = false;
@@ -35,8 +35,8 @@ struct NamedSeries {
 
 // Which channels, and the names of the options that set them (for messages).
 struct ChannelSelection {
-  std::string channels;  // comma-separated: gyro, accel, gyro1, gyro_x, accel1_z, all; empty: every channel
-  char axis = 'z';       // the axis of a single-axis "rate" channel
+  std::string channels;      // comma-separated: gyro, accel, gyro1, gyro_x, accel1_z, all; empty: every channel
+  char axis = 'z';           // the axis of a single-axis "rate" channel
   bool same_device = false;  // records of several devices are not refused
   std::string channels_field = "--channels", same_device_field = "--same-device", records_field = "--data";
 };

@@ -20,9 +20,12 @@ std::string fixed(double v, int digits) {
 
 std::string to_string(Finding::Severity severity) {
   switch (severity) {
-    case Finding::Severity::Note: return "note";
-    case Finding::Severity::Warning: return "warning";
-    case Finding::Severity::Error: return "error";
+    case Finding::Severity::Note:
+      return "note";
+    case Finding::Severity::Warning:
+      return "warning";
+    case Finding::Severity::Error:
+      return "error";
   }
   return "warning";
 }
@@ -73,7 +76,8 @@ OvenRun analyse_oven_run(const std::string& record, const Eigen::VectorXd& time_
   // Bin means of the temperature.
   const Binning b = make_bins(time_s, bin_s);
   std::vector<double> t, temp(static_cast<std::size_t>(b.bins), 0.0);
-  for (Eigen::Index i = 0; i < time_s.size(); ++i) temp[static_cast<std::size_t>(b.bin_of[static_cast<std::size_t>(i)])] += temp_c[i];
+  for (Eigen::Index i = 0; i < time_s.size(); ++i)
+    temp[static_cast<std::size_t>(b.bin_of[static_cast<std::size_t>(i)])] += temp_c[i];
   for (int k = 0; k < b.bins; ++k) {
     temp[static_cast<std::size_t>(k)] /= b.count[static_cast<std::size_t>(k)];
     t.push_back(time_s[b.first[static_cast<std::size_t>(k)]]);
@@ -139,33 +143,41 @@ std::vector<Finding> quality_gate(const std::vector<OvenRun>& runs) {
   const double lo = all.min_c, hi = all.max_c, span = all.span_k(), longest_soak = all.longest_soak_s;
   const bool heating = all.heating, cooling = all.cooling;
   if (span < kMinFitSpanK) {
-    out.push_back({S::Error, "span", "temperature span " + fixed(span, 3) + " K (" + fixed(lo, 2) + " .. " + fixed(hi, 2) +
-                                         " degC) is below " + fixed(kMinFitSpanK, 2) + " K: nothing to fit"});
+    out.push_back({S::Error, "span",
+                   "temperature span " + fixed(span, 3) + " K (" + fixed(lo, 2) + " .. " + fixed(hi, 2) +
+                       " degC) is below " + fixed(kMinFitSpanK, 2) + " K: nothing to fit"});
     return out;
   }
   if (span < kMinHistorySpanK)
-    out.push_back({S::Warning, "span", "temperature span " + fixed(span, 2) + " K (" + fixed(lo, 2) + " .. " + fixed(hi, 2) +
-                                           " degC) is below " + fixed(kMinHistorySpanK, 0) +
-                                           " K: no lag, dT/dt or hysteresis term is fitted"});
+    out.push_back({S::Warning, "span",
+                   "temperature span " + fixed(span, 2) + " K (" + fixed(lo, 2) + " .. " + fixed(hi, 2) +
+                       " degC) is below " + fixed(kMinHistorySpanK, 0) +
+                       " K: no lag, dT/dt or hysteresis term is fitted"});
   if (!heating || !cooling)
     out.push_back({S::Warning, "one_direction",
-                   std::string(heating ? "heating only" : cooling ? "cooling only" : "no heating or cooling leg") +
+                   std::string(heating   ? "heating only"
+                               : cooling ? "cooling only"
+                                         : "no heating or cooling leg") +
                        ": no dT/dt or hysteresis term is fitted (they need both directions)"});
   if (longest_soak < kMinSoakS)
-    out.push_back({S::Warning, "no_soak", "no soak (temperature within " + fixed(kSoakBandK, 1) + " K for " +
-                                              fixed(kMinSoakS, 0) + " s or more): no thermal lag term is fitted"});
+    out.push_back({S::Warning, "no_soak",
+                   "no soak (temperature within " + fixed(kSoakBandK, 1) + " K for " + fixed(kMinSoakS, 0) +
+                       " s or more): no thermal lag term is fitted"});
   for (const auto& r : runs) {
     for (const auto& leg : r.legs) {
       if (leg.direction == 0) continue;
       const double ramp = std::abs(leg.ramp_k_per_min());
-      const std::string where = r.record + ", " + leg.name() + " leg " + fixed(leg.start_s, 0) + " .. " + fixed(leg.end_s, 0) +
-                                " s (" + fixed(leg.from_c, 1) + " -> " + fixed(leg.to_c, 1) + " degC)";
+      const std::string where = r.record + ", " + leg.name() + " leg " + fixed(leg.start_s, 0) + " .. " +
+                                fixed(leg.end_s, 0) + " s (" + fixed(leg.from_c, 1) + " -> " + fixed(leg.to_c, 1) +
+                                " degC)";
       if (ramp > kMaxRampKPerMin)
-        out.push_back({S::Warning, "fast_ramp", where + ": mean ramp " + fixed(ramp, 1) + " K/min above " +
-                                                    fixed(kMaxRampKPerMin, 0) + " K/min (the die lags the reading)"});
+        out.push_back({S::Warning, "fast_ramp",
+                       where + ": mean ramp " + fixed(ramp, 1) + " K/min above " + fixed(kMaxRampKPerMin, 0) +
+                           " K/min (the die lags the reading)"});
       if (leg.end_s - leg.start_s < kMinLegS)
-        out.push_back({S::Warning, "short_leg", where + ": " + fixed(leg.end_s - leg.start_s, 0) + " s, shorter than " +
-                                                    fixed(kMinLegS, 0) + " s"});
+        out.push_back(
+            {S::Warning, "short_leg",
+             where + ": " + fixed(leg.end_s - leg.start_s, 0) + " s, shorter than " + fixed(kMinLegS, 0) + " s"});
     }
     if (r.gaps > 0)
       out.push_back({r.regular_bursts ? S::Note : S::Warning, "dropouts",

@@ -58,9 +58,9 @@ struct Binning {
 Binning make_bins(const Eigen::VectorXd& time_s, double bin_s);
 
 struct Leg {
-  double start_s = 0.0, end_s = 0.0;      // time of its first and last bin
-  double from_c = 0.0, to_c = 0.0;        // bin-mean temperature at its ends
-  int direction = 0;                      // +1 heating, -1 cooling, 0 level
+  double start_s = 0.0, end_s = 0.0;  // time of its first and last bin
+  double from_c = 0.0, to_c = 0.0;    // bin-mean temperature at its ends
+  int direction = 0;                  // +1 heating, -1 cooling, 0 level
   double ramp_k_per_min() const { return end_s > start_s ? 60.0 * (to_c - from_c) / (end_s - start_s) : 0.0; }
   std::string name() const { return direction > 0 ? "heating" : direction < 0 ? "cooling" : "level"; }
 };

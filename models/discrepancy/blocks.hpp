@@ -10,7 +10,8 @@
 // Noise covariance of the block means (continuous-time averages of IEEE 952 terms, error_model.hpp):
 //   white (N, rad/sqrt(s)):         Var = N^2 / L_i,  independent between blocks
 //   Gauss-Markov (sigma, tau)       Var = 2 sigma^2 tau^2 / L^2 (L/tau - 1 + exp(-L/tau))
-//   (each Gauss-Markov component: the flicker of B and the explicit terms):  Cov(i < j) = sigma^2 tau^2 / (L_i L_j) (1 - e^{-L_i/tau})
+//   (each Gauss-Markov component: the flicker of B and the explicit terms):  Cov(i < j) = sigma^2 tau^2 / (L_i L_j) (1
+//   - e^{-L_i/tau})
 //                                                (1 - e^{-L_j/tau}) exp(-(a_j - b_i)/tau)
 //   random walk (K, rad/s/sqrt(s)), W(t_first) = 0:
 //                                   Var = K^2 (a_i - t_first + L_i/3),  Cov(i < j) = K^2 ((a_i + b_i)/2 - t_first)

@@ -6,14 +6,13 @@
 //   y = prior(t, T_m, w) + sum_{i=0..d} b_i (T_m - T0)^i + sum_effects sum_j c_j basis_j(theta) + noise
 //
 // prior: the device file's systematic rate (physics, polynomials, any effects it already lists),
-// fixed; without a device, w (unit scale factor, corrected by the free scale-factor polynomial below). b_i: the model's free parameters, a correction
-// polynomial in temperature. T_m, the model temperature: the die temperature the device file
-// implies, T_d = T + tau_s dT/dt (first-order inverse of the case sensor's lag tau_s behind the
-// die, Options::sensor_time_constant_s), or the one an effect moves it to (thermal lag of T_d,
-// drive-frequency thermometer; at most one such effect). w: the true rate (0 when absent).
-// Effects see T_m as the record's temperature. Candidate effects are Effect plugins
-// (framework/plugin.hpp): basis columns with linear coefficients c and at most a few nonlinear
-// parameters theta.
+// fixed; without a device, w (unit scale factor, corrected by the free scale-factor polynomial below). b_i: the model's
+// free parameters, a correction polynomial in temperature. T_m, the model temperature: the die temperature the device
+// file implies, T_d = T + tau_s dT/dt (first-order inverse of the case sensor's lag tau_s behind the die,
+// Options::sensor_time_constant_s), or the one an effect moves it to (thermal lag of T_d, drive-frequency thermometer;
+// at most one such effect). w: the true rate (0 when absent). Effects see T_m as the record's temperature. Candidate
+// effects are Effect plugins (framework/plugin.hpp): basis columns with linear coefficients c and at most a few
+// nonlinear parameters theta.
 //
 // Fit and criterion. Generalized least squares with the covariance C of the block means that the
 // model's own noise terms predict (white N, flicker B as a Gauss-Markov sum, random walk K;
@@ -146,11 +145,11 @@ struct Step {
 // (in that view) instead of naming a candidate that does not fit. After the last named effect the
 // views are tested once more.
 struct StructureTest {
-  std::string view;          // one of the names above
+  std::string view;  // one of the names above
   double delta_chi2 = 0.0, delta_bic = -std::numeric_limits<double>::infinity();
-  int parameters = 0;        // q
-  double size_rad_s = 0.0;   // rms over the blocks of the view's fitted component
-  std::string where;         // e.g. "largest at 14.2 .. 25.8 degC (+160 deg/h)"
+  int parameters = 0;       // q
+  double size_rad_s = 0.0;  // rms over the blocks of the view's fitted component
+  std::string where;        // e.g. "largest at 14.2 .. 25.8 degC (+160 deg/h)"
   // The temperature view has a second form, a step in bias where the temperature crosses one
   // level (q = 2: size and level, the level searched); it replaces the bins when it scores higher.
   struct TemperatureStep {
@@ -161,7 +160,7 @@ struct StructureTest {
 };
 
 struct Unexplained {
-  bool found = false;               // a view's delta_BIC exceeds the significance
+  bool found = false;                // a view's delta_BIC exceeds the significance
   std::vector<StructureTest> views;  // every view, best first
 };
 

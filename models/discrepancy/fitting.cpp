@@ -1,6 +1,5 @@
 #include "models/discrepancy/workflow.hpp"
 
-
 namespace driftlab::discrepancy::detail {
 namespace {
 
@@ -31,8 +30,8 @@ TimeSeries Workflow::moved_record(const TimeSeries& rec, const std::vector<Term>
   TimeSeries moved = rec;
   for (const auto& t : terms) {
     if (!effect(t).moves_model_temperature()) continue;
-    moved.set_channel(
-        {role::kTemperature, "degC", "model temperature", effect(t).evaluate(rec, context_, t.theta).model_temperature_c});
+    moved.set_channel({role::kTemperature, "degC", "model temperature",
+                       effect(t).evaluate(rec, context_, t.theta).model_temperature_c});
   }
   return moved;
 }
@@ -130,7 +129,8 @@ Eigen::MatrixXd Workflow::parameter_covariance(const State& s) const {
   return chi2_scale(s) * norms.cwiseInverse().asDiagonal() * inverse * norms.cwiseInverse().asDiagonal();
 }
 
-std::vector<ReportedValue> Workflow::describe(const State& s, std::size_t term, const Eigen::MatrixXd& covariance) const {
+std::vector<ReportedValue> Workflow::describe(const State& s, std::size_t term,
+                                              const Eigen::MatrixXd& covariance) const {
   const Term& t = s.terms[term];
   const Effect& e = effect(t);
   const TimeSeries& rec = e.moves_model_temperature() ? block_record_ : s.design.moved;

@@ -10,8 +10,7 @@ void Workflow::set_noise(Result& result) {
     noise_ = *options_.noise;
   } else {
     if (!evenly_sampled_)
-      throw DataError({"", 0, "rate"},
-                      "the record has gaps: give the device's noise terms (--device) to test effects");
+      throw DataError({"", 0, "rate"}, "the record has gaps: give the device's noise terms (--device) to test effects");
     // The noise terms come from the part of the residual that no candidate reaches: the model
     // plus every applicable candidate at its best parameters (ordinary least squares on the
     // blocks), so that a lag, a hysteresis, a dT/dt term, a warm-up or a periodic term is not
@@ -52,12 +51,10 @@ void Workflow::set_noise(Result& result) {
   result.noise = noise_;
   Eigen::MatrixXd c = noise_covariance(blocks_, noise_);
   const double jitter = 1e-12 * c.diagonal().mean();
-  if (!(jitter > 0.0))
-    throw DataError({"", 0, "noise"}, "the noise terms are all zero: the test needs a noise model");
+  if (!(jitter > 0.0)) throw DataError({"", 0, "noise"}, "the noise terms are all zero: the test needs a noise model");
   c.diagonal().array() += jitter;
   Eigen::LLT<Eigen::MatrixXd> llt(c);
-  if (llt.info() != Eigen::Success)
-    throw DataError({"", 0, "noise"}, "the noise covariance is not positive definite");
+  if (llt.info() != Eigen::Success) throw DataError({"", 0, "noise"}, "the noise covariance is not positive definite");
   whitener_ = llt.matrixL();
   covariance_trace_ = c.trace();
 }

@@ -97,11 +97,13 @@ CandidateSet make_candidates(const Registry& registry, std::vector<std::string> 
     const auto dot = set.find('.');
     const auto eq = set.find('=');
     if (dot == std::string::npos || eq == std::string::npos || dot > eq)
-      throw ConfigError({"", 0, "--set " + set}, "expected effect/NAME.key=value, e.g. effect/thermal_lag.tau_max_s=8000");
+      throw ConfigError({"", 0, "--set " + set},
+                        "expected effect/NAME.key=value, e.g. effect/thermal_lag.tau_max_s=8000");
     std::string name = set.substr(0, dot);
     if (name.rfind("effect/", 0) != 0) name = "effect/" + name;
     if (std::find(names.begin(), names.end(), name) == names.end())
-      throw ConfigError({"", 0, "--set " + set}, name + " is not a candidate (see --effects and `driftlab plugins list`)");
+      throw ConfigError({"", 0, "--set " + set},
+                        name + " is not a candidate (see --effects and `driftlab plugins list`)");
     assignments[name].push_back(set.substr(dot + 1));
   }
   CandidateSet c;

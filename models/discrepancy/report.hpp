@@ -11,8 +11,8 @@
 //   gap_initial, gap_final, gap_metric, gap_unit, noise_floor
 //   criterion {name, significance, blocks, block_s}, final_scores[] (the round that stopped)
 //   unexplained {found, views[]}: structure no candidate explains
-//   model {data, device, bias_degree, bias_coefficients_initial/final (deg/h per K^i), noise {N, B, K}, noise_estimated}
-//   views {initial, final}: bins by temperature (heating, cooling), by dT/dt, regime means, spectrum
+//   model {data, device, bias_degree, bias_coefficients_initial/final (deg/h per K^i), noise {N, B, K},
+//   noise_estimated} views {initial, final}: bins by temperature (heating, cooling), by dT/dt, regime means, spectrum
 //                     peaks, Allan deviation of the residual against the noise terms
 #pragma once
 

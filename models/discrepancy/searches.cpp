@@ -28,8 +28,8 @@ std::vector<double> Workflow::grid(const Axis& a) const {
   if (a.scale == EffectParameter::Scale::Log) {
     count = std::max(3, static_cast<int>(std::ceil(std::log10(a.hi / a.lo) * options_.grid_points_per_decade)) + 1);
   } else {
-    count = std::clamp(static_cast<int>(std::ceil(std::abs(u1 - u0) * 4.0 * blocks_.duration_s())) + 1, 3,
-                       kMaxPeriodGrid);
+    count =
+        std::clamp(static_cast<int>(std::ceil(std::abs(u1 - u0) * 4.0 * blocks_.duration_s())) + 1, 3, kMaxPeriodGrid);
   }
   std::vector<double> u(static_cast<std::size_t>(count));
   for (int i = 0; i < count; ++i) u[static_cast<std::size_t>(i)] = u0 + (u1 - u0) * i / (count - 1);
@@ -37,7 +37,7 @@ std::vector<double> Workflow::grid(const Axis& a) const {
 }
 
 double Workflow::search_coordinate(const std::function<double(const Eigen::VectorXd&)>& chi2, const Axis& a,
-                         Eigen::VectorXd& theta, Eigen::Index k) const {
+                                   Eigen::VectorXd& theta, Eigen::Index k) const {
   const auto u = grid(a);
   auto at = [&](double value) {
     Eigen::VectorXd th = theta;
@@ -57,7 +57,7 @@ double Workflow::search_coordinate(const std::function<double(const Eigen::Vecto
 }
 
 void Workflow::refine_coordinate(const std::function<double(const Eigen::VectorXd&)>& chi2, const Axis& a,
-                       Eigen::VectorXd& theta, Eigen::Index k) const {
+                                 Eigen::VectorXd& theta, Eigen::Index k) const {
   const auto u = grid(a);
   const double step = std::abs(u[1] - u[0]);
   const double center = a.to_u(theta[k]);
@@ -82,8 +82,7 @@ std::vector<Score> Workflow::score_all(const State& state) const {
   for (std::size_t c = 0; c < candidates_.size(); ++c) {
     Score s;
     s.effect = candidates_[c].name;
-    if (std::any_of(state.terms.begin(), state.terms.end(), [&](const Term& t) { return t.candidate == c; }))
-      continue;
+    if (std::any_of(state.terms.begin(), state.terms.end(), [&](const Term& t) { return t.candidate == c; })) continue;
     const Effect& e = *candidates_[c].effect;
     for (const auto& role : e.required_roles())
       if (!block_record_.has(role)) s.note = "the record has no " + role + " channel";

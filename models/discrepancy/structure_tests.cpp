@@ -65,7 +65,8 @@ Eigen::VectorXd Workflow::full_model_temperature(const State& s) const {
   return moved_record(smooth_record_, s.terms).channel(role::kTemperature).values;
 }
 
-StructureTest Workflow::temperature_step(const State& state, const Thermal& th, const Eigen::VectorXd& full_temp_c) const {
+StructureTest Workflow::temperature_step(const State& state, const Thermal& th,
+                                         const Eigen::VectorXd& full_temp_c) const {
   std::vector<double> sorted(th.temp.data(), th.temp.data() + th.temp.size());
   std::sort(sorted.begin(), sorted.end());
   std::vector<double> levels;
@@ -85,14 +86,15 @@ StructureTest Workflow::temperature_step(const State& state, const Thermal& th, 
   // The level between the neighbouring grid levels (golden section, as for the candidates).
   double level = levels[best];
   const double lo = levels[best == 0 ? 0 : best - 1], hi = levels[std::min(best + 1, levels.size() - 1)];
-  if (const auto refined = golden_section_minimize([&](double l) { return chi2_at(l).chi2; }, lo, hi,
-                                                   options_.golden_iterations);
+  if (const auto refined =
+          golden_section_minimize([&](double l) { return chi2_at(l).chi2; }, lo, hi, options_.golden_iterations);
       refined.value < best_chi2)
     level = refined.x;
   const auto a = chi2_at(level);
   view.parameters = static_cast<int>(a.kept) + 1;
   view.delta_chi2 = state.fit.chi2 - a.chi2;
-  view.delta_bic = view.delta_chi2 / chi2_scale(state) - view.parameters * std::log(static_cast<double>(blocks_.size()));
+  view.delta_bic =
+      view.delta_chi2 / chi2_scale(state) - view.parameters * std::log(static_cast<double>(blocks_.size()));
   view.size_rad_s = rms(a.component);
   // The step's size from the joint fit with the model (the view's component is only the part
   // the model cannot take: a polynomial absorbs much of a step).
@@ -119,8 +121,8 @@ Unexplained Workflow::structure_tests(const State& state) const {
   auto add = [&](const std::string& view, const Eigen::MatrixXd& columns,
                  const std::function<std::string(const Eigen::VectorXd&)>& where) {
     const auto a = added_columns_chi2(state, columns);
-    StructureTest t{view, state.fit.chi2 - a.chi2, -std::numeric_limits<double>::infinity(),
-                    static_cast<int>(a.kept), 0.0, ""};
+    StructureTest t{
+        view, state.fit.chi2 - a.chi2, -std::numeric_limits<double>::infinity(), static_cast<int>(a.kept), 0.0, ""};
     if (a.kept > 0) {
       t.delta_bic = t.delta_chi2 / scale - static_cast<double>(a.kept) * log_blocks;
       t.size_rad_s = rms(a.component);
@@ -163,10 +165,16 @@ Unexplained Workflow::structure_tests(const State& state) const {
     return std::string(text);
   });
   add("temperature_rate", rate_columns(th), [&](const Eigen::VectorXd& c) {
-    const Eigen::Index k = [&] { Eigen::Index i; c.cwiseAbs().maxCoeff(&i); return i; }();
+    const Eigen::Index k = [&] {
+      Eigen::Index i;
+      c.cwiseAbs().maxCoeff(&i);
+      return i;
+    }();
     char text[160];
-    std::snprintf(text, sizeof text, "follows dT/dt with a temperature-dependent factor; largest %+.3g deg/h at %.3g degC, "
-                  "%.3g degC/min", c[k] * kDph, temp[k], th.rate[k] * 60.0);
+    std::snprintf(text, sizeof text,
+                  "follows dT/dt with a temperature-dependent factor; largest %+.3g deg/h at %.3g degC, "
+                  "%.3g degC/min",
+                  c[k] * kDph, temp[k], th.rate[k] * 60.0);
     return std::string(text);
   });
   add("time", bin_columns(rec.time(), false, time_edges),

@@ -111,7 +111,8 @@ Views residual_views(const Blocks& blocks, const Eigen::VectorXd& block_temperat
   }
 
   if (full_residual_rad_s.size() >= 8) {
-    const auto analysis = allan::analyze_rate(full_residual_rad_s, 1.0 / blocks.sample_interval_s, {.fit_terms = false});
+    const auto analysis =
+        allan::analyze_rate(full_residual_rad_s, 1.0 / blocks.sample_interval_s, {.fit_terms = false});
     for (const auto& d : analysis.curve) v.allan.push_back({d.tau, d.dev, model_allan_deviation(noise, d.tau)});
   }
   return v;

@@ -45,8 +45,7 @@ double empirical_scale_factor(const Config& config, double die_temp_c) {
   return 1.0 + x * polynomial(config.scale_factor_polynomial, x);
 }
 
-double systematic_rate(const Config& config, const DeviceResponse& device, double die_temp_c,
-                       double true_rate_rad_s) {
+double systematic_rate(const Config& config, const DeviceResponse& device, double die_temp_c, double true_rate_rad_s) {
   const double x = die_temp_c - config.reference_temp_c;
   const double scale = device.scale_factor * empirical_scale_factor(config, die_temp_c);
   return scale * true_rate_rad_s + device.bias_rad_s + polynomial(config.bias_polynomial_rad_s, x);
@@ -55,15 +54,23 @@ double systematic_rate(const Config& config, const DeviceResponse& device, doubl
 void set_effect(Effects& effects, std::string_view name, const std::vector<std::vector<double>>& v) {
   const auto& info = effect_info(name);
   bool complete = v.size() == info.keys.size();
-  for (std::size_t i = 0; complete && i < v.size(); ++i) complete = info.keys[i].list ? !v[i].empty() : v[i].size() == 1;
+  for (std::size_t i = 0; complete && i < v.size(); ++i)
+    complete = info.keys[i].list ? !v[i].empty() : v[i].size() == 1;
   if (!complete) throw std::logic_error("effect '" + std::string(name) + "': wrong number of values");
-  if (name == "thermal_lag") effects.thermal_lag = ThermalLag{v[0][0]};
-  else if (name == "temperature_rate") effects.temperature_rate = TemperatureRate{v[0][0]};
-  else if (name == "hysteresis") effects.hysteresis = Hysteresis{v[0][0], v[1][0]};
-  else if (name == "warmup_transient") effects.warmup_transient = WarmupTransient{v[0][0], v[1][0]};
-  else if (name == "periodic_disturbance") effects.periodic_disturbance = PeriodicDisturbance{v[0][0], v[1][0], v[2][0]};
-  else if (name == "scale_factor_temperature") effects.scale_factor_temperature = ScaleFactorTemperature{v[0]};
-  else throw std::logic_error("effect '" + std::string(name) + "' has no error-model term");
+  if (name == "thermal_lag")
+    effects.thermal_lag = ThermalLag{v[0][0]};
+  else if (name == "temperature_rate")
+    effects.temperature_rate = TemperatureRate{v[0][0]};
+  else if (name == "hysteresis")
+    effects.hysteresis = Hysteresis{v[0][0], v[1][0]};
+  else if (name == "warmup_transient")
+    effects.warmup_transient = WarmupTransient{v[0][0], v[1][0]};
+  else if (name == "periodic_disturbance")
+    effects.periodic_disturbance = PeriodicDisturbance{v[0][0], v[1][0], v[2][0]};
+  else if (name == "scale_factor_temperature")
+    effects.scale_factor_temperature = ScaleFactorTemperature{v[0]};
+  else
+    throw std::logic_error("effect '" + std::string(name) + "' has no error-model term");
 }
 
 std::vector<EffectParameters> effect_parameters(const Effects& e) {
@@ -92,8 +99,7 @@ Eigen::VectorXd additive_effects(const Effects& effects, const Eigen::VectorXd& 
     sum += (w->amplitude_rad_s * (-(time_s.array() - t0) / w->tau_s).exp()).matrix();
   }
   if (const auto& p = effects.periodic_disturbance)
-    sum += (p->amplitude_rad_s * (2.0 * std::numbers::pi * time_s.array() / p->period_s + p->phase_rad).sin())
-               .matrix();
+    sum += (p->amplitude_rad_s * (2.0 * std::numbers::pi * time_s.array() / p->period_s + p->phase_rad).sin()).matrix();
   return sum;
 }
 

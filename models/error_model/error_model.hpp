@@ -62,20 +62,19 @@ struct DeviceResponse {
 };
 
 struct GaussMarkovComponent {
-  double tau_s;      // correlation time, s
+  double tau_s;        // correlation time, s
   double sigma_rad_s;  // stationary standard deviation, rad/s
 };
 
 struct NoiseTerms {
-  double arw_rad_sqrt_s = 0.0;             // N, rad/sqrt(s)
-  double bias_instability_rad_s = 0.0;     // B, rad/s
-  double rate_random_walk_rad_s_sqrt_s = 0.0;  // K, rad/s/sqrt(s)
-  double flicker_tau_min_s = 0.5;          // shortest Gauss-Markov correlation time, s
-  double flicker_tau_max_s = 5000.0;       // longest Gauss-Markov correlation time, s
-  double flicker_poles_per_decade = 2.0;   // d, poles per decade of correlation time
+  double arw_rad_sqrt_s = 0.0;                     // N, rad/sqrt(s)
+  double bias_instability_rad_s = 0.0;             // B, rad/s
+  double rate_random_walk_rad_s_sqrt_s = 0.0;      // K, rad/s/sqrt(s)
+  double flicker_tau_min_s = 0.5;                  // shortest Gauss-Markov correlation time, s
+  double flicker_tau_max_s = 5000.0;               // longest Gauss-Markov correlation time, s
+  double flicker_poles_per_decade = 2.0;           // d, poles per decade of correlation time
   std::vector<GaussMarkovComponent> gauss_markov;  // explicit Gauss-Markov terms (GM above)
 };
-
 
 // The Gauss-Markov set that approximates flicker of bias instability B (mapping above).
 // Empty when B = 0. Number of components M = ceil(d * log10(tau_max / tau_min)) + 1.
@@ -85,26 +84,26 @@ std::vector<GaussMarkovComponent> gauss_markov_components(const NoiseTerms& term
 
 // Optional effects (issue 6): each absent by default; the discrepancy workflow's fitted model
 // leaves them out and names them when the data show them.
-struct ThermalLag {          // the resonator (die) lags the temperature sensor
-  double tau_s;              // extra first-order lag, s
+struct ThermalLag {  // the resonator (die) lags the temperature sensor
+  double tau_s;      // extra first-order lag, s
 };
-struct TemperatureRate {     // bias proportional to the die's dT/dt
+struct TemperatureRate {             // bias proportional to the die's dT/dt
   double coefficient_rad_s_per_k_s;  // rad/s per K/s
 };
-struct Hysteresis {          // heating/cooling branch offset, rate independent
-  double height_rad_s;       // full gap between the branches, rad/s (cooling branch is +height/2)
-  double width_k;            // temperature travel after a reversal to reach 1 - 1/e of the switch, K
+struct Hysteresis {     // heating/cooling branch offset, rate independent
+  double height_rad_s;  // full gap between the branches, rad/s (cooling branch is +height/2)
+  double width_k;       // temperature travel after a reversal to reach 1 - 1/e of the switch, K
 };
-struct WarmupTransient {     // power-on exponential
-  double amplitude_rad_s;    // at t = 0, rad/s
-  double tau_s;              // decay time, s
+struct WarmupTransient {   // power-on exponential
+  double amplitude_rad_s;  // at t = 0, rad/s
+  double tau_s;            // decay time, s
 };
 struct PeriodicDisturbance {  // a sinusoid on the rate
   double amplitude_rad_s;
   double period_s;
   double phase_rad = 0.0;
 };
-struct ScaleFactorTemperature {  // extra scale-factor drift: s *= 1 + sum_i c_i (T - T0)^(i+1)
+struct ScaleFactorTemperature {            // extra scale-factor drift: s *= 1 + sum_i c_i (T - T0)^(i+1)
   std::vector<double> coefficients_per_k;  // 1/K, 1/K^2, ...
 };
 
@@ -120,9 +119,9 @@ struct Effects {
 
 // The systematic part and its parameters.
 struct Config {
-  double reference_temp_c = 25.0;                // T0, degC
-  std::vector<double> bias_polynomial_rad_s;     // P_b coefficients: rad/s, rad/s/K, rad/s/K^2 ...
-  std::vector<double> scale_factor_polynomial;   // P_s coefficients: 1/K, 1/K^2, ... (no constant)
+  double reference_temp_c = 25.0;               // T0, degC
+  std::vector<double> bias_polynomial_rad_s;    // P_b coefficients: rad/s, rad/s/K, rad/s/K^2 ...
+  std::vector<double> scale_factor_polynomial;  // P_s coefficients: 1/K, 1/K^2, ... (no constant)
   NoiseTerms noise;
   Effects effects;
 };
@@ -131,8 +130,7 @@ struct Config {
 double empirical_scale_factor(const Config& config, double die_temp_c);
 
 // Systematic rate (no noise, no effects): s(T) w + b(T).
-double systematic_rate(const Config& config, const DeviceResponse& device, double die_temp_c,
-                       double true_rate_rad_s);
+double systematic_rate(const Config& config, const DeviceResponse& device, double die_temp_c, double true_rate_rad_s);
 
 // ---- effects as the effect catalogue names them (framework/effect_catalogue.hpp) ------------
 

@@ -52,7 +52,8 @@ BlockMeans block_means(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, 
 
 double block_mean_rms(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, double block_s) {
   const Eigen::VectorXd means = block_means(time_s, x, block_s).means;
-  if (means.size() == 0) throw DataError({"", 0, "rate"}, "the record is shorter than one " + std::to_string(block_s) + "-s block");
+  if (means.size() == 0)
+    throw DataError({"", 0, "rate"}, "the record is shorter than one " + std::to_string(block_s) + "-s block");
   return std::sqrt(means.squaredNorm() / static_cast<double>(means.size()));
 }
 
@@ -61,8 +62,8 @@ StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_r
   StageScore s;
   s.stage = stage;
   s.label = stage;
-  s.bandwidth_hz = std::min(allan::noise_bandwidth_hz(output_rad_s, sample_rate_hz, reference_arw_rad_sqrt_s),
-                            sample_rate_hz / 2.0);
+  s.bandwidth_hz =
+      std::min(allan::noise_bandwidth_hz(output_rad_s, sample_rate_hz, reference_arw_rad_sqrt_s), sample_rate_hz / 2.0);
   s.correlation_time_s = allan::correlation_time_s(s.bandwidth_hz);
   allan::AnalysisOptions options;
   options.min_tau_s = s.correlation_time_s;

@@ -19,7 +19,9 @@ constexpr PaperRow kPaperTable2[] = {
 nlohmann::json curve_json(const allan::Analysis& a) {
   nlohmann::json c = nlohmann::json::array();
   for (const auto& e : a.curve)
-    c.push_back({{"tau_s", e.tau}, {"dev_deg_h", e.dev * kDphPerRadPerSec}, {"lo_deg_h", e.dev_lo * kDphPerRadPerSec},
+    c.push_back({{"tau_s", e.tau},
+                 {"dev_deg_h", e.dev * kDphPerRadPerSec},
+                 {"lo_deg_h", e.dev_lo * kDphPerRadPerSec},
                  {"hi_deg_h", e.dev_hi * kDphPerRadPerSec}});
   return c;
 }
@@ -67,7 +69,8 @@ std::vector<PipelineStage> rate_stages(const Pipeline& pipeline, const std::map<
   if (!pipeline.stages.empty()) {
     for (const auto& stage : pipeline.stages)
       if (!is_rate(stage.output))
-        throw DataError({pipeline.file, 0, "stages." + stage.output}, "a stage must be one rad/s column (a compensated rate)");
+        throw DataError({pipeline.file, 0, "stages." + stage.output},
+                        "a stage must be one rad/s column (a compensated rate)");
     return pipeline.stages;
   }
   std::vector<PipelineStage> stages;
@@ -97,8 +100,10 @@ RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const st
   }
   // The PX4-style row needs an oven run the calibration quality gate does not refuse.
   const auto fittable = [&](const Eigen::VectorXd& temp) {
-    const auto gate = calibration::quality_gate({calibration::analyse_oven_run("the record", time, temp, calibration::FitOptions{}.bin_s)});
-    return std::none_of(gate.begin(), gate.end(), [](const auto& f) { return f.severity == calibration::Finding::Severity::Error; });
+    const auto gate = calibration::quality_gate(
+        {calibration::analyse_oven_run("the record", time, temp, calibration::FitOptions{}.bin_s)});
+    return std::none_of(gate.begin(), gate.end(),
+                        [](const auto& f) { return f.severity == calibration::Finding::Severity::Error; });
   };
   if (record.has(role::kTemperature) && fittable(record.channel(role::kTemperature).values)) {
     const Eigen::VectorXd& temp = record.channel(role::kTemperature).values;
@@ -118,8 +123,11 @@ RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const st
 
 nlohmann::json b_json(const allan::FloorReading& b) {
   const double f = kDphPerRadPerSec;
-  nlohmann::json j{{"B_resolved", b.resolved}, {"B_deg_h", nullptr}, {"B_upper_deg_h", b.high * f},
-                   {"B_tau_s", b.tau_s}, {"B_within_tau_s", b.longest_tau_s}};
+  nlohmann::json j{{"B_resolved", b.resolved},
+                   {"B_deg_h", nullptr},
+                   {"B_upper_deg_h", b.high * f},
+                   {"B_tau_s", b.tau_s},
+                   {"B_within_tau_s", b.longest_tau_s}};
   if (b.resolved) {
     j["B_deg_h"] = b.value * f;
     j["B_ci"] = {b.low * f, b.high * f};
@@ -130,7 +138,8 @@ nlohmann::json b_json(const allan::FloorReading& b) {
 std::string b_text(const allan::FloorReading& b) {
   const double f = kDphPerRadPerSec;
   if (b.resolved)
-    return number_text(b.value * f, "%.3g") + " [" + number_text(b.low * f, "%.2g") + "," + number_text(b.high * f, "%.2g") + "]";
+    return number_text(b.value * f, "%.3g") + " [" + number_text(b.low * f, "%.2g") + "," +
+           number_text(b.high * f, "%.2g") + "]";
   return "< " + number_text(b.high * f, "%.3g") + " (tau<=" + number_text(b.longest_tau_s, "%.0f") + "s)";
 }
 
@@ -145,7 +154,8 @@ nlohmann::json stage_json(const RunScores& s, const StageScore& st) {
   row.update(b_json(a.bias_instability));
   if (st.residual_drift_rad_s) row["residual_drift_deg_h"] = *st.residual_drift_rad_s * kDphPerRadPerSec;
   if (const auto it = s.against_floor.find(st.stage); it != s.against_floor.end()) {
-    row["error_vs_floor"] = {{"max_ratio", it->second.max_ratio}, {"tau_of_max_s", it->second.tau_of_max_s},
+    row["error_vs_floor"] = {{"max_ratio", it->second.max_ratio},
+                             {"tau_of_max_s", it->second.tau_of_max_s},
                              {"within_1_5x", it->second.within}};
   }
   if (const auto* p = paper_row(st.stage)) row["paper"] = {{"B_deg_h", p->b_deg_h}, {"N_deg_h_rtHz", p->n_deg_h_rthz}};
@@ -186,12 +196,16 @@ nlohmann::json scores_json(const RunScores& s) {
                      {"heating_only", m.fit.heating_only},
                      {"bin_s", m.fit.bin_s}};
   }
-  j["units"] = {{"B", "deg/h"}, {"N", "deg/h/sqrt(Hz)"}, {"bandwidth", "Hz (one-sided equivalent noise bandwidth)"},
-                {"residual_drift", "deg/h, rms of 60-s block means of output - true rate"}, {"allan", "deg/h"}};
-  j["readings"] = {{"B", "flat floor of the overlapping Allan deviation / 0.664 (IEEE 952 Annex C), at tau >= the "
-                         "output's correlation time (1 / bandwidth); a value only where the deviation has a floor (a "
-                         "minimum with rising or flat neighbours within the intervals), otherwise B_deg_h is null and "
-                         "B_upper_deg_h bounds B within tau <= B_within_tau_s"},
+  j["units"] = {{"B", "deg/h"},
+                {"N", "deg/h/sqrt(Hz)"},
+                {"bandwidth", "Hz (one-sided equivalent noise bandwidth)"},
+                {"residual_drift", "deg/h, rms of 60-s block means of output - true rate"},
+                {"allan", "deg/h"}};
+  j["readings"] = {{"B",
+                    "flat floor of the overlapping Allan deviation / 0.664 (IEEE 952 Annex C), at tau >= the "
+                    "output's correlation time (1 / bandwidth); a value only where the deviation has a floor (a "
+                    "minimum with rising or flat neighbours within the intervals), otherwise B_deg_h is null and "
+                    "B_upper_deg_h bounds B within tau <= B_within_tau_s"},
                    {"N", "-1/2 slope line at tau = 1 s"}};
   return j;
 }
@@ -199,10 +213,11 @@ nlohmann::json scores_json(const RunScores& s) {
 std::string table2_text(const RunScores& s) {
   std::string out;
   char line[256];
-  out += "Table 2 (B in deg/h, N in deg/h/sqrt(Hz), noise bandwidth in Hz, residual drift in deg/h; B is a value "
-         "[68% CI] only where the Allan deviation has a floor, otherwise a bound '< x' within the taus read)\n";
-  std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", "stage", "paper B", "paper N", "B",
-                "N", "bandwidth", "resid. drift");
+  out +=
+      "Table 2 (B in deg/h, N in deg/h/sqrt(Hz), noise bandwidth in Hz, residual drift in deg/h; B is a value "
+      "[68% CI] only where the Allan deviation has a floor, otherwise a bound '< x' within the taus read)\n";
+  std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", "stage", "paper B", "paper N", "B", "N",
+                "bandwidth", "resid. drift");
   out += line;
   const auto cell = [](std::optional<double> v, const char* fmt) {
     char b[32];
@@ -215,16 +230,17 @@ std::string table2_text(const RunScores& s) {
     const auto& a = st.analysis;
     const std::string b = b_text(a.bias_instability);
     std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", st.stage.c_str(),
-                  p ? cell(p->b_deg_h, "%.4g").c_str() : "-", p ? cell(p->n_deg_h_rthz, "%.4g").c_str() : "-", b.c_str(),
-                  cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g").c_str(), cell(st.bandwidth_hz, "%.3g").c_str(),
+                  p ? cell(p->b_deg_h, "%.4g").c_str() : "-", p ? cell(p->n_deg_h_rthz, "%.4g").c_str() : "-",
+                  b.c_str(), cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g").c_str(),
+                  cell(st.bandwidth_hz, "%.3g").c_str(),
                   st.residual_drift_rad_s ? cell(*st.residual_drift_rad_s * kDphPerRadPerSec, "%.3g").c_str() : "-");
     out += line;
   }
   if (s.intrinsic) {
     const auto& a = *s.intrinsic;
     std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", "intrinsic floor", "-", "-",
-                  b_text(a.bias_instability).c_str(),
-                  cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g").c_str(), "-", "-");
+                  b_text(a.bias_instability).c_str(), cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g").c_str(), "-",
+                  "-");
     out += line;
   }
   return out;

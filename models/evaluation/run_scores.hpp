@@ -37,8 +37,8 @@ inline constexpr const char* kBaselineStage = "px4_polynomial";
 inline bool is_pipeline_stage(const StageScore& stage) { return stage.source == StageScore::Source::Pipeline; }
 
 struct RunScores {
-  std::vector<StageScore> stages;                        // kOriginalStage, the pipeline's stages, kBaselineStage
-  std::optional<allan::Analysis> intrinsic;              // measured - systematic
+  std::vector<StageScore> stages;            // kOriginalStage, the pipeline's stages, kBaselineStage
+  std::optional<allan::Analysis> intrinsic;  // measured - systematic
   std::optional<Px4Baseline> baseline;
   std::map<std::string, FloorComparison> against_floor;  // per stage, factor 1.5
 };

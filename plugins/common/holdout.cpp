@@ -25,8 +25,7 @@ Split blocked_holdout(Eigen::Index n, double fraction, std::size_t blocks, std::
   Split split;
   for (Eigen::Index i = 0; i < n; ++i) (held[static_cast<std::size_t>(i)] ? split.holdout : split.train).push_back(i);
   if (split.train.empty() || split.holdout.empty()) {
-    throw std::invalid_argument("holdout of " + std::to_string(n) +
-                                " samples leaves an empty training or holdout set");
+    throw std::invalid_argument("holdout of " + std::to_string(n) + " samples leaves an empty training or holdout set");
   }
   return split;
 }

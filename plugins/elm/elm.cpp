@@ -31,8 +31,7 @@ void apply(Activation g, Eigen::MatrixXd& Z) {
 }
 
 // g(U W + b) for standardized rows U.
-Eigen::MatrixXd layer(const Eigen::MatrixXd& U, const Eigen::MatrixXd& W, const Eigen::RowVectorXd& b,
-                      Activation g) {
+Eigen::MatrixXd layer(const Eigen::MatrixXd& U, const Eigen::MatrixXd& W, const Eigen::RowVectorXd& b, Activation g) {
   Eigen::MatrixXd Z = U * W;
   Z.rowwise() += b;
   apply(g, Z);
@@ -42,8 +41,7 @@ Eigen::MatrixXd layer(const Eigen::MatrixXd& U, const Eigen::MatrixXd& W, const 
 }  // namespace
 
 Model::Model(Eigen::RowVectorXd mean, Eigen::RowVectorXd scale, Eigen::MatrixXd input_weights,
-             Eigen::RowVectorXd hidden_bias, Activation activation, Eigen::VectorXd output_weights,
-             double output_bias)
+             Eigen::RowVectorXd hidden_bias, Activation activation, Eigen::VectorXd output_weights, double output_bias)
     : mean_(std::move(mean)),
       scale_(std::move(scale)),
       input_weights_(std::move(input_weights)),

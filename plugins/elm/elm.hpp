@@ -27,7 +27,7 @@ namespace driftlab::elm {
 enum class Activation { Sigmoid, Tanh, Sine, Relu };
 
 struct Config {
-  std::size_t hidden = 50;       // L, >= 1
+  std::size_t hidden = 50;  // L, >= 1
   Activation activation = Activation::Sigmoid;
   double input_scale = 1.0;      // half-width of the uniform input weights and biases, > 0
   double regularization = 1e-8;  // ridge lambda, >= 0
@@ -44,10 +44,10 @@ class Model {
   // Hidden-layer outputs H (N x L) of raw feature rows X.
   Eigen::MatrixXd hidden(const Eigen::MatrixXd& X) const;
 
-  const Eigen::MatrixXd& input_weights() const { return input_weights_; }  // d x L
-  const Eigen::RowVectorXd& hidden_bias() const { return hidden_bias_; }   // L
+  const Eigen::MatrixXd& input_weights() const { return input_weights_; }    // d x L
+  const Eigen::RowVectorXd& hidden_bias() const { return hidden_bias_; }     // L
   const Eigen::VectorXd& output_weights() const { return output_weights_; }  // beta_1..beta_L
-  double output_bias() const { return output_bias_; }                      // beta_0
+  double output_bias() const { return output_bias_; }                        // beta_0
   // ||beta||_2 over beta_1..beta_L (the paper's second objective).
   double output_weight_norm() const { return output_weights_.norm(); }
 

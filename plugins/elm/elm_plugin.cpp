@@ -96,7 +96,8 @@ ParamTable table() {
        param::real("input_scale", 1.0, "1",
                    "random input weights and biases uniform in [-input_scale, input_scale] (standardized inputs)")
            .greater_than(0),
-       param::real("regularization", 1e-8, "1", "ridge lambda on the mean-square normal equations of the output weights")
+       param::real("regularization", 1e-8, "1",
+                   "ridge lambda on the mean-square normal equations of the output weights")
            .at_least(0),
        tuning::search_range("tune_hidden", {5, 200}, "1", "search range for hidden").at_least(1),
        tuning::search_range("tune_log10_regularization", {-10, -1}, "1", "search range for log10(regularization)"),
@@ -111,13 +112,12 @@ ParamTable table() {
 }  // namespace
 
 void register_elm_plugins(Registry& registry) {
-  registry.add({.name = "regressor/elm",
-                .summary = "extreme learning machine (seeded random hidden layer, ridge output weights), optionally tuned",
-                .reference = "Huang, Zhu & Siew 2006; Zhang et al., Micromachines 2024, 15(5), 609 (NSGA-II-tuned ELM)",
-                .params = table(),
-                .make = [](const ParamValues& p, const Registry& plugins) {
-                  return std::make_unique<ElmPlugin>(p, plugins);
-                }});
+  registry.add(
+      {.name = "regressor/elm",
+       .summary = "extreme learning machine (seeded random hidden layer, ridge output weights), optionally tuned",
+       .reference = "Huang, Zhu & Siew 2006; Zhang et al., Micromachines 2024, 15(5), 609 (NSGA-II-tuned ELM)",
+       .params = table(),
+       .make = [](const ParamValues& p, const Registry& plugins) { return std::make_unique<ElmPlugin>(p, plugins); }});
 }
 
 }  // namespace driftlab

@@ -39,8 +39,7 @@ void validate(const EnsembleConfig& c) {
 
 void check_finite(const Eigen::VectorXd& x) {
   for (Index i = 0; i < x.size(); ++i) {
-    if (!std::isfinite(x[i]))
-      throw std::domain_error("emd: sample " + std::to_string(i) + " is not finite");
+    if (!std::isfinite(x[i])) throw std::domain_error("emd: sample " + std::to_string(i) + " is not finite");
   }
 }
 
@@ -104,9 +103,8 @@ void for_members_in_order(int members, unsigned threads, Work work, Reduce reduc
   const int batch = static_cast<int>(std::min<unsigned>(std::max(threads, 1u), static_cast<unsigned>(members)));
   for (int first = 0; first < members; first += batch) {
     const int size = std::min(batch, members - first);
-    parallel_for(static_cast<std::size_t>(size), threads, [&](std::size_t k) {
-      work(first + static_cast<int>(k), static_cast<unsigned>(k));
-    });
+    parallel_for(static_cast<std::size_t>(size), threads,
+                 [&](std::size_t k) { work(first + static_cast<int>(k), static_cast<unsigned>(k)); });
     for (int k = 0; k < size; ++k) reduce(first + k, static_cast<unsigned>(k));
   }
 }
@@ -146,8 +144,7 @@ Result eemd(const Eigen::VectorXd& x, const EnsembleConfig& config) {
     Eigen::VectorXd member;
   };
   std::vector<Worker> workers;  // built in place: a sifter's buffers are not copied
-  for (unsigned w = 0; w < std::max(1u, config.threads); ++w)
-    workers.push_back({EmdWorkspace(config.sift), {}});
+  for (unsigned w = 0; w < std::max(1u, config.threads); ++w) workers.push_back({EmdWorkspace(config.sift), {}});
   Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(n, cap);
   std::vector<long> sifts(cap, 0);
   int widest = 0;
@@ -271,16 +268,13 @@ Result ceemdan(const Eigen::VectorXd& x, const CeemdanConfig& config) {
   return result;
 }
 
-double orthogonality_index(const Eigen::VectorXd& x, const Eigen::MatrixXd& imfs,
-                           const Eigen::VectorXd& residue) {
+double orthogonality_index(const Eigen::VectorXd& x, const Eigen::MatrixXd& imfs, const Eigen::VectorXd& residue) {
   if (imfs.rows() != x.size() || residue.size() != x.size())
     throw std::invalid_argument("orthogonality_index: IMFs, residue and signal lengths differ");
   const double signal_energy = x.squaredNorm();
-  if (!(signal_energy > 0.0))
-    throw std::domain_error("orthogonality_index: the signal has zero energy");
+  if (!(signal_energy > 0.0)) throw std::domain_error("orthogonality_index: the signal has zero energy");
   const double component_energy = imfs.colwise().squaredNorm().sum() + residue.squaredNorm();
   return (signal_energy - component_energy) / signal_energy;
 }
 
 }  // namespace driftlab::emd
-

@@ -146,11 +146,11 @@ struct EmdConfig {
 
 struct EnsembleConfig {
   SiftConfig sift;
-  int max_imfs = 0;              // EEMD: fixed K when > 0; CEEMDAN: cap on stages (0: floor(log2 N))
-  int ensemble_size = 100;       // I, number of noise realizations
-  double noise_strength = 0.2;   // eps0, noise std relative to std(x)
+  int max_imfs = 0;             // EEMD: fixed K when > 0; CEEMDAN: cap on stages (0: floor(log2 N))
+  int ensemble_size = 100;      // I, number of noise realizations
+  double noise_strength = 0.2;  // eps0, noise std relative to std(x)
   std::uint64_t seed = 1;
-  unsigned threads = 1;          // results do not depend on it
+  unsigned threads = 1;  // results do not depend on it
 };
 
 struct CeemdanConfig {
@@ -175,7 +175,6 @@ Result ceemdan(const Eigen::VectorXd& x, const CeemdanConfig& config);
 // over the IMFs and the residue (c_{K+1}). Because the components sum to x this equals
 // 1 - sum_j sum_t c_j(t)^2 / sum_t x(t)^2. Near 0 for an orthogonal decomposition; Huang reports
 // values of order 1e-3 to 1e-2 for well-behaved signals. O(N K). Requires sum x^2 > 0.
-double orthogonality_index(const Eigen::VectorXd& x, const Eigen::MatrixXd& imfs,
-                           const Eigen::VectorXd& residue);
+double orthogonality_index(const Eigen::VectorXd& x, const Eigen::MatrixXd& imfs, const Eigen::VectorXd& residue);
 
 }  // namespace driftlab::emd

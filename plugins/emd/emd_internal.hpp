@@ -18,8 +18,8 @@ namespace driftlab::emd::detail {
 
 using Index = std::ptrdiff_t;
 
-constexpr int kNearest = 3;        // extrema of each kind looked at near an end
-constexpr int kMaxEndKnots = 2;    // knots an end policy adds beyond an end, per envelope
+constexpr int kNearest = 3;      // extrema of each kind looked at near an end
+constexpr int kMaxEndKnots = 2;  // knots an end policy adds beyond an end, per envelope
 constexpr Index kPad = kMaxEndKnots;
 constexpr Index kWrittenPast = 3;  // extrema slots written past the last extremum by a scan
 constexpr Index kGroup = 4;        // samples per vector group in the envelope evaluation
@@ -111,8 +111,7 @@ NearEnd near_finish(const Extrema& e, Index n);
 
 // EndPolicy::Mirror at one end (emd.hpp): the knots of both envelopes from the extrema nearest to
 // that end and the end sample's value.
-void mirror_end(const NearEnd& max, const NearEnd& min, double end_value, EndKnots& max_knots,
-                EndKnots& min_knots);
+void mirror_end(const NearEnd& max, const NearEnd& min, double end_value, EndKnots& max_knots, EndKnots& min_knots);
 
 // EndPolicy::Linear at one end (emd.hpp): the one knot of the upper (or lower) envelope.
 EndKnots linear_end(const NearEnd& near, double end_value, bool upper);
@@ -187,10 +186,10 @@ void subtract_mean(double* h, const double* upper, const double* lower, Index co
 // interval's first sample, so each sample costs one cubic. `upper_piece` and `lower_piece` carry
 // the pieces from block to block as in evaluate_block. With `sums`, adds sum h^2 and sum mean^2
 // (before the subtraction) to sums[0] and sums[1].
-void subtract_mean_by_intervals(const Spline& upper, const Spline& lower, Index& upper_piece,
-                                Index& lower_piece, double* h, Index from, Index to);
-void subtract_mean_by_intervals(const Spline& upper, const Spline& lower, Index& upper_piece,
-                                Index& lower_piece, double* h, Index from, Index to, double* sums);
+void subtract_mean_by_intervals(const Spline& upper, const Spline& lower, Index& upper_piece, Index& lower_piece,
+                                double* h, Index from, Index to);
+void subtract_mean_by_intervals(const Spline& upper, const Spline& lower, Index& upper_piece, Index& lower_piece,
+                                double* h, Index from, Index to, double* sums);
 
 // ---- sifting.cpp ----------------------------------------------------------------------------
 

@@ -45,8 +45,8 @@ class EmdDecomposer final : public Decomposer {
     noise_strength_ = p.real("noise_strength");
     seed_ = static_cast<std::uint64_t>(p.integer("seed"));
     if (method_ == Method::Ceemdan)
-      variant_ = p.text("variant") == "torres2011" ? emd::CeemdanVariant::Torres2011
-                                                   : emd::CeemdanVariant::Colominas2014;
+      variant_ =
+          p.text("variant") == "torres2011" ? emd::CeemdanVariant::Torres2011 : emd::CeemdanVariant::Colominas2014;
   }
 
   Decomposition decompose(const Eigen::VectorXd& x, RunContext& ctx) override {
@@ -101,8 +101,7 @@ std::vector<ParamSpec> sift_params(const std::string& max_imfs_doc) {
                     "also the counts changing by <= 1 in total from the sift before), cauchy_sd (Huang "
                     "1998 eq. 5.5, aggregated SD < sd_threshold), fixed_sifts (exactly fixed_sifts)"),
       param::integer("s_number", 4, "1", "S for stop_rules s_number and s_number_steady").at_least(1),
-      param::real("sd_threshold", 0.2, "1",
-                  "threshold for stop_rule cauchy_sd: sum (h_prev - h)^2 / sum h_prev^2")
+      param::real("sd_threshold", 0.2, "1", "threshold for stop_rule cauchy_sd: sum (h_prev - h)^2 / sum h_prev^2")
           .greater_than(0),
       param::integer("fixed_sifts", 10, "1", "sifts per IMF for stop_rule fixed_sifts").at_least(1),
       param::integer("max_sifts", 50, "1", "cap on sifts per IMF, for every stop rule").at_least(1),
@@ -125,12 +124,10 @@ std::vector<ParamSpec> ensemble_params(double noise_strength) {
 }
 
 std::vector<CrossRule> sift_rules() {
-  return {{"stop_rule fixed_sifts needs fixed_sifts <= max_sifts",
-           {"fixed_sifts", "max_sifts"},
-           [](const ParamValues& v) {
-             return v.text("stop_rule") != "fixed_sifts" ||
-                    v.integer("fixed_sifts") <= v.integer("max_sifts");
-           }}};
+  return {
+      {"stop_rule fixed_sifts needs fixed_sifts <= max_sifts", {"fixed_sifts", "max_sifts"}, [](const ParamValues& v) {
+         return v.text("stop_rule") != "fixed_sifts" || v.integer("fixed_sifts") <= v.integer("max_sifts");
+       }}};
 }
 
 template <class... Lists>
@@ -168,15 +165,14 @@ void register_emd_plugins(Registry& registry) {
                 .summary = "complete ensemble EMD with adaptive noise, one averaged mode per stage",
                 .reference = "Torres et al. 2011 Sec. 3 (steps 1-6); Colominas et al. 2014 Sec. 3 "
                              "(improved variant, eqs. 4-7)",
-                .params = ParamTable{
-                    concat(sift_params("maximum number of IMFs; 0: until the residue has fewer "
-                                       "than 3 extrema, at most floor(log2 N)"),
-                           ensemble_params(0.2),
-                           std::vector<ParamSpec>{param::choice(
-                               "variant", "torres2011", {"torres2011", "colominas2014"},
-                               "torres2011: averaged first modes of residue + scaled noise modes; "
-                               "colominas2014: averaged local means (improved CEEMDAN)")}),
-                    sift_rules()},
+                .params = ParamTable{concat(sift_params("maximum number of IMFs; 0: until the residue has fewer "
+                                                        "than 3 extrema, at most floor(log2 N)"),
+                                            ensemble_params(0.2),
+                                            std::vector<ParamSpec>{param::choice(
+                                                "variant", "torres2011", {"torres2011", "colominas2014"},
+                                                "torres2011: averaged first modes of residue + scaled noise modes; "
+                                                "colominas2014: averaged local means (improved CEEMDAN)")}),
+                                     sift_rules()},
                 .make = make(Method::Ceemdan)});
 }
 

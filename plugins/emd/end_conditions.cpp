@@ -35,8 +35,7 @@ NearEnd near_finish(const Extrema& e, Index n) {
   return near;
 }
 
-void mirror_end(const NearEnd& max, const NearEnd& min, double end_value, EndKnots& max_knots,
-                EndKnots& min_knots) {
+void mirror_end(const NearEnd& max, const NearEnd& min, double end_value, EndKnots& max_knots, EndKnots& min_knots) {
   const bool max_nearest = max.s[0] < min.s[0];
   const NearEnd& nearest = max_nearest ? max : min;
   const NearEnd& other = max_nearest ? min : max;

@@ -130,21 +130,20 @@ struct GroupExtrema {
 };
 
 DRIFTLAB_AVX2_TARGET inline GroupExtrema group_extrema(const double* x, Index j) {
-  const __m256d value = _mm256_loadu_pd(x + j), left = _mm256_loadu_pd(x + j - 1),
-                right = _mm256_loadu_pd(x + j + 1);
+  const __m256d value = _mm256_loadu_pd(x + j), left = _mm256_loadu_pd(x + j - 1), right = _mm256_loadu_pd(x + j + 1);
   return {value, _mm256_cmp_pd(value, right, _CMP_EQ_OQ),
           _mm256_srli_epi64(_mm256_xor_si256(_mm256_castpd_si256(value), _mm256_castpd_si256(right)), 63),
-          _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(value, left, _CMP_GT_OQ),
-                                           _mm256_cmp_pd(value, right, _CMP_GT_OQ))),
-          _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(value, left, _CMP_LT_OQ),
-                                           _mm256_cmp_pd(value, right, _CMP_LT_OQ)))};
+          _mm256_movemask_pd(
+              _mm256_and_pd(_mm256_cmp_pd(value, left, _CMP_GT_OQ), _mm256_cmp_pd(value, right, _CMP_GT_OQ))),
+          _mm256_movemask_pd(
+              _mm256_and_pd(_mm256_cmp_pd(value, left, _CMP_LT_OQ), _mm256_cmp_pd(value, right, _CMP_LT_OQ)))};
 }
 
 // scan_strict (below) for densely packed extrema, 8 pairs at a time: the extrema among each 4
 // candidates are packed with one permutation per array and stored together; equalities and sign
 // changes are accumulated in vectors.
-DRIFTLAB_AVX2_TARGET bool scan_dense_avx2(const double* x, Index from, Index to, Appender& max,
-                                          Appender& min, Index& sign_changes) {
+DRIFTLAB_AVX2_TARGET bool scan_dense_avx2(const double* x, Index from, Index to, Appender& max, Appender& min,
+                                          Index& sign_changes) {
   Index changes = 0, i = strict_scan_head(x, from, changes);
   if (i == 0) return false;
   Index max_count = max.count, min_count = min.count;
@@ -172,8 +171,7 @@ DRIFTLAB_AVX2_TARGET bool scan_dense_avx2(const double* x, Index from, Index to,
   _mm256_store_si256(reinterpret_cast<__m256i*>(lanes.data()), lane_changes);
   max.count = max_count;
   min.count = min_count;
-  return strict_scan_tail(x, i, to, changes + lanes[0] + lanes[1] + lanes[2] + lanes[3], max, min,
-                          sign_changes);
+  return strict_scan_tail(x, i, to, changes + lanes[0] + lanes[1] + lanes[2] + lanes[3], max, min, sign_changes);
 }
 
 // scan_strict (below) for sparse extrema, 64 candidates c[k] at a time as bit masks: F_k when
@@ -181,8 +179,8 @@ DRIFTLAB_AVX2_TARGET bool scan_dense_avx2(const double* x, Index from, Index to,
 // c[k] is a maximum where F_k is set and F_{k-1} is not, a minimum where F_{k-1} is set and F_k is
 // not, and the sign changes are the set bits of S xor (S >> 1); the few extrema are then taken one
 // set bit at a time.
-DRIFTLAB_AVX2_TARGET bool scan_sparse_avx2(const double* x, Index from, Index to, Appender& max,
-                                           Appender& min, Index& sign_changes) {
+DRIFTLAB_AVX2_TARGET bool scan_sparse_avx2(const double* x, Index from, Index to, Appender& max, Appender& min,
+                                           Index& sign_changes) {
   constexpr Index kWord = 64;
   Index changes = 0, i = strict_scan_head(x, from, changes);
   if (i == 0) return false;

@@ -100,10 +100,10 @@ void Sifter::build_envelopes(const double* h, Index n) {
   const Index lower_first = add_end_knots(e.min, min_start, min_finish, n);
   const Index upper_knots = max_start.count + e.max.count + max_finish.count;
   const Index lower_knots = min_start.count + e.min.count + min_finish.count;
-  const SplineSystem upper{&e.max.pos[upper_first], &e.max.val[upper_first], upper_knots,
-                           upper_scratch_.second.data(), upper_scratch_.ratio.data()};
-  const SplineSystem lower{&e.min.pos[lower_first], &e.min.val[lower_first], lower_knots,
-                           lower_scratch_.second.data(), lower_scratch_.ratio.data()};
+  const SplineSystem upper{&e.max.pos[upper_first], &e.max.val[upper_first], upper_knots, upper_scratch_.second.data(),
+                           upper_scratch_.ratio.data()};
+  const SplineSystem lower{&e.min.pos[lower_first], &e.min.val[lower_first], lower_knots, lower_scratch_.second.data(),
+                           lower_scratch_.ratio.data()};
   fit_splines(upper, lower, lane_scratch_);
   upper_ = {upper.x, upper.y, upper.m, upper.n};
   lower_ = {lower.x, lower.y, lower.m, lower.n};

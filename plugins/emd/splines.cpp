@@ -22,9 +22,7 @@ constexpr std::array<double, kSmallSteps> small_step_inverses() {
 constexpr std::array<double, kSmallSteps> kSmallStepInverses = small_step_inverses();
 
 // 1/h for a knot spacing h (a whole number of samples); small spacings from a table.
-double inverse_step(Index h) {
-  return h < kSmallSteps ? kSmallStepInverses[h] : 1.0 / static_cast<double>(h);
-}
+double inverse_step(Index h) { return h < kSmallSteps ? kSmallStepInverses[h] : 1.0 / static_cast<double>(h); }
 
 double inverse_step(double h) { return inverse_step(static_cast<Index>(h)); }
 
@@ -44,8 +42,8 @@ using GroupBits = std::uint64_t __attribute__((vector_size(kGroup * sizeof(std::
 // not multiplied through, by O(h^2), so 8 rows stay in range for spacings h < 2^40).
 template <class V>
 struct Sweep {
-  V p, q, r;     // state after the last row
-  V x, y;        // the knot of the next row
+  V p, q, r;       // state after the last row
+  V x, y;          // the knot of the next row
   V before, rise;  // spacing and rise from the last row's knot to it
 
   // Eliminates the next row, whose far neighbour is (next_x, next_y).
@@ -144,8 +142,7 @@ template <class V>
 }
 
 // o[k] = y0 + t_k (b + t_k (c + t_k d)) for the kGroup positions t_k.
-[[gnu::always_inline]] inline void store_cubic(double* o, Group t, double y0, double b, double c,
-                                               double d) {
+[[gnu::always_inline]] inline void store_cubic(double* o, Group t, double y0, double b, double c, double d) {
   const Group value = y0 + t * (b + t * (c + t * d));
   std::memcpy(o, &value, sizeof value);
 }
@@ -153,8 +150,10 @@ template <class V>
 // The 4x4 transpose of rows v[0..3]: lane i of v[k] becomes lane k of v[i].
 [[gnu::always_inline]] inline void transpose(Group* v) {
   // __builtin_shufflevector (GCC >= 12 and clang) with constant lane indices: even, odd, low, high.
-  const Group t0 = __builtin_shufflevector(v[0], v[1], 0, 4, 2, 6), t1 = __builtin_shufflevector(v[0], v[1], 1, 5, 3, 7);
-  const Group t2 = __builtin_shufflevector(v[2], v[3], 0, 4, 2, 6), t3 = __builtin_shufflevector(v[2], v[3], 1, 5, 3, 7);
+  const Group t0 = __builtin_shufflevector(v[0], v[1], 0, 4, 2, 6),
+              t1 = __builtin_shufflevector(v[0], v[1], 1, 5, 3, 7);
+  const Group t2 = __builtin_shufflevector(v[2], v[3], 0, 4, 2, 6),
+              t3 = __builtin_shufflevector(v[2], v[3], 1, 5, 3, 7);
   v[0] = __builtin_shufflevector(t0, t2, 0, 1, 4, 5);
   v[1] = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
   v[2] = __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
@@ -216,20 +215,26 @@ template <int kGroups>
 [[gnu::always_inline]] inline Index evaluate_whole_pieces(const Spline& spline, Index j, Index from, Index to,
                                                           Index groups, double* out) {
   switch (groups) {
-    case 2: return evaluate_whole_pieces<2>(spline, j, from, to, out);
-    case 3: return evaluate_whole_pieces<3>(spline, j, from, to, out);
-    case 4: return evaluate_whole_pieces<4>(spline, j, from, to, out);
-    case 5: return evaluate_whole_pieces<5>(spline, j, from, to, out);
-    case 6: return evaluate_whole_pieces<6>(spline, j, from, to, out);
-    default: return j;
+    case 2:
+      return evaluate_whole_pieces<2>(spline, j, from, to, out);
+    case 3:
+      return evaluate_whole_pieces<3>(spline, j, from, to, out);
+    case 4:
+      return evaluate_whole_pieces<4>(spline, j, from, to, out);
+    case 5:
+      return evaluate_whole_pieces<5>(spline, j, from, to, out);
+    case 6:
+      return evaluate_whole_pieces<6>(spline, j, from, to, out);
+    default:
+      return j;
   }
 }
 
 // The mean removal of subtract_mean and subtract_mean_by_intervals (emd_internal.hpp), with and
 // without the Cauchy sums.
 template <bool kWithChangeRatio>
-[[gnu::always_inline]] inline void subtract_mean(double* h, const double* upper,
-                                                 const double* lower, Index count, double* sums) {
+[[gnu::always_inline]] inline void subtract_mean(double* h, const double* upper, const double* lower, Index count,
+                                                 double* sums) {
   for (Index i = 0; i < count; ++i) {
     const double mean = 0.5 * (upper[i] + lower[i]);
     if constexpr (kWithChangeRatio) {
@@ -242,8 +247,8 @@ template <bool kWithChangeRatio>
 
 template <bool kWithChangeRatio>
 [[gnu::always_inline]] inline void subtract_mean_by_intervals(const Spline& upper, const Spline& lower,
-                                                              Index& upper_piece, Index& lower_piece,
-                                                              double* h, Index from, Index to, double* sums) {
+                                                              Index& upper_piece, Index& lower_piece, double* h,
+                                                              Index from, Index to, double* sums) {
   Index ju = upper_piece, jl = lower_piece;
   while (piece_end(upper, ju, to) <= from) ++ju;
   while (piece_end(lower, jl, to) <= from) ++jl;
@@ -381,8 +386,8 @@ DRIFTLAB_SIMD_CLONES void fit_splines(const SplineSystem& a, const SplineSystem&
   }
 }
 
-DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Index from, Index to,
-                                         Index groups, double* out) {
+DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Index from, Index to, Index groups,
+                                         double* out) {
   const double *x = spline.x, *y = spline.y, *m = spline.m;
   const Index last_piece = spline.knots - 2;
   Index j = piece;
@@ -399,8 +404,7 @@ DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Ind
     const auto right = static_cast<Index>(x[j + 1]);
     const Index next_knot = j >= last_piece ? to : right, end = std::min(next_knot, to);
     const Index step = right - left;
-    const Cubic g =
-        cubic<double>(static_cast<double>(step), inverse_step(step), y[j], y[j + 1], m[j], m[j + 1]);
+    const Cubic g = cubic<double>(static_cast<double>(step), inverse_step(step), y[j], y[j + 1], m[j], m[j + 1]);
     const auto store = [&g](double* o, Group t) { store_cubic(o, t, g.y0, g.b, g.c, g.d); };
     double* o = out + (a - from);
     Group t = static_cast<double>(a - left) + kGroupOffsets;
@@ -417,8 +421,7 @@ DRIFTLAB_SIMD_CLONES void evaluate_block(const Spline& spline, Index& piece, Ind
   piece = j;
 }
 
-DRIFTLAB_SIMD_CLONES void subtract_mean(double* h, const double* upper, const double* lower,
-                                        Index count) {
+DRIFTLAB_SIMD_CLONES void subtract_mean(double* h, const double* upper, const double* lower, Index count) {
   subtract_mean<false>(h, upper, lower, count, nullptr);
 }
 
@@ -426,9 +429,8 @@ void subtract_mean(double* h, const double* upper, const double* lower, Index co
   subtract_mean<true>(h, upper, lower, count, sums);
 }
 
-DRIFTLAB_SIMD_CLONES void subtract_mean_by_intervals(const Spline& upper, const Spline& lower,
-                                                     Index& upper_piece, Index& lower_piece,
-                                                     double* h, Index from, Index to) {
+DRIFTLAB_SIMD_CLONES void subtract_mean_by_intervals(const Spline& upper, const Spline& lower, Index& upper_piece,
+                                                     Index& lower_piece, double* h, Index from, Index to) {
   subtract_mean_by_intervals<false>(upper, lower, upper_piece, lower_piece, h, from, to, nullptr);
 }
 

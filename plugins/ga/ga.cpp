@@ -59,8 +59,7 @@ double sbx_spread(double u, double beta, double eta) {
   return std::pow(1.0 / (2.0 - u * alpha), 1.0 / (eta + 1.0));
 }
 
-void sbx(Eigen::VectorXd& a, Eigen::VectorXd& b, const std::vector<Gene>& genes, double eta,
-         SeededRandom& rng) {
+void sbx(Eigen::VectorXd& a, Eigen::VectorXd& b, const std::vector<Gene>& genes, double eta, SeededRandom& rng) {
   constexpr double kSameGene = 1e-14;
   for (std::size_t i = 0; i < genes.size(); ++i) {
     const auto k = static_cast<Eigen::Index>(i);
@@ -79,8 +78,8 @@ void sbx(Eigen::VectorXd& a, Eigen::VectorXd& b, const std::vector<Gene>& genes,
   }
 }
 
-void polynomial_mutation(Eigen::VectorXd& x, const std::vector<Gene>& genes, double probability,
-                         double eta, SeededRandom& rng) {
+void polynomial_mutation(Eigen::VectorXd& x, const std::vector<Gene>& genes, double probability, double eta,
+                         SeededRandom& rng) {
   const double power = 1.0 / (eta + 1.0);
   for (std::size_t i = 0; i < genes.size(); ++i) {
     const auto k = static_cast<Eigen::Index>(i);
@@ -116,8 +115,8 @@ Eigen::VectorXd random_individual(const std::vector<Gene>& genes, SeededRandom& 
 }
 
 // Evaluates individuals [first, population.size()) into values on `threads` threads.
-void evaluate(const Objective& objective, const std::vector<Eigen::VectorXd>& population,
-              std::size_t first, std::vector<double>& values, unsigned threads) {
+void evaluate(const Objective& objective, const std::vector<Eigen::VectorXd>& population, std::size_t first,
+              std::vector<double>& values, unsigned threads) {
   parallel_for(population.size() - first, threads, [&](std::size_t j) {
     const double v = objective(population[first + j]);
     values[first + j] = std::isfinite(v) ? v : std::numeric_limits<double>::infinity();
@@ -127,8 +126,7 @@ void evaluate(const Objective& objective, const std::vector<Eigen::VectorXd>& po
 std::vector<std::size_t> ranking(const std::vector<double>& values) {
   std::vector<std::size_t> order(values.size());
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return values[a] < values[b]; });
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return values[a] < values[b]; });
   return order;
 }
 

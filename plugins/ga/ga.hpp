@@ -43,16 +43,16 @@ struct Bound {
 };
 
 struct Config {
-  std::size_t population = 40;          // individuals per generation, >= 2
-  std::size_t generations = 50;         // G_MAX: generations bred after the initial one
-  std::size_t tournament_size = 2;      // >= 1 (1 = random selection)
-  double crossover_probability = 0.9;   // per pair, in [0, 1]
-  double crossover_eta = 15.0;          // SBX distribution index, > 0 (larger: children nearer parents)
-  double mutation_probability = 0.25;   // per gene, in [0, 1]
-  double mutation_eta = 20.0;           // polynomial mutation distribution index, > 0
-  std::size_t elites = 2;               // best individuals copied unchanged, < population
+  std::size_t population = 40;         // individuals per generation, >= 2
+  std::size_t generations = 50;        // G_MAX: generations bred after the initial one
+  std::size_t tournament_size = 2;     // >= 1 (1 = random selection)
+  double crossover_probability = 0.9;  // per pair, in [0, 1]
+  double crossover_eta = 15.0;         // SBX distribution index, > 0 (larger: children nearer parents)
+  double mutation_probability = 0.25;  // per gene, in [0, 1]
+  double mutation_eta = 20.0;          // polynomial mutation distribution index, > 0
+  std::size_t elites = 2;              // best individuals copied unchanged, < population
   std::uint64_t seed = 1;
-  unsigned threads = 1;                 // evaluation workers; results do not depend on it
+  unsigned threads = 1;  // evaluation workers; results do not depend on it
 };
 
 // Objective to minimize; called concurrently from `threads` workers.

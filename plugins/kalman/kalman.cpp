@@ -33,7 +33,8 @@ inline double scalar_step(double& x, double& p, double z, const ScalarModel& mod
 
 void require_finite_measurements(const Eigen::Ref<const Eigen::MatrixXd>& z) {
   for (Eigen::Index k = 0; k < z.rows(); ++k) {
-    if (!z.row(k).allFinite()) throw std::invalid_argument("kalman: measurement " + std::to_string(k) + " is not finite");
+    if (!z.row(k).allFinite())
+      throw std::invalid_argument("kalman: measurement " + std::to_string(k) + " is not finite");
   }
 }
 
@@ -41,12 +42,10 @@ void require_symmetric_psd(const Eigen::MatrixXd& m, const std::string& name) {
   constexpr double kRelativeTolerance = 1e-12;  // rounding in matrices given as decimal text
   require(m.allFinite(), name + " must be finite");
   const double scale = m.cwiseAbs().maxCoeff();
-  require((m - m.transpose()).cwiseAbs().maxCoeff() <= kRelativeTolerance * scale,
-          name + " must be symmetric");
+  require((m - m.transpose()).cwiseAbs().maxCoeff() <= kRelativeTolerance * scale, name + " must be symmetric");
   if (scale == 0.0) return;
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(m, Eigen::EigenvaluesOnly);
-  require(eigen.eigenvalues().minCoeff() >= -kRelativeTolerance * scale,
-          name + " must be positive semi-definite");
+  require(eigen.eigenvalues().minCoeff() >= -kRelativeTolerance * scale, name + " must be positive semi-definite");
 }
 
 void symmetrize(Eigen::MatrixXd& p, Eigen::MatrixXd& work) {
@@ -146,8 +145,8 @@ void validate(const LinearModel& model) {
 }
 
 LinearModel random_walk_model(double q, double r) {
-  LinearModel model{Eigen::MatrixXd::Ones(1, 1), Eigen::MatrixXd::Ones(1, 1),
-                    Eigen::MatrixXd::Constant(1, 1, q), Eigen::MatrixXd::Constant(1, 1, r)};
+  LinearModel model{Eigen::MatrixXd::Ones(1, 1), Eigen::MatrixXd::Ones(1, 1), Eigen::MatrixXd::Constant(1, 1, q),
+                    Eigen::MatrixXd::Constant(1, 1, r)};
   validate(model);
   return model;
 }
@@ -185,7 +184,8 @@ LinearFilter::LinearFilter(LinearModel model, Eigen::VectorXd x0, Eigen::MatrixX
   const Eigen::Index m = model_.measurements();
   require(x_.size() == n, "initial state must have " + std::to_string(n) + " entries");
   require(x_.allFinite(), "initial state must be finite");
-  require(p_.rows() == n && p_.cols() == n, "initial covariance must be " + std::to_string(n) + " x " + std::to_string(n));
+  require(p_.rows() == n && p_.cols() == n,
+          "initial covariance must be " + std::to_string(n) + " x " + std::to_string(n));
   require_symmetric_psd(p_, "initial covariance");
   x_pred_ = x_;
   innovation_.resize(m);
@@ -223,7 +223,8 @@ void LinearFilter::update(const Eigen::Ref<const Eigen::VectorXd>& z) {
     gain_t_ /= s_(0, 0);
   } else {
     s_llt_.compute(s_);
-    if (s_llt_.info() != Eigen::Success) throw std::domain_error("kalman: innovation covariance is not positive definite");
+    if (s_llt_.info() != Eigen::Success)
+      throw std::domain_error("kalman: innovation covariance is not positive definite");
     s_llt_.solveInPlace(gain_t_);
   }
   gain_ = gain_t_.transpose();

@@ -110,8 +110,8 @@ double process_variance_from_rrw(double rrw, double sample_rate_hz);
 class LinearFilter {
  public:
   LinearFilter(LinearModel model, Eigen::VectorXd x0, Eigen::MatrixXd p0);
-  void predict();                                              // (10), (11)
-  void update(const Eigen::Ref<const Eigen::VectorXd>& z);     // (12), (13), (14)
+  void predict();                                                           // (10), (11)
+  void update(const Eigen::Ref<const Eigen::VectorXd>& z);                  // (12), (13), (14)
   const Eigen::VectorXd& step(const Eigen::Ref<const Eigen::VectorXd>& z);  // predict + update
 
   const Eigen::VectorXd& state() const { return x_; }

@@ -65,8 +65,10 @@ class KalmanFilter final : public Filter {
         smoother_(p.boolean("smoother")),
         initial_variance_(p.real("initial_variance")) {
     const auto& x0 = p.reals("initial_state");
-    initial_state_ = x0.empty() ? Eigen::VectorXd(Eigen::VectorXd::Zero(model_states(p)))
-                                : Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(x0.data(), static_cast<Eigen::Index>(x0.size())));
+    initial_state_ =
+        x0.empty()
+            ? Eigen::VectorXd(Eigen::VectorXd::Zero(model_states(p)))
+            : Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(x0.data(), static_cast<Eigen::Index>(x0.size())));
   }
 
   Eigen::VectorXd filter(const Eigen::VectorXd& z, RunContext& ctx) override {
@@ -86,13 +88,12 @@ class KalmanFilter final : public Filter {
     ctx.diagnostics["smoothed"] = smoother_;
     try {
       if (model_ == "random_walk") return scalar(z, {q, r}, fs, ctx);
-      kalman::LinearModel model =
-          model_ == "random_walk_gauss_markov"
-              ? kalman::random_walk_gauss_markov_model(q, gm_sigma_, gm_tau_, 1.0 / fs, r)
-              : kalman::LinearModel{f_, h_, q_matrix_, Eigen::MatrixXd::Constant(1, 1, r)};
+      kalman::LinearModel model = model_ == "random_walk_gauss_markov"
+                                      ? kalman::random_walk_gauss_markov_model(q, gm_sigma_, gm_tau_, 1.0 / fs, r)
+                                      : kalman::LinearModel{f_, h_, q_matrix_, Eigen::MatrixXd::Constant(1, 1, r)};
       const Eigen::MatrixXd p0 = initial_variance_ * Eigen::MatrixXd::Identity(model.states(), model.states());
-      const auto estimates = smoother_ ? kalman::smooth(z, model, initial_state_, p0)
-                                       : kalman::filter(z, model, initial_state_, p0);
+      const auto estimates =
+          smoother_ ? kalman::smooth(z, model, initial_state_, p0) : kalman::filter(z, model, initial_state_, p0);
       if (estimates.state.rows() > 0) {
         const Eigen::VectorXd last = estimates.state.row(estimates.state.rows() - 1).transpose();
         ctx.diagnostics["final_state"] = std::vector<double>(last.data(), last.data() + last.size());
@@ -104,8 +105,7 @@ class KalmanFilter final : public Filter {
   }
 
  private:
-  Eigen::VectorXd scalar(const Eigen::VectorXd& z, const kalman::ScalarModel& model, double fs,
-                         RunContext& ctx) const {
+  Eigen::VectorXd scalar(const Eigen::VectorXd& z, const kalman::ScalarModel& model, double fs, RunContext& ctx) const {
     const double gain = kalman::steady_state_gain(model);
     ctx.diagnostics["steady_state_gain"] = gain;
     if (fs > 0.0 && !smoother_) {
@@ -138,54 +138,57 @@ void register_kalman_plugins(Registry& registry) {
        .summary = "Kalman filter (random walk, random walk + Gauss-Markov, or matrices) with optional RTS smoother",
        .reference = "Li et al. 2023 eqs. 10-14 (Joseph-form update); Rauch, Tung & Striebel 1965; "
                     "IEEE Std 952 (Allan terms N, K)",
-       .params = ParamTable{
-           {
-               param::choice("model", "random_walk", {"random_walk", "random_walk_gauss_markov", "linear"},
-                             "state model: random walk + white noise (paper); plus a first-order Gauss-Markov "
-                             "term (gm_sigma, gm_tau); or linear (f_matrix, h_matrix, q_matrix)"),
-               param::choice("noise", "given", {"given", "from_allan"},
-                             "given: use q and r; from_allan: r = arw^2 fs, q = rrw^2 / fs (fs = sample rate)"),
-               param::real("q", 1e-10, "(rad/s)^2", "random-walk increment variance per sample (noise: given)")
-                   .at_least(0),
-               param::real("r", 1e-6, "(rad/s)^2", "measurement noise variance (noise: given)").greater_than(0),
-               param::real("arw", 1e-4, "rad/s/sqrt(Hz)",
-                           "angle random walk N for noise: from_allan (1 deg/sqrt(h) = 2.909e-4 rad/s/sqrt(Hz))")
-                   .greater_than(0),
-               param::real("rrw", 1e-7, "rad/s^2/sqrt(Hz)",
-                           "rate random walk K for noise: from_allan (1 deg/h/sqrt(h) = 8.081e-8 rad/s^2/sqrt(Hz))")
-                   .at_least(0),
-               param::real("sample_rate_hz", 0.0, "Hz", "sample rate for from_allan and Gauss-Markov; 0 = from the time stamps")
-                   .at_least(0),
-               param::real("gm_sigma", 1e-4, "rad/s", "stationary standard deviation of the Gauss-Markov term")
-                   .at_least(0),
-               param::real("gm_tau", 100.0, "s", "correlation time of the Gauss-Markov term").greater_than(0),
-               param::reals("f_matrix", {1.0}, "1", "model linear: state transition F, n x n, row-major"),
-               param::reals("h_matrix", {1.0}, "1", "model linear: measurement row H, n entries"),
-               param::reals("q_matrix", {1e-10}, "(rad/s)^2", "model linear: process noise covariance Q, n x n, row-major")
-                   .must("symmetric positive semi-definite n x n (row-major)", symmetric_psd_problem,
-                         std::vector<double>{1.0, 2.0, 3.0, 4.0}),
-               param::boolean("smoother", false, "run the Rauch-Tung-Striebel smoother (offline) after the filter"),
-               param::reals("initial_state", {}, "rad/s", "state before the first sample; empty = zeros"),
-               param::real("initial_variance", 1.0, "(rad/s)^2", "P0 = initial_variance * I").greater_than(0),
-           },
-           {
-               {"f_matrix has n x n entries",
-                {"f_matrix"},
-                [](const ParamValues& v) { return square_side(v.reals("f_matrix")) > 0; }},
-               {"h_matrix and q_matrix match f_matrix (n and n x n entries)",
-                {"f_matrix", "h_matrix", "q_matrix"},
-                [](const ParamValues& v) {
-                  const Eigen::Index n = square_side(v.reals("f_matrix"));
-                  return static_cast<Eigen::Index>(v.reals("h_matrix").size()) == n &&
-                         square_side(v.reals("q_matrix")) == n;
-                }},
-               {"initial_state is empty or has one entry per state of the model",
-                {"initial_state", "model", "f_matrix"},
-                [](const ParamValues& v) {
-                  const auto size = static_cast<Eigen::Index>(v.reals("initial_state").size());
-                  return size == 0 || size == model_states(v);
-                }},
-           }},
+       .params =
+           ParamTable{
+               {
+                   param::choice("model", "random_walk", {"random_walk", "random_walk_gauss_markov", "linear"},
+                                 "state model: random walk + white noise (paper); plus a first-order Gauss-Markov "
+                                 "term (gm_sigma, gm_tau); or linear (f_matrix, h_matrix, q_matrix)"),
+                   param::choice("noise", "given", {"given", "from_allan"},
+                                 "given: use q and r; from_allan: r = arw^2 fs, q = rrw^2 / fs (fs = sample rate)"),
+                   param::real("q", 1e-10, "(rad/s)^2", "random-walk increment variance per sample (noise: given)")
+                       .at_least(0),
+                   param::real("r", 1e-6, "(rad/s)^2", "measurement noise variance (noise: given)").greater_than(0),
+                   param::real("arw", 1e-4, "rad/s/sqrt(Hz)",
+                               "angle random walk N for noise: from_allan (1 deg/sqrt(h) = 2.909e-4 rad/s/sqrt(Hz))")
+                       .greater_than(0),
+                   param::real("rrw", 1e-7, "rad/s^2/sqrt(Hz)",
+                               "rate random walk K for noise: from_allan (1 deg/h/sqrt(h) = 8.081e-8 rad/s^2/sqrt(Hz))")
+                       .at_least(0),
+                   param::real("sample_rate_hz", 0.0, "Hz",
+                               "sample rate for from_allan and Gauss-Markov; 0 = from the time stamps")
+                       .at_least(0),
+                   param::real("gm_sigma", 1e-4, "rad/s", "stationary standard deviation of the Gauss-Markov term")
+                       .at_least(0),
+                   param::real("gm_tau", 100.0, "s", "correlation time of the Gauss-Markov term").greater_than(0),
+                   param::reals("f_matrix", {1.0}, "1", "model linear: state transition F, n x n, row-major"),
+                   param::reals("h_matrix", {1.0}, "1", "model linear: measurement row H, n entries"),
+                   param::reals("q_matrix", {1e-10}, "(rad/s)^2",
+                                "model linear: process noise covariance Q, n x n, row-major")
+                       .must("symmetric positive semi-definite n x n (row-major)", symmetric_psd_problem,
+                             std::vector<double>{1.0, 2.0, 3.0, 4.0}),
+                   param::boolean("smoother", false, "run the Rauch-Tung-Striebel smoother (offline) after the filter"),
+                   param::reals("initial_state", {}, "rad/s", "state before the first sample; empty = zeros"),
+                   param::real("initial_variance", 1.0, "(rad/s)^2", "P0 = initial_variance * I").greater_than(0),
+               },
+               {
+                   {"f_matrix has n x n entries",
+                    {"f_matrix"},
+                    [](const ParamValues& v) { return square_side(v.reals("f_matrix")) > 0; }},
+                   {"h_matrix and q_matrix match f_matrix (n and n x n entries)",
+                    {"f_matrix", "h_matrix", "q_matrix"},
+                    [](const ParamValues& v) {
+                      const Eigen::Index n = square_side(v.reals("f_matrix"));
+                      return static_cast<Eigen::Index>(v.reals("h_matrix").size()) == n &&
+                             square_side(v.reals("q_matrix")) == n;
+                    }},
+                   {"initial_state is empty or has one entry per state of the model",
+                    {"initial_state", "model", "f_matrix"},
+                    [](const ParamValues& v) {
+                      const auto size = static_cast<Eigen::Index>(v.reals("initial_state").size());
+                      return size == 0 || size == model_states(v);
+                    }},
+               }},
        .make = [](const ParamValues& p, const Registry&) { return std::make_unique<KalmanFilter>(p); }});
 }
 

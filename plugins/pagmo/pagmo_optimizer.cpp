@@ -38,21 +38,34 @@ namespace {
 using Type = Option::Type;
 
 Option real(std::string key, std::string pagmo_name, double def, std::string doc) {
-  return {.key = std::move(key), .pagmo_name = std::move(pagmo_name), .type = Type::Real, .default_number = def,
+  return {.key = std::move(key),
+          .pagmo_name = std::move(pagmo_name),
+          .type = Type::Real,
+          .default_number = def,
           .doc = std::move(doc)};
 }
 Option integer(std::string key, std::string pagmo_name, double def, std::string doc) {
-  return {.key = std::move(key), .pagmo_name = std::move(pagmo_name), .type = Type::Integer,
-          .default_number = def, .doc = std::move(doc)};
+  return {.key = std::move(key),
+          .pagmo_name = std::move(pagmo_name),
+          .type = Type::Integer,
+          .default_number = def,
+          .doc = std::move(doc)};
 }
 Option boolean(std::string key, std::string pagmo_name, bool def, std::string doc) {
-  return {.key = std::move(key), .pagmo_name = std::move(pagmo_name), .type = Type::Boolean,
-          .default_number = def ? 1.0 : 0.0, .doc = std::move(doc)};
+  return {.key = std::move(key),
+          .pagmo_name = std::move(pagmo_name),
+          .type = Type::Boolean,
+          .default_number = def ? 1.0 : 0.0,
+          .doc = std::move(doc)};
 }
 Option choice(std::string key, std::string pagmo_name, std::string def, std::vector<std::string> choices,
               std::string doc) {
-  return {.key = std::move(key), .pagmo_name = std::move(pagmo_name), .type = Type::Choice,
-          .default_choice = std::move(def), .choices = std::move(choices), .doc = std::move(doc)};
+  return {.key = std::move(key),
+          .pagmo_name = std::move(pagmo_name),
+          .type = Type::Choice,
+          .default_choice = std::move(def),
+          .choices = std::move(choices),
+          .doc = std::move(doc)};
 }
 Option in(Option o, std::optional<double> lo, std::optional<double> hi, bool lo_open = false, bool hi_open = false) {
   o.min = lo;
@@ -71,105 +84,187 @@ Option tolerance(std::string key, std::string what) {
 
 std::vector<Algorithm> make_table() {
   std::vector<Algorithm> t;
-  t.push_back({"sga", "simple genetic algorithm (selection, crossover, mutation)", false, 2, 1, true,
-               {in(real("cr", "cr", 0.9, "crossover probability"), 0.0, 1.0),
-                in(real("eta_c", "eta_c", 1.0, "SBX distribution index (crossover sbx)"), 1.0, 100.0),
-                in(real("m", "m", 0.02, "mutation probability per gene"), 0.0, 1.0),
-                in(real("param_m", "param_m", 1.0,
-                        "mutation parameter: polynomial distribution index in [1, 100]; gaussian/uniform width "
-                        "as a share of the bounds in [0, 1]"),
-                   0.0, 100.0),
-                in(integer("param_s", "param_s", 2, "tournament size (tournament) or number of best parents (truncated)"),
-                   1.0, {}),
-                choice("crossover", "crossover", "exponential", {"exponential", "binomial", "sbx", "single"},
-                       "crossover operator (sbx needs an even population)"),
-                choice("mutation", "mutation", "polynomial", {"gaussian", "uniform", "polynomial"}, "mutation operator"),
-                choice("selection", "selection", "tournament", {"tournament", "truncated"}, "selection operator")}});
-  t.push_back({"de", "differential evolution (Storn & Price 1997)", false, 5, 1, true,
-               {in(real("f", "F", 0.8, "weight coefficient F"), 0.0, 1.0),
-                in(real("cr", "CR", 0.9, "crossover probability CR"), 0.0, 1.0),
-                in(integer("variant", "variant", 2, "mutation variant (1 best/1/exp ... 10 rand-to-best/1/bin, pagmo's list)"),
-                   1.0, 10.0),
-                tolerance("ftol", "objective"), tolerance("xtol", "decision-vector")}});
-  t.push_back({"sade", "self-adaptive differential evolution (jDE / iDE)", false, 7, 1, true,
+  t.push_back(
+      {"sga",
+       "simple genetic algorithm (selection, crossover, mutation)",
+       false,
+       2,
+       1,
+       true,
+       {in(real("cr", "cr", 0.9, "crossover probability"), 0.0, 1.0),
+        in(real("eta_c", "eta_c", 1.0, "SBX distribution index (crossover sbx)"), 1.0, 100.0),
+        in(real("m", "m", 0.02, "mutation probability per gene"), 0.0, 1.0),
+        in(real("param_m", "param_m", 1.0,
+                "mutation parameter: polynomial distribution index in [1, 100]; gaussian/uniform width "
+                "as a share of the bounds in [0, 1]"),
+           0.0, 100.0),
+        in(integer("param_s", "param_s", 2, "tournament size (tournament) or number of best parents (truncated)"), 1.0,
+           {}),
+        choice("crossover", "crossover", "exponential", {"exponential", "binomial", "sbx", "single"},
+               "crossover operator (sbx needs an even population)"),
+        choice("mutation", "mutation", "polynomial", {"gaussian", "uniform", "polynomial"}, "mutation operator"),
+        choice("selection", "selection", "tournament", {"tournament", "truncated"}, "selection operator")}});
+  t.push_back(
+      {"de",
+       "differential evolution (Storn & Price 1997)",
+       false,
+       5,
+       1,
+       true,
+       {in(real("f", "F", 0.8, "weight coefficient F"), 0.0, 1.0),
+        in(real("cr", "CR", 0.9, "crossover probability CR"), 0.0, 1.0),
+        in(integer("variant", "variant", 2, "mutation variant (1 best/1/exp ... 10 rand-to-best/1/bin, pagmo's list)"),
+           1.0, 10.0),
+        tolerance("ftol", "objective"), tolerance("xtol", "decision-vector")}});
+  t.push_back({"sade",
+               "self-adaptive differential evolution (jDE / iDE)",
+               false,
+               7,
+               1,
+               true,
                {in(integer("variant", "variant", 2, "mutation variant (pagmo's list of 18)"), 1.0, 18.0),
                 in(integer("variant_adptv", "variant_adptv", 1, "adaptation: 1 jDE, 2 iDE"), 1.0, 2.0),
                 tolerance("ftol", "objective"), tolerance("xtol", "decision-vector")}});
-  t.push_back({"pso", "particle swarm optimization", false, 1, 1, true,
+  t.push_back({"pso",
+               "particle swarm optimization",
+               false,
+               1,
+               1,
+               true,
                {in(real("omega", "omega", 0.7298, "inertia weight (or constriction factor)"), 0.0, 1.0),
                 in(real("eta1", "eta1", 2.05, "social component"), 0.0, 4.0),
                 in(real("eta2", "eta2", 2.05, "cognitive component"), 0.0, 4.0),
                 in(real("max_vel", "max_vel", 0.5, "maximum velocity as a share of the bounds' width"), 0.0, 1.0, true),
                 in(integer("variant", "variant", 5, "algorithm variant (pagmo's list of 6)"), 1.0, 6.0),
-                in(integer("neighb_type", "neighb_type", 2, "swarm topology: 1 gbest, 2 lbest, 3 Von Neumann, 4 adaptive random"),
+                in(integer("neighb_type", "neighb_type", 2,
+                           "swarm topology: 1 gbest, 2 lbest, 3 Von Neumann, 4 adaptive random"),
                    1.0, 4.0),
                 in(integer("neighb_param", "neighb_param", 4, "topology parameter (lbest: neighbours)"), 1.0, {})}});
-  t.push_back({"cmaes", "covariance matrix adaptation evolution strategy", false, 5, 1, true,
-               {automatic(in(real("cc", "cc", -1, "backward time horizon of the evolution path (-1: automatic)"), 0.0, 1.0)),
-                automatic(in(real("cs", "cs", -1, "makes partly up for the small variance loss (-1: automatic)"), 0.0, 1.0)),
-                automatic(in(real("c1", "c1", -1, "learning rate of the rank-one update (-1: automatic)"), 0.0, 1.0)),
-                automatic(in(real("cmu", "cmu", -1, "learning rate of the rank-mu update (-1: automatic)"), 0.0, 1.0)),
-                in(real("sigma0", "sigma0", 0.5, "initial step size as a share of the bounds' width"), 0.0, {}, true),
-                tolerance("ftol", "objective"), tolerance("xtol", "decision-vector"),
-                boolean("force_bounds", "force_bounds", true, "keep samples inside the bounds (else they are clamped before evaluation)")}});
-  t.push_back({"xnes", "exponential natural evolution strategies", false, 5, 1, true,
-               {automatic(in(real("eta_mu", "eta_mu", -1, "learning rate of the mean (-1: automatic)"), 0.0, 1.0, true)),
-                automatic(in(real("eta_sigma", "eta_sigma", -1, "learning rate of the step size (-1: automatic)"), 0.0, 1.0, true)),
-                automatic(in(real("eta_b", "eta_b", -1, "learning rate of the covariance (-1: automatic)"), 0.0, 1.0, true)),
-                automatic(in(real("sigma0", "sigma0", -1, "initial step size as a share of the bounds' width (-1: automatic)"), 0.0, 1.0, true)),
-                tolerance("ftol", "objective"), tolerance("xtol", "decision-vector"),
-                boolean("force_bounds", "force_bounds", true, "keep samples inside the bounds (else they are clamped before evaluation)")}});
-  t.push_back({"gaco", "extended ant colony optimization", false, 2, 1, true,
-               {in(integer("ker", "ker", 10, "solution archive size (pagmo's default 63); at most the population"), 2.0, {}),
-                in(real("q", "q", 1.0, "convergence speed parameter"), 0.0, {}),
-                real("oracle", "oracle", 0.0, "oracle parameter of the penalty method"),
-                in(real("acc", "acc", 0.01, "accuracy parameter of the penalty method"), 0.0, {}),
-                in(integer("threshold", "threshold", 1, "generation from which the focus parameter acts; at most generations"), 1.0, {}),
-                in(integer("n_gen_mark", "n_gen_mark", 7, "generations over which the standard deviations shrink"), 1.0, {}),
-                in(integer("impstop", "impstop", 100000, "stop after this many generations without improvement"), 1.0, {}),
-                in(integer("evalstop", "evalstop", 100000, "stop after this many evaluations without improvement"), 1.0, {}),
-                in(real("focus", "focus", 0.0, "focus parameter (larger: search nearer the best)"), 0.0, {})}});
+  t.push_back(
+      {"cmaes",
+       "covariance matrix adaptation evolution strategy",
+       false,
+       5,
+       1,
+       true,
+       {automatic(in(real("cc", "cc", -1, "backward time horizon of the evolution path (-1: automatic)"), 0.0, 1.0)),
+        automatic(in(real("cs", "cs", -1, "makes partly up for the small variance loss (-1: automatic)"), 0.0, 1.0)),
+        automatic(in(real("c1", "c1", -1, "learning rate of the rank-one update (-1: automatic)"), 0.0, 1.0)),
+        automatic(in(real("cmu", "cmu", -1, "learning rate of the rank-mu update (-1: automatic)"), 0.0, 1.0)),
+        in(real("sigma0", "sigma0", 0.5, "initial step size as a share of the bounds' width"), 0.0, {}, true),
+        tolerance("ftol", "objective"), tolerance("xtol", "decision-vector"),
+        boolean("force_bounds", "force_bounds", true,
+                "keep samples inside the bounds (else they are clamped before evaluation)")}});
+  t.push_back(
+      {"xnes",
+       "exponential natural evolution strategies",
+       false,
+       5,
+       1,
+       true,
+       {automatic(in(real("eta_mu", "eta_mu", -1, "learning rate of the mean (-1: automatic)"), 0.0, 1.0, true)),
+        automatic(
+            in(real("eta_sigma", "eta_sigma", -1, "learning rate of the step size (-1: automatic)"), 0.0, 1.0, true)),
+        automatic(in(real("eta_b", "eta_b", -1, "learning rate of the covariance (-1: automatic)"), 0.0, 1.0, true)),
+        automatic(in(real("sigma0", "sigma0", -1, "initial step size as a share of the bounds' width (-1: automatic)"),
+                     0.0, 1.0, true)),
+        tolerance("ftol", "objective"), tolerance("xtol", "decision-vector"),
+        boolean("force_bounds", "force_bounds", true,
+                "keep samples inside the bounds (else they are clamped before evaluation)")}});
+  t.push_back(
+      {"gaco",
+       "extended ant colony optimization",
+       false,
+       2,
+       1,
+       true,
+       {in(integer("ker", "ker", 10, "solution archive size (pagmo's default 63); at most the population"), 2.0, {}),
+        in(real("q", "q", 1.0, "convergence speed parameter"), 0.0, {}),
+        real("oracle", "oracle", 0.0, "oracle parameter of the penalty method"),
+        in(real("acc", "acc", 0.01, "accuracy parameter of the penalty method"), 0.0, {}),
+        in(integer("threshold", "threshold", 1, "generation from which the focus parameter acts; at most generations"),
+           1.0, {}),
+        in(integer("n_gen_mark", "n_gen_mark", 7, "generations over which the standard deviations shrink"), 1.0, {}),
+        in(integer("impstop", "impstop", 100000, "stop after this many generations without improvement"), 1.0, {}),
+        in(integer("evalstop", "evalstop", 100000, "stop after this many evaluations without improvement"), 1.0, {}),
+        in(real("focus", "focus", 0.0, "focus parameter (larger: search nearer the best)"), 0.0, {})}});
   t.push_back({"gwo", "grey wolf optimizer", false, 3, 1, true, {}});
-  t.push_back({"bee_colony", "artificial bee colony", false, 2, 1, true,
-               {in(integer("limit", "limit", 20, "trials without improvement before a food source is abandoned"), 1.0, {})}});
+  t.push_back(
+      {"bee_colony",
+       "artificial bee colony",
+       false,
+       2,
+       1,
+       true,
+       {in(integer("limit", "limit", 20, "trials without improvement before a food source is abandoned"), 1.0, {})}});
   t.push_back({"sea", "(N+1)-evolution strategy", false, 1, 1, true, {}});
-  t.push_back({"simulated_annealing", "Corana's simulated annealing (budget n_t_adj * n_range_adj * bin_size * dimension; generations unused)",
-               false, 1, 1, false,
+  t.push_back({"simulated_annealing",
+               "Corana's simulated annealing (budget n_t_adj * n_range_adj * bin_size * dimension; generations unused)",
+               false,
+               1,
+               1,
+               false,
                {in(real("ts", "Ts", 10.0, "starting temperature"), 0.0, {}, true),
                 in(real("tf", "Tf", 0.1, "final temperature (at most ts)"), 0.0, {}, true),
                 in(integer("n_t_adj", "n_T_adj", 10, "temperature adjustments"), 1.0, {}),
                 in(integer("n_range_adj", "n_range_adj", 1, "range adjustments per temperature"), 1.0, {}),
                 in(integer("bin_size", "bin_size", 20, "mutations per range adjustment"), 1.0, {}),
-                in(real("start_range", "start_range", 1.0, "starting neighbourhood as a share of the bounds' width"), 0.0, 1.0, true)}});
-  t.push_back({"compass_search", "compass search (pattern search from the best individual; generations unused)", false, 1, 1, false,
-               {in(integer("max_fevals", "max_fevals", 1000, "evaluation budget"), 1.0, {}),
-                in(real("start_range", "start_range", 0.1, "starting step as a share of the bounds' width"), 0.0, 1.0, true),
-                in(real("stop_range", "stop_range", 0.01, "stop when the step falls below this (less than start_range)"), 0.0, 1.0, true),
-                in(real("reduction_coeff", "reduction_coeff", 0.5, "step reduction factor"), 0.0, 1.0, true, true)}});
-  t.push_back({"nsga2", "non-dominated sorting genetic algorithm II (Deb et al. 2002), two or more objectives", true, 8, 4, true,
+                in(real("start_range", "start_range", 1.0, "starting neighbourhood as a share of the bounds' width"),
+                   0.0, 1.0, true)}});
+  t.push_back(
+      {"compass_search",
+       "compass search (pattern search from the best individual; generations unused)",
+       false,
+       1,
+       1,
+       false,
+       {in(integer("max_fevals", "max_fevals", 1000, "evaluation budget"), 1.0, {}),
+        in(real("start_range", "start_range", 0.1, "starting step as a share of the bounds' width"), 0.0, 1.0, true),
+        in(real("stop_range", "stop_range", 0.01, "stop when the step falls below this (less than start_range)"), 0.0,
+           1.0, true),
+        in(real("reduction_coeff", "reduction_coeff", 0.5, "step reduction factor"), 0.0, 1.0, true, true)}});
+  t.push_back({"nsga2",
+               "non-dominated sorting genetic algorithm II (Deb et al. 2002), two or more objectives",
+               true,
+               8,
+               4,
+               true,
                {in(real("cr", "cr", 0.95, "SBX crossover probability"), 0.0, 1.0, false, true),
                 in(real("eta_c", "eta_c", 10.0, "SBX distribution index"), 1.0, 100.0),
                 in(real("m", "m", 0.01, "mutation probability per gene"), 0.0, 1.0),
                 in(real("eta_m", "eta_m", 50.0, "polynomial-mutation distribution index"), 1.0, 100.0)}});
-  t.push_back({"moead", "multi-objective evolutionary algorithm by decomposition (DE variant), two or more objectives", true, 3, 1, true,
-               {choice("weight_generation", "weight_generation", "grid", {"grid", "random", "low_discrepancy"},
-                       "how the weight vectors are made"),
-                choice("decomposition", "decomposition", "tchebycheff", {"tchebycheff", "weighted", "bi"},
-                       "decomposition of the objectives"),
-                in(integer("neighbours", "neighbours", 20, "size of the weights' neighbourhood; less than the population"), 2.0, {}),
-                in(real("cr", "CR", 1.0, "DE crossover probability"), 0.0, 1.0),
-                in(real("f", "F", 0.5, "DE weight coefficient"), 0.0, 1.0),
-                in(real("eta_m", "eta_m", 20.0, "polynomial-mutation distribution index"), 0.0, {}),
-                in(real("realb", "realb", 0.9, "chance that parents come from the neighbourhood"), 0.0, 1.0),
-                in(integer("limit", "limit", 2, "most individuals a child may replace"), 0.0, {}),
-                boolean("preserve_diversity", "preserve_diversity", true, "apply the diversity preservation mechanism")}});
-  t.push_back({"nspso", "non-dominated sorting particle swarm optimization, two or more objectives", true, 2, 1, true,
+  t.push_back(
+      {"moead",
+       "multi-objective evolutionary algorithm by decomposition (DE variant), two or more objectives",
+       true,
+       3,
+       1,
+       true,
+       {choice("weight_generation", "weight_generation", "grid", {"grid", "random", "low_discrepancy"},
+               "how the weight vectors are made"),
+        choice("decomposition", "decomposition", "tchebycheff", {"tchebycheff", "weighted", "bi"},
+               "decomposition of the objectives"),
+        in(integer("neighbours", "neighbours", 20, "size of the weights' neighbourhood; less than the population"), 2.0,
+           {}),
+        in(real("cr", "CR", 1.0, "DE crossover probability"), 0.0, 1.0),
+        in(real("f", "F", 0.5, "DE weight coefficient"), 0.0, 1.0),
+        in(real("eta_m", "eta_m", 20.0, "polynomial-mutation distribution index"), 0.0, {}),
+        in(real("realb", "realb", 0.9, "chance that parents come from the neighbourhood"), 0.0, 1.0),
+        in(integer("limit", "limit", 2, "most individuals a child may replace"), 0.0, {}),
+        boolean("preserve_diversity", "preserve_diversity", true, "apply the diversity preservation mechanism")}});
+  t.push_back({"nspso",
+               "non-dominated sorting particle swarm optimization, two or more objectives",
+               true,
+               2,
+               1,
+               true,
                {in(real("omega", "omega", 0.6, "particles' inertia weight"), 0.0, 1.0),
                 in(real("c1", "c1", 2.0, "magnitude of the force towards the particle's best"), 0.0, {}, true),
                 in(real("c2", "c2", 2.0, "magnitude of the force towards the leader"), 0.0, {}, true),
                 in(real("chi", "chi", 1.0, "velocity scaling factor"), 0.0, {}, true),
                 in(real("v_coeff", "v_coeff", 0.5, "velocity limit as a share of the bounds' width"), 0.0, 1.0, true),
-                in(integer("leader_selection_range", "leader_selection_range", 60, "percent of the front leaders are drawn from"),
+                in(integer("leader_selection_range", "leader_selection_range", 60,
+                           "percent of the front leaders are drawn from"),
                    0.0, 100.0),
                 choice("diversity_mechanism", "diversity_mechanism", "crowding_distance",
                        {"crowding_distance", "niche_count", "max_min"}, "diversity mechanism for leader selection")}});
@@ -219,9 +314,11 @@ pagmo::algorithm make_algorithm(const Algorithm& a, const Config& c, unsigned se
     return pagmo::algorithm(pagmo::sga(gen, n("cr"), n("eta_c"), n("m"), n("param_m"), u(n("param_s")), s("crossover"),
                                        s("mutation"), s("selection"), seed));
   }
-  if (name == "de") return pagmo::algorithm(pagmo::de(gen, n("f"), n("cr"), u(n("variant")), n("ftol"), n("xtol"), seed));
+  if (name == "de")
+    return pagmo::algorithm(pagmo::de(gen, n("f"), n("cr"), u(n("variant")), n("ftol"), n("xtol"), seed));
   if (name == "sade") {
-    return pagmo::algorithm(pagmo::sade(gen, u(n("variant")), u(n("variant_adptv")), n("ftol"), n("xtol"), false, seed));
+    return pagmo::algorithm(
+        pagmo::sade(gen, u(n("variant")), u(n("variant_adptv")), n("ftol"), n("xtol"), false, seed));
   }
   if (name == "pso") {
     return pagmo::algorithm(pagmo::pso(gen, n("omega"), n("eta1"), n("eta2"), n("max_vel"), u(n("variant")),
@@ -369,8 +466,8 @@ void check_bounds(const std::vector<Bound>& bounds) {
     const auto& b = bounds[i];
     const double lo = b.integer ? std::ceil(b.lower) : b.lower, hi = b.integer ? std::floor(b.upper) : b.upper;
     if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi) {
-      throw std::invalid_argument("parameter " + std::to_string(i) + " has an empty bound [" +
-                                  std::to_string(b.lower) + ", " + std::to_string(b.upper) + "]");
+      throw std::invalid_argument("parameter " + std::to_string(i) + " has an empty bound [" + std::to_string(b.lower) +
+                                  ", " + std::to_string(b.upper) + "]");
     }
   }
 }

@@ -62,7 +62,7 @@ struct Algorithm {
   bool multi_objective = false;
   std::size_t min_population = 1;
   std::size_t population_multiple_of = 1;  // nsga2: 4
-  bool uses_generations = true;             // false: the budget comes from its own options
+  bool uses_generations = true;            // false: the budget comes from its own options
   std::vector<Option> options;
 };
 

@@ -49,14 +49,15 @@ ParamSpec spec_of(const po::Algorithm& a, const po::Option& o) {
     return s;
   }
   const std::string range = std::string(o.min_exclusive ? "(" : "[") + "0, 1]";
-  s.must("-1 (automatic) or in " + range,
-         [o, range](const ParamValue& v) -> std::string {
-           const double x = as_number(v);
-           if (x == -1.0) return "";
-           const bool low_ok = o.min_exclusive ? x > *o.min : x >= *o.min;
-           return low_ok && x <= *o.max ? "" : "must be -1 (automatic) or in " + range;
-         },
-         -0.5);
+  s.must(
+      "-1 (automatic) or in " + range,
+      [o, range](const ParamValue& v) -> std::string {
+        const double x = as_number(v);
+        if (x == -1.0) return "";
+        const bool low_ok = o.min_exclusive ? x > *o.min : x >= *o.min;
+        return low_ok && x <= *o.max ? "" : "must be -1 (automatic) or in " + range;
+      },
+      -0.5);
   return s;
 }
 
@@ -80,41 +81,53 @@ std::vector<CrossRule> rules() {
     if (a.options.empty()) continue;
     std::vector<std::string> keys{"algorithm"};
     for (const auto& o : a.options) keys.push_back(option_key(a, o));
-    r.push_back({a.name + "_* options are used only with algorithm: " + a.name + " (elsewhere they keep their defaults)",
-                 keys, [a](const ParamValues& p) {
-                   if (p.text("algorithm") == a.name) return true;
-                   for (const auto& o : a.options) {
-                     if (!equals_default(p, option_key(a, o), o)) return false;
-                   }
-                   return true;
-                 }});
+    r.push_back(
+        {a.name + "_* options are used only with algorithm: " + a.name + " (elsewhere they keep their defaults)", keys,
+         [a](const ParamValues& p) {
+           if (p.text("algorithm") == a.name) return true;
+           for (const auto& o : a.options) {
+             if (!equals_default(p, option_key(a, o), o)) return false;
+           }
+           return true;
+         }});
   }
   const auto when = [](std::string alg, std::function<bool(const ParamValues&)> f) {
-    return [alg = std::move(alg), f = std::move(f)](const ParamValues& p) { return p.text("algorithm") != alg || f(p); };
+    return
+        [alg = std::move(alg), f = std::move(f)](const ParamValues& p) { return p.text("algorithm") != alg || f(p); };
   };
-  r.push_back({"sga_param_s <= population", {"sga_param_s", "population"},
-               when("sga", [](const ParamValues& p) { return p.integer("sga_param_s") <= p.integer("population"); })});
-  r.push_back({"sga_crossover sbx needs an even population", {"sga_crossover", "population"},
+  r.push_back({"sga_param_s <= population", {"sga_param_s", "population"}, when("sga", [](const ParamValues& p) {
+                 return p.integer("sga_param_s") <= p.integer("population");
+               })});
+  r.push_back({"sga_crossover sbx needs an even population",
+               {"sga_crossover", "population"},
                when("sga", [](const ParamValues& p) {
                  return p.text("sga_crossover") != "sbx" || p.integer("population") % 2 == 0;
                })});
-  r.push_back({"sga_param_m in [1, 100] for polynomial mutation, in [0, 1] otherwise", {"sga_param_m", "sga_mutation"},
+  r.push_back({"sga_param_m in [1, 100] for polynomial mutation, in [0, 1] otherwise",
+               {"sga_param_m", "sga_mutation"},
                [](const ParamValues& p) {
                  const double m = p.real("sga_param_m");
                  return p.text("sga_mutation") == "polynomial" ? m >= 1.0 && m <= 100.0 : m >= 0.0 && m <= 1.0;
                }});
-  r.push_back({"gaco_ker <= population", {"gaco_ker", "population"},
-               when("gaco", [](const ParamValues& p) { return p.integer("gaco_ker") <= p.integer("population"); })});
-  r.push_back({"gaco_threshold <= generations (unless generations is 0)", {"gaco_threshold", "generations"},
+  r.push_back({"gaco_ker <= population", {"gaco_ker", "population"}, when("gaco", [](const ParamValues& p) {
+                 return p.integer("gaco_ker") <= p.integer("population");
+               })});
+  r.push_back({"gaco_threshold <= generations (unless generations is 0)",
+               {"gaco_threshold", "generations"},
                when("gaco", [](const ParamValues& p) {
                  return p.integer("generations") == 0 || p.integer("gaco_threshold") <= p.integer("generations");
                })});
-  r.push_back({"moead_neighbours < population", {"moead_neighbours", "population"},
-               when("moead", [](const ParamValues& p) { return p.integer("moead_neighbours") < p.integer("population"); })});
-  r.push_back({"simulated_annealing_tf <= simulated_annealing_ts", {"simulated_annealing_tf", "simulated_annealing_ts"},
-               [](const ParamValues& p) { return p.real("simulated_annealing_tf") <= p.real("simulated_annealing_ts"); }});
+  r.push_back(
+      {"moead_neighbours < population", {"moead_neighbours", "population"}, when("moead", [](const ParamValues& p) {
+         return p.integer("moead_neighbours") < p.integer("population");
+       })});
+  r.push_back(
+      {"simulated_annealing_tf <= simulated_annealing_ts",
+       {"simulated_annealing_tf", "simulated_annealing_ts"},
+       [](const ParamValues& p) { return p.real("simulated_annealing_tf") <= p.real("simulated_annealing_ts"); }});
   r.push_back({"compass_search_stop_range < compass_search_start_range",
-               {"compass_search_stop_range", "compass_search_start_range"}, [](const ParamValues& p) {
+               {"compass_search_stop_range", "compass_search_start_range"},
+               [](const ParamValues& p) {
                  return p.real("compass_search_stop_range") < p.real("compass_search_start_range");
                }});
   return r;
@@ -125,17 +138,17 @@ ParamTable table() {
   for (const auto& a : po::algorithms()) names.push_back(a.name);
   std::string doc = "pagmo algorithm:";
   for (const auto& a : po::algorithms()) doc += " " + a.name + (a.multi_objective ? " (multi-objective)" : "");
-  ParamTable t{{param::choice("algorithm", "sga", names, doc),
-                param::integer("population", 40, "1", "individuals (initial points drawn uniformly in the bounds)")
-                    .at_least(1),
-                param::integer("generations", 50, "1",
-                               "generations (pagmo's gen); unused by simulated_annealing and compass_search")
-                    .at_least(0),
-                param::choice("pareto_choice", "closest_to_ideal", {"closest_to_ideal", "min_first"},
-                              "several objectives: the point chosen from the final front, nearest the ideal point "
-                              "with each objective scaled to [0, 1] over the front, or the smallest first objective"),
-                param::seed()},
-               rules()};
+  ParamTable t{
+      {param::choice("algorithm", "sga", names, doc),
+       param::integer("population", 40, "1", "individuals (initial points drawn uniformly in the bounds)").at_least(1),
+       param::integer("generations", 50, "1",
+                      "generations (pagmo's gen); unused by simulated_annealing and compass_search")
+           .at_least(0),
+       param::choice("pareto_choice", "closest_to_ideal", {"closest_to_ideal", "min_first"},
+                     "several objectives: the point chosen from the final front, nearest the ideal point "
+                     "with each objective scaled to [0, 1] over the front, or the smallest first objective"),
+       param::seed()},
+      rules()};
   for (const auto& a : po::algorithms()) {
     for (const auto& o : a.options) t.params.push_back(spec_of(a, o));
   }
@@ -150,7 +163,7 @@ class PagmoPlugin final : public Optimizer {
                 .population = static_cast<std::size_t>(p.integer("population")),
                 .generations = static_cast<std::size_t>(p.integer("generations")),
                 .pareto_choice = p.text("pareto_choice") == "min_first" ? po::ParetoChoice::MinFirst
-                                                                         : po::ParetoChoice::ClosestToIdeal,
+                                                                        : po::ParetoChoice::ClosestToIdeal,
                 .seed = static_cast<std::uint64_t>(p.integer("seed"))} {
     for (const auto& o : algorithm_.options) {
       const std::string key = option_key(algorithm_, o);
@@ -206,7 +219,8 @@ class PagmoPlugin final : public Optimizer {
                                                             r.pareto_f.row(i).data() + r.pareto_f.cols())}});
       }
       ctx.diagnostics["pareto_front"] = front;
-      ctx.diagnostics["best_values"] = std::vector<double>(r.best_values.data(), r.best_values.data() + r.best_values.size());
+      ctx.diagnostics["best_values"] =
+          std::vector<double>(r.best_values.data(), r.best_values.data() + r.best_values.size());
       ctx.diagnostics["pareto_choice"] =
           config.pareto_choice == po::ParetoChoice::MinFirst ? "min_first" : "closest_to_ideal";
     }

@@ -70,8 +70,7 @@ std::vector<int> block_labels(Eigen::Index rows, std::size_t blocks, const std::
                                   std::to_string(blocks) + ")");
     }
     for (Eigen::Index i = 0; i < n; ++i) {
-      label[static_cast<std::size_t>(begin + i)] =
-          base + static_cast<int>((i * static_cast<Eigen::Index>(blocks)) / n);
+      label[static_cast<std::size_t>(begin + i)] = base + static_cast<int>((i * static_cast<Eigen::Index>(blocks)) / n);
     }
     base += static_cast<int>(blocks);
     begin = end;
@@ -100,7 +99,8 @@ GroupGrams group_grams(const Eigen::MatrixXd& A, const Eigen::VectorXd& y, const
   check_inputs(A, y);
   if (label.size() != static_cast<std::size_t>(A.rows())) throw std::invalid_argument("one label per row needed");
   const int nb = label.empty() ? 0 : *std::max_element(label.begin(), label.end()) + 1;
-  if (nb < 2 || *std::min_element(label.begin(), label.end()) < 0) throw std::invalid_argument("need labels 0 .. G-1, G >= 2");
+  if (nb < 2 || *std::min_element(label.begin(), label.end()) < 0)
+    throw std::invalid_argument("need labels 0 .. G-1, G >= 2");
   const Eigen::Index c = A.cols();
   GroupGrams g{std::vector<Eigen::MatrixXd>(static_cast<std::size_t>(nb), Eigen::MatrixXd::Zero(c, c)),
                std::vector<Eigen::VectorXd>(static_cast<std::size_t>(nb), Eigen::VectorXd::Zero(c)),
@@ -172,8 +172,8 @@ Fit fit(const Eigen::VectorXd& x, const Eigen::VectorXd& y, const Config& config
   if (x.size() != y.size()) throw std::invalid_argument("x and y differ in length");
   if (!x.allFinite()) throw std::invalid_argument("non-finite value in x");
   const double half_range = 0.5 * (x.maxCoeff() - x.minCoeff());
-  const double s = std::max({half_range, std::abs(x.maxCoeff() - config.x0), std::abs(x.minCoeff() - config.x0),
-                             1e-12});
+  const double s =
+      std::max({half_range, std::abs(x.maxCoeff() - config.x0), std::abs(x.minCoeff() - config.x0), 1e-12});
   Fit out;
   out.x0 = config.x0;
   double best = std::numeric_limits<double>::infinity();

@@ -68,9 +68,9 @@ Eigen::MatrixXd scaled_powers(const Eigen::VectorXd& x, double x0, double s, int
 
 struct Config {
   int min_order = 1;
-  int max_order = 5;          // orders min..max are scored; a fixed order: min = max
-  std::size_t blocks = 8;     // held-out time blocks per record, >= 2
-  double x0 = 0.0;            // expansion point (e.g. the reference temperature, degC)
+  int max_order = 5;       // orders min..max are scored; a fixed order: min = max
+  std::size_t blocks = 8;  // held-out time blocks per record, >= 2
+  double x0 = 0.0;         // expansion point (e.g. the reference temperature, degC)
 };
 
 struct Fit {

@@ -24,8 +24,8 @@ class PolynomialPlugin final : public Regressor {
   void fit(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, RunContext& ctx) override {
     fit_.reset();
     if (X.cols() != 1) {
-      throw DataError({"", 0, "features"}, "regressor/polynomial: needs exactly one input feature, got " +
-                                               std::to_string(X.cols()));
+      throw DataError({"", 0, "features"},
+                      "regressor/polynomial: needs exactly one input feature, got " + std::to_string(X.cols()));
     }
     try {
       fit_ = polynomial::fit(X.col(0), y, config_);
@@ -41,8 +41,8 @@ class PolynomialPlugin final : public Regressor {
   Eigen::VectorXd predict(const Eigen::MatrixXd& X) const override {
     if (!fit_) throw NotFittedError("regressor/polynomial: predict called before fit");
     if (X.cols() != 1) {
-      throw DataError({"", 0, "features"}, "regressor/polynomial: needs exactly one input feature, got " +
-                                               std::to_string(X.cols()));
+      throw DataError({"", 0, "features"},
+                      "regressor/polynomial: needs exactly one input feature, got " + std::to_string(X.cols()));
     }
     Eigen::VectorXd out(X.rows());
     for (Eigen::Index i = 0; i < X.rows(); ++i) out[i] = polynomial::evaluate(fit_->coefficients, fit_->x0, X(i, 0));
@@ -61,18 +61,19 @@ void register_polynomial_plugins(Registry& registry) {
       {.name = "regressor/polynomial",
        .summary = "polynomial in (x - center), order chosen on held-out contiguous time blocks",
        .reference = "PX4 / ArduPilot thermal calibration (third-order fit)",
-       .params = ParamTable{
-           {param::integer("order", 0, "1", "fixed polynomial order; 0 = choose between min_order and max_order")
-                .at_least(0)
-                .at_most(12),
-            param::integer("min_order", 1, "1", "lowest order scored when choosing").at_least(0).at_most(12),
-            param::integer("max_order", 5, "1", "highest order scored when choosing").at_least(0).at_most(12),
-            param::integer("holdout_blocks", 8, "1", "contiguous held-out time blocks for the order choice")
-                .at_least(2),
-            param::real("center", 25.0, "unit of x", "expansion point x0 (e.g. the reference temperature, degC)")},
-           {{"min_order <= max_order",
-             {"min_order", "max_order"},
-             [](const ParamValues& p) { return p.integer("min_order") <= p.integer("max_order"); }}}},
+       .params =
+           ParamTable{
+               {param::integer("order", 0, "1", "fixed polynomial order; 0 = choose between min_order and max_order")
+                    .at_least(0)
+                    .at_most(12),
+                param::integer("min_order", 1, "1", "lowest order scored when choosing").at_least(0).at_most(12),
+                param::integer("max_order", 5, "1", "highest order scored when choosing").at_least(0).at_most(12),
+                param::integer("holdout_blocks", 8, "1", "contiguous held-out time blocks for the order choice")
+                    .at_least(2),
+                param::real("center", 25.0, "unit of x", "expansion point x0 (e.g. the reference temperature, degC)")},
+               {{"min_order <= max_order",
+                 {"min_order", "max_order"},
+                 [](const ParamValues& p) { return p.integer("min_order") <= p.integer("max_order"); }}}},
        .make = [](const ParamValues& p, const Registry&) { return std::make_unique<PolynomialPlugin>(p); }});
 }
 

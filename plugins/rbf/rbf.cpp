@@ -44,8 +44,7 @@ void check(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Config& c) 
   if (c.centre_method == CentreMethod::KMeans) {
     const auto used = std::min<std::size_t>(static_cast<std::size_t>(X.rows()), c.kmeans_sample);
     if (c.centres < 1 || c.centres > used) {
-      fail("k-means needs 1 <= centres <= rows used (" + std::to_string(used) + "), got " +
-           std::to_string(c.centres));
+      fail("k-means needs 1 <= centres <= rows used (" + std::to_string(used) + "), got " + std::to_string(c.centres));
     }
   } else {
     constexpr double kMaxGridCentres = 1e5;
@@ -157,8 +156,8 @@ Eigen::MatrixXd design(const Eigen::MatrixXd& U, const Eigen::MatrixXd& C, const
   return B;
 }
 
-Eigen::VectorXd least_squares(const Eigen::MatrixXd& U, const Eigen::VectorXd& y,
-                              const Eigen::MatrixXd& C, const Config& c) {
+Eigen::VectorXd least_squares(const Eigen::MatrixXd& U, const Eigen::VectorXd& y, const Eigen::MatrixXd& C,
+                              const Config& c) {
   try {
     return ridge::solve(
         U.rows(), C.rows() + (c.linear_tail ? U.cols() : 0),
@@ -169,8 +168,8 @@ Eigen::VectorXd least_squares(const Eigen::MatrixXd& U, const Eigen::VectorXd& y
   }
 }
 
-Eigen::VectorXd lms(const Eigen::MatrixXd& U, const Eigen::VectorXd& y, const Eigen::MatrixXd& C,
-                    const Config& c, std::vector<double>& epoch_rmse) {
+Eigen::VectorXd lms(const Eigen::MatrixXd& U, const Eigen::VectorXd& y, const Eigen::MatrixXd& C, const Config& c,
+                    std::vector<double>& epoch_rmse) {
   const Eigen::MatrixXd d = design(U, C, c);
   Eigen::MatrixXd rows_as_columns(d.cols() + 1, d.rows());
   rows_as_columns.topRows(d.cols()) = d.transpose();
@@ -187,8 +186,8 @@ Eigen::VectorXd lms(const Eigen::MatrixXd& U, const Eigen::VectorXd& y, const Ei
 
 }  // namespace
 
-Network::Network(Eigen::RowVectorXd mean, Eigen::RowVectorXd scale, Eigen::MatrixXd centres,
-                 double sigma, Eigen::VectorXd weights, double bias, Eigen::VectorXd linear)
+Network::Network(Eigen::RowVectorXd mean, Eigen::RowVectorXd scale, Eigen::MatrixXd centres, double sigma,
+                 Eigen::VectorXd weights, double bias, Eigen::VectorXd linear)
     : mean_(std::move(mean)),
       scale_(std::move(scale)),
       centres_(std::move(centres)),
@@ -207,8 +206,7 @@ Eigen::VectorXd Network::predict(const Eigen::MatrixXd& X, unsigned threads) con
   parallel_for(blocks, threads, [&](std::size_t block) {
     const Eigen::Index start = static_cast<Eigen::Index>(block) * ridge::kBlockRows;
     const Eigen::Index len = std::min(ridge::kBlockRows, X.rows() - start);
-    const Eigen::MatrixXd U =
-        (X.middleRows(start, len).rowwise() - mean_).array().rowwise() / scale_.array();
+    const Eigen::MatrixXd U = (X.middleRows(start, len).rowwise() - mean_).array().rowwise() / scale_.array();
     out.segment(start, len) = (activations(U, centres_, sigma_) * weights_).array() + bias_;
     if (linear_.size() > 0) out.segment(start, len) += U * linear_;
   });
@@ -233,12 +231,10 @@ FitResult fit(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Config& 
   const Eigen::RowVectorXd& mean = standardizer.mean;
   const Eigen::RowVectorXd& scale = standardizer.scale;
   const Eigen::MatrixXd U = standardizer.apply(X);
-  Eigen::MatrixXd C = config.centre_method == CentreMethod::KMeans ? kmeans(U, config)
-                                                                   : grid(U, config.grid_points);
+  Eigen::MatrixXd C = config.centre_method == CentreMethod::KMeans ? kmeans(U, config) : grid(U, config.grid_points);
   std::vector<double> epoch_rmse;
-  const Eigen::VectorXd w = config.solver == WeightSolver::LeastSquares
-                                ? least_squares(U, y, C, config)
-                                : lms(U, y, C, config, epoch_rmse);
+  const Eigen::VectorXd w =
+      config.solver == WeightSolver::LeastSquares ? least_squares(U, y, C, config) : lms(U, y, C, config, epoch_rmse);
   const Eigen::Index k = C.rows();
   // w = (Gaussian weights, linear tail if any, constant last)
   return {Network(mean, scale, std::move(C), config.sigma, w.head(k), w[w.size() - 1], w.segment(k, w.size() - k - 1)),

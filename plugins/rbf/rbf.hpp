@@ -46,18 +46,18 @@ enum class WeightSolver { LeastSquares, Lms };
 
 struct Config {
   CentreMethod centre_method = CentreMethod::KMeans;
-  std::size_t centres = 20;             // K for k-means, >= 1 and <= rows used by k-means
-  std::size_t grid_points = 5;          // per axis for Grid, >= 1
-  double sigma = 1.0;                   // unit width in standardized input units, > 0
+  std::size_t centres = 20;     // K for k-means, >= 1 and <= rows used by k-means
+  std::size_t grid_points = 5;  // per axis for Grid, >= 1
+  double sigma = 1.0;           // unit width in standardized input units, > 0
   WeightSolver solver = WeightSolver::LeastSquares;
-  double regularization = 1e-8;         // ridge lambda, >= 0
-  double lms_rate = 0.5;                // beta of eq. 9, in (0, 2)
-  std::size_t lms_epochs = 50;          // passes over the data for Lms
-  std::size_t kmeans_iterations = 50;   // Lloyd iterations cap
-  std::size_t kmeans_sample = 2000;     // rows used by k-means at most
-  std::uint64_t seed = 1;               // k-means subsample and seeding
-  bool linear_tail = false;             // add v^T u (see above)
-  unsigned threads = 1;                 // least-squares blocks in parallel; results do not depend on it
+  double regularization = 1e-8;        // ridge lambda, >= 0
+  double lms_rate = 0.5;               // beta of eq. 9, in (0, 2)
+  std::size_t lms_epochs = 50;         // passes over the data for Lms
+  std::size_t kmeans_iterations = 50;  // Lloyd iterations cap
+  std::size_t kmeans_sample = 2000;    // rows used by k-means at most
+  std::uint64_t seed = 1;              // k-means subsample and seeding
+  bool linear_tail = false;            // add v^T u (see above)
+  unsigned threads = 1;                // least-squares blocks in parallel; results do not depend on it
 };
 
 class Network {
@@ -73,7 +73,7 @@ class Network {
   const Eigen::RowVectorXd& scale() const { return scale_; }
   const Eigen::MatrixXd& centres() const { return centres_; }  // K x d, standardized units
   double sigma() const { return sigma_; }
-  const Eigen::VectorXd& weights() const { return weights_; }   // w_1..w_K
+  const Eigen::VectorXd& weights() const { return weights_; }  // w_1..w_K
   double bias() const { return bias_; }
   const Eigen::VectorXd& linear() const { return linear_; }  // v (empty without a linear tail)
 

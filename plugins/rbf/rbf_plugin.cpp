@@ -31,8 +31,8 @@ SearchRange range_of(const ParamValues& p, const std::string& key) {
 class RbfPlugin final : public Regressor {
  public:
   RbfPlugin(const ParamValues& p, const Registry& registry)
-      : config_{.centre_method = p.text("centre_method") == "grid" ? rbf::CentreMethod::Grid
-                                                                    : rbf::CentreMethod::KMeans,
+      : config_{.centre_method =
+                    p.text("centre_method") == "grid" ? rbf::CentreMethod::Grid : rbf::CentreMethod::KMeans,
                 .centres = static_cast<std::size_t>(p.integer("centres")),
                 .grid_points = static_cast<std::size_t>(p.integer("grid_points")),
                 .sigma = p.real("sigma"),
@@ -93,7 +93,9 @@ class RbfPlugin final : public Regressor {
   }
 
   nlohmann::json describe(const rbf::Config& c, double holdout_rmse) const {
-    nlohmann::json out{{"sigma", c.sigma}, {"regularization", c.regularization}, {"linear_tail", c.linear_tail},
+    nlohmann::json out{{"sigma", c.sigma},
+                       {"regularization", c.regularization},
+                       {"linear_tail", c.linear_tail},
                        {"holdout_rmse", holdout_rmse}};
     if (tunes_centres()) {
       out["centres"] = c.centres;
@@ -115,9 +117,9 @@ class RbfPlugin final : public Regressor {
       }
     };
 
-    std::vector<Bound> bounds{{"sigma", sigma_range_.low, sigma_range_.high, false},
-                              {"log10_regularization", log10_regularization_range_.low,
-                               log10_regularization_range_.high, false}};
+    std::vector<Bound> bounds{
+        {"sigma", sigma_range_.low, sigma_range_.high, false},
+        {"log10_regularization", log10_regularization_range_.low, log10_regularization_range_.high, false}};
     if (tunes_centres()) {
       const double usable = static_cast<double>(
           std::min<std::size_t>(static_cast<std::size_t>(data.X_train.rows()), config_.kmeans_sample));
@@ -130,16 +132,18 @@ class RbfPlugin final : public Regressor {
     const tuning::Search found = tuning::search(*optimizer_, bounds, tuning_, data, fit_and_score, ctx);
     const OptimizationResult& result = found.result;
     const rbf::Config best = decode(result.best);
-    ctx.diagnostics["tuning"] = {
-        {"objective", "RMSE on a blocked holdout (unit of the target)"},
-        {"holdout", {{"fraction", tuning_.holdout_fraction}, {"blocks", tuning_.holdout_blocks},
-                     {"row_stride", data.row_stride}, {"train_samples", data.X_train.rows()},
-                     {"holdout_samples", data.X_holdout.rows()}}},
-        {"start", describe(config_, holdout_rmse(config_))},
-        {"best", describe(best, result.best_value)},
-        {"history", result.history},
-        {"evaluations", result.evaluations},
-        {"optimizer", found.optimizer_diagnostics}};
+    ctx.diagnostics["tuning"] = {{"objective", "RMSE on a blocked holdout (unit of the target)"},
+                                 {"holdout",
+                                  {{"fraction", tuning_.holdout_fraction},
+                                   {"blocks", tuning_.holdout_blocks},
+                                   {"row_stride", data.row_stride},
+                                   {"train_samples", data.X_train.rows()},
+                                   {"holdout_samples", data.X_holdout.rows()}}},
+                                 {"start", describe(config_, holdout_rmse(config_))},
+                                 {"best", describe(best, result.best_value)},
+                                 {"history", result.history},
+                                 {"evaluations", result.evaluations},
+                                 {"optimizer", found.optimizer_diagnostics}};
     return best;
   }
 
@@ -164,53 +168,51 @@ void register_rbf_plugins(Registry& registry) {
        .summary = "Gaussian RBF network (k-means or grid centres, ridge or LMS weights), optionally tuned",
        .reference = "Li et al. 2023 eqs. 6-9",
        .params =
-           ParamTable{
-               {param::choice("centre_method", "kmeans", {"kmeans", "grid"},
-                              "centres by seeded k-means (k-means++ start) or on a regular grid"),
-                param::integer("centres", 20, "1", "number of centres K (kmeans)").at_least(1),
-                param::integer("grid_points", 5, "1", "centres per standardized input axis (grid; K = grid_points^features)")
-                    .at_least(1),
-                param::real("sigma", 1.0, "1", "Gaussian width in standardized input units (feature std = 1)")
-                    .greater_than(0),
-                param::choice("solver", "least_squares", {"least_squares", "lms"},
-                              "output weights by ridge least squares (LDLT) or the paper's LMS rule (eq. 9)"),
-                param::real("regularization", 1e-8, "1", "ridge lambda on the mean-square normal equations")
-                    .at_least(0),
-                param::real("lms_rate", 0.5, "1", "beta of the LMS rule (eq. 9)").greater_than(0).less_than(2),
-                param::integer("lms_epochs", 50, "1", "passes over the data for the LMS rule").at_least(1),
-                param::integer("kmeans_iterations", 50, "1", "cap on Lloyd iterations").at_least(1),
-                param::integer("kmeans_sample", 2000, "1", "rows used by k-means at most (seeded subsample)")
-                    .at_least(1),
-                param::boolean("linear_tail", false,
-                               "add a linear term in the standardized inputs (y = sum w a + b + v.u): the "
-                               "Gaussians then model only the curvature of a nearly linear target"),
-                param::boolean("tune", false,
-                               "tune sigma, regularization and (kmeans) centres with the nested optimizer on "
-                               "the blocked-holdout RMSE, then fit all samples"),
-                param::nested("optimizer", "optimizer", "optimizer/ga",
-                              "optimizer used when tune is true; objective: held-out RMSE"),
-                param::boolean("tune_linear_tail", false,
-                               "when tuning, the optimizer also chooses whether the network has the linear "
-                               "tail (a 0/1 gene)"),
-                search_range("tune_sigma", {0.05, 3.0}, "search range for sigma").greater_than(0),
-                search_range("tune_centres", {4, 60}, "search range for centres (kmeans)").at_least(1),
-                search_range("tune_log10_regularization", {-10, -2}, "search range for log10(regularization)"),
-                param::real("holdout_fraction", 0.2, "1", "share of samples held out when tuning")
-                    .greater_than(0)
-                    .less_than(1),
-                param::integer("holdout_blocks", 10, "1", "evenly spread contiguous held-out runs when tuning")
-                    .at_least(1),
-                param::integer("tune_rows", 20000, "1",
-                               "rows the tuning sees at most: means of ceil(rows / tune_rows) consecutive rows; "
-                               "the final fit uses all rows")
-                    .at_least(10),
-                param::seed()},
-               {{"centres <= kmeans_sample",
-                 {"centres", "kmeans_sample"},
-                 [](const ParamValues& p) { return p.integer("centres") <= p.integer("kmeans_sample"); }}}},
-       .make = [](const ParamValues& p, const Registry& plugins) {
-         return std::make_unique<RbfPlugin>(p, plugins);
-       }});
+           ParamTable{{param::choice("centre_method", "kmeans", {"kmeans", "grid"},
+                                     "centres by seeded k-means (k-means++ start) or on a regular grid"),
+                       param::integer("centres", 20, "1", "number of centres K (kmeans)").at_least(1),
+                       param::integer("grid_points", 5, "1",
+                                      "centres per standardized input axis (grid; K = grid_points^features)")
+                           .at_least(1),
+                       param::real("sigma", 1.0, "1", "Gaussian width in standardized input units (feature std = 1)")
+                           .greater_than(0),
+                       param::choice("solver", "least_squares", {"least_squares", "lms"},
+                                     "output weights by ridge least squares (LDLT) or the paper's LMS rule (eq. 9)"),
+                       param::real("regularization", 1e-8, "1", "ridge lambda on the mean-square normal equations")
+                           .at_least(0),
+                       param::real("lms_rate", 0.5, "1", "beta of the LMS rule (eq. 9)").greater_than(0).less_than(2),
+                       param::integer("lms_epochs", 50, "1", "passes over the data for the LMS rule").at_least(1),
+                       param::integer("kmeans_iterations", 50, "1", "cap on Lloyd iterations").at_least(1),
+                       param::integer("kmeans_sample", 2000, "1", "rows used by k-means at most (seeded subsample)")
+                           .at_least(1),
+                       param::boolean("linear_tail", false,
+                                      "add a linear term in the standardized inputs (y = sum w a + b + v.u): the "
+                                      "Gaussians then model only the curvature of a nearly linear target"),
+                       param::boolean("tune", false,
+                                      "tune sigma, regularization and (kmeans) centres with the nested optimizer on "
+                                      "the blocked-holdout RMSE, then fit all samples"),
+                       param::nested("optimizer", "optimizer", "optimizer/ga",
+                                     "optimizer used when tune is true; objective: held-out RMSE"),
+                       param::boolean("tune_linear_tail", false,
+                                      "when tuning, the optimizer also chooses whether the network has the linear "
+                                      "tail (a 0/1 gene)"),
+                       search_range("tune_sigma", {0.05, 3.0}, "search range for sigma").greater_than(0),
+                       search_range("tune_centres", {4, 60}, "search range for centres (kmeans)").at_least(1),
+                       search_range("tune_log10_regularization", {-10, -2}, "search range for log10(regularization)"),
+                       param::real("holdout_fraction", 0.2, "1", "share of samples held out when tuning")
+                           .greater_than(0)
+                           .less_than(1),
+                       param::integer("holdout_blocks", 10, "1", "evenly spread contiguous held-out runs when tuning")
+                           .at_least(1),
+                       param::integer("tune_rows", 20000, "1",
+                                      "rows the tuning sees at most: means of ceil(rows / tune_rows) consecutive rows; "
+                                      "the final fit uses all rows")
+                           .at_least(10),
+                       param::seed()},
+                      {{"centres <= kmeans_sample",
+                        {"centres", "kmeans_sample"},
+                        [](const ParamValues& p) { return p.integer("centres") <= p.integer("kmeans_sample"); }}}},
+       .make = [](const ParamValues& p, const Registry& plugins) { return std::make_unique<RbfPlugin>(p, plugins); }});
 }
 
 }  // namespace driftlab

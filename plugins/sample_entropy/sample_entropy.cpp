@@ -48,7 +48,7 @@ constexpr int kMaxUnrolledCoords = 6;
 // -fopenmp-simd the loop becomes a vector reduction.
 template <int kCoords>
 [[gnu::always_inline]] inline void count_candidates(const std::vector<const double*>& c, std::size_t i, std::size_t a,
-                      std::size_t b, double r, PairCounts& out) {
+                                                    std::size_t b, double r, PairCounts& out) {
   const int coords = kCoords > 0 ? kCoords : static_cast<int>(c.size());
   const double* first = c[0];
   const double* last = c[coords - 1];
@@ -71,9 +71,8 @@ template <int kCoords>
 // Compiled for AVX2 and baseline x86-64 (framework/simd.hpp): the candidate loops inlined here
 // are the vector reductions.
 template <int kCoords>
-DRIFTLAB_SIMD_CLONES std::optional<PairCounts> count_template_pairs(std::span<const double> x,
-                                                                    std::size_t count, int coords,
-                                                                    double r, std::uint64_t budget) {
+DRIFTLAB_SIMD_CLONES std::optional<PairCounts> count_template_pairs(std::span<const double> x, std::size_t count,
+                                                                    int coords, double r, std::uint64_t budget) {
   std::vector<std::size_t> order(count);
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return x[p] < x[q]; });
@@ -83,15 +82,13 @@ DRIFTLAB_SIMD_CLONES std::optional<PairCounts> count_template_pairs(std::span<co
     strip_begin.push_back(s);
     std::size_t e = s + 1;
     while (e < count && x[order[e]] - x[order[s]] < r) ++e;
-    std::sort(order.begin() + static_cast<std::ptrdiff_t>(s),
-              order.begin() + static_cast<std::ptrdiff_t>(e),
+    std::sort(order.begin() + static_cast<std::ptrdiff_t>(s), order.begin() + static_cast<std::ptrdiff_t>(e),
               [&](std::size_t p, std::size_t q) { return x[p + 1] < x[q + 1]; });
     s = e;
   }
   strip_begin.push_back(count);
 
-  std::vector<std::vector<double>> storage(static_cast<std::size_t>(coords),
-                                           std::vector<double>(count));
+  std::vector<std::vector<double>> storage(static_cast<std::size_t>(coords), std::vector<double>(count));
   std::vector<const double*> c(static_cast<std::size_t>(coords));
   for (int k = 0; k < coords; ++k) {
     auto& column = storage[static_cast<std::size_t>(k)];
@@ -126,15 +123,21 @@ DRIFTLAB_SIMD_CLONES std::optional<PairCounts> count_template_pairs(std::span<co
 }
 
 // Enumerated counts, or nothing once more than `budget` candidate pairs would be compared.
-std::optional<PairCounts> count_template_pairs(std::span<const double> x, std::size_t count,
-                                               int coords, double r, std::uint64_t budget) {
+std::optional<PairCounts> count_template_pairs(std::span<const double> x, std::size_t count, int coords, double r,
+                                               std::uint64_t budget) {
   switch (coords) {
-    case 2: return count_template_pairs<2>(x, count, coords, r, budget);
-    case 3: return count_template_pairs<3>(x, count, coords, r, budget);
-    case 4: return count_template_pairs<4>(x, count, coords, r, budget);
-    case 5: return count_template_pairs<5>(x, count, coords, r, budget);
-    case kMaxUnrolledCoords: return count_template_pairs<kMaxUnrolledCoords>(x, count, coords, r, budget);
-    default: return count_template_pairs<0>(x, count, coords, r, budget);
+    case 2:
+      return count_template_pairs<2>(x, count, coords, r, budget);
+    case 3:
+      return count_template_pairs<3>(x, count, coords, r, budget);
+    case 4:
+      return count_template_pairs<4>(x, count, coords, r, budget);
+    case 5:
+      return count_template_pairs<5>(x, count, coords, r, budget);
+    case kMaxUnrolledCoords:
+      return count_template_pairs<kMaxUnrolledCoords>(x, count, coords, r, budget);
+    default:
+      return count_template_pairs<0>(x, count, coords, r, budget);
   }
 }
 
@@ -158,9 +161,7 @@ class Fenwick {
  public:
   explicit Fenwick(std::size_t n) : tree_(n + 1, 0) {}
 
-  void add(std::size_t position, std::int32_t delta) {
-    fenwick_add(tree_.data(), tree_.size() - 1, position, delta);
-  }
+  void add(std::size_t position, std::int32_t delta) { fenwick_add(tree_.data(), tree_.size() - 1, position, delta); }
 
   // Points at positions [lo, hi).
   std::int64_t count(std::size_t lo, std::size_t hi) const {
@@ -175,8 +176,7 @@ class Fenwick {
 // tree over u keeps the sorted v of the points it covers and a Fenwick tree over them.
 class Fenwick2D {
  public:
-  Fenwick2D(std::span<const std::uint32_t> u, std::span<const std::uint32_t> v)
-      : n_(u.size()), begin_(n_ + 2, 0) {
+  Fenwick2D(std::span<const std::uint32_t> u, std::span<const std::uint32_t> v) : n_(u.size()), begin_(n_ + 2, 0) {
     for (std::size_t p = 0; p < n_; ++p) {
       for (std::size_t k = u[p] + 1; k <= n_; k += lowest_bit(k)) ++begin_[k + 1];
     }
@@ -225,9 +225,9 @@ class Fenwick2D {
   }
 
   std::size_t n_;
-  std::vector<std::size_t> begin_;      // node k's values in [begin_[k], begin_[k + 1])
-  std::vector<std::uint32_t> values_;   // sorted v per node
-  std::vector<std::int32_t> tree_;      // per node a Fenwick tree of size + 1 slots
+  std::vector<std::size_t> begin_;     // node k's values in [begin_[k], begin_[k + 1])
+  std::vector<std::uint32_t> values_;  // sorted v per node
+  std::vector<std::int32_t> tree_;     // per node a Fenwick tree of size + 1 slots
 };
 
 // One coordinate of the templates: its values sorted, each template's rank, and the rank interval
@@ -254,11 +254,9 @@ class RankedCoordinate {
   // Ranks [lo, hi) of the values v with |value(t) - v| < r.
   std::pair<std::uint32_t, std::uint32_t> matching(std::size_t t, double r) const {
     const double c = values_[t];
-    const auto lo = std::partition_point(sorted_.begin(), sorted_.end(),
-                                         [&](double v) { return !(c - v < r); });
+    const auto lo = std::partition_point(sorted_.begin(), sorted_.end(), [&](double v) { return !(c - v < r); });
     const auto hi = std::partition_point(lo, sorted_.end(), [&](double v) { return v - c < r; });
-    return {static_cast<std::uint32_t>(lo - sorted_.begin()),
-            static_cast<std::uint32_t>(hi - sorted_.begin())};
+    return {static_cast<std::uint32_t>(lo - sorted_.begin()), static_cast<std::uint32_t>(hi - sorted_.begin())};
   }
 
  private:
@@ -327,9 +325,12 @@ void require_no_nan(std::span<const double> entropies) {
 
 std::string to_string(Status status) {
   switch (status) {
-    case Status::Finite: return "finite";
-    case Status::NoMatches: return "no matches of length m+1 (SampEn = Inf)";
-    case Status::Undefined: return "no matches of length m (SampEn undefined, reported as Inf)";
+    case Status::Finite:
+      return "finite";
+    case Status::NoMatches:
+      return "no matches of length m+1 (SampEn = Inf)";
+    case Status::Undefined:
+      return "no matches of length m (SampEn undefined, reported as Inf)";
   }
   return "unknown";
 }
@@ -408,9 +409,12 @@ std::vector<Result> sample_entropy_profile(std::span<const double> x, int max_m,
 
 std::string to_string(Group group) {
   switch (group) {
-    case Group::Noise: return "noise";
-    case Group::Mixed: return "mixed";
-    case Group::Drift: return "drift";
+    case Group::Noise:
+      return "noise";
+    case Group::Mixed:
+      return "mixed";
+    case Group::Drift:
+      return "drift";
   }
   return "unknown";
 }
@@ -461,8 +465,8 @@ std::vector<GroupDecision> group_by_gaps(std::span<const double> entropies) {
   std::sort(gaps.begin(), gaps.end(), [](const Gap& g, const Gap& h) { return g.after < h.after; });
 
   auto describe_cut = [&](const Gap& gap) {
-    return "(" + format_entropy(entropies[order[gap.after]]) + " | " +
-           format_entropy(entropies[order[gap.after + 1]]) + ")";
+    return "(" + format_entropy(entropies[order[gap.after]]) + " | " + format_entropy(entropies[order[gap.after + 1]]) +
+           ")";
   };
 
   std::vector<GroupDecision> decisions(count);

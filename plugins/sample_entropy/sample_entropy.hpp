@@ -82,8 +82,7 @@ enum class Counting { Automatic, Enumerate, RangeCount };
 
 // SampEn(m, r) with r in the data's unit. Throws std::invalid_argument when m < 0, r < 0 or NaN,
 // or a sample is not finite. Counting::RangeCount applies to m = 1 and 2 (others enumerate).
-Result sample_entropy(std::span<const double> x, int m, double tolerance,
-                      Counting counting = Counting::Automatic);
+Result sample_entropy(std::span<const double> x, int m, double tolerance, Counting counting = Counting::Automatic);
 
 // SampEn(m, r * population_sd(x)).
 Result sample_entropy_relative(std::span<const double> x, int m, double r_relative);

@@ -22,9 +22,12 @@ namespace {
 
 ImfGroup to_imf_group(sampen::Group group) {
   switch (group) {
-    case sampen::Group::Noise: return ImfGroup::Noise;
-    case sampen::Group::Mixed: return ImfGroup::Mixed;
-    case sampen::Group::Drift: return ImfGroup::Drift;
+    case sampen::Group::Noise:
+      return ImfGroup::Noise;
+    case sampen::Group::Mixed:
+      return ImfGroup::Mixed;
+    case sampen::Group::Drift:
+      return ImfGroup::Drift;
   }
   return ImfGroup::Mixed;
 }
@@ -43,9 +46,8 @@ class SampleEntropyClassifier final : public Classifier {
     const auto results = entropies(imfs, ctx.threads);
     std::vector<double> values;
     for (const auto& r : results) values.push_back(r.value);
-    const auto decisions = rule_ == "thresholds"
-                               ? sampen::group_by_thresholds(values, noise_above_, drift_below_)
-                               : sampen::group_by_gaps(values);
+    const auto decisions = rule_ == "thresholds" ? sampen::group_by_thresholds(values, noise_above_, drift_below_)
+                                                 : sampen::group_by_gaps(values);
 
     Classification c;
     c.scores = values;
@@ -124,35 +126,32 @@ void register_sample_entropy_plugins(Registry& registry) {
        .summary = "groups IMFs into noise / mixed / drift by sample entropy (largest gaps or thresholds)",
        .reference = "Richman & Moorman 2000 (SampEn; PhysioNet sampen.c counts); Li et al. 2023 "
                     "Sec. 3 (S1 noise, S2 mixed, S3 drift)",
-       .params = ParamTable{
-           {
-               param::integer("m", 2, "1", "template length (embedding dimension)").at_least(0).at_most(10),
-               param::real("r", 0.2, "1",
-                           "tolerance as a multiple of the IMF's population standard deviation; "
-                           "templates match when every |difference| < r * SD")
-                   .greater_than(0),
-               param::choice("rule", "gaps", {"gaps", "thresholds"},
-                             "gaps: the two largest gaps in the decreasing SampEn sequence split "
-                             "noise | mixed | drift (one gap: no mixed; none: all mixed); "
-                             "thresholds: noise above noise_above, drift below drift_below"),
-               param::real("noise_above", 1.0, "1",
-                           "rule thresholds: SampEn above this (or Inf) -> noise")
-                   .at_least(0),
-               param::real("drift_below", 0.2, "1", "rule thresholds: SampEn below this -> drift")
-                   .at_least(0),
-               param::integer("max_samples", 40000, "1",
-                              "IMFs longer than this are scored on 8 evenly spaced windows of max_samples / 8 "
-                              "samples (pair counts summed); below 128: always the whole IMF")
-                   .at_least(0),
-           },
-           {
-               {"noise_above > drift_below",
-                {"noise_above", "drift_below"},
-                [](const ParamValues& v) { return v.real("noise_above") > v.real("drift_below"); }},
-           }},
-       .make = [](const ParamValues& p, const Registry&) {
-         return std::make_unique<SampleEntropyClassifier>(p);
-       }});
+       .params =
+           ParamTable{
+               {
+                   param::integer("m", 2, "1", "template length (embedding dimension)").at_least(0).at_most(10),
+                   param::real("r", 0.2, "1",
+                               "tolerance as a multiple of the IMF's population standard deviation; "
+                               "templates match when every |difference| < r * SD")
+                       .greater_than(0),
+                   param::choice("rule", "gaps", {"gaps", "thresholds"},
+                                 "gaps: the two largest gaps in the decreasing SampEn sequence split "
+                                 "noise | mixed | drift (one gap: no mixed; none: all mixed); "
+                                 "thresholds: noise above noise_above, drift below drift_below"),
+                   param::real("noise_above", 1.0, "1", "rule thresholds: SampEn above this (or Inf) -> noise")
+                       .at_least(0),
+                   param::real("drift_below", 0.2, "1", "rule thresholds: SampEn below this -> drift").at_least(0),
+                   param::integer("max_samples", 40000, "1",
+                                  "IMFs longer than this are scored on 8 evenly spaced windows of max_samples / 8 "
+                                  "samples (pair counts summed); below 128: always the whole IMF")
+                       .at_least(0),
+               },
+               {
+                   {"noise_above > drift_below",
+                    {"noise_above", "drift_below"},
+                    [](const ParamValues& v) { return v.real("noise_above") > v.real("drift_below"); }},
+               }},
+       .make = [](const ParamValues& p, const Registry&) { return std::make_unique<SampleEntropyClassifier>(p); }});
 }
 
 }  // namespace driftlab

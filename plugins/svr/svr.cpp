@@ -20,8 +20,8 @@ using Kernel = dlib::radial_basis_kernel<Sample>;
 
 }  // namespace
 
-Model::Model(Eigen::RowVectorXd mean, Eigen::RowVectorXd scale, double y_mean, double y_scale,
-             Eigen::MatrixXd support, Eigen::VectorXd alpha, double b, double gamma)
+Model::Model(Eigen::RowVectorXd mean, Eigen::RowVectorXd scale, double y_mean, double y_scale, Eigen::MatrixXd support,
+             Eigen::VectorXd alpha, double b, double gamma)
     : mean_(std::move(mean)),
       scale_(std::move(scale)),
       y_mean_(y_mean),

@@ -110,13 +110,12 @@ ParamTable table() {
 }  // namespace
 
 void register_svr_plugins(Registry& registry) {
-  registry.add({.name = "regressor/svr",
-                .summary = "epsilon-SVR with a Gaussian kernel (dlib's SMO), optionally tuned",
-                .reference = "Smola & Schoelkopf 2004; Sensors 2020, PMC7345257 (CS-SVR drift model); dlib svr_trainer",
-                .params = table(),
-                .make = [](const ParamValues& p, const Registry& plugins) {
-                  return std::make_unique<SvrPlugin>(p, plugins);
-                }});
+  registry.add(
+      {.name = "regressor/svr",
+       .summary = "epsilon-SVR with a Gaussian kernel (dlib's SMO), optionally tuned",
+       .reference = "Smola & Schoelkopf 2004; Sensors 2020, PMC7345257 (CS-SVR drift model); dlib svr_trainer",
+       .params = table(),
+       .make = [](const ParamValues& p, const Registry& plugins) { return std::make_unique<SvrPlugin>(p, plugins); }});
 }
 
 }  // namespace driftlab

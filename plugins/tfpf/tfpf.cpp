@@ -98,8 +98,9 @@ Result filter(const Eigen::VectorXd& x, const Config& config) {
   std::vector<double> w(static_cast<std::size_t>(h + 1));
   for (Eigen::Index m = 0; m <= h; ++m) {
     w[static_cast<std::size_t>(m)] =
-        config.lag_window == LagWindow::Rectangular ? 1.0
-                                                    : 0.5 * (1.0 + std::cos(kPi * static_cast<double>(m) / static_cast<double>(h + 1)));
+        config.lag_window == LagWindow::Rectangular
+            ? 1.0
+            : 0.5 * (1.0 + std::cos(kPi * static_cast<double>(m) / static_cast<double>(h + 1)));
   }
 
   int fft_size = 64;

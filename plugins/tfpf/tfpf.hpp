@@ -53,17 +53,17 @@ enum class LagWindow { Rectangular, Hann };
 
 struct Config {
   WindowRule rule = WindowRule::NoiseLevel;
-  int window = 31;          // odd, >= 3: the window length for WindowRule::Fixed
-  int short_window = 9;     // odd, >= 3: NoiseLevel, signal-dominated input
-  int long_window = 65;     // odd, >= short_window: NoiseLevel, noise-dominated input
+  int window = 31;       // odd, >= 3: the window length for WindowRule::Fixed
+  int short_window = 9;  // odd, >= 3: NoiseLevel, signal-dominated input
+  int long_window = 65;  // odd, >= short_window: NoiseLevel, noise-dominated input
   LagWindow lag_window = LagWindow::Rectangular;
 };
 
 struct Result {
   Eigen::VectorXd filtered;
-  int window = 0;             // the window length used, samples
-  double noise_sigma = 0.0;   // MAD estimate from the first differences, signal units
-  double noise_share = 0.0;   // noise_sigma^2 / var(x), clamped to [0, 1]
+  int window = 0;            // the window length used, samples
+  double noise_sigma = 0.0;  // MAD estimate from the first differences, signal units
+  double noise_share = 0.0;  // noise_sigma^2 / var(x), clamped to [0, 1]
 };
 
 // The noise estimate of the window rule (see above): {sigma, share}.

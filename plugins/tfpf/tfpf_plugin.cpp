@@ -64,23 +64,23 @@ void register_tfpf_plugins(Registry& registry) {
        .summary = "time-frequency peak filtering: PWVD peak of the FM-encoded signal, window chosen by noise level",
        .reference = "Boashash & Mesbah 2004 (TFPF); window rule after the SEEMD-TFPF / ICEEMDAN-TFPF gyro papers "
                     "(short window for signal-dominated, long for noise-dominated components)",
-       .params = ParamTable{
-           {
-               param::choice("window_rule", "noise_level", {"noise_level", "fixed"},
-                             "noise_level: short_window when the estimated noise share sigma^2/var <= 0.1, "
-                             "long_window when >= 0.9, geometric in between (sigma from the MAD of first "
-                             "differences); fixed: window"),
-               odd_window("window", 31, "PWVD lag-window length for window_rule fixed"),
-               odd_window("short_window", 9, "window for signal-dominated input (window_rule noise_level)"),
-               odd_window("long_window", 65, "window for noise-dominated input (window_rule noise_level)"),
-               param::choice("lag_window", "rectangular", {"rectangular", "hann"},
-                             "lag weighting of the pseudo Wigner-Ville distribution"),
-           },
-           {
-               {"short_window <= long_window",
-                {"short_window", "long_window"},
-                [](const ParamValues& v) { return v.integer("short_window") <= v.integer("long_window"); }},
-           }},
+       .params =
+           ParamTable{{
+                          param::choice("window_rule", "noise_level", {"noise_level", "fixed"},
+                                        "noise_level: short_window when the estimated noise share sigma^2/var <= 0.1, "
+                                        "long_window when >= 0.9, geometric in between (sigma from the MAD of first "
+                                        "differences); fixed: window"),
+                          odd_window("window", 31, "PWVD lag-window length for window_rule fixed"),
+                          odd_window("short_window", 9, "window for signal-dominated input (window_rule noise_level)"),
+                          odd_window("long_window", 65, "window for noise-dominated input (window_rule noise_level)"),
+                          param::choice("lag_window", "rectangular", {"rectangular", "hann"},
+                                        "lag weighting of the pseudo Wigner-Ville distribution"),
+                      },
+                      {
+                          {"short_window <= long_window",
+                           {"short_window", "long_window"},
+                           [](const ParamValues& v) { return v.integer("short_window") <= v.integer("long_window"); }},
+                      }},
        .make = [](const ParamValues& p, const Registry&) { return std::make_unique<TfpfFilter>(p); }});
 }
 

@@ -143,7 +143,7 @@ Result decompose(const Eigen::VectorXd& x, const Config& config) {
 
   std::vector<double> omega = initial_centres(config, n);
   std::vector<double> u_re(k_count * nb, 0.0), u_im(k_count * nb, 0.0);
-  std::vector<double> sum_re(nb, 0.0), sum_im(nb, 0.0);  // sum of all current modes
+  std::vector<double> sum_re(nb, 0.0), sum_im(nb, 0.0);        // sum of all current modes
   std::vector<double> lambda_re(nb, 0.0), lambda_im(nb, 0.0);  // dual variable
   const SpectrumView spectrum{freq.data(), f_re.data(), f_im.data(), lambda_re.data(), lambda_im.data(), nb};
 

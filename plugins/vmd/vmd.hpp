@@ -54,23 +54,23 @@ namespace driftlab::vmd {
 enum class Init { Uniform, Zero, Random };
 
 struct Config {
-  int modes = 4;                // K >= 1
-  double alpha = 2000.0;        // bandwidth penalty (reference-code convention), > 0
-  double tau = 0.0;             // dual ascent step, >= 0 (0: no exact-reconstruction constraint)
-  bool dc = false;              // hold the first centre frequency at 0
+  int modes = 4;          // K >= 1
+  double alpha = 2000.0;  // bandwidth penalty (reference-code convention), > 0
+  double tau = 0.0;       // dual ascent step, >= 0 (0: no exact-reconstruction constraint)
+  bool dc = false;        // hold the first centre frequency at 0
   Init init = Init::Uniform;
-  double tolerance = 1e-7;      // relative change of the mode spectra, > 0
-  int max_iterations = 500;     // >= 1
-  std::uint64_t seed = 1;       // Init::Random only
+  double tolerance = 1e-7;   // relative change of the mode spectra, > 0
+  int max_iterations = 500;  // >= 1
+  std::uint64_t seed = 1;    // Init::Random only
 };
 
 struct Result {
-  Eigen::MatrixXd modes;                // N x K, highest centre frequency first
-  Eigen::VectorXd centre_frequencies;   // K, cycles per sample, same order as the columns
-  Eigen::VectorXd residue;              // x - sum of the modes
+  Eigen::MatrixXd modes;               // N x K, highest centre frequency first
+  Eigen::VectorXd centre_frequencies;  // K, cycles per sample, same order as the columns
+  Eigen::VectorXd residue;             // x - sum of the modes
   int iterations = 0;
   bool converged = false;
-  double final_change = 0.0;            // the stopping statistic at the last iteration
+  double final_change = 0.0;  // the stopping statistic at the last iteration
 };
 
 // Needs N >= 4 finite samples.

@@ -20,12 +20,18 @@ void require(bool condition, const std::string& message) {
 
 const gsl_wavelet_type* gsl_type(Family family) {
   switch (family) {
-    case Family::Daubechies: return gsl_wavelet_daubechies;
-    case Family::DaubechiesCentered: return gsl_wavelet_daubechies_centered;
-    case Family::Haar: return gsl_wavelet_haar;
-    case Family::HaarCentered: return gsl_wavelet_haar_centered;
-    case Family::Bspline: return gsl_wavelet_bspline;
-    case Family::BsplineCentered: return gsl_wavelet_bspline_centered;
+    case Family::Daubechies:
+      return gsl_wavelet_daubechies;
+    case Family::DaubechiesCentered:
+      return gsl_wavelet_daubechies_centered;
+    case Family::Haar:
+      return gsl_wavelet_haar;
+    case Family::HaarCentered:
+      return gsl_wavelet_haar_centered;
+    case Family::Bspline:
+      return gsl_wavelet_bspline;
+    case Family::BsplineCentered:
+      return gsl_wavelet_bspline_centered;
   }
   return gsl_wavelet_daubechies;
 }
@@ -42,9 +48,11 @@ struct WorkspaceDeleter {
 bool valid_order(Family family, int order) {
   switch (family) {
     case Family::Daubechies:
-    case Family::DaubechiesCentered: return order >= 4 && order <= 20 && order % 2 == 0;
+    case Family::DaubechiesCentered:
+      return order >= 4 && order <= 20 && order % 2 == 0;
     case Family::Haar:
-    case Family::HaarCentered: return order == 2;
+    case Family::HaarCentered:
+      return order == 2;
     case Family::Bspline:
     case Family::BsplineCentered:
       for (const int k : {103, 105, 202, 204, 206, 208, 301, 303, 305, 307, 309}) {
@@ -61,9 +69,7 @@ double mad_sigma(std::vector<double> coefficients) {
   return signal::median(std::move(coefficients)) / signal::kMadToSigma;
 }
 
-double universal_threshold(std::size_t n) {
-  return n < 2 ? 0.0 : std::sqrt(2.0 * std::log(static_cast<double>(n)));
-}
+double universal_threshold(std::size_t n) { return n < 2 ? 0.0 : std::sqrt(2.0 * std::log(static_cast<double>(n))); }
 
 double sure_risk(const std::vector<double>& y, double t) {
   double risk = static_cast<double>(y.size());
@@ -140,8 +146,10 @@ Result denoise(const Eigen::VectorXd& x, const Config& config) {
   for (Eigen::Index i = 0; i < m; ++i) data[static_cast<std::size_t>(i)] = x[signal::reflect(i - before, n)];
 
   // Orders are validated above, so GSL's allocation cannot fail on them; a null means no memory.
-  std::unique_ptr<gsl_wavelet, WaveletDeleter> w(gsl_wavelet_alloc(gsl_type(config.family), static_cast<std::size_t>(config.order)));
-  std::unique_ptr<gsl_wavelet_workspace, WorkspaceDeleter> work(gsl_wavelet_workspace_alloc(static_cast<std::size_t>(m)));
+  std::unique_ptr<gsl_wavelet, WaveletDeleter> w(
+      gsl_wavelet_alloc(gsl_type(config.family), static_cast<std::size_t>(config.order)));
+  std::unique_ptr<gsl_wavelet_workspace, WorkspaceDeleter> work(
+      gsl_wavelet_workspace_alloc(static_cast<std::size_t>(m)));
   if (!w || !work) throw std::runtime_error("wavelet: GSL could not allocate the transform");
   if (gsl_wavelet_transform_forward(w.get(), data.data(), 1, static_cast<std::size_t>(m), work.get()) != GSL_SUCCESS) {
     throw std::runtime_error("wavelet: GSL forward transform failed");
@@ -156,7 +164,8 @@ Result denoise(const Eigen::VectorXd& x, const Config& config) {
   };
   auto level_coefficients = [&](int l) {
     const auto [b, e] = level_range(l);
-    return std::vector<double>(data.begin() + static_cast<std::ptrdiff_t>(b), data.begin() + static_cast<std::ptrdiff_t>(e));
+    return std::vector<double>(data.begin() + static_cast<std::ptrdiff_t>(b),
+                               data.begin() + static_cast<std::ptrdiff_t>(e));
   };
   const double finest_sigma = mad_sigma(level_coefficients(1));
   for (int l = 1; l <= result.levels; ++l) {

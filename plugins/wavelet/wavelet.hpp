@@ -60,7 +60,7 @@ enum class NoiseEstimate { FinestLevel, PerLevel };
 
 struct Config {
   Family family = Family::Daubechies;
-  int order = 8;  // GSL's k
+  int order = 8;   // GSL's k
   int levels = 5;  // detail levels thresholded, >= 1
   ThresholdRule rule = ThresholdRule::Universal;
   Shrink shrink = Shrink::Soft;
@@ -69,10 +69,10 @@ struct Config {
 
 struct Result {
   Eigen::VectorXd denoised;
-  int levels = 0;                   // levels actually thresholded (finest first below)
-  std::vector<double> sigma;        // noise level per thresholded level, signal units
-  std::vector<double> thresholds;   // lambda per thresholded level, signal units
-  std::vector<std::size_t> kept;    // coefficients above the threshold, per level
+  int levels = 0;                  // levels actually thresholded (finest first below)
+  std::vector<double> sigma;       // noise level per thresholded level, signal units
+  std::vector<double> thresholds;  // lambda per thresholded level, signal units
+  std::vector<std::size_t> kept;   // coefficients above the threshold, per level
 };
 
 // True when GSL implements order k for the family.
@@ -82,7 +82,7 @@ Result denoise(const Eigen::VectorXd& x, const Config& config);
 
 // Building blocks (exposed for tests).
 double mad_sigma(std::vector<double> coefficients);        // median(|c|) / 0.6745
-double universal_threshold(std::size_t n);                  // sqrt(2 ln n), in units of sigma
+double universal_threshold(std::size_t n);                 // sqrt(2 ln n), in units of sigma
 double sure_risk(const std::vector<double>& y, double t);  // SURE(t) for normalized y
 double sure_threshold(const std::vector<double>& y);       // argmin over [0, sqrt(2 ln n)]
 double hybrid_sure_threshold(const std::vector<double>& y);

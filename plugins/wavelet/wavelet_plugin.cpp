@@ -64,33 +64,34 @@ void register_wavelet_plugins(Registry& registry) {
        .summary = "wavelet-threshold denoising (GSL DWT; soft/hard; universal, SURE or hybrid SURE thresholds)",
        .reference = "Donoho & Johnstone 1994 (VisuShrink); Donoho & Johnstone 1995 (SureShrink); "
                     "Johnstone & Silverman 1997 (level-dependent noise)",
-       .params = ParamTable{
-           {
-               param::choice("wavelet", "daubechies",
-                             {"daubechies", "daubechies_centered", "haar", "haar_centered", "bspline",
-                              "bspline_centered"},
-                             "wavelet family (GSL)"),
-               param::integer("order", 8, "1",
-                              "GSL's k: daubechies 4, 6, ..., 20 (k/2 vanishing moments; 8 = db4), haar 2, "
-                              "bspline 103 105 202 204 206 208 301 303 305 307 309"),
-               param::integer("levels", 5, "1", "detail levels thresholded, finest first (coarser levels kept)")
-                   .at_least(1)
-                   .at_most(30),
-               param::choice("threshold", "universal", {"universal", "sure", "sure_hybrid"},
-                             "universal sigma sqrt(2 ln N) (VisuShrink); sure: per-level SURE minimizer; "
-                             "sure_hybrid: universal on sparse levels, else SURE (SureShrink)"),
-               param::choice("mode", "soft", {"soft", "hard"}, "shrinkage rule"),
-               param::choice("noise_estimate", "finest_level", {"finest_level", "per_level"},
-                             "sigma = median(|d|)/0.6745 of the finest details for all levels (white noise) or of "
-                             "each level's own details (coloured noise)"),
-           },
-           {
-               {"order is one GSL implements for the wavelet family",
-                {"wavelet", "order"},
-                [](const ParamValues& v) {
-                  return wavelet::valid_order(family_of(v.text("wavelet")), static_cast<int>(v.integer("order")));
-                }},
-           }},
+       .params =
+           ParamTable{
+               {
+                   param::choice(
+                       "wavelet", "daubechies",
+                       {"daubechies", "daubechies_centered", "haar", "haar_centered", "bspline", "bspline_centered"},
+                       "wavelet family (GSL)"),
+                   param::integer("order", 8, "1",
+                                  "GSL's k: daubechies 4, 6, ..., 20 (k/2 vanishing moments; 8 = db4), haar 2, "
+                                  "bspline 103 105 202 204 206 208 301 303 305 307 309"),
+                   param::integer("levels", 5, "1", "detail levels thresholded, finest first (coarser levels kept)")
+                       .at_least(1)
+                       .at_most(30),
+                   param::choice("threshold", "universal", {"universal", "sure", "sure_hybrid"},
+                                 "universal sigma sqrt(2 ln N) (VisuShrink); sure: per-level SURE minimizer; "
+                                 "sure_hybrid: universal on sparse levels, else SURE (SureShrink)"),
+                   param::choice("mode", "soft", {"soft", "hard"}, "shrinkage rule"),
+                   param::choice("noise_estimate", "finest_level", {"finest_level", "per_level"},
+                                 "sigma = median(|d|)/0.6745 of the finest details for all levels (white noise) or of "
+                                 "each level's own details (coloured noise)"),
+               },
+               {
+                   {"order is one GSL implements for the wavelet family",
+                    {"wavelet", "order"},
+                    [](const ParamValues& v) {
+                      return wavelet::valid_order(family_of(v.text("wavelet")), static_cast<int>(v.integer("order")));
+                    }},
+               }},
        .make = [](const ParamValues& p, const Registry&) { return std::make_unique<WaveletFilter>(p); }});
 }
 

@@ -64,15 +64,17 @@ AllanResult allan_deviation(const InputArray& x, double fs_hz, const std::string
   const auto u = find_unit(unit);
   if (!u || u->quantity != Quantity::AngularRate)
     throw ConfigError({"", 0, "unit"}, "'" + unit + "' is not an angular-rate unit (rad/s, deg/s, deg/h, ...)");
-  const allan::TauGrid grid = std::holds_alternative<std::string>(taus)
-                                  ? allan::parse_tau_grid(std::get<std::string>(taus))
-                                  : allan::TauGrid{.kind = allan::GridKind::Explicit,
-                                                   .taus_s = std::get<std::vector<double>>(taus)};
+  const allan::TauGrid grid =
+      std::holds_alternative<std::string>(taus)
+          ? allan::parse_tau_grid(std::get<std::string>(taus))
+          : allan::TauGrid{.kind = allan::GridKind::Explicit, .taus_s = std::get<std::vector<double>>(taus)};
   const auto samples = vector_view(x, "x");
   const auto input_type = input == "rate" ? allan::InputType::Rate : allan::InputType::Angle;
   const double tau0 = 1.0 / fs_hz;
 
-  AllanResult r{.kind = kind_name, .confidence = confidence, .sample_rate_hz = fs_hz,
+  AllanResult r{.kind = kind_name,
+                .confidence = confidence,
+                .sample_rate_hz = fs_hz,
                 .samples = static_cast<std::size_t>(samples.size())};
   std::vector<allan::Estimate> curve;
   std::optional<allan::Analysis> analysis;
@@ -122,15 +124,19 @@ void bind_allan(py::module_& m) {
                               "B read as the flat floor of the OADEV: min sigma(tau) / sqrt(2 ln 2 / pi) "
                               "(IEEE 952 Annex C), with the chi-square interval of that point scaled the same way; "
                               "a B only where resolved (the deviation has a floor there), otherwise B < high_rad_s")
-      .def_property_readonly("resolved", [](const BiasInstability& b) { return b.reading.resolved; },
-                             "True where the minimum is a floor (rising or flat neighbours within the intervals)")
-      .def_property_readonly("longest_tau_s", [](const BiasInstability& b) { return b.reading.longest_tau_s; },
-                             "an unresolved B is bounded within tau <= this")
-      .def_property_readonly("value_rad_s", [](const BiasInstability& b) { return b.reading.value; },
-                             "min sigma / 0.664: B when resolved, otherwise only what the bound comes from")
+      .def_property_readonly(
+          "resolved", [](const BiasInstability& b) { return b.reading.resolved; },
+          "True where the minimum is a floor (rising or flat neighbours within the intervals)")
+      .def_property_readonly(
+          "longest_tau_s", [](const BiasInstability& b) { return b.reading.longest_tau_s; },
+          "an unresolved B is bounded within tau <= this")
+      .def_property_readonly(
+          "value_rad_s", [](const BiasInstability& b) { return b.reading.value; },
+          "min sigma / 0.664: B when resolved, otherwise only what the bound comes from")
       .def_property_readonly("low_rad_s", [](const BiasInstability& b) { return b.reading.low; })
       .def_property_readonly("high_rad_s", [](const BiasInstability& b) { return b.reading.high; })
-      .def_property_readonly("tau_s", [](const BiasInstability& b) { return b.reading.tau_s; }, "tau of the minimum")
+      .def_property_readonly(
+          "tau_s", [](const BiasInstability& b) { return b.reading.tau_s; }, "tau of the minimum")
       .def("__repr__", [](const BiasInstability& b) {
         return "<driftlab.BiasInstability " + std::to_string(b.reading.value) + " rad/s at tau " +
                std::to_string(b.reading.tau_s) + " s>";
@@ -138,15 +144,20 @@ void bind_allan(py::module_& m) {
 
   py::class_<NoiseTerm>(m, "NoiseTerm", "One fitted IEEE 952 term: value and 1-sigma in the unit its name states")
       .def_property_readonly("value", [](const NoiseTerm& t) { return t.estimate.value; })
-      .def_property_readonly("sigma", [](const NoiseTerm& t) { return t.estimate.sigma; },
-                             "1-sigma; for a term set to 0 the level it could have at one sigma")
-      .def_property_readonly("fitted", [](const NoiseTerm& t) { return t.estimate.fitted; },
-                             "False when the constrained fit set the term to 0")
-      .def_property_readonly("resolved", [](const NoiseTerm& t) { return t.estimate.resolved; },
-                             "fitted and its square more than one sigma above 0; otherwise only value < high")
-      .def_property_readonly("low", [](const NoiseTerm& t) { return t.estimate.low; }, "one-sigma interval, low end")
-      .def_property_readonly("high", [](const NoiseTerm& t) { return t.estimate.high; },
-                             "one-sigma interval, high end: the bound of an unresolved term")
+      .def_property_readonly(
+          "sigma", [](const NoiseTerm& t) { return t.estimate.sigma; },
+          "1-sigma; for a term set to 0 the level it could have at one sigma")
+      .def_property_readonly(
+          "fitted", [](const NoiseTerm& t) { return t.estimate.fitted; },
+          "False when the constrained fit set the term to 0")
+      .def_property_readonly(
+          "resolved", [](const NoiseTerm& t) { return t.estimate.resolved; },
+          "fitted and its square more than one sigma above 0; otherwise only value < high")
+      .def_property_readonly(
+          "low", [](const NoiseTerm& t) { return t.estimate.low; }, "one-sigma interval, low end")
+      .def_property_readonly(
+          "high", [](const NoiseTerm& t) { return t.estimate.high; },
+          "one-sigma interval, high end: the bound of an unresolved term")
       .def("__repr__", [](const NoiseTerm& t) {
         return t.estimate.resolved ? "<driftlab.NoiseTerm " + std::to_string(t.estimate.value) + " +- " +
                                          std::to_string(t.estimate.sigma) + ">"
@@ -156,18 +167,24 @@ void bind_allan(py::module_& m) {
   py::class_<NoiseTerms>(m, "NoiseTerms",
                          "Least-squares fit of sigma^2 = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + "
                          "R^2 tau^2/2 to the OADEV curve (IEEE 952 eq. C.2; models/allan/noise_fit.hpp)")
-      .def_property_readonly("Q_rad", [](const NoiseTerms& f) { return f.term(allan::Term::Q); }, "quantization")
-      .def_property_readonly("N_rad_sqrt_s", [](const NoiseTerms& f) { return f.term(allan::Term::N); },
-                             "angle random walk, rad/sqrt(s) = rad/s/sqrt(Hz)")
-      .def_property_readonly("B_rad_s", [](const NoiseTerms& f) { return f.term(allan::Term::B); }, "bias instability")
-      .def_property_readonly("K_rad_s_sqrt_s", [](const NoiseTerms& f) { return f.term(allan::Term::K); },
-                             "rate random walk, rad/s/sqrt(s) = rad/s^2/sqrt(Hz)")
-      .def_property_readonly("R_rad_s2", [](const NoiseTerms& f) { return f.term(allan::Term::R); }, "rate ramp")
+      .def_property_readonly(
+          "Q_rad", [](const NoiseTerms& f) { return f.term(allan::Term::Q); }, "quantization")
+      .def_property_readonly(
+          "N_rad_sqrt_s", [](const NoiseTerms& f) { return f.term(allan::Term::N); },
+          "angle random walk, rad/sqrt(s) = rad/s/sqrt(Hz)")
+      .def_property_readonly(
+          "B_rad_s", [](const NoiseTerms& f) { return f.term(allan::Term::B); }, "bias instability")
+      .def_property_readonly(
+          "K_rad_s_sqrt_s", [](const NoiseTerms& f) { return f.term(allan::Term::K); },
+          "rate random walk, rad/s/sqrt(s) = rad/s^2/sqrt(Hz)")
+      .def_property_readonly(
+          "R_rad_s2", [](const NoiseTerms& f) { return f.term(allan::Term::R); }, "rate ramp")
       .def_property_readonly("chi2", [](const NoiseTerms& f) { return f.fit.chi2; })
       .def_property_readonly("points", [](const NoiseTerms& f) { return f.fit.points; })
       .def_property_readonly("dof", [](const NoiseTerms& f) { return f.fit.dof; })
-      .def("model_dev_rad_s", [](const NoiseTerms& f, double tau_s) { return f.fit.model_deviation(tau_s); },
-           py::arg("tau_s"), "Allan deviation of the fitted model at tau_s, rad/s");
+      .def(
+          "model_dev_rad_s", [](const NoiseTerms& f, double tau_s) { return f.fit.model_deviation(tau_s); },
+          py::arg("tau_s"), "Allan deviation of the fitted model at tau_s, rad/s");
 
   py::class_<AllanResult>(m, "Allan", "Allan-family deviation on a tau grid, with intervals, edf and readings")
       .def_readonly("kind", &AllanResult::kind)

@@ -41,8 +41,7 @@ YAML::Node to_yaml(py::handle value) {
   }
   // numpy scalars and other numbers: through their float value (integral ones stay integral).
   const double number = value.cast<double>();
-  if (std::floor(number) == number && std::abs(number) < 9.0e15)
-    return YAML::Node(static_cast<std::int64_t>(number));
+  if (std::floor(number) == number && std::abs(number) < 9.0e15) return YAML::Node(static_cast<std::int64_t>(number));
   return YAML::Node(number);
 }
 
@@ -50,8 +49,8 @@ YAML::Node to_yaml(py::handle value) {
 
 Eigen::Map<const Eigen::VectorXd> vector_view(const InputArray& array, const char* name) {
   if (array.ndim() != 1)
-    throw DataError({"", 0, name}, "expected a 1-D array of samples, got " + std::to_string(array.ndim()) +
-                                       " dimensions");
+    throw DataError({"", 0, name},
+                    "expected a 1-D array of samples, got " + std::to_string(array.ndim()) + " dimensions");
   const Eigen::Map<const Eigen::VectorXd> x(array.data(), array.shape(0));
   for (Eigen::Index i = 0; i < x.size(); ++i)
     if (!std::isfinite(x[i]))
@@ -72,12 +71,18 @@ py::array columns_to_numpy(Eigen::MatrixXd&& columns) {
 
 py::object to_python(const nlohmann::json& value) {
   switch (value.type()) {
-    case nlohmann::json::value_t::null: return py::none();
-    case nlohmann::json::value_t::boolean: return py::bool_(value.get<bool>());
-    case nlohmann::json::value_t::number_integer: return py::int_(value.get<std::int64_t>());
-    case nlohmann::json::value_t::number_unsigned: return py::int_(value.get<std::uint64_t>());
-    case nlohmann::json::value_t::number_float: return py::float_(value.get<double>());
-    case nlohmann::json::value_t::string: return py::str(value.get<std::string>());
+    case nlohmann::json::value_t::null:
+      return py::none();
+    case nlohmann::json::value_t::boolean:
+      return py::bool_(value.get<bool>());
+    case nlohmann::json::value_t::number_integer:
+      return py::int_(value.get<std::int64_t>());
+    case nlohmann::json::value_t::number_unsigned:
+      return py::int_(value.get<std::uint64_t>());
+    case nlohmann::json::value_t::number_float:
+      return py::float_(value.get<double>());
+    case nlohmann::json::value_t::string:
+      return py::str(value.get<std::string>());
     case nlohmann::json::value_t::array: {
       py::list list;
       for (const auto& item : value) list.append(to_python(item));
@@ -88,7 +93,8 @@ py::object to_python(const nlohmann::json& value) {
       for (const auto& [k, v] : value.items()) dict[py::str(k)] = to_python(v);
       return dict;
     }
-    default: return py::none();  // binary and discarded values do not occur in reports
+    default:
+      return py::none();  // binary and discarded values do not occur in reports
   }
 }
 

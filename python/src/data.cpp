@@ -139,9 +139,9 @@ py::dict simulate_whole_imu(const devices::ImuDefinition& imu, const devices::Si
                             const devices::SimulationOptions& options) {
   // About 800 bytes per sample and instance, as the command line estimates.
   const double samples = std::floor(options.duration_s.value_or(chamber.duration_s()) * options.sample_rate_hz) + 1.0;
-  check_memory_estimate(samples * 800.0 * static_cast<double>(imu.instances.size()), {"", 0, "fs_hz, duration_s"},
-                        std::to_string(samples) + " samples of " + std::to_string(imu.instances.size()) +
-                            " IMU instances");
+  check_memory_estimate(
+      samples * 800.0 * static_cast<double>(imu.instances.size()), {"", 0, "fs_hz, duration_s"},
+      std::to_string(samples) + " samples of " + std::to_string(imu.instances.size()) + " IMU instances");
   std::vector<devices::ImuSimulationColumn> columns;
   {
     py::gil_scoped_release release;
@@ -297,7 +297,8 @@ calibration::FitOptions fit_options(const FitArguments& a) {
   const auto kind = calibration::parse_model_kind(a.model);
   if (!kind) throw ConfigError({"", 0, "model"}, "expected poly, physical or rbf, got '" + a.model + "'");
   const auto policy = calibration::parse_extrapolation(a.extrapolation);
-  if (!policy) throw ConfigError({"", 0, "extrapolation"}, "expected clamp, linear or evaluate, got '" + a.extrapolation + "'");
+  if (!policy)
+    throw ConfigError({"", 0, "extrapolation"}, "expected clamp, linear or evaluate, got '" + a.extrapolation + "'");
   if (a.min_order < 0 || a.max_order > 12 || a.min_order > a.max_order)
     throw ConfigError({"", 0, "min_order"}, "expected 0 <= min_order <= max_order <= 12");
   if (a.blocks < 2 || a.blocks > 1000) throw ConfigError({"", 0, "blocks"}, "must be 2 .. 1000");
@@ -305,7 +306,8 @@ calibration::FitOptions fit_options(const FitArguments& a) {
   if (!(a.derivative_tau_s > 0.0) || !std::isfinite(a.derivative_tau_s))
     throw ConfigError({"", 0, "derivative_tau_s"}, "must be a finite number > 0 s");
   if (a.ga_population < 2 || a.ga_population > 1000) throw ConfigError({"", 0, "ga_population"}, "must be 2 .. 1000");
-  if (a.ga_generations < 1 || a.ga_generations > 1000) throw ConfigError({"", 0, "ga_generations"}, "must be 1 .. 1000");
+  if (a.ga_generations < 1 || a.ga_generations > 1000)
+    throw ConfigError({"", 0, "ga_generations"}, "must be 1 .. 1000");
   f.kind = *kind;
   f.extrapolation = *policy;
   f.reference_temp_c = a.reference_temp_c;
@@ -390,19 +392,24 @@ py::tuple export_model(const CalibrationModel& m, const std::string& format, boo
   calibration::ExportOptions options;
   options.strict = strict;
   calibration::ExportResult r;
-  if (format == "c-header") r = calibration::export_c_header(*m.model, options);
-  else if (format == "px4") r = calibration::export_px4_params(*m.model, options);
-  else if (format == "ardupilot") r = calibration::export_ardupilot_params(*m.model, options);
-  else if (format == "kalibr") r = calibration::export_kalibr_imu_yaml(*m.model, options);
-  else throw ConfigError({"", 0, "format"}, "'" + format + "': expected c-header, px4, ardupilot or kalibr");
+  if (format == "c-header")
+    r = calibration::export_c_header(*m.model, options);
+  else if (format == "px4")
+    r = calibration::export_px4_params(*m.model, options);
+  else if (format == "ardupilot")
+    r = calibration::export_ardupilot_params(*m.model, options);
+  else if (format == "kalibr")
+    r = calibration::export_kalibr_imu_yaml(*m.model, options);
+  else
+    throw ConfigError({"", 0, "format"}, "'" + format + "': expected c-header, px4, ardupilot or kalibr");
   return py::make_tuple(r.text, r.notes);
 }
 
 // ---- discrepancy -----------------------------------------------------------------------------
 
 struct Discrepancy {
-  py::dict report;                  // report.json's data (models/discrepancy/report.hpp)
-  py::list named_effects;           // report["named_effects"]
+  py::dict report;         // report.json's data (models/discrepancy/report.hpp)
+  py::list named_effects;  // report["named_effects"]
   double gap_initial_deg_h = 0.0, gap_final_deg_h = 0.0, noise_floor_deg_h = 0.0;
   bool unexplained = false;
   py::array model_initial_rad_s, model_final_rad_s;
@@ -427,7 +434,8 @@ Discrepancy find_discrepancy(const py::object& inputs, const std::optional<std::
     if (*bias_degree < 0 || *bias_degree > 6) throw ConfigError({"", 0, "bias_degree"}, "must be 0 .. 6");
     options.bias_degree = *bias_degree;
   }
-  if (!(block_s >= 0.0) || !std::isfinite(block_s)) throw ConfigError({"", 0, "block_s"}, "must be a finite number >= 0 s");
+  if (!(block_s >= 0.0) || !std::isfinite(block_s))
+    throw ConfigError({"", 0, "block_s"}, "must be a finite number >= 0 s");
   if (!(significance >= 0.0) || !std::isfinite(significance))
     throw ConfigError({"", 0, "significance"}, "must be a finite number >= 0");
   if (max_effects < 0 || max_effects > 20) throw ConfigError({"", 0, "max_effects"}, "must be 0 .. 20");
@@ -528,12 +536,14 @@ void bind_data(py::module_& m) {
                      "degC, Hz), as the command line reads it. Arrays view the record's storage.")
       .def_property_readonly("time_s", [](const Record& r) { return view_of(r.series->time(), r.series); })
       .def_property_readonly("channels", &record_channels, "role -> samples (rate, temperature, gyro_x, ...)")
-      .def_property_readonly("units", [](const Record& r) { return per_channel(r, &Channel::unit); },
-                             "role -> internal (SI) unit of its samples")
-      .def_property_readonly("sources", [](const Record& r) { return per_channel(r, &Channel::source); },
-                             "role -> the column or log field it was read from")
-      .def_property_readonly("sample_rate_hz", [](const Record& r) { return r.series->sample_rate_hz(); },
-                             "mean sample rate, Hz")
+      .def_property_readonly(
+          "units", [](const Record& r) { return per_channel(r, &Channel::unit); },
+          "role -> internal (SI) unit of its samples")
+      .def_property_readonly(
+          "sources", [](const Record& r) { return per_channel(r, &Channel::source); },
+          "role -> the column or log field it was read from")
+      .def_property_readonly(
+          "sample_rate_hz", [](const Record& r) { return r.series->sample_rate_hz(); }, "mean sample rate, Hz")
       .def_readonly("notes", &Record::notes, "what a log reader repaired or left out")
       .def_readonly("path", &Record::path, "the file it was read from")
       .def("__len__", [](const Record& r) { return r.series->size(); })
@@ -560,8 +570,7 @@ topic, instance, sensor: what to take from a log (ignored for CSV). required: ro
 present. Returns Record (time_s, channels, units, sources, sample_rate_hz, notes, path).)");
 
   m.def(
-      "device_files",
-      [] { return devices::list_device_files(package("devices_dir")().cast<std::filesystem::path>()); },
+      "device_files", [] { return devices::list_device_files(package("devices_dir")().cast<std::filesystem::path>()); },
       "The device files (*.yaml) of driftlab.devices_dir(), sorted.");
   const devices::SimulationOptions simulation_defaults;
   m.def("simulate", &simulate_device, py::arg("device"), py::arg("profile") = "oven",
@@ -606,8 +615,9 @@ true_gyro{i}_*, true_accel{i}_*, systematic_gyro{i}_*, systematic_accel{i}_*; th
            "record of another device (device_id) is refused. Returns a dict: <role> (compensated, SI), "
            "bias_<role> (the correction subtracted, same unit) per channel, and extrapolated (True where some "
            "channel's model temperature was outside its calibrated range).")
-      .def("to_json", [](const CalibrationModel& c) { return calibration::to_json_text(*c.model); },
-           "The model as a driftlab-calibration/2 file's text.")
+      .def(
+          "to_json", [](const CalibrationModel& c) { return calibration::to_json_text(*c.model); },
+          "The model as a driftlab-calibration/2 file's text.")
       .def("export", &export_model, py::arg("format"), py::arg("strict") = false,
            "The model in a firmware / navigation format: 'c-header', 'px4', 'ardupilot' or 'kalibr'. Returns "
            "(text, notes): notes list approximations and dropped terms (strict=True refuses them instead).")
@@ -626,9 +636,9 @@ true_gyro{i}_*, true_accel{i}_*, systematic_gyro{i}_*, systematic_accel{i}_*; th
   const calibration::FitOptions fit_defaults;
   m.def(
       "calibrate",
-      [](const py::object& records, const std::string& model, const py::object& channels, char axis,
-         bool same_device, const std::string& extrapolation, double reference_temp_c, int min_order, int max_order,
-         std::size_t blocks, double bin_s, double derivative_tau_s, bool heating_only, std::size_t ga_population,
+      [](const py::object& records, const std::string& model, const py::object& channels, char axis, bool same_device,
+         const std::string& extrapolation, double reference_temp_c, int min_order, int max_order, std::size_t blocks,
+         double bin_s, double derivative_tau_s, bool heating_only, std::size_t ga_population,
          std::size_t ga_generations, std::uint64_t seed, bool strict, bool force, const std::string& device,
          int threads, std::optional<double> fs_hz) {
         // A selection as text ("gyro,accel1_z") or as a list of its items (["gyro", "accel1_z"]).
@@ -643,8 +653,8 @@ true_gyro{i}_*, true_accel{i}_*, systematic_gyro{i}_*, systematic_accel{i}_*; th
                           ga_population, ga_generations, heating_only, seed},
                          selection, axis, same_device, strict, force, device, threads, fs_hz);
       },
-      py::arg("records"), py::arg("model") = "physical", py::kw_only(), py::arg("channels") = "",
-      py::arg("axis") = 'z', py::arg("same_device") = false, py::arg("extrapolation") = "clamp",
+      py::arg("records"), py::arg("model") = "physical", py::kw_only(), py::arg("channels") = "", py::arg("axis") = 'z',
+      py::arg("same_device") = false, py::arg("extrapolation") = "clamp",
       py::arg("reference_temp_c") = fit_defaults.reference_temp_c, py::arg("min_order") = fit_defaults.min_order,
       py::arg("max_order") = fit_defaults.max_order, py::arg("blocks") = fit_defaults.holdout_blocks,
       py::arg("bin_s") = fit_defaults.bin_s, py::arg("derivative_tau_s") = fit_defaults.derivative_tau_s,
@@ -672,9 +682,13 @@ force: keep a model whose held-out error exceeds the uncompensated one (--force;
 device: the device name stored in the model. threads: channels fitted in parallel (same results).
 Returns Calibration: .model (CalibrationModel: compensate, to_json, export) and .gate (the quality
 gate's findings that did not stop the fit).)");
-  m.def("load_calibration", [](const std::filesystem::path& path) {
-    return CalibrationModel{std::make_shared<const calibration::ImuCalibration>(calibration::read_calibration(path))};
-  }, py::arg("path"), "Reads a calibration model file (driftlab-calibration/2, or /1 as one gyro channel).");
+  m.def(
+      "load_calibration",
+      [](const std::filesystem::path& path) {
+        return CalibrationModel{
+            std::make_shared<const calibration::ImuCalibration>(calibration::read_calibration(path))};
+      },
+      py::arg("path"), "Reads a calibration model file (driftlab-calibration/2, or /1 as one gyro channel).");
 
   py::class_<Discrepancy>(m, "Discrepancy", "What discrepancy() found: the named effects and the gaps")
       .def_readonly("report", &Discrepancy::report,
@@ -691,7 +705,8 @@ gate's findings that did not stop the fit).)");
       .def_readonly("noise_floor_deg_h", &Discrepancy::noise_floor_deg_h, "what noise alone would leave, deg/h")
       .def_readonly("unexplained", &Discrepancy::unexplained,
                     "True when structure remains that no candidate explains (report['unexplained'] says where)")
-      .def_readonly("model_initial_rad_s", &Discrepancy::model_initial_rad_s, "the initial model's systematic rate, rad/s")
+      .def_readonly("model_initial_rad_s", &Discrepancy::model_initial_rad_s,
+                    "the initial model's systematic rate, rad/s")
       .def_readonly("model_final_rad_s", &Discrepancy::model_final_rad_s, "the final model's systematic rate, rad/s")
       .def("__repr__", [](const Discrepancy& d) {
         return "<driftlab.Discrepancy " + std::to_string(py::len(d.named_effects)) + " named effect(s), gap " +
@@ -737,22 +752,28 @@ unexplained, model_initial_rad_s, model_final_rad_s).)");
                   "A pipeline from a file path, the name of a pipeline shipped with driftlab "
                   "(driftlab.pipelines_dir(): 'li2023'), or YAML text (anything with a line break). Validated "
                   "before any data is touched: ConfigError lists every problem with its line and key.")
-      .def_property_readonly("inputs", [](const PipelineHandle& p) { return p.pipeline->inputs; },
-                             "input name -> the record's channel role it reads")
+      .def_property_readonly(
+          "inputs", [](const PipelineHandle& p) { return p.pipeline->inputs; },
+          "input name -> the record's channel role it reads")
       .def_property_readonly("outputs", [](const PipelineHandle& p) { return p.pipeline->output_order; })
-      .def_property_readonly("steps", [](const PipelineHandle& p) {
-        std::vector<std::pair<std::string, std::string>> steps;
-        for (const auto& s : p.pipeline->steps) steps.emplace_back(s.name, s.plugin.empty() ? "sum" : s.plugin);
-        return steps;
-      }, "(name, plugin) per step, in execution order")
+      .def_property_readonly(
+          "steps",
+          [](const PipelineHandle& p) {
+            std::vector<std::pair<std::string, std::string>> steps;
+            for (const auto& s : p.pipeline->steps) steps.emplace_back(s.name, s.plugin.empty() ? "sum" : s.plugin);
+            return steps;
+          },
+          "(name, plugin) per step, in execution order")
       .def_property_readonly("seed", [](const PipelineHandle& p) { return p.pipeline->seed; })
-      .def("effective_yaml", [](const PipelineHandle& p) { return effective_pipeline_yaml(*p.pipeline, registry()); },
-           "The pipeline with every parameter and seed written out; loading it gives the same run.")
-      .def("run", &run, py::arg("inputs"), py::arg("threads") = 1, py::arg("fs_hz") = py::none(),
-           "Runs the steps on a Record, or on a dict of arrays by channel role ('rate' rad/s, 'temperature' degC, "
-           "...) with 'time' (s) or fs_hz. threads: worker threads (results do not depend on them). "
-           "Returns PipelineRun (outputs, units, report, table2_text); a record with a rate is scored as `driftlab run` "
-           "scores it (Table 2 in report).");
+      .def(
+          "effective_yaml", [](const PipelineHandle& p) { return effective_pipeline_yaml(*p.pipeline, registry()); },
+          "The pipeline with every parameter and seed written out; loading it gives the same run.")
+      .def(
+          "run", &run, py::arg("inputs"), py::arg("threads") = 1, py::arg("fs_hz") = py::none(),
+          "Runs the steps on a Record, or on a dict of arrays by channel role ('rate' rad/s, 'temperature' degC, "
+          "...) with 'time' (s) or fs_hz. threads: worker threads (results do not depend on them). "
+          "Returns PipelineRun (outputs, units, report, table2_text); a record with a rate is scored as `driftlab run` "
+          "scores it (Table 2 in report).");
 }
 
 }  // namespace driftlab::python

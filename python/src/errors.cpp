@@ -55,22 +55,22 @@ void raise_config(PyObject* cls, const ConfigError& e) {
 
 void register_errors(py::module_& m) {
   const py::handle value_error(PyExc_ValueError), runtime_error(PyExc_RuntimeError);
-  classes.error = new_class(m, "Error", "Base of every error the driftlab library raises.",
-                            py::make_tuple(runtime_error));
-  classes.config = new_class(
-      m, "ConfigError",
-      "Bad configuration: a parameter, a pipeline, a device file, a calibration file. `problems` lists every "
-      "problem found, each a dict with file, line (1-based, 0 unknown), field and message.",
-      py::make_tuple(py::handle(classes.error), value_error));
+  classes.error =
+      new_class(m, "Error", "Base of every error the driftlab library raises.", py::make_tuple(runtime_error));
+  classes.config =
+      new_class(m, "ConfigError",
+                "Bad configuration: a parameter, a pipeline, a device file, a calibration file. `problems` lists every "
+                "problem found, each a dict with file, line (1-based, 0 unknown), field and message.",
+                py::make_tuple(py::handle(classes.error), value_error));
   classes.data = new_class(
       m, "DataError",
       "Bad input data: a non-finite sample, a record too short, a CSV cell. `file`, `line` and `field` say where.",
       py::make_tuple(py::handle(classes.error), value_error));
-  classes.unknown_plugin = new_class(
-      m, "UnknownPluginError", "A plugin name the registry does not know, or a library that is not a plugin.",
-      py::make_tuple(py::handle(classes.config)));
-  classes.not_fitted = new_class(m, "NotFittedError", "A model used before it was fitted.",
-                                 py::make_tuple(py::handle(classes.error)));
+  classes.unknown_plugin =
+      new_class(m, "UnknownPluginError", "A plugin name the registry does not know, or a library that is not a plugin.",
+                py::make_tuple(py::handle(classes.config)));
+  classes.not_fitted =
+      new_class(m, "NotFittedError", "A model used before it was fitted.", py::make_tuple(py::handle(classes.error)));
 
   py::register_exception_translator([](std::exception_ptr p) {
     try {

@@ -101,9 +101,12 @@ struct SampleEntropyResult {
 
 const char* status_name(sampen::Status status) {
   switch (status) {
-    case sampen::Status::Finite: return "finite";
-    case sampen::Status::NoMatches: return "no_matches";
-    case sampen::Status::Undefined: return "undefined";
+    case sampen::Status::Finite:
+      return "finite";
+    case sampen::Status::NoMatches:
+      return "no_matches";
+    case sampen::Status::Undefined:
+      return "undefined";
   }
   return "undefined";
 }
@@ -164,19 +167,26 @@ void bind_plugins(py::module_& m) {
   py::class_<SampleEntropyResult>(m, "SampleEntropy",
                                   "SampEn(m, r) = -ln(A / B) with its pair counts (Richman & Moorman 2000, "
                                   "PhysioNet sampen.c counting)")
-      .def_property_readonly("value", [](const SampleEntropyResult& s) { return s.result.value; },
-                             "-ln(A / B); inf when A = 0 or B = 0 (see status)")
-      .def_property_readonly("a", [](const SampleEntropyResult& s) { return s.result.a; },
-                             "A: template pairs i < j matching over m + 1 samples")
-      .def_property_readonly("b", [](const SampleEntropyResult& s) { return s.result.b; },
-                             "B: template pairs i < j matching over m samples")
-      .def_property_readonly("n", [](const SampleEntropyResult& s) { return s.result.n; }, "number of samples")
-      .def_property_readonly("m", [](const SampleEntropyResult& s) { return s.result.m; }, "template length")
+      .def_property_readonly(
+          "value", [](const SampleEntropyResult& s) { return s.result.value; },
+          "-ln(A / B); inf when A = 0 or B = 0 (see status)")
+      .def_property_readonly(
+          "a", [](const SampleEntropyResult& s) { return s.result.a; },
+          "A: template pairs i < j matching over m + 1 samples")
+      .def_property_readonly(
+          "b", [](const SampleEntropyResult& s) { return s.result.b; },
+          "B: template pairs i < j matching over m samples")
+      .def_property_readonly(
+          "n", [](const SampleEntropyResult& s) { return s.result.n; }, "number of samples")
+      .def_property_readonly(
+          "m", [](const SampleEntropyResult& s) { return s.result.m; }, "template length")
       .def_readonly("r", &SampleEntropyResult::r, "tolerance as a multiple of the population standard deviation")
-      .def_property_readonly("tolerance", [](const SampleEntropyResult& s) { return s.result.tolerance; },
-                             "absolute tolerance r x SD, in the unit of x")
-      .def_property_readonly("status", [](const SampleEntropyResult& s) { return status_name(s.result.status); },
-                             "'finite'; 'no_matches' (A = 0 < B); 'undefined' (B = 0)")
+      .def_property_readonly(
+          "tolerance", [](const SampleEntropyResult& s) { return s.result.tolerance; },
+          "absolute tolerance r x SD, in the unit of x")
+      .def_property_readonly(
+          "status", [](const SampleEntropyResult& s) { return status_name(s.result.status); },
+          "'finite'; 'no_matches' (A = 0 < B); 'undefined' (B = 0)")
       .def("__repr__", [](const SampleEntropyResult& s) {
         return "<driftlab.SampleEntropy " + std::to_string(s.result.value) + " (A = " + std::to_string(s.result.a) +
                ", B = " + std::to_string(s.result.b) + ", m = " + std::to_string(s.result.m) + ")>";

@@ -140,7 +140,8 @@ TEST(DeviceFile, ReadsTheEffectsSectionAndTheCommandLineFormAlike) {
       "format: driftlab-device/1\nidentity: {name: x}\n"
       "structure: {youngs_modulus_gpa: 169, poisson_ratio: 0.27, density_kg_m3: 2330, length_um: 3000,"
       " width_um: 2300, thickness_um: 60, proof_mass_area_fraction: 0.3}\n"
-      "modes: {drive: {frequency_hz: 30740, quality_factor: 8000}, sense: {frequency_hz: 30886, quality_factor: 2500}}\n"
+      "modes: {drive: {frequency_hz: 30740, quality_factor: 8000}, sense: {frequency_hz: 30886, quality_factor: "
+      "2500}}\n"
       "electronics: {drive_amplitude_um: 5}\n"
       "channels: [{name: r, role: rate, unit: deg/s, range: [-10, 10]}, {name: t, role: temperature, unit: degC}]\n"
       "effects: {hysteresis: {height_dph: 30, width_c: 3}, scale_factor_temperature: {coefficients_ppm: [100, 2]}}\n";
@@ -163,12 +164,14 @@ TEST(DeviceFile, ReadsGaussMarkovNoiseTermsAndNamesABadOne) {
       "format: driftlab-device/1\nidentity: {name: x}\n"
       "structure: {youngs_modulus_gpa: 169, poisson_ratio: 0.27, density_kg_m3: 2330, length_um: 3000,"
       " width_um: 2300, thickness_um: 60, proof_mass_area_fraction: 0.3}\n"
-      "modes: {drive: {frequency_hz: 30740, quality_factor: 8000}, sense: {frequency_hz: 30886, quality_factor: 2500}}\n"
+      "modes: {drive: {frequency_hz: 30740, quality_factor: 8000}, sense: {frequency_hz: 30886, quality_factor: "
+      "2500}}\n"
       "electronics: {drive_amplitude_um: 5}\n"
       "channels: [{name: r, role: rate, unit: deg/s, range: [-10, 10]}, {name: t, role: temperature, unit: degC}]\n";
-  const DeviceDefinition d = parse_device(
-      head + "error_model:\n  noise: {arw_dph_rthz: 10, gauss_markov: [{sigma_dph: 20, tau_s: 200}, {sigma_dph: 5, tau_s: 30}]}\n",
-      "inline.yaml");
+  const DeviceDefinition d = parse_device(head +
+                                              "error_model:\n  noise: {arw_dph_rthz: 10, gauss_markov: [{sigma_dph: "
+                                              "20, tau_s: 200}, {sigma_dph: 5, tau_s: 30}]}\n",
+                                          "inline.yaml");
   const auto& gm = d.error_model.noise.gauss_markov;
   ASSERT_EQ(gm.size(), 2u);
   EXPECT_DOUBLE_EQ(gm[0].sigma_rad_s, 20 * kDph);
@@ -189,9 +192,8 @@ std::string read_text(const std::string& path) {
   return s.str();
 }
 
-const std::vector<NamedEffect> kNamed{
-    {"thermal_lag", {{"tau_s", "s", {300.25}}}},
-    {"hysteresis", {{"height_dph", "deg/h", {214.5}}, {"width_c", "degC", {2.5}}}}};
+const std::vector<NamedEffect> kNamed{{"thermal_lag", {{"tau_s", "s", {300.25}}}},
+                                      {"hysteresis", {{"height_dph", "deg/h", {214.5}}, {"width_c", "degC", {2.5}}}}};
 
 TEST(DeviceFileUpdate, AppendsAnEffectsSectionAndKeepsEveryOriginalLine) {
   const std::string original = read_text(kFixtures + "valid_minimal.yaml") + "# a closing comment\n";
@@ -222,7 +224,8 @@ TEST(DeviceFileUpdate, ReplacesAListedEffectInPlaceAndKeepsTheOthersAndTheCommen
   EXPECT_DOUBLE_EQ(d.error_model.effects.thermal_lag->tau_s, 300.25);
   EXPECT_TRUE(d.error_model.effects.periodic_disturbance);
 
-  const std::string flow = read_text(kFixtures + "valid_minimal.yaml") + "effects: {thermal_lag: {tau_s: 100}, warmup_transient: {amplitude_dph: 20, tau_s: 50}}\n";
+  const std::string flow = read_text(kFixtures + "valid_minimal.yaml") +
+                           "effects: {thermal_lag: {tau_s: 100}, warmup_transient: {amplitude_dph: 20, tau_s: 50}}\n";
   const auto from_flow = parse_device(add_effects_to_device_text(flow, "new.yaml", kNamed, ""), "new.yaml");
   EXPECT_DOUBLE_EQ(from_flow.error_model.effects.thermal_lag->tau_s, 300.25);
   EXPECT_TRUE(from_flow.error_model.effects.warmup_transient && from_flow.error_model.effects.hysteresis);
@@ -263,11 +266,11 @@ TEST_P(MalformedDeviceFile, GetsAClearErrorWithFileLineAndKey) {
     bool found = false;
     for (const auto& p : e.problems()) {
       EXPECT_EQ(p.where.file, path);
-      found |= p.where.line == c.line && p.where.field == c.field &&
-               p.message.find(c.message) != std::string::npos;
+      found |= p.where.line == c.line && p.where.field == c.field && p.message.find(c.message) != std::string::npos;
     }
-    EXPECT_TRUE(found) << "expected line " << c.line << ", key '" << c.field << "', message containing '"
-                       << c.message << "'; got:\n" << e.what();
+    EXPECT_TRUE(found) << "expected line " << c.line << ", key '" << c.field << "', message containing '" << c.message
+                       << "'; got:\n"
+                       << e.what();
   }
 }
 

@@ -54,7 +54,9 @@ SenseResponse integrate_sense(double drive_hz, double sense_hz, double q, double
 TEST(DeviceModel, SenseAmplitudeMatchesTheIntegratedTwoDofEquations) {
   constexpr double kIntegrationTolerance = 2e-3;  // RK4 at 200 steps/cycle, lock-in over 20 cycles
   constexpr double kX0 = 5e-6, kRate = 1.0;
-  struct Case { double split_hz, q; };
+  struct Case {
+    double split_hz, q;
+  };
   for (const Case c : {Case{146.0, 30.0}, Case{40.0, 60.0}, Case{5.8, 100.0}, Case{-80.0, 50.0}}) {
     const double drive = 3000.0, sense = drive + c.split_hz;
     const SenseResponse expected = DeviceModel::sense_response(drive, sense, c.q, kX0);
@@ -82,7 +84,7 @@ TEST(DeviceModel, SenseAmplitudeFollowsTheComplexTransferFunctionOverSplitAndQ) 
 
 TEST(DeviceModel, SenseAmplitudeReachesTheMatchedAndWideSplitLimits) {
   constexpr double kRoundingTolerance = 1e-12;  // a zero split makes the general form the matched one
-  constexpr double kLimitTolerance = 3e-3;  // wide split: neglected df / (2 f) = 2.4e-3 and f / (Q df)
+  constexpr double kLimitTolerance = 3e-3;      // wide split: neglected df / (2 f) = 2.4e-3 and f / (Q df)
   constexpr double kX0 = 5e-6;
   const double f = 30740.0, q = 2500.0;
   const SenseResponse matched = DeviceModel::sense_response(f, f, q, kX0);
@@ -102,14 +104,14 @@ TEST(DeviceModel, FrequenciesMoveWithTheConfiguredCoefficients) {
   const auto& s = physics.sense;
   for (double t : {-30.0, 0.0, 25.0, 60.0}) {
     const double dt = t - physics.reference_temp_c;
-    EXPECT_NEAR(model.drive_frequency_hz(t), d.frequency_hz * (1 + d.frequency_tc_per_k * dt + d.frequency_tc2_per_k2 * dt * dt),
+    EXPECT_NEAR(model.drive_frequency_hz(t),
+                d.frequency_hz * (1 + d.frequency_tc_per_k * dt + d.frequency_tc2_per_k2 * dt * dt),
                 kRoundingTolerance);
     EXPECT_NEAR(model.sense_frequency_hz(t), s.frequency_hz * (1 + s.frequency_tc_per_k * dt), kRoundingTolerance);
   }
   // The split drifts by f_s a_s - f_d a_d per kelvin (linear part).
   const double slope = (model.split_hz(26.0) - model.split_hz(24.0)) / 2.0;
-  EXPECT_NEAR(slope, s.frequency_hz * s.frequency_tc_per_k - d.frequency_hz * d.frequency_tc_per_k,
-              kRoundingTolerance);
+  EXPECT_NEAR(slope, s.frequency_hz * s.frequency_tc_per_k - d.frequency_hz * d.frequency_tc_per_k, kRoundingTolerance);
   EXPECT_LT(slope, 0.0);  // the FMVMG file gives the sense mode the larger coefficient
 }
 
@@ -160,8 +162,9 @@ TEST(DeviceModel, ProofMassAndStiffnessAreConsistentWithTheDimensions) {
   EXPECT_NEAR(std::sqrt(k / mass) / kTwoPi / 30740.0, 1.0, kRoundingTolerance);
   // n clamped-guided beams of the implied length give back the stiffness: k = n E t w^3 / L^3.
   const double length = model.implied_beam_length_m(model.config().drive);
-  EXPECT_NEAR(s.beams_per_mode * s.youngs_modulus_pa * s.thickness_m * std::pow(s.beam_width_m, 3) /
-                  std::pow(length, 3) / k, 1.0, kRoundingTolerance);
+  EXPECT_NEAR(
+      s.beams_per_mode * s.youngs_modulus_pa * s.thickness_m * std::pow(s.beam_width_m, 3) / std::pow(length, 3) / k,
+      1.0, kRoundingTolerance);
   EXPECT_LT(length, s.length_m);
 }
 

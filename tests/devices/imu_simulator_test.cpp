@@ -57,13 +57,12 @@ TEST(ImuSimulator, MeasuredMinusSystematicHasTheStatedNoiseOnEveryAxis) {
         const auto& r = axis_of(record.instances[i], gyro, a);
         const auto& n = axis_of(imu.instances[i], gyro, a).noise;
         const Eigen::VectorXd noise = r.measured - r.systematic;
-        const auto estimate = allan::estimate(allan::Kind::Oadev, allan::angle_from_rate(noise, 1.0 / kFs),
-                                              1.0 / kFs, allan::InputType::Rate, one_second, kConfidence)
+        const auto estimate = allan::estimate(allan::Kind::Oadev, allan::angle_from_rate(noise, 1.0 / kFs), 1.0 / kFs,
+                                              allan::InputType::Rate, one_second, kConfidence)
                                   .front();
         const double white = n.arw_rad_sqrt_s;
-        const double with_floors =
-            std::sqrt(white * white + std::pow(0.664 * n.bias_instability_rad_s, 2) +
-                      n.rate_random_walk_rad_s_sqrt_s * n.rate_random_walk_rad_s_sqrt_s / 3.0);
+        const double with_floors = std::sqrt(white * white + std::pow(0.664 * n.bias_instability_rad_s, 2) +
+                                             n.rate_random_walk_rad_s_sqrt_s * n.rate_random_walk_rad_s_sqrt_s / 3.0);
         EXPECT_GE(estimate.dev_hi, white) << "instance " << i << (gyro ? " gyro " : " accel ") << "xyz"[a];
         EXPECT_LE(estimate.dev_lo, with_floors) << "instance " << i << (gyro ? " gyro " : " accel ") << "xyz"[a];
       }
@@ -158,8 +157,8 @@ TEST(ImuSimulator, ABadOrientationScheduleIsRefusedWithItsLineAndTheSingleAxisSi
   EXPECT_THAT(problems_of("{dwell_s: 5}"), ::testing::HasSubstr("up_directions"));
   EXPECT_THAT(problems_of("{dwell_s: 5, up_directions: [[0, 0, 1]], spin: 1}"), ::testing::HasSubstr("spin"));
 
-  SimulationProfile profile = parse_profile(
-      "format: driftlab-profile/1\norientation: {dwell_s: 5, up_directions: [[0, 0, 1]]}\n", "p.yaml");
+  SimulationProfile profile =
+      parse_profile("format: driftlab-profile/1\norientation: {dwell_s: 5, up_directions: [[0, 0, 1]]}\n", "p.yaml");
   EXPECT_THROW(simulate(load_device_file(std::string(DRIFTLAB_SOURCE_DIR) + "/devices/fmvmg.yaml"), profile,
                         options(1.0, 10.0, 1)),
                ConfigError);
@@ -205,7 +204,7 @@ TEST(ImuSimulator, SameSeedSameRecordAnotherSeedOtherNoiseOnly) {
 TEST(ImuSimulator, EachNoiseStreamIsIndependentOfWhatElseTheFileDescribes) {
   const ImuDefinition full = imu3();
   ImuDefinition reduced = full;
-  reduced.instances.pop_back();                                 // no second instance
+  reduced.instances.pop_back();                                         // no second instance
   reduced.instances[0].gyro.axes[0].noise = error_model::NoiseTerms{};  // a quiet gyro x
   const auto a = simulate_imu(full, default_oven_profile(), options(2.0, 600.0, 5));
   const auto b = simulate_imu(reduced, default_oven_profile(), options(2.0, 600.0, 5));

@@ -50,8 +50,8 @@ TEST(Simulator, SameSeedSameOutputDifferentSeedDifferentNoise) {
 TEST(Simulator, AllanAnalysisOfAStaticRecordRecoversNAndK) {
   // White rate + rate random walk only; least squares of sigma^2(tau) = N^2/tau + K^2 tau/3 over an
   // octave OADEV grid, weighted by the number of terms over sigma^4 (chi-square scatter).
-  constexpr double kNTolerance = 0.05;   // N rests on millions of short-tau terms
-  constexpr double kKTolerance = 0.25;   // K rests on a few tens of independent long intervals
+  constexpr double kNTolerance = 0.05;  // N rests on millions of short-tau terms
+  constexpr double kKTolerance = 0.25;  // K rests on a few tens of independent long intervals
   DeviceDefinition device = fmvmg();
   auto& noise = device.error_model.noise;
   noise.arw_rad_sqrt_s = 99.6 * kDph;
@@ -128,7 +128,7 @@ TEST(Simulator, DieLagsTheChamberAndTheSensorLagsTheDie) {
   DeviceDefinition noiseless = device;
   for (auto& c : noiseless.channels) c.noise = 0.0, c.resolution = 0.0;
   const auto r = simulate(noiseless, default_oven_profile(), options(1.0, 0, 1));
-  const double ramp = 1.0 / 60.0;  // degC/s
+  const double ramp = 1.0 / 60.0;      // degC/s
   const Eigen::Index k = 1800 + 2700;  // middle of the heating ramp, 15 die time constants in
   EXPECT_NEAR(r.chamber_temp_c[k] - r.die_temp_c[k], ramp * device.thermal.die_time_constant_s, kExactDiscretization);
   EXPECT_NEAR(r.die_temp_c[k] - r.temp_c[k], ramp * device.thermal.sensor_time_constant_s, kExactDiscretization);
@@ -151,7 +151,7 @@ TEST(Simulator, ThermalLagEffectMakesTheDieLagTheSensor) {
   DeviceDefinition device = fmvmg();
   apply_effect_option("thermal_lag:tau_s=400", device.error_model.effects);
   const auto r = simulate(device, default_oven_profile(), options(1.0, 0, 1));
-  const Eigen::Index k = 1800 + 2700;  // heating
+  const Eigen::Index k = 1800 + 2700;                            // heating
   EXPECT_GT(r.temp_c[k] - r.die_temp_c[k], 0.8 * 400.0 / 60.0);  // ~ rate * tau once settled
   EXPECT_LT(r.temp_c[k] - r.die_temp_c[k], 400.0 / 60.0);
 }

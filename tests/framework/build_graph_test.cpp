@@ -49,8 +49,8 @@ TEST(BuildGraph, PluginSourcesIncludeNoProjectHeaderOutsideFrameworkAndPlugins) 
       if (!std::regex_search(line, m, include)) continue;
       const std::string header = m[1];
       const bool below = header.rfind("framework/", 0) == 0 || header.rfind("plugins/", 0) == 0;
-      EXPECT_TRUE(below) << std::filesystem::relative(entry.path(), root).string() << ":" << line_number
-                         << " includes " << header;
+      EXPECT_TRUE(below) << std::filesystem::relative(entry.path(), root).string() << ":" << line_number << " includes "
+                         << header;
     }
   }
   EXPECT_GT(files, 0);

@@ -60,18 +60,18 @@ TEST_P(EveryBuiltinPlugin, DescribesItselfCompletely) {
   EXPECT_FALSE(info.reference.empty()) << "built-ins name the paper or standard they implement";
   for (const auto& spec : info.params.params) {
     EXPECT_FALSE(spec.doc.empty()) << spec.key;
-    EXPECT_TRUE(spec.type == driftlab::ParamType::Plugin || !spec.unit.empty()) << spec.key << " states a unit ('1' if none)";
+    EXPECT_TRUE(spec.type == driftlab::ParamType::Plugin || !spec.unit.empty())
+        << spec.key << " states a unit ('1' if none)";
     EXPECT_THAT(spec.key, ::testing::MatchesRegex("[a-z][a-z0-9_]*")) << "snake_case keys";
     EXPECT_TRUE(spec.check(spec.default_value).empty()) << spec.key << ": default violates its own constraint";
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Registry, EveryBuiltinPlugin, ::testing::ValuesIn(builtin_names()),
-                         [](const auto& test_info) {
-                           std::string n = test_info.param;
-                           std::replace(n.begin(), n.end(), '/', '_');
-                           return n;
-                         });
+INSTANTIATE_TEST_SUITE_P(Registry, EveryBuiltinPlugin, ::testing::ValuesIn(builtin_names()), [](const auto& test_info) {
+  std::string n = test_info.param;
+  std::replace(n.begin(), n.end(), '/', '_');
+  return n;
+});
 
 }  // namespace
 }  // namespace driftlab

@@ -90,8 +90,7 @@ TEST_P(CsvReaderRejects, NamingFileLineAndColumn) {
 
 INSTANTIATE_TEST_SUITE_P(
     Fixtures, CsvReaderRejects,
-    testing::Values(BadCsv{"empty.csv", 0, "", "file is empty"},
-                    BadCsv{"no_header.csv", 1, "", "missing header row"},
+    testing::Values(BadCsv{"empty.csv", 0, "", "file is empty"}, BadCsv{"no_header.csv", 1, "", "missing header row"},
                     BadCsv{"missing_rate_column.csv", 1, "rate", "no column for the 'rate' channel"},
                     BadCsv{"non_numeric.csv", 8, "rate_dps", "expected a number, got 'abc'"},
                     BadCsv{"nan_line_1234.csv", 1234, "rate_dps", "NaN/Inf not allowed"},

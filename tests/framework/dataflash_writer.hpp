@@ -18,12 +18,33 @@ using Value = std::variant<double, std::string>;
 
 inline std::size_t size_of(char c) {
   switch (c) {
-    case 'b': case 'B': case 'M': return 1;
-    case 'h': case 'H': case 'c': case 'C': case 'g': return 2;
-    case 'i': case 'I': case 'f': case 'e': case 'E': case 'L': case 'n': return 4;
-    case 'd': case 'q': case 'Q': return 8;
-    case 'N': return 16;
-    case 'Z': case 'a': return 64;
+    case 'b':
+    case 'B':
+    case 'M':
+      return 1;
+    case 'h':
+    case 'H':
+    case 'c':
+    case 'C':
+    case 'g':
+      return 2;
+    case 'i':
+    case 'I':
+    case 'f':
+    case 'e':
+    case 'E':
+    case 'L':
+    case 'n':
+      return 4;
+    case 'd':
+    case 'q':
+    case 'Q':
+      return 8;
+    case 'N':
+      return 16;
+    case 'Z':
+    case 'a':
+      return 64;
   }
   throw std::invalid_argument(std::string("format character ") + c);
 }
@@ -42,12 +63,15 @@ class Writer {
     std::size_t size = 3;
     if (length < 0)
       for (const char c : format) size += size_of(c);
-    write(kFmtFormat, kFmt, {double(type), double(length < 0 ? size : static_cast<std::size_t>(length)), name, format, columns});
+    write(kFmtFormat, kFmt,
+          {double(type), double(length < 0 ? size : static_cast<std::size_t>(length)), name, format, columns});
     if (type != kFmt) formats_[type] = format;
     return *this;
   }
 
-  Writer& message(std::uint8_t type, const std::vector<Value>& values) { return write(formats_.at(type), type, values); }
+  Writer& message(std::uint8_t type, const std::vector<Value>& values) {
+    return write(formats_.at(type), type, values);
+  }
 
   Writer& raw(const std::string& bytes) {
     bytes_ += bytes;
@@ -92,22 +116,39 @@ class Writer {
     if (c == 'a') return text("", 64);
     const double v = std::get<double>(value);
     switch (c) {
-      case 'b': return put(static_cast<std::int8_t>(v));
-      case 'B': case 'M': return put(static_cast<std::uint8_t>(v));
-      case 'h': return put(static_cast<std::int16_t>(v));
-      case 'H': return put(static_cast<std::uint16_t>(v));
-      case 'i': return put(static_cast<std::int32_t>(v));
-      case 'I': return put(static_cast<std::uint32_t>(v));
-      case 'q': return put(static_cast<std::int64_t>(v));
-      case 'Q': return put(static_cast<std::uint64_t>(v));
-      case 'f': return put(static_cast<float>(v));
-      case 'd': return put(v);
-      case 'g': return put(half(v));
-      case 'c': return put(static_cast<std::int16_t>(std::lround(v)));
-      case 'C': return put(static_cast<std::uint16_t>(std::lround(v)));
-      case 'e': return put(static_cast<std::int32_t>(std::lround(v)));
-      case 'E': return put(static_cast<std::uint32_t>(std::lround(v)));
-      case 'L': return put(static_cast<std::int32_t>(std::lround(v * 1e7)));
+      case 'b':
+        return put(static_cast<std::int8_t>(v));
+      case 'B':
+      case 'M':
+        return put(static_cast<std::uint8_t>(v));
+      case 'h':
+        return put(static_cast<std::int16_t>(v));
+      case 'H':
+        return put(static_cast<std::uint16_t>(v));
+      case 'i':
+        return put(static_cast<std::int32_t>(v));
+      case 'I':
+        return put(static_cast<std::uint32_t>(v));
+      case 'q':
+        return put(static_cast<std::int64_t>(v));
+      case 'Q':
+        return put(static_cast<std::uint64_t>(v));
+      case 'f':
+        return put(static_cast<float>(v));
+      case 'd':
+        return put(v);
+      case 'g':
+        return put(half(v));
+      case 'c':
+        return put(static_cast<std::int16_t>(std::lround(v)));
+      case 'C':
+        return put(static_cast<std::uint16_t>(std::lround(v)));
+      case 'e':
+        return put(static_cast<std::int32_t>(std::lround(v)));
+      case 'E':
+        return put(static_cast<std::uint32_t>(std::lround(v)));
+      case 'L':
+        return put(static_cast<std::int32_t>(std::lround(v * 1e7)));
     }
     throw std::invalid_argument(std::string("format character ") + c);
   }
@@ -130,7 +171,8 @@ inline Writer& define_imu_log(Writer& w) {
 // One IMU message of instance `instance`.
 inline Writer& imu(Writer& w, double time_us, int instance, double gx, double gy, double gz, double ax, double ay,
                    double az, double temperature) {
-  return w.message(kImu, {time_us, double(instance), gx, gy, gz, ax, ay, az, 0.0, 0.0, temperature, 1.0, 1.0, 1000.0, 1000.0});
+  return w.message(
+      kImu, {time_us, double(instance), gx, gy, gz, ax, ay, az, 0.0, 0.0, temperature, 1.0, 1.0, 1000.0, 1000.0});
 }
 
 inline Writer& parm(Writer& w, double time_us, const std::string& name, double value) {

@@ -47,13 +47,13 @@ TEST(ImuNames, RecognisesCommonHeaderStyles) {
     const char* unit;
   };
   const Case cases[] = {
-      {"gyro_x", "gyro_x", "rad/s"},        {"gx", "gyro_x", "rad/s"},          {"GyrX", "gyro_x", "rad/s"},
-      {"GyrZ_1", "gyro1_z", "rad/s"},       {"gyro1_y", "gyro1_y", "rad/s"},    {"gyro_x_dps", "gyro_x", "deg/s"},
-      {"gyro_z_mdps", "gyro_z", "mdps"},    {"gyr_y_rad_s", "gyro_y", "rad/s"}, {"accel_z", "accel_z", "m/s^2"},
-      {"acc_x", "accel_x", "m/s^2"},        {"AccY", "accel_y", "m/s^2"},       {"ax", "accel_x", "m/s^2"},
-      {"accel_z_g", "accel_z", "g"},        {"acc_2_x_mg", "accel2_x", "mg"},   {"accel_x_mps2", "accel_x", "m/s^2"},
-      {"temp", "temperature", "degC"},      {"temp_c", "temperature", "degC"},  {"T", "temperature", "degC"},
-      {"temp1", "temperature1", "degC"},    {"imu2_temp_k", "temperature2", "K"}};
+      {"gyro_x", "gyro_x", "rad/s"},     {"gx", "gyro_x", "rad/s"},           {"GyrX", "gyro_x", "rad/s"},
+      {"GyrZ_1", "gyro1_z", "rad/s"},    {"gyro1_y", "gyro1_y", "rad/s"},     {"gyro_x_dps", "gyro_x", "deg/s"},
+      {"gyro_z_mdps", "gyro_z", "mdps"}, {"gyr_y_rad_s", "gyro_y", "rad/s"},  {"accel_z", "accel_z", "m/s^2"},
+      {"acc_x", "accel_x", "m/s^2"},     {"AccY", "accel_y", "m/s^2"},        {"ax", "accel_x", "m/s^2"},
+      {"accel_z_g", "accel_z", "g"},     {"acc_2_x_mg", "accel2_x", "mg"},    {"accel_x_mps2", "accel_x", "m/s^2"},
+      {"temp", "temperature", "degC"},   {"temp_c", "temperature", "degC"},   {"T", "temperature", "degC"},
+      {"temp1", "temperature1", "degC"}, {"imu2_temp_k", "temperature2", "K"}};
   for (const auto& c : cases) {
     const auto m = imu::recognize_imu_column(c.header);
     ASSERT_TRUE(m.has_value()) << c.header;

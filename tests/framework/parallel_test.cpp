@@ -49,9 +49,7 @@ TEST(ParallelFor, GivesTheSameResultsOnOneTwoAndSevenThreads) {
   }
 }
 
-TEST(ParallelFor, TreatsZeroThreadsAsOne) {
-  EXPECT_EQ(run_items(10, 0).values, run_items(10, 1).values);
-}
+TEST(ParallelFor, TreatsZeroThreadsAsOne) { EXPECT_EQ(run_items(10, 0).values, run_items(10, 1).values); }
 
 TEST(ParallelFor, CallsNothingForZeroItems) {
   for (unsigned threads : {1u, 2u, 7u}) {
@@ -93,7 +91,8 @@ TEST(ParallelFor, RethrowsTheFailureWithTheSmallestIndexAfterRunningEveryItemBef
     } catch (const std::invalid_argument& e) {
       EXPECT_EQ(std::string(e.what()), "item 40") << threads << " threads";
     }
-    for (std::size_t i = 0; i <= 40; ++i) EXPECT_EQ(calls[i].load(), 1) << "item " << i << ", " << threads << " threads";
+    for (std::size_t i = 0; i <= 40; ++i)
+      EXPECT_EQ(calls[i].load(), 1) << "item " << i << ", " << threads << " threads";
   }
 }
 

@@ -27,9 +27,9 @@ TEST_F(ParamsTest, DefaultsFillEveryDeclaredKeyIncludingNestedPlugins) {
 }
 
 TEST_F(ParamsTest, AssignmentsAreParsedAsYamlIncludingNestedPlugins) {
-  const auto values = params_from_assignments(
-      registry_, "regressor/test_linear",
-      {"max_terms=5", "optimizer={plugin: optimizer/test_midpoint, params: {evaluations: 4}}"});
+  const auto values =
+      params_from_assignments(registry_, "regressor/test_linear",
+                              {"max_terms=5", "optimizer={plugin: optimizer/test_midpoint, params: {evaluations: 4}}"});
   EXPECT_EQ(values.integer("max_terms"), 5);
   EXPECT_EQ(values.plugin("optimizer").params.integer("evaluations"), 4);
 }
@@ -79,14 +79,15 @@ TEST(ParamSpec, DescribesItsConstraint) {
 }
 
 TEST(ParamSpec, GeneratedInvalidExamplesAreRejected) {
-  const std::vector<ParamSpec> specs{
-      param::real("a", 1, "s", "").greater_than(0).at_most(5), param::integer("n", 3, "1", "").at_least(1),
-      param::choice("c", "x", {"x", "y"}, ""), param::reals("v", {1.0}, "1", "").at_least(0),
-      param::boolean("b", true, "")};
+  const std::vector<ParamSpec> specs{param::real("a", 1, "s", "").greater_than(0).at_most(5),
+                                     param::integer("n", 3, "1", "").at_least(1),
+                                     param::choice("c", "x", {"x", "y"}, ""),
+                                     param::reals("v", {1.0}, "1", "").at_least(0), param::boolean("b", true, "")};
   for (const auto& spec : specs) {
     ASSERT_TRUE(spec.check(spec.default_value).empty()) << spec.key;
     for (const auto& bad : invalid_examples(spec))
-      EXPECT_FALSE(spec.check(bad.value).empty()) << spec.key << " accepted " << format_value(bad.value) << " (" << bad.why << ")";
+      EXPECT_FALSE(spec.check(bad.value).empty())
+          << spec.key << " accepted " << format_value(bad.value) << " (" << bad.why << ")";
   }
 }
 

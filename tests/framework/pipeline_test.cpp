@@ -31,7 +31,8 @@ class PipelineTest : public ::testing::Test {
     return {};
   }
 
-  static bool reported(const std::vector<Diagnostic>& problems, int line, const std::string& key, const std::string& text) {
+  static bool reported(const std::vector<Diagnostic>& problems, int line, const std::string& key,
+                       const std::string& text) {
     for (const auto& p : problems)
       if (p.where.line == line && p.where.field == key && p.message.find(text) != std::string::npos) return true;
     return false;
@@ -46,7 +47,8 @@ class PipelineTest : public ::testing::Test {
   static TimeSeries record() {
     TimeSeries r(Eigen::VectorXd::LinSpaced(200, 0.0, 19.9));
     const Eigen::VectorXd temp = 20.0 + 0.5 * r.time().array();
-    r.set_channel({role::kRate, "rad/s", "test", (0.01 * temp.array() + (r.time().array() * 3.0).sin() * 1e-3).matrix()});
+    r.set_channel(
+        {role::kRate, "rad/s", "test", (0.01 * temp.array() + (r.time().array() * 3.0).sin() * 1e-3).matrix()});
     r.set_channel({role::kTemperature, "degC", "test", temp});
     return r;
   }
@@ -68,12 +70,14 @@ TEST_F(PipelineTest, ReportsThreeDifferentMistakesTogetherWithTheirLines) {
 
 TEST_F(PipelineTest, ReportsDuplicateStepNames) {
   const auto problems = problems_of("duplicate_names.yaml");
-  EXPECT_TRUE(reported(problems, 10, "steps[2].name", "duplicate step name 'first' (first used on line 4)")) << all(problems);
+  EXPECT_TRUE(reported(problems, 10, "steps[2].name", "duplicate step name 'first' (first used on line 4)"))
+      << all(problems);
 }
 
 TEST_F(PipelineTest, ReportsCyclicReferences) {
   const auto problems = problems_of("cycle.yaml");
-  EXPECT_TRUE(reported(problems, 4, "first", "cyclic reference: steps first, second depend on each other")) << all(problems);
+  EXPECT_TRUE(reported(problems, 4, "first", "cyclic reference: steps first, second depend on each other"))
+      << all(problems);
 }
 
 TEST_F(PipelineTest, ReportsStructuralMistakesWithoutTouchingData) {
@@ -103,7 +107,8 @@ outputs: {out: fit.fitted}
                    "inline.yaml", registry_);
     FAIL();
   } catch (const ConfigError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("fit.params.min_terms,fit.params.max_terms: violates rule: min_terms <= max_terms"));
+    EXPECT_THAT(e.what(),
+                HasSubstr("fit.params.min_terms,fit.params.max_terms: violates rule: min_terms <= max_terms"));
   }
 }
 
@@ -182,12 +187,14 @@ TEST_F(PipelineTest, ADifferentPipelineSeedChangesSeededSteps) {
 seed: 1
 steps:
   - {name: s, plugin: filter/test_gain, inputs: {signal: rate}}
-outputs: {o: s.signal})"), "a.yaml", registry_);
+outputs: {o: s.signal})"),
+                                "a.yaml", registry_);
   const auto b = parse_pipeline(std::string(R"(format: driftlab-pipeline/1
 seed: 2
 steps:
   - {name: s, plugin: filter/test_gain, inputs: {signal: rate}}
-outputs: {o: s.signal})"), "b.yaml", registry_);
+outputs: {o: s.signal})"),
+                                "b.yaml", registry_);
   EXPECT_NE(a.steps[0].params.integer("seed"), b.steps[0].params.integer("seed"));
 }
 

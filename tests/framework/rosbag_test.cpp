@@ -114,7 +114,8 @@ TEST(Mcap, EveryFixtureVariantGivesTheIndependentReadersValues) {
       for (int a = 0; a < 3; ++a) {
         const std::string axis(1, "xyz"[a]);
         EXPECT_EQ(record.channel("gyro_" + axis).values[i], m.at("angular_velocity")[a].get<double>()) << end << axis;
-        EXPECT_EQ(record.channel("accel_" + axis).values[i], m.at("linear_acceleration")[a].get<double>()) << end << axis;
+        EXPECT_EQ(record.channel("accel_" + axis).values[i], m.at("linear_acceleration")[a].get<double>())
+            << end << axis;
       }
     }
     EXPECT_FALSE(record.has("temperature")) << "--topic names the Imu topic only";
@@ -139,7 +140,8 @@ TEST(Mcap, TheSummaryIsReadWhenPresentAndTheStreamSufficesWithout) {
 }
 
 TEST(Mcap, ATemperatureTopicPairsByNamespaceAndIsInterpolatedOntoTheGyro) {
-  const auto reference = load_json(ros2_dir() / "reference_mcap.json").at("imu_zstd.mcap").at("topics").at("/imu/temperature");
+  const auto reference =
+      load_json(ros2_dir() / "reference_mcap.json").at("imu_zstd.mcap").at("topics").at("/imu/temperature");
   std::vector<std::string> notes;
   const TimeSeries record = ros::read_imu(ros2_dir() / "imu_zstd.mcap", {}, &notes);
   ASSERT_TRUE(record.has("temperature"));
@@ -149,7 +151,8 @@ TEST(Mcap, ATemperatureTopicPairsByNamespaceAndIsInterpolatedOntoTheGyro) {
   // gyro keeps all its samples, the temperature is linear in between.
   EXPECT_EQ(record.size(), 3061);
   EXPECT_DOUBLE_EQ(record.channel("temperature").values[0], reference.at("first").at("temperature").get<double>());
-  EXPECT_DOUBLE_EQ(record.channel("temperature").values[record.size() - 1], reference.at("last").at("temperature").get<double>());
+  EXPECT_DOUBLE_EQ(record.channel("temperature").values[record.size() - 1],
+                   reference.at("last").at("temperature").get<double>());
   EXPECT_NEAR(record.channel("temperature").values[5], 20.025, 1e-9);
   EXPECT_THAT(notes, Contains("time base: /imu/data angular_velocity; 2 other streams linearly interpolated onto it"));
 }
@@ -178,7 +181,8 @@ TEST(McapBadInput, CorruptChunksBadMagicAndUnknownCompressionAreDataErrors) {
   const auto codec = zstd.find("zstd");
   ASSERT_NE(codec, std::string::npos);
   zstd.replace(codec, 4, "zzzz");
-  EXPECT_THAT(data_error([&] { mcap::parse(zstd, "codec.mcap"); }), HasSubstr("compression 'zzzz' is not one driftlab reads"));
+  EXPECT_THAT(data_error([&] { mcap::parse(zstd, "codec.mcap"); }),
+              HasSubstr("compression 'zzzz' is not one driftlab reads"));
 
   std::string compressed = read_bytes(ros2_dir() / "imu_zstd.mcap");
   compressed[compressed.find("zstd") + 40] ^= 0x55;  // inside the first chunk's zstd frame
@@ -204,23 +208,35 @@ TEST(McapBadInput, StatisticsThatDisagreeWithTheDataAreADataError) {
 TEST(RosMessages, EncapsulationsOtherThanPlainCdrAndShortMessagesAreDataErrors) {
   const Location where{"x.mcap", 0, "/imu"};
   const ros::Describe m = [] { return std::string("m"); };
-  EXPECT_THAT(data_error([&] { ros::decode_imu(std::string("\x00\x02\x00\x00", 4), ros::Encoding::Cdr, where, [] { return std::string("/imu row 3"); }); }),
-              AllOf(HasSubstr("x.mcap: /imu: /imu row 3: byte 0 of the message: CDR encapsulation 0x0002 is not read")));
-  EXPECT_THAT(data_error([&] { ros::decode_imu(std::string("\x00\x01\x00\x00\x01\x00\x00\x00", 8), ros::Encoding::Cdr, where, m); }),
+  EXPECT_THAT(
+      data_error([&] {
+        ros::decode_imu(std::string("\x00\x02\x00\x00", 4), ros::Encoding::Cdr, where,
+                        [] { return std::string("/imu row 3"); });
+      }),
+      AllOf(HasSubstr("x.mcap: /imu: /imu row 3: byte 0 of the message: CDR encapsulation 0x0002 is not read")));
+  EXPECT_THAT(data_error([&] {
+                ros::decode_imu(std::string("\x00\x01\x00\x00\x01\x00\x00\x00", 8), ros::Encoding::Cdr, where, m);
+              }),
               HasSubstr("byte 8 of the message: message ends after 8 bytes"));
-  EXPECT_THAT(data_error([&] { ros::decode_temperature(std::string(9, '\0'), ros::MessageType::Float64, ros::Encoding::Ros1, where, m); }),
+  EXPECT_THAT(data_error([&] {
+                ros::decode_temperature(std::string(9, '\0'), ros::MessageType::Float64, ros::Encoding::Ros1, where, m);
+              }),
               HasSubstr("1 bytes after the end of the message's fields"));
   std::string huge_string("\x00\x01\x00\x00\x01\x00\x00\x00\x02\x00\x00\x00\xff\xff\xff\x7f", 16);
   EXPECT_THAT(data_error([&] { ros::decode_imu(huge_string, ros::Encoding::Cdr, where, m); }),
               HasSubstr("string of 2147483647 bytes, but 0 remain"));
-  EXPECT_EQ(ros::decode_temperature(std::string("\x00\x00\x80\x3f", 4), ros::MessageType::Float32, ros::Encoding::Ros1, where, m).degc, 1.0);
+  EXPECT_EQ(ros::decode_temperature(std::string("\x00\x00\x80\x3f", 4), ros::MessageType::Float32, ros::Encoding::Ros1,
+                                    where, m)
+                .degc,
+            1.0);
 }
 
 // ---- rosbag2 sqlite3 and directories -----------------------------------------------------------
 
 TEST(Rosbag2, Sqlite3TopicsCountsAndTimesAreThoseOfTheSqlite3Cli) {
   const auto reference = load_json(rosbag2_dir() / "reference_db3.json");
-  for (const auto& [dir, file] : {std::pair{"talker-sqlite3", "talker.db3"}, std::pair{"cdr_test-sqlite3", "cdr_test_0.db3"}}) {
+  for (const auto& [dir, file] :
+       {std::pair{"talker-sqlite3", "talker.db3"}, std::pair{"cdr_test-sqlite3", "cdr_test_0.db3"}}) {
     SCOPED_TRACE(file);
     for (const auto& path : {rosbag2_dir() / dir / file, rosbag2_dir() / dir}) {
       const auto bag = rosbag::read(path);
@@ -260,10 +276,12 @@ TEST(Rosbag2, ADb3DirectoryGivesTheImuAndTemperatureOfItsMessages) {
   const auto counts = load_json(ros2_dir() / "reference_db3.json");
   const auto values = load_json(ros2_dir() / "reference_mcap.json").at("imu_zstd.mcap").at("topics");
   const auto bag = rosbag::read(ros2_dir() / "imu_db3");
-  for (const auto& t : counts) EXPECT_EQ(bag.find(t.at("name").get<std::string>())->count, t.at("count").get<std::uint64_t>());
+  for (const auto& t : counts)
+    EXPECT_EQ(bag.find(t.at("name").get<std::string>())->count, t.at("count").get<std::uint64_t>());
   std::vector<std::string> notes;
   const TimeSeries record = read_record(ros2_dir() / "imu_db3", {.required_roles = {}}, {}, &notes);
-  EXPECT_EQ(record.channel("gyro_z").values[0], values.at("/imu/data").at("first").at("angular_velocity")[2].get<double>());
+  EXPECT_EQ(record.channel("gyro_z").values[0],
+            values.at("/imu/data").at("first").at("angular_velocity")[2].get<double>());
   EXPECT_EQ(record.channel("temperature").values[0], 20.0);
   EXPECT_NEAR(record.time()[0], 47.58, kStampTolerance);
 }
@@ -285,8 +303,9 @@ TEST(Rosbag2, ADirectoryOfSeveralFilesIsOneBag) {
   const auto dir = scratch("split");
   fs::copy_file(ros2_dir() / "imu_lz4.mcap", dir / "split_0.mcap");
   fs::copy_file(ros2_dir() / "imu_zstd.mcap", dir / "split_1.mcap");
-  write_bytes(dir / "metadata.yaml", "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: mcap\n"
-                                     "  relative_file_paths: [split_0.mcap, split_1.mcap]\n");
+  write_bytes(dir / "metadata.yaml",
+              "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: mcap\n"
+              "  relative_file_paths: [split_0.mcap, split_1.mcap]\n");
   const auto bag = rosbag::read(dir);
   EXPECT_EQ(bag.files.size(), 2u);
   EXPECT_EQ(bag.find("/imu/data")->count, 500u + 3061u);
@@ -294,7 +313,8 @@ TEST(Rosbag2, ADirectoryOfSeveralFilesIsOneBag) {
   std::vector<std::string> notes;
   const TimeSeries r = ros::read_imu(dir, {}, &notes);
   EXPECT_EQ(r.size(), 3061);  // the first 500 stamps twice: the first of each kept
-  EXPECT_THAT(notes, Contains("/imu/data: 1 samples earlier than the one before; sorted by time"));  // at the file boundary
+  EXPECT_THAT(notes,
+              Contains("/imu/data: 1 samples earlier than the one before; sorted by time"));  // at the file boundary
   EXPECT_THAT(notes, Contains("/imu/data: 500 repeated time stamps; the first sample of each kept"));
 }
 
@@ -302,7 +322,8 @@ TEST(Rosbag2BadInput, TruncatedDb3AndBadMetadataAreDataErrors) {
   const auto dir = scratch("db3");
   const std::string db3 = read_bytes(ros2_dir() / "imu_db3" / "imu_db3_0.db3");
   write_bytes(dir / "cut.db3", db3.substr(0, db3.size() / 2));
-  EXPECT_THAT(data_error([&] { ros::read_imu(dir / "cut.db3", {}); }), AllOf(HasSubstr("cut.db3"), HasSubstr("sqlite3:")));
+  EXPECT_THAT(data_error([&] { ros::read_imu(dir / "cut.db3", {}); }),
+              AllOf(HasSubstr("cut.db3"), HasSubstr("sqlite3:")));
   write_bytes(dir / "header.db3", db3.substr(0, 100));
   EXPECT_THAT(data_error([&] { rosbag::read(dir / "header.db3"); }), HasSubstr("header.db3"));
 
@@ -310,7 +331,8 @@ TEST(Rosbag2BadInput, TruncatedDb3AndBadMetadataAreDataErrors) {
   write_bytes(dir / "file_mode" / "metadata.yaml",
               "rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n  compression_format: zstd\n"
               "  compression_mode: FILE\n  relative_file_paths: [b_0.db3.zstd]\n");
-  EXPECT_THAT(data_error([&] { rosbag::read(dir / "file_mode"); }), AllOf(HasSubstr("compressed whole"), HasSubstr("zstd -d")));
+  EXPECT_THAT(data_error([&] { rosbag::read(dir / "file_mode"); }),
+              AllOf(HasSubstr("compressed whole"), HasSubstr("zstd -d")));
   fs::create_directories(dir / "missing");
   write_bytes(dir / "missing" / "metadata.yaml",
               "rosbag2_bagfile_information:\n  storage_identifier: mcap\n  relative_file_paths: [gone_0.mcap]\n");
@@ -335,7 +357,8 @@ TEST(Rosbag2BadInput, ABagWithoutImuATopicNotThereAndAnUnreadTypeAreNamed) {
               HasSubstr("std_msgs/msg/String, neither an IMU"));
   LogSelection instance;
   instance.instance = 1;
-  EXPECT_THAT(data_error([&] { ros::read_imu(ros2_dir() / "imu_lz4.mcap", instance); }), HasSubstr("matches no stream"));
+  EXPECT_THAT(data_error([&] { ros::read_imu(ros2_dir() / "imu_lz4.mcap", instance); }),
+              HasSubstr("matches no stream"));
 }
 
 // ---- ROS 1 -------------------------------------------------------------------------------------
@@ -384,7 +407,8 @@ TEST(Ros1, TheRos2CopiesOfTheRecordingGiveTheSameRecord) {
 TEST(Ros1BadInput, TruncatedAndCorruptBagsAreDataErrorsNeverCrashes) {
   const auto dir = scratch("ros1_cut");
   const std::string bytes = read_bytes(ros1_fixture());
-  for (const std::size_t cut : {std::size_t{5}, std::size_t{13}, std::size_t{4200}, bytes.size() / 2, bytes.size() - 100, bytes.size() - 1}) {
+  for (const std::size_t cut :
+       {std::size_t{5}, std::size_t{13}, std::size_t{4200}, bytes.size() / 2, bytes.size() - 100, bytes.size() - 1}) {
     SCOPED_TRACE(cut);
     write_bytes(dir / "cut.bag", bytes.substr(0, cut));
     EXPECT_THAT(data_error([&] { ros::read_imu(dir / "cut.bag", {}); }), HasSubstr("cut.bag"));
@@ -400,8 +424,8 @@ class Ros1Written : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = scratch("written");
-    const std::string command = "/usr/bin/python3 " + std::string(DRIFTLAB_SOURCE_DIR) + "/tests/framework/write_ros1_bags.py cases " +
-                                dir_.string() + " 2>/dev/null";
+    const std::string command = "/usr/bin/python3 " + std::string(DRIFTLAB_SOURCE_DIR) +
+                                "/tests/framework/write_ros1_bags.py cases " + dir_.string() + " 2>/dev/null";
     const int status = std::system(command.c_str());
     status_ = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   }
@@ -430,7 +454,8 @@ TEST_F(Ros1Written, TwoImuTopicsAreTwoInstancesWithTheirTemperatureTopics) {
   std::vector<std::string> notes;
   const TimeSeries r = ros::read_imu(bag("two_imus.bag"), {}, &notes);
   EXPECT_THAT(notes, Contains(HasSubstr("/cabin/temperature: a temperature topic that pairs with no IMU topic")));
-  for (const auto* role : {"gyro_z", "gyro1_z", "accel1_z", "temperature", "temperature1"}) EXPECT_TRUE(r.has(role)) << role;
+  for (const auto* role : {"gyro_z", "gyro1_z", "accel1_z", "temperature", "temperature1"})
+    EXPECT_TRUE(r.has(role)) << role;
   EXPECT_EQ(r.channel("temperature").source, "/imu0/temperature");
   EXPECT_EQ(r.channel("temperature1").source, "/imu1/temp_c");  // std_msgs/Float64 named *temp*
   // Instance 1 starts 3 ms later: the first base sample (100.0 s) is dropped; at 100.1 s instance 1

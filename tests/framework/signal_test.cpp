@@ -25,10 +25,10 @@ TEST(Signal, HysteresisSwitchesBranchOnReversalAndSaturates) {
   constexpr double kSaturated = 1e-4;
   const double width = 2.0;
   Eigen::VectorXd temp(401);
-  for (int k = 0; k <= 200; ++k) temp[k] = 0.1 * k;            // heat 0 -> 20
+  for (int k = 0; k <= 200; ++k) temp[k] = 0.1 * k;                   // heat 0 -> 20
   for (int k = 201; k <= 400; ++k) temp[k] = 20.0 - 0.1 * (k - 200);  // cool 20 -> 0
   const Eigen::VectorXd s = hysteresis_state(temp, width);
-  EXPECT_NEAR(s[200], 1.0, kSaturated);  // 20 K of travel = 10 widths
+  EXPECT_NEAR(s[200], 1.0, kSaturated);                          // 20 K of travel = 10 widths
   EXPECT_NEAR(s[220], -1.0 + 2.0 * std::exp(-1.0), kSaturated);  // 2 K = one width after reversal
   EXPECT_NEAR(s[400], -1.0, kSaturated);
 }

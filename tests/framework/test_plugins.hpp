@@ -33,7 +33,8 @@ class Midpoint final : public Optimizer {
   OptimizationResult minimize(const Objective& f, const std::vector<Bound>& bounds, RunContext&) override {
     OptimizationResult r;
     r.best.resize(static_cast<Eigen::Index>(bounds.size()));
-    for (std::size_t i = 0; i < bounds.size(); ++i) r.best[static_cast<Eigen::Index>(i)] = 0.5 * (bounds[i].lower + bounds[i].upper);
+    for (std::size_t i = 0; i < bounds.size(); ++i)
+      r.best[static_cast<Eigen::Index>(i)] = 0.5 * (bounds[i].lower + bounds[i].upper);
     r.best_value = f(r.best);
     r.evaluations = 1;
     return r;
@@ -101,8 +102,9 @@ inline void register_test_plugins(Registry& r) {
   ParamTable linear{{param::nested("optimizer", "optimizer", "optimizer/test_midpoint", "tunes nothing"),
                      param::integer("min_terms", 1, "1", "lower"), param::integer("max_terms", 3, "1", "upper"),
                      param::choice("method", "qr", {"qr", "normal"}, "solver")}};
-  linear.rules.push_back({"min_terms <= max_terms", {"min_terms", "max_terms"},
-                          [](const ParamValues& v) { return v.integer("min_terms") <= v.integer("max_terms"); }});
+  linear.rules.push_back({"min_terms <= max_terms", {"min_terms", "max_terms"}, [](const ParamValues& v) {
+                            return v.integer("min_terms") <= v.integer("max_terms");
+                          }});
   r.add({.name = "regressor/test_linear",
          .summary = "least squares",
          .reference = "",

@@ -32,7 +32,7 @@ constexpr double kFloatTolerance = 1e-6;  // values logged as float, compared as
 
 fs::path pyulog_dir() { return fs::path(DRIFTLAB_SHARED_DATA) / "logs" / "px4-pyulog"; }
 
-#define SKIP_WITHOUT_PYULOG_LOGS()                                                              \
+#define SKIP_WITHOUT_PYULOG_LOGS() \
   if (!fs::exists(pyulog_dir() / "sample.ulg")) GTEST_SKIP() << "no shared data: " << pyulog_dir()
 
 std::string read_file(const fs::path& p) {
@@ -294,11 +294,12 @@ TEST(UlogPyulogSamples, VehicleImuIsTheMeanRateOfEachIntegrationPeriodAsPyulogRe
 TEST(UlogPyulogSamples, TruncatedFixtureIsADataErrorNamingFileAndOffset) {
   SKIP_WITHOUT_PYULOG_LOGS();
   const std::string bytes = read_file(pyulog_dir() / "sample_log_small.ulg");
-  for (const std::size_t cut : {std::size_t{3}, std::size_t{15}, std::size_t{17}, std::size_t{1000}, std::size_t{180800},
-                                bytes.size() / 2, bytes.size() - 1}) {
+  for (const std::size_t cut : {std::size_t{3}, std::size_t{15}, std::size_t{17}, std::size_t{1000},
+                                std::size_t{180800}, bytes.size() / 2, bytes.size() - 1}) {
     SCOPED_TRACE(cut);
-    EXPECT_THAT(error_of([&] { ulog::parse(std::string_view(bytes).substr(0, cut), "cut.ulg"); }),
-                AllOf(HasSubstr("DataError: cut.ulg: byte "), ::testing::AnyOf(HasSubstr("truncated"), HasSubstr("header"))));
+    EXPECT_THAT(
+        error_of([&] { ulog::parse(std::string_view(bytes).substr(0, cut), "cut.ulg"); }),
+        AllOf(HasSubstr("DataError: cut.ulg: byte "), ::testing::AnyOf(HasSubstr("truncated"), HasSubstr("header"))));
   }
 }
 
@@ -310,8 +311,9 @@ TEST(UlogPyulogSamples, AMissingTopicIsADataErrorNamingWhatTheLogHas) {
               AllOf(HasSubstr("DataError"), HasSubstr("sample.ulg"), HasSubstr("'sensor_gyro' is not in the log"),
                     HasSubstr("sensor_combined[0]")));
   selection.topic = "vehicle_imu";
-  EXPECT_THAT(error_of([&] { ulog::read_imu(pyulog_dir() / "sample.ulg", selection); }),
-              AllOf(HasSubstr("DataError"), HasSubstr("'vehicle_imu' is not in the log"), HasSubstr("sensor_combined[0]")));
+  EXPECT_THAT(
+      error_of([&] { ulog::read_imu(pyulog_dir() / "sample.ulg", selection); }),
+      AllOf(HasSubstr("DataError"), HasSubstr("'vehicle_imu' is not in the log"), HasSubstr("sensor_combined[0]")));
   selection.topic = "vehicle_gps_position";
   EXPECT_THAT(error_of([&] { ulog::read_imu(pyulog_dir() / "sample.ulg", selection); }),
               AllOf(HasSubstr("ConfigError"), HasSubstr("--topic"), HasSubstr("vehicle_imu")));
@@ -340,7 +342,7 @@ TEST(UlogStructure, NestedFormatsArraysAndPaddingAreFlattened) {
   const std::string payload = Writer::le(5000, 8) + Writer::f32(1.5f) + Writer::f32(-2.f) + Writer::f32(3.f) +
                               Writer::f32(4.f) + Writer::le(static_cast<std::uint16_t>(-7), 2) + Writer::le(8, 2) +
                               Writer::le(9, 2) + std::string(1, '\1');
-  w.data(3, payload);                                        // trailing padding left out, as PX4 writes
+  w.data(3, payload);                                               // trailing padding left out, as PX4 writes
   w.data(3, payload.substr(0, 8 + 16 + 6) + std::string(4, '\0'));  // and with it
   ulog::ReadOptions all;
   all.keep_all = true;
@@ -349,7 +351,8 @@ TEST(UlogStructure, NestedFormatsArraysAndPaddingAreFlattened) {
   EXPECT_EQ(t.message_size, 8u + 16u + 6u + 1u + 3u);
   std::vector<std::string> names;
   for (const auto& c : t.columns) names.push_back(c.name);
-  EXPECT_EQ(names, (std::vector<std::string>{"timestamp", "v[0].x", "v[0].y", "v[1].x", "v[1].y", "a[0]", "a[1]", "a[2]", "ok"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"timestamp", "v[0].x", "v[0].y", "v[1].x", "v[1].y", "a[0]", "a[1]",
+                                             "a[2]", "ok"}));
   EXPECT_EQ(t.count, 2u);
   EXPECT_EQ(t.column("v[0].x")[0], 1.5);
   EXPECT_EQ(t.column("v[1].y")[0], 4.0);
@@ -395,7 +398,13 @@ TEST(UlogStructure, AMessageCutOffBeforeAppendedDataIsSkipped) {
   const std::string cut = Writer::le(46, 2) + "D" + Writer::le(1, 2) + "\x01\x02";  // a data message cut off
   const std::uint64_t appended_at = w.bytes().size() + cut.size();
   std::string bytes = w.bytes() + cut;
-  bytes += Writer(0).message('M', std::string("\0", 1) + "\x13" "char[5] hardfault_x" "crash").bytes().substr(16);
+  bytes += Writer(0)
+               .message('M', std::string("\0", 1) +
+                                 "\x13"
+                                 "char[5] hardfault_x"
+                                 "crash")
+               .bytes()
+               .substr(16);
   // Point the flag bits' first appended offset at the appended part.
   bytes.replace(16 + 3 + 16, 8, Writer::le(appended_at, 8));
   ulog::ReadOptions all;
@@ -473,12 +482,22 @@ TEST(UlogBadInput, UnknownMessageTypeAndOtherCorruptionAreDataErrors) {
   EXPECT_THAT(parse_error(Writer().flag_bits().flag_bits().bytes()), HasSubstr("only as the first message"));
   EXPECT_THAT(parse_error(Writer().flag_bits().data(9, std::string(8, '\0')).bytes()),
               HasSubstr("msg_id 9, which no 'A' message added"));
-  EXPECT_THAT(parse_error(Writer().flag_bits().format(testing_ulog::kSensorGyroFormat).add(0, 1, "sensor_gyro")
-                              .data(1, std::string(10, '\0')).bytes()),
+  EXPECT_THAT(parse_error(Writer()
+                              .flag_bits()
+                              .format(testing_ulog::kSensorGyroFormat)
+                              .add(0, 1, "sensor_gyro")
+                              .data(1, std::string(10, '\0'))
+                              .bytes()),
               HasSubstr("has 10 bytes; its format needs 40"));
   EXPECT_THAT(parse_error(Writer().flag_bits().info("char[9] sys_name", "PX4").bytes()),
               HasSubstr("the value has 3 bytes"));
-  EXPECT_THAT(parse_error(Writer().flag_bits().message('I', "\x40" "abc").bytes()), HasSubstr("key of 64 bytes"));
+  EXPECT_THAT(parse_error(Writer()
+                              .flag_bits()
+                              .message('I',
+                                       "\x40"
+                                       "abc")
+                              .bytes()),
+              HasSubstr("key of 64 bytes"));
 }
 
 TEST(UlogBadInput, MissingFileAndNonFiniteValuesAreDataErrors) {
@@ -488,8 +507,8 @@ TEST(UlogBadInput, MissingFileAndNonFiniteValuesAreDataErrors) {
   w.data(1, testing_ulog::sensor_gyro(1000, 1, 0, 0, 0, 25));
   w.data(1, testing_ulog::sensor_gyro(2000, 1, std::nanf(""), 0, 0, 25));
   const auto path = write_temp("nan.ulg", w.bytes());
-  EXPECT_THAT(error_of([&] { ulog::read_imu(path, {}); }),
-              AllOf(HasSubstr("nan.ulg"), HasSubstr("sensor_gyro[0].x"), HasSubstr("non-finite value at time stamp 2000 us")));
+  EXPECT_THAT(error_of([&] { ulog::read_imu(path, {}); }), AllOf(HasSubstr("nan.ulg"), HasSubstr("sensor_gyro[0].x"),
+                                                                 HasSubstr("non-finite value at time stamp 2000 us")));
 }
 
 // --- the registry ----------------------------------------------------------------------------

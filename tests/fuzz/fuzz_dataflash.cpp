@@ -47,7 +47,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       require(t.time_us.size() == (t.timed ? t.count : 0), "kept time stamps differ from the message count");
       require(t.values.size() == t.columns.size(), "one value vector per column");
       for (std::size_t c = 0; c < t.columns.size(); ++c)
-        require(t.values[c].size() == (t.columns[c].numeric() ? t.count : 0), "a column's values differ from the message count");
+        require(t.values[c].size() == (t.columns[c].numeric() ? t.count : 0),
+                "a column's values differ from the message count");
     }
     require(messages == log.messages, "the types' counts do not add up to the message count");
     require(message_bytes + log.skipped_bytes + log.truncated_bytes == bytes.size(), "bytes not accounted for");

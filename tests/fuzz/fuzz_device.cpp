@@ -1,6 +1,7 @@
 // libFuzzer harness: the device-file and chamber/rate-profile parsers (devices/). The first byte
 // picks the parser. Property oracle for an accepted device: its model responds finitely over its
-// temperature range; for an accepted profile: a finite, non-negative duration. Rejections must be ConfigError; anything else is a finding.
+// temperature range; for an accepted profile: a finite, non-negative duration. Rejections must be ConfigError; anything
+// else is a finding.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

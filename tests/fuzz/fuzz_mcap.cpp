@@ -35,16 +35,20 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const mcap::Visitor visit = [&](const mcap::Message& m) {
     ++visits;
     require(m.channel != nullptr && m.channel->count > 0, "a visit of a channel not counted");
-    require(m.log_time >= m.channel->min_log_time && m.log_time <= m.channel->max_log_time, "a visit outside its channel's span");
+    require(m.log_time >= m.channel->min_log_time && m.log_time <= m.channel->max_log_time,
+            "a visit outside its channel's span");
     const auto type = (mode & 2) ? ros::MessageType::Imu : types.at(m.channel->id);
     const auto encoding = m.channel->message_encoding == "ros1" ? ros::Encoding::Ros1 : ros::Encoding::Cdr;
     try {
       if (type == ros::MessageType::Imu) {
-        const auto imu = ros::decode_imu(m.data, encoding, {"fuzz.mcap", 0, m.channel->topic}, [&m] { return m.place.text(); });
-        require(encoding == ros::Encoding::Ros1 || (imu.stamp_ns >= -2147483648LL * 1000000000 && imu.stamp_ns < 2147483648LL * 1000000000),
+        const auto imu =
+            ros::decode_imu(m.data, encoding, {"fuzz.mcap", 0, m.channel->topic}, [&m] { return m.place.text(); });
+        require(encoding == ros::Encoding::Ros1 ||
+                    (imu.stamp_ns >= -2147483648LL * 1000000000 && imu.stamp_ns < 2147483648LL * 1000000000),
                 "a CDR stamp outside int32 seconds");
       } else {
-        ros::decode_temperature(m.data, type, encoding, {"fuzz.mcap", 0, m.channel->topic}, [&m] { return m.place.text(); });
+        ros::decode_temperature(m.data, type, encoding, {"fuzz.mcap", 0, m.channel->topic},
+                                [&m] { return m.place.text(); });
       }
     } catch (const DataError&) {
     }

@@ -23,8 +23,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const Pipeline p = parse_pipeline(text, "fuzz.yaml", *registry);
     const std::string effective = effective_pipeline_yaml(p, *registry);
     const Pipeline again = parse_pipeline(effective, "effective.yaml", *registry);
-    fuzz::require(effective_pipeline_yaml(again, *registry) == effective,
-                  "the effective pipeline reloads to itself", effective);
+    fuzz::require(effective_pipeline_yaml(again, *registry) == effective, "the effective pipeline reloads to itself",
+                  effective);
   } catch (const ConfigError&) {
   }
   return 0;

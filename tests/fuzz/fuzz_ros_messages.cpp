@@ -19,8 +19,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size == 0) return 0;
   using namespace driftlab;
   using fuzz::require;
-  constexpr ros::MessageType kTypes[] = {ros::MessageType::Imu, ros::MessageType::Temperature, ros::MessageType::Float32,
-                                         ros::MessageType::Float64};
+  constexpr ros::MessageType kTypes[] = {ros::MessageType::Imu, ros::MessageType::Temperature,
+                                         ros::MessageType::Float32, ros::MessageType::Float64};
   const ros::MessageType type = kTypes[data[0] & 3];
   const ros::Encoding encoding = (data[0] & 4) ? ros::Encoding::Ros1 : ros::Encoding::Cdr;
   const std::string_view bytes(reinterpret_cast<const char*>(data + 1), size - 1);
@@ -32,7 +32,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       require(m.stamp_ns < 0 || m.stamp_ns % 1000000000 < 1000000000, "stamp nanoseconds");
     } else {
       const auto m = ros::decode_temperature(bytes, type, encoding, where, what);
-      require(m.stamp_ns.has_value() == (type == ros::MessageType::Temperature), "a stamp where the type has none, or none where it has one");
+      require(m.stamp_ns.has_value() == (type == ros::MessageType::Temperature),
+              "a stamp where the type has none, or none where it has one");
     }
   } catch (const DataError&) {
   }

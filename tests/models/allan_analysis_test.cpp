@@ -65,7 +65,7 @@ TEST(Bursts, ReadTheContinuousRecordsDeviationWithinTheirIntervals) {
   const Eigen::Index per_burst = static_cast<Eigen::Index>(kBurstS * kFs);
   const Eigen::Index period = static_cast<Eigen::Index>(kPeriodS * kFs);
   error_model::NoiseTerms terms;
-  terms.arw_rad_sqrt_s = 0.01 * 3.14159265358979323846 / 180.0;              // 0.6 deg/sqrt(h)
+  terms.arw_rad_sqrt_s = 0.01 * 3.14159265358979323846 / 180.0;                 // 0.6 deg/sqrt(h)
   terms.rate_random_walk_rad_s_sqrt_s = 1e-3 * 3.14159265358979323846 / 180.0;  // 3.6 deg/h/sqrt(s)
   int inside = 0, checked = 0;
   for (int seed = 1; seed <= kRecords; ++seed) {
@@ -81,8 +81,8 @@ TEST(Bursts, ReadTheContinuousRecordsDeviationWithinTheirIntervals) {
     EXPECT_EQ(bursts.segments, static_cast<std::size_t>(kBursts));
     EXPECT_LE(bursts.curve.back().tau, kBurstS);
     for (const auto& e : bursts.curve) {
-      const auto same = std::find_if(continuous.curve.begin(), continuous.curve.end(),
-                                     [&](const Estimate& c) { return c.m == e.m; });
+      const auto same =
+          std::find_if(continuous.curve.begin(), continuous.curve.end(), [&](const Estimate& c) { return c.m == e.m; });
       ASSERT_NE(same, continuous.curve.end());
       ++checked;
       inside += e.dev_lo <= same->dev && same->dev <= e.dev_hi;
@@ -140,7 +140,8 @@ TEST(FloorReading, ReadsATrueFloorWithinItsInterval) {
   terms.rate_random_walk_rad_s_sqrt_s = 0.3 / 60.0 * kRadPerSecPerDph;
   terms.flicker_tau_min_s = 2.0;
   terms.flicker_tau_max_s = 1e6;
-  const Analysis a = analyze_rate(error_model::rate_noise(terms, kFs, static_cast<Eigen::Index>(kHours * 3600 * kFs), 11), kFs);
+  const Analysis a =
+      analyze_rate(error_model::rate_noise(terms, kFs, static_cast<Eigen::Index>(kHours * 3600 * kFs), 11), kFs);
   const auto& b = a.bias_instability;
   std::printf("B = %.3g [%.3g, %.3g] deg/h at tau = %g s (resolved: %d)\n", b.value / kRadPerSecPerDph,
               b.low / kRadPerSecPerDph, b.high / kRadPerSecPerDph, b.tau_s, b.resolved);

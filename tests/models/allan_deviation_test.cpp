@@ -21,9 +21,7 @@ namespace {
 
 using testing::number;
 
-bool has_stable32_data() {
-  return std::filesystem::exists(testing::stable32_dir() / "expected.csv");
-}
+bool has_stable32_data() { return std::filesystem::exists(testing::stable32_dir() / "expected.csv"); }
 
 // Relative rounding of a value printed with d significant digits: at most half a unit in the
 // last place over a mantissa >= 1, i.e. 0.5 * 10^(1-d).
@@ -46,8 +44,7 @@ TEST(Nbs14, MatchesEveryPublishedValueToThePrintedDigits) {
   ASSERT_EQ(phase10.size(), 10);
   ASSERT_EQ(freq1000.size(), 1000);
   const std::map<std::string, std::vector<Eigen::VectorXd>> angles{
-      {"nbs14_10", {phase10, angle_from_rate(freq10, 1.0)}},
-      {"nbs14_1000", {angle_from_rate(freq1000, 1.0)}}};
+      {"nbs14_10", {phase10, angle_from_rate(freq10, 1.0)}}, {"nbs14_1000", {angle_from_rate(freq1000, 1.0)}}};
   std::size_t checked = 0;
   for (const auto& row : testing::read_table(testing::stable32_dir() / "expected.csv")) {
     std::string statistic = row.at("statistic");
@@ -94,8 +91,7 @@ TEST(Adis16405, MatchesThePublishedMaximalOverlapAllanVarianceOnAllAxes) {
     ASSERT_EQ(factors.size(), 18u) << channel;
     const auto devs = deviations(Kind::Oadev, angle, kTau0, factors);
     for (std::size_t i = 0; i < factors.size(); ++i) {
-      EXPECT_NEAR(devs[i].dev * devs[i].dev / avar[i], 1.0, kPublishedTolerance)
-          << channel << " m=" << factors[i];
+      EXPECT_NEAR(devs[i].dev * devs[i].dev / avar[i], 1.0, kPublishedTolerance) << channel << " m=" << factors[i];
       EXPECT_DOUBLE_EQ(devs[i].tau, static_cast<double>(factors[i]) * kTau0);
     }
   }
@@ -109,9 +105,7 @@ double naive(Kind kind, const Eigen::VectorXd& x, std::size_t m, double tau0) {
   double sum = 0.0;
   std::ptrdiff_t terms = 0;
   const auto d2 = [&](std::ptrdiff_t i) { return x(i + 2 * sm) - 2.0 * x(i + sm) + x(i); };
-  const auto d3 = [&](std::ptrdiff_t i) {
-    return x(i + 3 * sm) - 3.0 * x(i + 2 * sm) + 3.0 * x(i + sm) - x(i);
-  };
+  const auto d3 = [&](std::ptrdiff_t i) { return x(i + 3 * sm) - 3.0 * x(i + 2 * sm) + 3.0 * x(i + sm) - x(i); };
   switch (kind) {
     case Kind::Adev:
       for (std::ptrdiff_t i = 0; i + 2 * sm < n; i += sm, ++terms) sum += d2(i) * d2(i);
@@ -237,7 +231,7 @@ TEST(Deviations, GiveTheSameResultForARateAndItsIntegratedAngle) {
 }
 
 TEST(Deviations, OfWhiteRateNoiseFollowTheOneOverRootTauLaw) {
-  constexpr double kDensity = 0.02;       // rad/s/sqrt(Hz)
+  constexpr double kDensity = 0.02;               // rad/s/sqrt(Hz)
   constexpr double kStatisticalTolerance = 0.05;  // relative, 1e6 samples up to m = 1000
   std::mt19937_64 engine(3);
   std::normal_distribution<double> normal;

@@ -80,7 +80,8 @@ TEST(Gmwm, RecoversWhiteNoiseRandomWalkAndGaussMarkovWithinTheirIntervals) {
   const Fit f = bootstrap(asymptotic, samples, 20, 11, 2);
   EXPECT_EQ(f.intervals, "bootstrap, 20 of 20 replicates");
   EXPECT_EQ(bootstrap(asymptotic, samples, 20, 11, 1).components[2].parameters[1].high,
-            f.components[2].parameters[1].high) << "the same intervals on one thread";
+            f.components[2].parameters[1].high)
+      << "the same intervals on one thread";
   ASSERT_EQ(f.components.size(), 3u);
   const double expected[] = {n, k, sigma, t};
   const Parameter* got[] = {&f.components[0].parameters[0], &f.components[1].parameters[0],
@@ -99,8 +100,9 @@ TEST(Gmwm, RecoversWhiteNoiseRandomWalkAndGaussMarkovWithinTheirIntervals) {
 TEST(Gmwm, RecoversWhiteNoiseQuantizationAndRandomWalkWithinTheirIntervals) {
   const double n = 2e-4, q = 5e-5, k = 2e-6, fs = 100.0;
   const Eigen::Index samples = 720000;  // 2 h
-  const Eigen::VectorXd x = simulate(
-      {term(Process::WhiteNoise, {n}), term(Process::Quantization, {q}), term(Process::RandomWalk, {k})}, fs, samples, 5);
+  const Eigen::VectorXd x =
+      simulate({term(Process::WhiteNoise, {n}), term(Process::Quantization, {q}), term(Process::RandomWalk, {k})}, fs,
+               samples, 5);
   const auto curve = analyze_rate(x, fs, {.fit_terms = false}).curve;
   const Fit f = bootstrap(fit(curve, fs, parse_model("wn+qn+rw")), samples, 20, 12, 2);
   const double expected[] = {n, q, k};
@@ -142,10 +144,11 @@ TEST(Gmwm, BootstrapIntervalsCoverTheTruthAndTheAccuracyOfBothEstimatorsIsMeasur
     slope_k += std::pow((*analysis.fit)[Term::K].value / k - 1, 2);
   }
   const auto rms = [&](double sum) { return std::sqrt(sum / kSeeds); };
-  std::printf("one-sigma coverage: asymptotic %.2f, bootstrap %.2f; rms relative error N: GMWM %.4f, slope fit "
-              "%.4f; K: GMWM %.3f, slope fit %.3f\n",
-              static_cast<double>(asymptotic_covered) / parameters, static_cast<double>(bootstrap_covered) / parameters,
-              rms(gmwm_n), rms(slope_n), rms(gmwm_k), rms(slope_k));
+  std::printf(
+      "one-sigma coverage: asymptotic %.2f, bootstrap %.2f; rms relative error N: GMWM %.4f, slope fit "
+      "%.4f; K: GMWM %.3f, slope fit %.3f\n",
+      static_cast<double>(asymptotic_covered) / parameters, static_cast<double>(bootstrap_covered) / parameters,
+      rms(gmwm_n), rms(slope_n), rms(gmwm_k), rms(slope_k));
   EXPECT_GT(static_cast<double>(bootstrap_covered) / parameters, 0.55) << "68.3 % nominal";
   EXPECT_LT(rms(gmwm_n), 0.5 * rms(slope_n));
 }

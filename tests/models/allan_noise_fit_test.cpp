@@ -57,8 +57,7 @@ struct TrueTerms {
 // IEEE 952 C.1's two-sided bias-instability spectrum B^2 / (2 pi f), whose Allan deviation floor
 // is sqrt(2 ln 2 / pi) B = 0.664 B. (IEEE 952's PSDs are two-sided: white rate N^2, random walk
 // K^2 / (2 pi f)^2, matching the white std N / sqrt(tau0) and walk steps K sqrt(tau0) here.)
-Eigen::VectorXd simulate(const TrueTerms& truth, std::size_t samples, double tau0,
-                         std::uint64_t seed) {
+Eigen::VectorXd simulate(const TrueTerms& truth, std::size_t samples, double tau0, std::uint64_t seed) {
   Normal normal(seed);
   Eigen::VectorXd rate(static_cast<Eigen::Index>(samples));
   const double white = truth.n / std::sqrt(tau0);
@@ -96,16 +95,12 @@ NoiseFit fit_record(const Eigen::VectorXd& rate, double tau0) {
   return fit_noise_terms(curve);
 }
 
-bool inside(const TermEstimate& t, double truth, double width) {
-  return std::abs(t.value - truth) <= width * t.sigma;
-}
+bool inside(const TermEstimate& t, double truth, double width) { return std::abs(t.value - truth) <= width * t.sigma; }
 
 // deg/sqrt(h), deg/h, deg/h/sqrt(h) -> SI.
 constexpr double arw(double deg_per_sqrt_h) { return deg_per_sqrt_h * kPi / 180.0 / 60.0; }
 constexpr double bias(double deg_per_h) { return deg_per_h * kPi / 180.0 / 3600.0; }
-constexpr double rrw(double deg_per_h_sqrt_h) {
-  return deg_per_h_sqrt_h * kPi / 180.0 / 3600.0 / 60.0;
-}
+constexpr double rrw(double deg_per_h_sqrt_h) { return deg_per_h_sqrt_h * kPi / 180.0 / 3600.0 / 60.0; }
 
 TEST(NoiseFitUnits, ConvertEveryTermToTheUsualGyroUnits) {
   constexpr double kConversionTolerance = 1e-12;  // a few roundings of exact factors
@@ -181,8 +176,7 @@ TEST(NoiseFit, RecoversBiasInstabilityWithinItsWiderTolerance) {
     b_inside += std::abs(fit[Term::B].value - truth.b) <=
                 kIntervalWidth * fit[Term::B].sigma + kFlickerModelTolerance * truth.b;
   }
-  std::printf("inside: N %d (+-2 sigma), B %d (+-2 sigma + 10 %%) of %d trials\n", n_inside,
-              b_inside, kTrials);
+  std::printf("inside: N %d (+-2 sigma), B %d (+-2 sigma + 10 %%) of %d trials\n", n_inside, b_inside, kTrials);
   EXPECT_GE(n_inside, kRequiredFraction * kTrials);
   EXPECT_GE(b_inside, kRequiredFraction * kTrials);
 }

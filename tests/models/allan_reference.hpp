@@ -20,9 +20,7 @@ namespace driftlab::allan::testing {
 
 inline std::filesystem::path shared_data() { return DRIFTLAB_SHARED_DATA; }
 
-inline std::filesystem::path stable32_dir() {
-  return shared_data() / "real" / "allantools-stable32";
-}
+inline std::filesystem::path stable32_dir() { return shared_data() / "real" / "allantools-stable32"; }
 
 inline std::filesystem::path smac_dir() { return shared_data() / "real" / "smac-imudata-static"; }
 
@@ -50,8 +48,7 @@ inline Eigen::VectorXd read_values(const std::filesystem::path& path) {
 }
 
 // The first `count` numeric columns of a header-led CSV (fast path for large records).
-inline std::vector<Eigen::VectorXd> read_columns(const std::filesystem::path& path,
-                                                 std::size_t count) {
+inline std::vector<Eigen::VectorXd> read_columns(const std::filesystem::path& path, std::size_t count) {
   const std::string text = read_text(path);
   std::vector<std::vector<double>> columns(count);
   const char* p = text.c_str();
@@ -72,8 +69,7 @@ inline std::vector<Eigen::VectorXd> read_columns(const std::filesystem::path& pa
 }
 
 // Rows of a header-led CSV without quoting, as column name -> text.
-inline std::vector<std::map<std::string, std::string>> read_table(
-    const std::filesystem::path& path) {
+inline std::vector<std::map<std::string, std::string>> read_table(const std::filesystem::path& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot open " + path.string());
   const auto split = [](const std::string& line) {

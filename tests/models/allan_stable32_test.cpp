@@ -97,10 +97,11 @@ struct TableCheck {
 std::vector<TableCheck> all_tables() {
   std::vector<TableCheck> out;
   for (auto& [file, rows] : tables()) {
-    TableCheck t{file, kind_of(rows.front().at("statistic")),
-                 rows.front().at("preprocessing") == "frac_1e7_approx" ? kOcxoOctaveTolerance
-                                                                       : kPrintedDigitsTolerance,
-                 &record(rows.front().at("data_file"), rows.front().at("preprocessing")), rows,
+    TableCheck t{file,
+                 kind_of(rows.front().at("statistic")),
+                 rows.front().at("preprocessing") == "frac_1e7_approx" ? kOcxoOctaveTolerance : kPrintedDigitsTolerance,
+                 &record(rows.front().at("data_file"), rows.front().at("preprocessing")),
+                 rows,
                  {}};
     for (const auto& row : rows) t.factors.push_back(static_cast<std::size_t>(number(row, "af_m")));
     out.push_back(std::move(t));
@@ -117,8 +118,7 @@ TEST_F(Stable32Tables, DeviationsAndTermCountsMatchEveryRow) {
       const double expected = number(t.rows[i], "sigma");
       EXPECT_LE(relative(devs[i].dev, expected), t.tolerance)
           << t.file << " m=" << t.factors[i] << " got " << devs[i].dev << " expected " << expected;
-      EXPECT_EQ(devs[i].terms, static_cast<std::size_t>(number(t.rows[i], "n")))
-          << t.file << " m=" << t.factors[i];
+      EXPECT_EQ(devs[i].terms, static_cast<std::size_t>(number(t.rows[i], "n"))) << t.file << " m=" << t.factors[i];
       ++rows;
     }
   }
@@ -153,8 +153,7 @@ TEST_F(Stable32Tables, ConfidenceBoundsMatchEveryRowForStable32sNoiseType) {
       const Row& row = t.rows[i];
       if (number(row, "min_sigma") == 0.0) continue;  // Stable32 printed no bounds
       if (unexplained_bounds(t.file, t.factors[i])) continue;
-      const double dev =
-          stable32_roundoff(t.file, t.factors[i]) ? number(row, "sigma") : devs[i].dev;
+      const double dev = stable32_roundoff(t.file, t.factors[i]) ? number(row, "sigma") : devs[i].dev;
       const bool longest = i + 1 == t.rows.size();
       const int alpha = static_cast<int>(number(row, "alpha"));
       const double edf = equivalent_dof(t.kind, alpha, n, t.factors[i]);
@@ -192,8 +191,8 @@ TEST_F(Stable32Tables, NoiseIdentificationAgreesWithStable32) {
   }
   const auto& [lag1_agree, lag1_total] = tally[NoiseMethod::Lag1Autocorrelation];
   const auto& [b1_agree, b1_total] = tally[NoiseMethod::B1Ratio];
-  std::printf("lag-1 autocorrelation: %zu of %zu rows agree; B1 ratio: %zu of %zu\n", lag1_agree,
-              lag1_total, b1_agree, b1_total);
+  std::printf("lag-1 autocorrelation: %zu of %zu rows agree; B1 ratio: %zu of %zu\n", lag1_agree, lag1_total, b1_agree,
+              b1_total);
   // Measured: 2485 of 2497 (99.5 %) and 950 of 1552 (61 %). Below 30 points Stable32 decides
   // differently from SP1065's B1/R(n) recipe (it often keeps alpha = 0 where B1 says -1).
   EXPECT_GE(static_cast<double>(lag1_agree), 0.99 * static_cast<double>(lag1_total));

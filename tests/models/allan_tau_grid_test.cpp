@@ -21,8 +21,7 @@ TEST(TauGrid, OctaveAndDecadeFollowStable32sLimits) {
   // Cs5071A, 556990 points: decade 1, 2, 4, 10, ... 100000 for ADEV, TOTDEV to 200000.
   const TauGrid decade{GridKind::Decade, 10, {}};
   const Factors adev = averaging_factors(decade, Kind::Adev, 556990, 1.0);
-  EXPECT_EQ(adev, (Factors{1, 2, 4, 10, 20, 40, 100, 200, 400, 1000, 2000, 4000, 10000, 20000, 40000,
-                           100000}));
+  EXPECT_EQ(adev, (Factors{1, 2, 4, 10, 20, 40, 100, 200, 400, 1000, 2000, 4000, 10000, 20000, 40000, 100000}));
   EXPECT_EQ(averaging_factors(decade, Kind::Totdev, 556990, 1.0).back(), 200000u);
   // PHASE.DAT, 1001 points: ADEV/HDEV octave to 128, TOTDEV to 256.
   EXPECT_EQ(averaging_factors(TauGrid{}, Kind::Hdev, 1001, 1.0).back(), 128u);

@@ -42,7 +42,12 @@ Record run(const devices::DeviceDefinition& device, const devices::SimulationPro
 devices::SimulationProfile other_profile() {
   devices::SimulationProfile p;
   p.chamber_c = devices::Profile(25.0);
-  p.chamber_c.hold(600).ramp_at_rate(50, 2.0 / 60).hold(900).ramp_at_rate(-10, 0.5 / 60).hold(900).ramp_at_rate(30, 1.5 / 60);
+  p.chamber_c.hold(600)
+      .ramp_at_rate(50, 2.0 / 60)
+      .hold(900)
+      .ramp_at_rate(-10, 0.5 / 60)
+      .hold(900)
+      .ramp_at_rate(30, 1.5 / 60);
   return p;
 }
 
@@ -73,7 +78,8 @@ TEST(CalibrationEvidence, ThePhysicalModelBeatsThePolynomialWhereTheDriftIsNotPo
   const double poly = drift(test, fit(cal, ModelKind::Polynomial));
   const double physical = drift(test, fit(cal, ModelKind::Physical));
   const double rbf = drift(test, fit(cal, ModelKind::Rbf));
-  EXPECT_LT(physical, 0.8 * poly) << "physical " << physical / kRadPerSecPerDph << " vs poly " << poly / kRadPerSecPerDph;
+  EXPECT_LT(physical, 0.8 * poly) << "physical " << physical / kRadPerSecPerDph << " vs poly "
+                                  << poly / kRadPerSecPerDph;
   EXPECT_LT(rbf, 0.8 * poly) << "rbf " << rbf / kRadPerSecPerDph << " vs poly " << poly / kRadPerSecPerDph;
 }
 
@@ -90,8 +96,8 @@ TEST(CalibrationEvidence, ThePhysicalModelRecoversTheLagAndReachesTheIntrinsicFl
   EXPECT_NEAR(m.lag_tau_s, 400.0, kLagTolerance * 400.0);
   const double floor = evaluation::block_mean_rms(test.time_s, test.rate_rad_s - test.systematic_rad_s);
   const double physical = drift(test, m);
-  EXPECT_LT(physical, kFloorFactor * floor) << "physical " << physical / kRadPerSecPerDph << " deg/h, floor "
-                                            << floor / kRadPerSecPerDph << " deg/h";
+  EXPECT_LT(physical, kFloorFactor * floor)
+      << "physical " << physical / kRadPerSecPerDph << " deg/h, floor " << floor / kRadPerSecPerDph << " deg/h";
   std::printf("[ summary  ] lag %.1f s (truth 400); held-out drift %.2f deg/h, intrinsic floor %.2f deg/h\n",
               m.lag_tau_s, physical / kRadPerSecPerDph, floor / kRadPerSecPerDph);
 }

@@ -40,8 +40,13 @@ ChannelCalibration channel(Sensor sensor, char axis, int instance, std::vector<d
   const imu::ChannelId id{sensor, axis, instance};
   CalibrationModel m = testing::example_polynomial_model(std::move(a), lo, hi);
   m.reference_temp_c = t0;
-  return {id, id.role(), id.role() + (sensor == Sensor::Gyro ? "_dps" : "_mps2"),
-          sensor == Sensor::Gyro ? "deg/s" : "m/s^2", instance == 0 ? "temp_c" : "temp1_c", std::move(device_id), true,
+  return {id,
+          id.role(),
+          id.role() + (sensor == Sensor::Gyro ? "_dps" : "_mps2"),
+          sensor == Sensor::Gyro ? "deg/s" : "m/s^2",
+          instance == 0 ? "temp_c" : "temp1_c",
+          std::move(device_id),
+          true,
           std::move(m)};
 }
 
@@ -70,7 +75,8 @@ ImuCalibration two_instance_imu() {
     auto& c = m.channels[k];
     if (c.id.sensor == Sensor::Accel && c.id.instance == 1) c.offset_observable = false;
     const double g = c.id.sensor == Sensor::Gyro ? 1.0 : 10.0;  // accelerometer terms in m/s^2 units
-    c.model.noise = {g * (7e-5 + 1e-6 * static_cast<double>(k)), g * 3e-5, g * (1e-6 + 1e-7 * static_cast<double>(k)), 200.0};
+    c.model.noise = {g * (7e-5 + 1e-6 * static_cast<double>(k)), g * 3e-5, g * (1e-6 + 1e-7 * static_cast<double>(k)),
+                     200.0};
   }
   return m;
 }
@@ -189,7 +195,8 @@ TEST(CalibrationExports, Px4ParamsHoldEveryAxisAndInstanceAndPx4sEquationReprodu
   EXPECT_EQ(real32(p, "TC_A1_X0_0"), 0.0f) << "an accelerometer without a reference: X0 = a0 = 0 about its T0";
 
   for (const auto& c : imu.channels) {
-    const std::string b = std::string("TC_") + (c.id.sensor == Sensor::Gyro ? "G" : "A") + std::to_string(c.id.instance) + "_";
+    const std::string b =
+        std::string("TC_") + (c.id.sensor == Sensor::Gyro ? "G" : "A") + std::to_string(c.id.instance) + "_";
     const int axis = c.id.axis - 'x';
     double x[4];
     for (int k = 0; k < 4; ++k) x[k] = real32(p, b + "X" + std::to_string(k) + "_" + std::to_string(axis));
@@ -203,7 +210,8 @@ TEST(CalibrationExports, Px4ParamsHoldEveryAxisAndInstanceAndPx4sEquationReprodu
   EXPECT_GT(loss_of(r, {Sensor::Gyro, 'x', 1}).max_error, 0.0) << "order 5: approximated";
   EXPECT_EQ(loss_of(r, {Sensor::Gyro, 'x', 0}).max_error, 0.0) << "a cubic is exact";
   EXPECT_GT(loss_of(r, {Sensor::Accel, 'x', 1}).max_error, 0.0) << "held at accel1_z's narrower range";
-  EXPECT_NE(r.text.find("# NOTE: gyro1_x: order-5 polynomial"), std::string::npos) << "the file states the loss per channel";
+  EXPECT_NE(r.text.find("# NOTE: gyro1_x: order-5 polynomial"), std::string::npos)
+      << "the file states the loss per channel";
 }
 
 TEST(CalibrationExports, ArduPilotParmHoldsEveryInstanceAndArduPilotsEquationReproducesTheModel) {
@@ -222,12 +230,13 @@ TEST(CalibrationExports, ArduPilotParmHoldsEveryInstanceAndArduPilotsEquationRep
   for (const char a : {'X', 'Y', 'Z'}) {
     EXPECT_TRUE(p.count(std::string("INS_GYROFFS_") + a));
     EXPECT_TRUE(p.count(std::string("INS_GYR2OFFS_") + a));
-    EXPECT_FALSE(p.count(std::string("INS_ACCOFFS_") + a)) << "the accelerometer constant is ArduPilot's own calibration's";
+    EXPECT_FALSE(p.count(std::string("INS_ACCOFFS_") + a))
+        << "the accelerometer constant is ArduPilot's own calibration's";
   }
   EXPECT_EQ(p.size(), 2u * (3u + 18u + 4u)) << "nothing else";
   EXPECT_EQ(p.at("INS_TCAL2_TMIN"), "-5") << "one range per instance: the intersection (accel1_z from -5 degC)";
 
-  constexpr float kAccelCalTemp = 20.0f;     // where the emulated ArduPilot accelerometer calibration runs
+  constexpr float kAccelCalTemp = 20.0f;       // where the emulated ArduPilot accelerometer calibration runs
   constexpr double kUnobservedConstant = 0.3;  // m/s^2: the accelerometer offset the model does not know
   for (const auto& c : imu.channels) {
     const int n = c.id.instance + 1;
@@ -247,13 +256,15 @@ TEST(CalibrationExports, ArduPilotParmHoldsEveryInstanceAndArduPilotsEquationRep
     x[0] = offset;
     const double stated = kGridSlack * loss_of(r, c.id).max_error;
     for (double t = c.model.valid_min_c; t <= c.model.valid_max_c; t += kStep) {
-      const double firmware = ardupilot_correction(p, n, c.id.sensor, c.id.axis, static_cast<float>(t), caltemp, offset);
+      const double firmware =
+          ardupilot_correction(p, n, c.id.sensor, c.id.axis, static_cast<float>(t), caltemp, offset);
       const double tolerance = stated + 2.0 * real32_allowance(x, t, 35.0);
       ASSERT_NEAR(firmware - constant, c.model.polynomial_bias_rad_s(t), tolerance) << c.id.role() << " at " << t;
     }
   }
   EXPECT_GT(loss_of(r, {Sensor::Gyro, 'z', 1}).max_error, 0.0) << "gyro1 is held at the instance's -5 degC";
-  EXPECT_NE(r.text.find("# NOTE: gyro1_z: valid range -10 .. 50 degC held at [TMIN, TMAX] = -5 .. 50"), std::string::npos)
+  EXPECT_NE(r.text.find("# NOTE: gyro1_z: valid range -10 .. 50 degC held at [TMIN, TMAX] = -5 .. 50"),
+            std::string::npos)
       << r.text;
 }
 
@@ -334,7 +345,8 @@ TEST(CalibrationExports, KalibrYamlWritesAnUnresolvedTermOnlyAsAMarkedBound) {
 }
 
 std::filesystem::path scratch(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("driftlab_exports_" + std::to_string(::getpid()) + "_" + name);
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("driftlab_exports_" + std::to_string(::getpid()) + "_" + name);
   std::filesystem::create_directories(dir);
   return dir;
 }
@@ -409,7 +421,8 @@ int main(void) {
 
 TEST(CalibrationExports, PrefixesThatAreNoSafeCIdentifierStartAreRefused) {
   const ImuCalibration imu = testing::one_channel(testing::example_polynomial_model());
-  for (const std::string& bad : std::vector<std::string>{"", "_cal", "1cal", "cal_", "my__cal", "cal-x", std::string(33, 'a')}) {
+  for (const std::string& bad :
+       std::vector<std::string>{"", "_cal", "1cal", "cal_", "my__cal", "cal-x", std::string(33, 'a')}) {
     EXPECT_THROW(export_c_header(imu, {.symbol_prefix = bad}), ConfigError) << "'" << bad << "'";
   }
   EXPECT_NO_THROW(export_c_header(imu, {.symbol_prefix = std::string(32, 'a')}));
@@ -430,7 +443,8 @@ TEST(CalibrationExports, StrictRefusesNamingTheChannelAndTheDefaultStatesWhatIsD
   const auto r = export_px4_params(imu);
   EXPECT_NE(r.text.find("# NOTE: gyro1_x: dropped (not representable in PX4 TC_G1_*): hysteresis"), std::string::npos)
       << r.text;
-  EXPECT_NE(r.text.find("# NOTE: gyro1_x: dropped (not representable in PX4 TC_G1_*): scale-factor"), std::string::npos);
+  EXPECT_NE(r.text.find("# NOTE: gyro1_x: dropped (not representable in PX4 TC_G1_*): scale-factor"),
+            std::string::npos);
   EXPECT_EQ(loss_of(r, {Sensor::Gyro, 'x', 1}).dropped.size(), 6u)
       << "lag, dT/dt, hysteresis, RBF, scale factor, linear extrapolation";
   // A cubic under the linear policy is exact inside the range but not outside it: strict refuses it.
@@ -464,7 +478,8 @@ TEST(CalibrationExports, ValuesThatAreNoFiniteReal32AreRefusedNamingChannelAndPa
     ADD_FAILURE() << "not refused";
   } catch (const ConfigError& e) {
     const std::string what = e.what();
-    EXPECT_NE(what.find("gyro_x: INS_TCAL1_GYR1_X"), std::string::npos) << what;  // 3e39: re-expanded about 35 degC, x1e6
+    EXPECT_NE(what.find("gyro_x: INS_TCAL1_GYR1_X"), std::string::npos)
+        << what;  // 3e39: re-expanded about 35 degC, x1e6
     EXPECT_EQ(what.find("accel_x"), std::string::npos) << "names the one channel: " << what;
   }
 }
@@ -487,7 +502,8 @@ TEST(CalibrationExports, TheSingleAxisV1FileStillExportsToItsAxisOfInstanceZero)
   const auto ap = read_params(export_ardupilot_params(v1).text, false);
   EXPECT_NE(real32(ap, "INS_TCAL1_GYR1_Z"), 0.0f);
   EXPECT_EQ(real32(ap, "INS_TCAL1_ACC1_Z"), 0.0f);
-  EXPECT_EQ(compile_c99(scratch("v1"), export_c_header(v1).text, "#include \"cal.h\"\nint main(void) { return 0; }\n"), "");
+  EXPECT_EQ(compile_c99(scratch("v1"), export_c_header(v1).text, "#include \"cal.h\"\nint main(void) { return 0; }\n"),
+            "");
   EXPECT_THROW(export_kalibr_imu_yaml(v1), ConfigError) << "no accelerometer and no noise terms: refused";
 }
 

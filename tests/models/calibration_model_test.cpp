@@ -36,8 +36,8 @@ CalibrationModel full_model() { return testing::example_full_model(); }
 TEST(CalibrationModelJson, RoundTripsEveryFieldOfEveryChannel) {
   const auto path = scratch("full.json");
   ImuCalibration imu_model = testing::one_channel(full_model());
-  imu_model.channels.push_back({{imu::Sensor::Accel, 'z', 1}, "accel1_z", "az1", "mg", "temp1", "2490378", false,
-                                poly_model()});
+  imu_model.channels.push_back(
+      {{imu::Sensor::Accel, 'z', 1}, "accel1_z", "az1", "mg", "temp1", "2490378", false, poly_model()});
   std::ofstream(path) << to_json_text(imu_model);
   const ImuCalibration back = read_calibration(path);
   ASSERT_EQ(back.channels.size(), 2u);
@@ -158,7 +158,8 @@ TEST(CalibrationModelValidation, ModelsAreCheckedAsPhysicsNotOnlyAsSyntax) {
   refused(m, "bias.polynomial_rad_s_per_k_i", "expected at most 16 coefficients");
   m = testing::example_polynomial_model({1e-3, 1e307, 1e307}, -10.0, 50.0);  // finite coefficients, an infinite bias
   refused(m, "bias.polynomial_rad_s_per_k_i", "the bias is not finite");
-  m = testing::example_polynomial_model({1e-3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1e282}, -10.0, 50.0);
+  m = testing::example_polynomial_model(
+      {1e-3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1e282}, -10.0, 50.0);
   m.bias_sigma_rad_s.clear();
   EXPECT_NO_THROW(m.validate()) << "finite over the range when clamped: 1e282 * 35^15 ~ 1e305";
   m.extrapolation = Extrapolation::Evaluate;
@@ -184,14 +185,14 @@ TEST(CalibrationModelJson, ARepeatedKeyAFifoAndAnUnphysicalModelAreRefusedWithFi
   nested.replace(nested.find("\"axis\""), 6, "\"axis\": \"x\", \"axis\"");
   EXPECT_NE(error_of(nested).find("channels[0].axis: the key appears twice"), std::string::npos) << error_of(nested);
   std::string negative_sf = good;
-  negative_sf = std::regex_replace(negative_sf, std::regex("\"polynomial_per_k_j\": \\[\\]"),
-                                   "\"polynomial_per_k_j\": [-2.0]");
+  negative_sf =
+      std::regex_replace(negative_sf, std::regex("\"polynomial_per_k_j\": \\[\\]"), "\"polynomial_per_k_j\": [-2.0]");
   const std::string n = error_of(negative_sf);
   EXPECT_NE(n.find("bad.json: channels[0].model.scale_factor.polynomial_per_k_j: the scale factor is -1"),
             std::string::npos)
       << n;
-  ImuCalibration accel = testing::one_channel(testing::example_polynomial_model({1e-3, 1e307, 1e307}),
-                                              {imu::Sensor::Accel, 'z', 0});
+  ImuCalibration accel =
+      testing::one_channel(testing::example_polynomial_model({1e-3, 1e307, 1e307}), {imu::Sensor::Accel, 'z', 0});
   const std::string a = error_of(to_json_text(accel));  // the key as the accelerometer's file spells it
   EXPECT_NE(a.find("bad.json: channels[0].model.bias.polynomial_m_s2_per_k_i: the bias is not finite"),
             std::string::npos)
@@ -212,7 +213,9 @@ TEST(CalibrationModelJson, ARepeatedKeyAFifoAndAnUnphysicalModelAreRefusedWithFi
 TEST(CausalCompensator, SubtractsThePolynomialAndFlagsAndClampsOutsideTheRange) {
   const CalibrationModel m = poly_model();
   CausalCompensator c(m);
-  const auto p = [&](double t) { return m.bias_rad_s[0] + m.bias_rad_s[1] * (t - 25) + m.bias_rad_s[2] * (t - 25) * (t - 25); };
+  const auto p = [&](double t) {
+    return m.bias_rad_s[0] + m.bias_rad_s[1] * (t - 25) + m.bias_rad_s[2] * (t - 25) * (t - 25);
+  };
   EXPECT_NEAR(c.step(0.0, 0.01, 30.0), 0.01 - p(30.0), kRounding);
   EXPECT_FALSE(c.last_extrapolated());
   EXPECT_NEAR(c.step(1.0, 0.01, 70.0), 0.01 - p(50.0), kRounding) << "clamp holds the edge value";
@@ -240,8 +243,8 @@ TEST(CausalCompensator, EvaluatesTheRbfNetworkInsideTheRangeOfItsFittingData) {
   // 2e-5 rad/s x exp(-30 K / 1.5 K) = 4e-14 (measured 6e-14).
   constexpr double kSameEdge = 1e-12;
   CalibrationModel m = testing::example_full_model();  // dT/dt range +-0.02 K/s = +-1.2 degC/min
-  m.temperature_rate_rad_s_per_k_s = 0.0;               // only the network sees dT/dt
-  m.lag_tau_s = 0.0;                                    // the same model temperature on both ramps
+  m.temperature_rate_rad_s_per_k_s = 0.0;              // only the network sees dT/dt
+  m.lag_tau_s = 0.0;                                   // the same model temperature on both ramps
   // 1.5 and 2.4 degC/min are both beyond the range: the network sees its edge both times.
   EXPECT_NEAR(after_ramp(m, 1.5), after_ramp(m, 2.4), kSameEdge);
   m.rbf->input_min.clear();

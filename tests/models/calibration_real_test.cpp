@@ -34,7 +34,7 @@ Record load(const std::filesystem::path& file, const std::string& time, const st
   o.max_gap_factor = 0.0;
   const TimeSeries ts = read_csv(file, o);
   return {file.filename().string() + ":" + rate, ts.time(), ts.channel("rate").values,
-          ts.channel("temperature").values, {}, {}};
+          ts.channel("temperature").values,      {},        {}};
 }
 
 struct Design {
@@ -70,15 +70,19 @@ std::vector<Design> designs() {
     o.holdout_blocks = 4;
     o.max_order = 3;
     o.extrapolation = Extrapolation::Linear;
-    out.push_back({std::string("lsm6dsm ") + axis + ", early -> late", {slice(whole, -1, 3600)}, slice(whole, 3600, 1e9), o});
-    out.push_back({std::string("lsm6dsm ") + axis + ", late -> early", {slice(whole, 3600, 1e9)}, slice(whole, -1, 3600), o});
+    out.push_back(
+        {std::string("lsm6dsm ") + axis + ", early -> late", {slice(whole, -1, 3600)}, slice(whole, 3600, 1e9), o});
+    out.push_back(
+        {std::string("lsm6dsm ") + axis + ", late -> early", {slice(whole, 3600, 1e9)}, slice(whole, -1, 3600), o});
   }
   // MPU6050 static, 0.3 degC span: first 330 s -> the rest.
   const auto mpu = kReal / "sunsided-mpu6050-static" / "mpu6050_unmoved_x_forward_10min.csv";
   for (const char axis : {'x', 'y', 'z'}) {
     const Record whole = load(mpu, "time_s", std::string("gyro_") + axis + "_dps", "deg/s", "temp_C");
-    out.push_back({std::string("mpu6050 ") + axis + ", first 330 s -> rest", {slice(whole, -1, 330)},
-                   slice(whole, 330, 1e9), {}});
+    out.push_back({std::string("mpu6050 ") + axis + ", first 330 s -> rest",
+                   {slice(whole, -1, 330)},
+                   slice(whole, 330, 1e9),
+                   {}});
   }
   return out;
 }
@@ -101,8 +105,8 @@ TEST(CalibrationReal, TheDefaultModelIsNeverWorseThanTheSimpleOnesOnHeldOutRealL
     const CalibrationModel chosen = fit_calibration(d.fit, o);
     const double none = drift(d.test, nullptr), p = drift(d.test, &poly), c3 = drift(d.test, &px4),
                  m = drift(d.test, &chosen);
-    std::printf("%-34s none %9.1f  PX4-style %8.1f  poly %8.1f  default %8.1f deg/h (%s)\n", d.name.c_str(), none / kDph,
-                c3 / kDph, p / kDph, m / kDph, to_string(chosen.kind).c_str());
+    std::printf("%-34s none %9.1f  PX4-style %8.1f  poly %8.1f  default %8.1f deg/h (%s)\n", d.name.c_str(),
+                none / kDph, c3 / kDph, p / kDph, m / kDph, to_string(chosen.kind).c_str());
     const double allowed = d.name == kKnownShortfall ? kKnownShortfallRatio : kNoWorseThanSimple;
     EXPECT_LE(m, allowed * std::min(p, c3)) << d.name;
     EXPECT_LE(m, none) << d.name;
@@ -114,7 +118,8 @@ TEST(CalibrationReal, TheDefaultModelIsNeverWorseThanTheSimpleOnesOnHeldOutRealL
 TEST(CalibrationReal, ThePhysicalModelIsChosenWhereTheHistoryTransfers) {
   if (!std::filesystem::exists(kReal)) GTEST_SKIP() << "no " << kReal;
   const auto all = designs();
-  const auto found = std::find_if(all.begin(), all.end(), [](const Design& d) { return d.name == "tofupilot x, test cool2"; });
+  const auto found =
+      std::find_if(all.begin(), all.end(), [](const Design& d) { return d.name == "tofupilot x, test cool2"; });
   ASSERT_NE(found, all.end());
   {
     const Design& d = *found;

@@ -88,7 +88,8 @@ struct RecordRun {
 RecordRun run_record(std::uint64_t index, const std::vector<std::string>& hidden, bool with_drive_frequency = false) {
   const auto device = fmvmg(with_drive_frequency);
   RecordRun r{testing_oven::make_record(device, kSeed, index, hidden), {}};
-  r.result = discrepancy::find_missing_effects(r.record.series, candidates().list, devices::discrepancy_options(device));
+  r.result =
+      discrepancy::find_missing_effects(r.record.series, candidates().list, devices::discrepancy_options(device));
   return r;
 }
 
@@ -262,9 +263,10 @@ TEST(WithoutTheDeviceFile, HiddenEffectsAreNamedAsOftenAsWithItAndNothingWrongIs
   constexpr double kPoints = 0.03;  // the allowance: 3 percentage points
   EXPECT_GE(without_device, with_device - static_cast<int>(std::floor(kPoints * nameable)))
       << without_device << " vs " << with_device << " of " << nameable;
-  std::printf("[ summary  ] named first: %d of %d with the device file, %d of %d without (scale-factor records "
-              "left out); truth gap halved: %d / %d of %d\n",
-              with_device, nameable, without_device, nameable, shrunk_with, shrunk_without, records);
+  std::printf(
+      "[ summary  ] named first: %d of %d with the device file, %d of %d without (scale-factor records "
+      "left out); truth gap halved: %d / %d of %d\n",
+      with_device, nameable, without_device, nameable, shrunk_with, shrunk_without, records);
 }
 
 TEST(WithoutTheDeviceFile, NothingIsNamedInRecordsWithOnlyColouredNoise) {
@@ -302,14 +304,16 @@ TEST(GaussMarkovNoise, ADeviceFileThatListsItNamesNothingInNoiseOnlyRecords) {
   for (int i = 0; i < kNoiseOnlyRecords / 2; ++i) {
     devices::DeviceDefinition device;
     const auto record = gauss_markov_record(700000 + static_cast<std::uint64_t>(i), {}, device);
-    const auto with = discrepancy::find_missing_effects(record.series, candidates().list, devices::discrepancy_options(device));
+    const auto with =
+        discrepancy::find_missing_effects(record.series, candidates().list, devices::discrepancy_options(device));
     EXPECT_THAT(named(with), ::testing::IsEmpty()) << "record " << i;
     if (!with.final_scores.empty()) largest_with = std::max(largest_with, with.final_scores.front().delta_bic);
     named_without += !run_without_device(record).steps.empty();
   }
-  std::printf("[ summary  ] %d noise-only records with Gauss-Markov bias noise: largest delta BIC %.1f with the device "
-              "file listing it; without the device file %d of them name an effect\n",
-              kNoiseOnlyRecords / 2, largest_with, named_without);
+  std::printf(
+      "[ summary  ] %d noise-only records with Gauss-Markov bias noise: largest delta BIC %.1f with the device "
+      "file listing it; without the device file %d of them name an effect\n",
+      kNoiseOnlyRecords / 2, largest_with, named_without);
 }
 
 TEST(GaussMarkovNoise, HiddenEffectsAreStillNamedThroughIt) {
@@ -332,7 +336,8 @@ TEST(GaussMarkovNoise, HiddenEffectsAreStillNamedThroughIt) {
 
 // Effects outside the library, added to the simulated rate as functions of the resonator
 // temperature: the workflow must not name a candidate, and must say which view holds the rest.
-void expect_unexplained_in(const std::string& view, const std::function<double(double t, double temp, double rate)>& bias,
+void expect_unexplained_in(const std::string& view,
+                           const std::function<double(double t, double temp, double rate)>& bias,
                            const std::function<void(const discrepancy::StructureTest&)>& check_view = {}) {
   constexpr int kRecords = 4;
   for (int i = 0; i < kRecords; ++i) {
@@ -346,7 +351,7 @@ void expect_unexplained_in(const std::string& view, const std::function<double(d
     record.series.set_channel({role::kRate, "rad/s", "rate with an effect outside the library", rate});
     for (const auto& [label, result] :
          {std::pair{"with the device file", discrepancy::find_missing_effects(record.series, candidates().list,
-                                                                               devices::discrepancy_options(device))},
+                                                                              devices::discrepancy_options(device))},
           std::pair{"without it", run_without_device(record)}}) {
       EXPECT_THAT(named(result), ::testing::IsEmpty()) << label << ", record " << i;
       EXPECT_TRUE(result.unexplained.found) << label << ", record " << i;
@@ -368,14 +373,15 @@ TEST(EffectOutsideTheLibrary, ABiasStepAtOneTemperatureIsUnexplainedInTheTempera
   // degC: well inside the spacing of the level search (64 equal-count levels, refined between
   // neighbours by golden section); measured 0.01 .. 0.04.
   constexpr double kStepLevel = 0.5;
-  constexpr double kStepSize = 0.15;  // relative: the joint fit's size scatters with the noise, -6 .. +8 %
+  constexpr double kStepSize = 0.15;              // relative: the joint fit's size scatters with the noise, -6 .. +8 %
   const double step = 1000.0 * kRadPerSecPerDph;  // above 20 degC
-  expect_unexplained_in("temperature", [&](double, double temp, double) { return temp > 20.0 ? step : 0.0; },
-                        [&](const discrepancy::StructureTest& view) {
-                          ASSERT_TRUE(view.step.has_value()) << view.where;
-                          EXPECT_NEAR(view.step->level_c, 20.0, kStepLevel);
-                          EXPECT_NEAR(view.step->size_rad_s, step, kStepSize * step);
-                        });
+  expect_unexplained_in(
+      "temperature", [&](double, double temp, double) { return temp > 20.0 ? step : 0.0; },
+      [&](const discrepancy::StructureTest& view) {
+        ASSERT_TRUE(view.step.has_value()) << view.where;
+        EXPECT_NEAR(view.step->level_c, 20.0, kStepLevel);
+        EXPECT_NEAR(view.step->size_rad_s, step, kStepSize * step);
+      });
 }
 
 TEST(EffectOutsideTheLibrary, ABiasProportionalToTSquaredTimesDtDtIsUnexplainedInTheTemperatureRateView) {
@@ -398,12 +404,16 @@ TEST(OneSystematicRate, TheWorkflowsDevicePriorIsTheSimulatorsSystematicRateWith
   const auto plain = fmvmg(false);
   auto device = plain;
   // Every catalogue effect at a realistic size, in file units (slow enough for 40-s blocks).
-  const std::map<std::string, std::vector<double>> file_values{
-      {"thermal_lag", {300}},           {"temperature_rate", {60}},                {"hysteresis", {200, 2}},
-      {"warmup_transient", {300, 600}}, {"periodic_disturbance", {100, 1200, 30}}, {"scale_factor_temperature", {40}}};
+  const std::map<std::string, std::vector<double>> file_values{{"thermal_lag", {300}},
+                                                               {"temperature_rate", {60}},
+                                                               {"hysteresis", {200, 2}},
+                                                               {"warmup_transient", {300, 600}},
+                                                               {"periodic_disturbance", {100, 1200, 30}},
+                                                               {"scale_factor_temperature", {40}}};
   for (const auto& info : effect_catalogue()) {
     std::vector<std::vector<double>> si;
-    for (std::size_t i = 0; i < info.keys.size(); ++i) si.push_back({file_values.at(info.name)[i] * info.keys[i].to_si});
+    for (std::size_t i = 0; i < info.keys.size(); ++i)
+      si.push_back({file_values.at(info.name)[i] * info.keys[i].to_si});
     error_model::set_effect(device.error_model.effects, info.name, si);
   }
   testing_oven::Draw draw(kSeed, 400000);

@@ -77,8 +77,8 @@ TEST(ErrorModel, AnExplicitGaussMarkovTermHasTheClosedFormAllanVarianceOfGmwm) {
   const double fs = 5.0;
   const Eigen::VectorXd noise = rate_noise(terms, fs, static_cast<Eigen::Index>(20 * 3600 * fs), 8);
   for (const auto& d : oadev(noise, fs, {5, 50, 250, 1000, 2500})) {
-    const double sigma_tau = std::sqrt(allan::gmwm::process_variance(allan::gmwm::Process::GaussMarkov,
-                                                                      std::vector<double>{2e-4, 100.0}, d.tau * fs, 1.0 / fs));
+    const double sigma_tau = std::sqrt(allan::gmwm::process_variance(
+        allan::gmwm::Process::GaussMarkov, std::vector<double>{2e-4, 100.0}, d.tau * fs, 1.0 / fs));
     EXPECT_NEAR(d.dev / sigma_tau, 1.0, kAllanTolerance) << "tau " << d.tau;
   }
 }
@@ -90,8 +90,7 @@ TEST(ErrorModel, RateRandomWalkHasTheAllanSignatureOfK) {
   const double fs = 10.0;
   const Eigen::VectorXd noise = rate_noise(terms, fs, 1000000, 3);
   for (const auto& d : oadev(noise, fs, {100, 1000, 5000}))
-    EXPECT_NEAR(d.dev / (terms.rate_random_walk_rad_s_sqrt_s * std::sqrt(d.tau / 3.0)), 1.0, kAllanTolerance)
-        << d.tau;
+    EXPECT_NEAR(d.dev / (terms.rate_random_walk_rad_s_sqrt_s * std::sqrt(d.tau / 3.0)), 1.0, kAllanTolerance) << d.tau;
 }
 
 TEST(ErrorModel, SameSeedSameNoiseAndEachTermHasItsOwnStream) {
@@ -106,8 +105,9 @@ TEST(ErrorModel, SameSeedSameNoiseAndEachTermHasItsOwnStream) {
   NoiseTerms flicker_only = terms;
   flicker_only.arw_rad_sqrt_s = 0.0;
   constexpr double kRoundingTolerance = 1e-18;  // one addition per sample
-  EXPECT_LT((a - rate_noise(white_only, 100.0, 1000, 9) - rate_noise(flicker_only, 100.0, 1000, 9))
-                .cwiseAbs().maxCoeff(), kRoundingTolerance);
+  EXPECT_LT(
+      (a - rate_noise(white_only, 100.0, 1000, 9) - rate_noise(flicker_only, 100.0, 1000, 9)).cwiseAbs().maxCoeff(),
+      kRoundingTolerance);
 }
 
 TEST(ErrorModel, AdditiveEffectsFollowTheirDefinitions) {
@@ -120,7 +120,8 @@ TEST(ErrorModel, AdditiveEffectsFollowTheirDefinitions) {
   e.periodic_disturbance = PeriodicDisturbance{3e-5, 25.0, 0.0};
   const Eigen::VectorXd sum = additive_effects(e, t, temp);
   for (Eigen::Index k = 0; k < t.size(); k += 10) {
-    const double expected = 2e-5 * 0.5 + 1e-4 * std::exp(-t[k] / 20.0) + 3e-5 * std::sin(2 * std::numbers::pi * t[k] / 25.0);
+    const double expected =
+        2e-5 * 0.5 + 1e-4 * std::exp(-t[k] / 20.0) + 3e-5 * std::sin(2 * std::numbers::pi * t[k] / 25.0);
     EXPECT_NEAR(sum[k], expected, kRoundingTolerance) << t[k];
   }
 }

@@ -124,7 +124,8 @@ TEST(ElmPlugin, TunesWithTheGaOnOneObjectiveAndWithNsga2OnTwo) {
   EXPECT_EQ(ga_ctx.diagnostics["tuning"]["objectives"].size(), 1u);
   EXPECT_LT(rmse(by_ga->predict(d.X), d.y), 0.05);
 
-  const std::string nsga2 = "optimizer={plugin: optimizer/pagmo, params: {algorithm: nsga2, population: 8, generations: 3}}";
+  const std::string nsga2 =
+      "optimizer={plugin: optimizer/pagmo, params: {algorithm: nsga2, population: 8, generations: 3}}";
   auto by_nsga2 = make({"tune=true", nsga2});
   RunContext ctx;
   by_nsga2->fit(d.X, d.y, ctx);

@@ -119,8 +119,7 @@ Eigen::VectorXd naive_spline(const Knots& k, Eigen::Index n) {
   return out;
 }
 
-std::vector<Eigen::Index> slice_reversed(const std::vector<Eigen::Index>& v, Eigen::Index from,
-                                         Eigen::Index to) {
+std::vector<Eigen::Index> slice_reversed(const std::vector<Eigen::Index>& v, Eigen::Index from, Eigen::Index to) {
   std::vector<Eigen::Index> out;
   for (Eigen::Index i = std::min<Eigen::Index>(to, static_cast<Eigen::Index>(v.size())) - 1;
        i >= std::max<Eigen::Index>(from, 0); --i)
@@ -229,7 +228,8 @@ void linear_ends(const Eigen::VectorXd& x, const std::vector<Eigen::Index>& idx,
   k.y.push_back(end_value(idx[0], idx[std::min<Eigen::Index>(1, m - 1)], 0));
   for (auto i : idx) k.t.push_back(static_cast<double>(i)), k.y.push_back(x[i]);
   k.t.push_back(static_cast<double>(last));
-  k.y.push_back(end_value(idx[static_cast<std::size_t>(m - 1)], idx[static_cast<std::size_t>(std::max<Eigen::Index>(m - 2, 0))], last));
+  k.y.push_back(end_value(idx[static_cast<std::size_t>(m - 1)],
+                          idx[static_cast<std::size_t>(std::max<Eigen::Index>(m - 2, 0))], last));
 }
 
 // Extrema by definition: a run of equal samples x[a..b] (often a single sample), 1 <= a, b + 2 <= n,
@@ -278,7 +278,8 @@ TEST(Emd, OneSiftMatchesANaiveDenseSplineReferenceForBothEndPolicies) {
     std::uniform_real_distribution<double> uniform(0.0, 2.0 * kPi);
     const Eigen::Index n = 400 + 37 * seed;
     Eigen::VectorXd x = white_noise(n, seed);
-    if (seed % 2 == 0) x = tone(n, 11.0, uniform(rng)) + tone(n, 23.0, uniform(rng), 0.7) + tone(n, 3.0, uniform(rng), 1.5);
+    if (seed % 2 == 0)
+      x = tone(n, 11.0, uniform(rng)) + tone(n, 23.0, uniform(rng), 0.7) + tone(n, 3.0, uniform(rng), 1.5);
     for (auto policy : {emd::EndPolicy::Mirror, emd::EndPolicy::Linear}) {
       const auto r = emd::emd(x, one_sift(policy));
       ASSERT_EQ(r.imfs.cols(), 1);
@@ -351,8 +352,7 @@ TEST(Emd, RepeatedSiftsAcrossBlocksMatchTheNaiveReference) {
     Eigen::VectorXd h = x;
     for (int k = 0; k < kSifts; ++k) h = naive_one_sift(h, emd::EndPolicy::Mirror);
     ASSERT_EQ(r.imfs.cols(), 1);
-    EXPECT_LT((r.imfs.col(0) - h).cwiseAbs().maxCoeff(), kSiftTolerance)
-        << naive_counts(x).maxima << " maxima";
+    EXPECT_LT((r.imfs.col(0) - h).cwiseAbs().maxCoeff(), kSiftTolerance) << naive_counts(x).maxima << " maxima";
   }
 }
 
@@ -583,8 +583,7 @@ TEST(Emd, RejectsBadConfigurationsAndNonFiniteSamples) {
   EXPECT_THROW(emd::eemd(x, ensemble([](auto& c) { c.ensemble_size = 0; })), std::invalid_argument);
   EXPECT_THROW(emd::eemd(x, ensemble([](auto& c) { c.noise_strength = -0.1; })), std::invalid_argument);
   EXPECT_THROW(emd::eemd(x, ensemble([](auto& c) { c.threads = 0; })), std::invalid_argument);
-  EXPECT_THROW(emd::ceemdan(x, {.ensemble = ensemble([](auto& c) { c.max_imfs = -2; })}),
-               std::invalid_argument);
+  EXPECT_THROW(emd::ceemdan(x, {.ensemble = ensemble([](auto& c) { c.max_imfs = -2; })}), std::invalid_argument);
   EXPECT_THROW(emd::ceemdan(bad, {}), std::domain_error);
 }
 
@@ -677,10 +676,10 @@ TEST(EmdPlugins, DecomposeThroughTheRegistryAndReportSiftsAndOrthogonality) {
   register_builtin_plugins(registry);
   const Eigen::VectorXd x = busy_signal(1500, 15);
   for (const char* name : {"decomposition/emd", "decomposition/eemd", "decomposition/ceemdan"}) {
-    const auto params = params_from_assignments(registry, name,
-                                                std::string(name) == "decomposition/emd"
-                                                    ? std::vector<std::string>{}
-                                                    : std::vector<std::string>{"ensemble_size=4"});
+    const auto params =
+        params_from_assignments(registry, name,
+                                std::string(name) == "decomposition/emd" ? std::vector<std::string>{}
+                                                                         : std::vector<std::string>{"ensemble_size=4"});
     auto decomposer = registry.create_as<Decomposer>({name, params});
     RunContext ctx;
     ctx.threads = 2;
@@ -695,8 +694,7 @@ TEST(EmdPlugins, RejectFixedSiftsAboveTheSiftCapNamingBothParameters) {
   Registry registry;
   register_builtin_plugins(registry);
   try {
-    params_from_assignments(registry, "decomposition/emd",
-                            {"stop_rule=fixed_sifts", "fixed_sifts=60", "max_sifts=50"});
+    params_from_assignments(registry, "decomposition/emd", {"stop_rule=fixed_sifts", "fixed_sifts=60", "max_sifts=50"});
     FAIL() << "expected a ConfigError";
   } catch (const ConfigError& e) {
     const std::string message = e.what();
@@ -710,8 +708,8 @@ TEST(EmdPlugins, RejectFixedSiftsAboveTheSiftCapNamingBothParameters) {
 TEST(EmdPlugins, ReportANonFiniteSampleAsADataError) {
   Registry registry;
   register_builtin_plugins(registry);
-  auto decomposer = registry.create_as<Decomposer>(
-      {"decomposition/emd", params_from_assignments(registry, "decomposition/emd", {})});
+  auto decomposer =
+      registry.create_as<Decomposer>({"decomposition/emd", params_from_assignments(registry, "decomposition/emd", {})});
   Eigen::VectorXd x = busy_signal(100, 1);
   x[3] = std::nan("");
   RunContext ctx;

@@ -126,15 +126,13 @@ TEST(Ga, RethrowsAnExceptionThrownByTheObjective) {
 }
 
 TEST(Ga, RejectsAnEmptyIntegerBound) {
-  EXPECT_THROW(ga::minimize(rosenbrock, {{0.2, 0.8, true}, {0.0, 1.0, false}}, ga::Config{}),
-               std::invalid_argument);
+  EXPECT_THROW(ga::minimize(rosenbrock, {{0.2, 0.8, true}, {0.0, 1.0, false}}, ga::Config{}), std::invalid_argument);
 }
 
 TEST(GaPlugin, MinimizesThroughTheRegistryAndLogsTheHistoryInTheDiagnostics) {
   Registry registry;
   register_builtin_plugins(registry);
-  const auto params = params_from_assignments(registry, "optimizer/ga",
-                                              {"population=30", "generations=20", "seed=4"});
+  const auto params = params_from_assignments(registry, "optimizer/ga", {"population=30", "generations=20", "seed=4"});
   auto optimizer = registry.create_as<Optimizer>({"optimizer/ga", params});
   RunContext ctx;
   ctx.threads = 2;
@@ -149,11 +147,10 @@ TEST(GaPlugin, MinimizesThroughTheRegistryAndLogsTheHistoryInTheDiagnostics) {
 TEST(GaPlugin, ReportsAnEmptyBoundAsAConfigError) {
   Registry registry;
   register_builtin_plugins(registry);
-  auto optimizer = registry.create_as<Optimizer>(
-      {"optimizer/ga", params_from_assignments(registry, "optimizer/ga", {})});
+  auto optimizer =
+      registry.create_as<Optimizer>({"optimizer/ga", params_from_assignments(registry, "optimizer/ga", {})});
   RunContext ctx;
-  EXPECT_THROW(optimizer->minimize(rosenbrock, {{"x", 1.0, 0.0, false}, {"y", 0.0, 1.0, false}}, ctx),
-               ConfigError);
+  EXPECT_THROW(optimizer->minimize(rosenbrock, {{"x", 1.0, 0.0, false}, {"y", 0.0, 1.0, false}}, ctx), ConfigError);
 }
 
 }  // namespace

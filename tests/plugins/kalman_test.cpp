@@ -243,7 +243,7 @@ double allan_variance(const Eigen::VectorXd& rate, Eigen::Index m) {
 
 TEST(Kalman, AllanTermsConvertToPerSampleVariancesThatReproduceThoseTerms) {
   constexpr double fs = 100.0;
-  const double arw = 0.3 * (kPi / 180.0) / 60.0;   // 0.3 deg/sqrt(h) in rad/s/sqrt(Hz)
+  const double arw = 0.3 * (kPi / 180.0) / 60.0;           // 0.3 deg/sqrt(h) in rad/s/sqrt(Hz)
   const double rrw = 2.0 * (kPi / 180.0) / 3600.0 / 60.0;  // 2 deg/h/sqrt(h) in rad/s^2/sqrt(Hz)
   const double r = kalman::measurement_variance_from_arw(arw, fs);
   const double q = kalman::process_variance_from_rrw(rrw, fs);
@@ -299,7 +299,8 @@ TEST_F(KalmanPlugin, DerivesNoiseFromAllanTermsAndMatchesTheKernel) {
   const auto rec = simulate_random_walk(3000, 1e-9, 1e-6, 3);
   auto plugin = make({"noise=from_allan", "arw=1e-4", "rrw=3e-7", "smoother=true"});
   RunContext ctx;
-  ctx.time_s = Eigen::VectorXd::LinSpaced(rec.measured.size(), 0.0, static_cast<double>(rec.measured.size() - 1) / 50.0);
+  ctx.time_s =
+      Eigen::VectorXd::LinSpaced(rec.measured.size(), 0.0, static_cast<double>(rec.measured.size() - 1) / 50.0);
   const Eigen::VectorXd out = plugin->filter(rec.measured, ctx);
   const double fs = 50.0;
   const kalman::ScalarModel model{3e-7 * 3e-7 / fs, 1e-4 * 1e-4 * fs};
@@ -316,8 +317,8 @@ TEST_F(KalmanPlugin, LinearModelFromMatricesOutputsTheObservedCombination) {
   const Eigen::VectorXd out = plugin->filter(rec.measured, ctx);
   kalman::LinearModel model{Eigen::Matrix2d{{1.0, 0.01}, {0.0, 1.0}}, Eigen::RowVector2d{1.0, 0.0},
                             Eigen::Matrix2d{{0.0, 0.0}, {0.0, 1e-8}}, Eigen::MatrixXd::Constant(1, 1, 0.01)};
-  const auto expected = kalman::filter(Eigen::MatrixXd(rec.measured), model, Eigen::Vector2d::Zero(),
-                                       Eigen::Matrix2d::Identity());
+  const auto expected =
+      kalman::filter(Eigen::MatrixXd(rec.measured), model, Eigen::Vector2d::Zero(), Eigen::Matrix2d::Identity());
   EXPECT_EQ(out, expected.state.col(0));
 }
 

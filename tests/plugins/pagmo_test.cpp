@@ -50,9 +50,9 @@ TEST(Pagmo, EverySingleObjectiveGenerationalAlgorithmFindsTheMinimumOfAShiftedSp
     std::size_t population, generations;
     double tolerance;
   };
-  const std::vector<Case> cases{{"de", 20, 300, 1e-3},  {"sade", 20, 300, 1e-3},     {"pso", 20, 300, 1e-2},
-                                {"cmaes", 10, 300, 1e-3}, {"xnes", 10, 300, 1e-2},   {"sga", 40, 300, 0.1},
-                                {"gaco", 20, 300, 1e-2},  {"gwo", 20, 300, 1e-2},    {"bee_colony", 20, 200, 1e-2},
+  const std::vector<Case> cases{{"de", 20, 300, 1e-3},    {"sade", 20, 300, 1e-3}, {"pso", 20, 300, 1e-2},
+                                {"cmaes", 10, 300, 1e-3}, {"xnes", 10, 300, 1e-2}, {"sga", 40, 300, 0.1},
+                                {"gaco", 20, 300, 1e-2},  {"gwo", 20, 300, 1e-2},  {"bee_colony", 20, 200, 1e-2},
                                 {"sea", 10, 2000, 0.1}};
   const std::vector<po::Bound> bounds(3, {-5.0, 5.0, false});
   for (const auto& c : cases) {
@@ -201,11 +201,11 @@ TEST(PagmoPlugin, ValidatesOptionsAgainstTheAlgorithmTable) {
   register_builtin_plugins(r);
   const auto params = [&](std::vector<std::string> a) { return params_from_assignments(r, "optimizer/pagmo", a); };
   EXPECT_NO_THROW(params({"algorithm=de", "de_f=0.5", "de_variant=7"}));
-  EXPECT_THROW(params({"algorithm=de", "de_f=1.5"}), ConfigError);                   // F in [0, 1]
-  EXPECT_THROW(params({"algorithm=pso", "de_f=0.5"}), ConfigError);                  // another algorithm's option
-  EXPECT_THROW(params({"algorithm=nsga2", "population=30"}), ConfigError);           // not a multiple of 4
+  EXPECT_THROW(params({"algorithm=de", "de_f=1.5"}), ConfigError);          // F in [0, 1]
+  EXPECT_THROW(params({"algorithm=pso", "de_f=0.5"}), ConfigError);         // another algorithm's option
+  EXPECT_THROW(params({"algorithm=nsga2", "population=30"}), ConfigError);  // not a multiple of 4
   EXPECT_THROW(params({"algorithm=sga", "sga_crossover=sbx", "population=41"}), ConfigError);
-  EXPECT_THROW(params({"algorithm=cmaes", "cmaes_cc=-0.5"}), ConfigError);           // -1 or [0, 1]
+  EXPECT_THROW(params({"algorithm=cmaes", "cmaes_cc=-0.5"}), ConfigError);  // -1 or [0, 1]
   EXPECT_NO_THROW(params({"algorithm=cmaes", "cmaes_cc=-1"}));
   EXPECT_THROW(params({"algorithm=gaco", "gaco_ker=50", "population=20"}), ConfigError);
   EXPECT_THROW(params({"algorithm=bogus"}), ConfigError);

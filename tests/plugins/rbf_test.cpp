@@ -20,17 +20,14 @@ Eigen::MatrixXd uniform_points(Eigen::Index n, double lo, double hi, std::uint64
   std::mt19937_64 engine(seed);
   Eigen::MatrixXd X(n, 2);
   for (Eigen::Index i = 0; i < n; ++i)
-    for (Eigen::Index f = 0; f < 2; ++f)
-      X(i, f) = lo + (hi - lo) * static_cast<double>(engine() >> 11) * 0x1.0p-53;
+    for (Eigen::Index f = 0; f < 2; ++f) X(i, f) = lo + (hi - lo) * static_cast<double>(engine() >> 11) * 0x1.0p-53;
   return X;
 }
 
-Eigen::VectorXd sin_cos(const Eigen::MatrixXd& X) {
-  return (X.col(0).array().sin() * X.col(1).array().cos()).matrix();
-}
+Eigen::VectorXd sin_cos(const Eigen::MatrixXd& X) { return (X.col(0).array().sin() * X.col(1).array().cos()).matrix(); }
 
 const Registry& builtin_registry() {
-  static const Registry& registry = [] () -> const Registry& {
+  static const Registry& registry = []() -> const Registry& {
     static Registry r;
     register_builtin_plugins(r);
     return r;
@@ -139,8 +136,7 @@ TEST(Rbf, LmsFitErrorDecreasesEpochByEpochOnARepresentableTarget) {
   c.sigma = 0.7;
   // Targets the network can represent exactly: the grid centres depend on X only.
   const auto reference = rbf::fit(X, sin_cos(X), c).network;
-  const Eigen::MatrixXd U =
-      (X.rowwise() - reference.mean()).array().rowwise() / reference.scale().array();
+  const Eigen::MatrixXd U = (X.rowwise() - reference.mean()).array().rowwise() / reference.scale().array();
   const Eigen::VectorXd w_true = Eigen::VectorXd::LinSpaced(16, -1.0, 1.0);
   const Eigen::VectorXd y = (rbf::activations(U, reference.centres(), c.sigma) * w_true).array() + 0.3;
   const double rms_of_target = std::sqrt(y.squaredNorm() / static_cast<double>(y.size()));
@@ -177,9 +173,8 @@ TEST(Rbf, BlockedHoldoutPartitionsTheSamplesIntoSpreadRuns) {
   all.insert(split.holdout.begin(), split.holdout.end());
   EXPECT_EQ(all.size(), 1000u);
   for (Eigen::Index segment = 0; segment < 10; ++segment) {
-    const auto held_in_segment = std::count_if(split.holdout.begin(), split.holdout.end(), [&](Eigen::Index i) {
-      return i / 100 == segment;
-    });
+    const auto held_in_segment =
+        std::count_if(split.holdout.begin(), split.holdout.end(), [&](Eigen::Index i) { return i / 100 == segment; });
     EXPECT_EQ(held_in_segment, 20) << "segment " << segment;
   }
 }
@@ -213,8 +208,8 @@ TEST(RbfPlugin, GaTuningImprovesTheHeldOutRmseOverAPoorStartingSigma) {
 
 TEST(RbfPlugin, SameSeedGivesTheSameModelOnAnyThreadCount) {
   const Eigen::MatrixXd X = uniform_points(800, -3.0, 3.0, 9);
-  const std::vector<std::string> params{
-      "seed=5", "tune=true", "optimizer={plugin: optimizer/ga, params: {population: 8, generations: 3}}"};
+  const std::vector<std::string> params{"seed=5", "tune=true",
+                                        "optimizer={plugin: optimizer/ga, params: {population: 8, generations: 3}}"};
   Eigen::VectorXd reference;
   for (unsigned threads : {1u, 2u, 3u}) {
     const auto rbf = make_rbf(params);

@@ -130,8 +130,8 @@ TEST(SampleEntropy, MatchesTheFullPrecisionPythonPortWithAndWithoutNormalisation
   int checked = 0;
   for (const auto& e : read_expected()) {
     if (e.implementation.rfind("Kinsa/sampen", 0) != 0) continue;
-    const auto result = e.normalize ? sampen::sample_entropy_relative(x, e.m, e.r)
-                                    : sampen::sample_entropy(x, e.m, e.r);
+    const auto result =
+        e.normalize ? sampen::sample_entropy_relative(x, e.m, e.r) : sampen::sample_entropy(x, e.m, e.r);
     EXPECT_NEAR(result.value, std::stod(e.value), kLogRounding) << "m = " << e.m << " normalize " << e.normalize;
     ++checked;
   }
@@ -186,10 +186,10 @@ TEST(SampleEntropy, CountsEqualTheNaiveDefinitionOnGaussianData) {
           const auto naive = naive_counts(x, m, r);
           for (const auto counting : kCountings) {
             const auto fast = sampen::sample_entropy(x, m, r, counting);
-            ASSERT_EQ(fast.a, naive.a) << "seed " << seed << " n " << n << " m " << m << " r " << r
-                                       << " counting " << static_cast<int>(counting);
-            ASSERT_EQ(fast.b, naive.b) << "seed " << seed << " n " << n << " m " << m << " r " << r
-                                       << " counting " << static_cast<int>(counting);
+            ASSERT_EQ(fast.a, naive.a) << "seed " << seed << " n " << n << " m " << m << " r " << r << " counting "
+                                       << static_cast<int>(counting);
+            ASSERT_EQ(fast.b, naive.b) << "seed " << seed << " n " << n << " m " << m << " r " << r << " counting "
+                                       << static_cast<int>(counting);
           }
         }
       }
@@ -210,10 +210,10 @@ TEST(SampleEntropy, CountsEqualTheNaiveDefinitionOnIntegerDataWithTiesAtTheToler
             const auto naive = naive_counts(x, m, r);
             for (const auto counting : kCountings) {
               const auto fast = sampen::sample_entropy(x, m, r, counting);
-              ASSERT_EQ(fast.a, naive.a) << "seed " << seed << " n " << n << " levels " << levels
-                                         << " m " << m << " r " << r << " counting " << static_cast<int>(counting);
-              ASSERT_EQ(fast.b, naive.b) << "seed " << seed << " n " << n << " levels " << levels
-                                         << " m " << m << " r " << r << " counting " << static_cast<int>(counting);
+              ASSERT_EQ(fast.a, naive.a) << "seed " << seed << " n " << n << " levels " << levels << " m " << m << " r "
+                                         << r << " counting " << static_cast<int>(counting);
+              ASSERT_EQ(fast.b, naive.b) << "seed " << seed << " n " << n << " levels " << levels << " m " << m << " r "
+                                         << r << " counting " << static_cast<int>(counting);
             }
           }
         }

@@ -103,8 +103,8 @@ TEST(SvrPlugin, PredictBeforeFitThrowsAndTuningByPagmoBeatsAPoorStart) {
 
 TEST(SvrPlugin, TunesTwoObjectivesWithNsga2) {
   const auto d = known_function(300, 0.1);
-  auto tuned = make({"tune=true",
-                     "optimizer={plugin: optimizer/pagmo, params: {algorithm: nsga2, population: 8, generations: 3}}"});
+  auto tuned = make(
+      {"tune=true", "optimizer={plugin: optimizer/pagmo, params: {algorithm: nsga2, population: 8, generations: 3}}"});
   RunContext ctx;
   tuned->fit(d.X, d.y, ctx);
   EXPECT_EQ(ctx.diagnostics["tuning"]["objectives"], nlohmann::json({"holdout_rmse", "support_vector_share"}));

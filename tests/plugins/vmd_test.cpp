@@ -102,9 +102,8 @@ TEST(Vmd, RecoversThePapersIntrawaveFmSignal) {
 
 TEST(Vmd, ModesSumBackToTheSignalWhenTheDualAscentEnforcesIt) {
   const double fs = 100.0;
-  const Eigen::VectorXd x = sampled(2000, fs, [](double t) {
-    return std::sin(2.0 * kPi * 0.5 * t) + 0.3 * std::sin(2.0 * kPi * 7.0 * t);
-  });
+  const Eigen::VectorXd x =
+      sampled(2000, fs, [](double t) { return std::sin(2.0 * kPi * 0.5 * t) + 0.3 * std::sin(2.0 * kPi * 7.0 * t); });
   const vmd::Result r =
       vmd::decompose(x, {.modes = 4, .alpha = 2000.0, .tau = 1.0, .tolerance = 1e-9, .max_iterations = 3000});
   EXPECT_TRUE(r.converged);
@@ -119,9 +118,8 @@ TEST(Vmd, ModesSumBackToTheSignalWhenTheDualAscentEnforcesIt) {
 
 TEST(Vmd, WithoutDualAscentTheResidueHoldsOnlyWhatNoBandCaptured) {
   const double fs = 100.0;
-  const Eigen::VectorXd x = sampled(2000, fs, [](double t) {
-    return std::sin(2.0 * kPi * 0.5 * t) + 0.3 * std::sin(2.0 * kPi * 7.0 * t);
-  });
+  const Eigen::VectorXd x =
+      sampled(2000, fs, [](double t) { return std::sin(2.0 * kPi * 0.5 * t) + 0.3 * std::sin(2.0 * kPi * 7.0 * t); });
   const vmd::Result r = vmd::decompose(x, {.modes = 2});
   // Two modes on two tones: each Wiener filter passes its tone at gain ~1.
   EXPECT_LT(interior_rms(r.residue, 0.05), 0.02 * rms(x));
@@ -162,9 +160,8 @@ TEST(Vmd, SameSeedSameModesWithRandomInitialisation) {
 }
 
 TEST(Vmd, ModesComeHighestCentreFrequencyFirstForOddLengths) {
-  const Eigen::VectorXd x = sampled(1001, 1000.0, [](double t) {
-    return std::cos(2.0 * kPi * 5.0 * t) + std::cos(2.0 * kPi * 150.0 * t);
-  });
+  const Eigen::VectorXd x =
+      sampled(1001, 1000.0, [](double t) { return std::cos(2.0 * kPi * 5.0 * t) + std::cos(2.0 * kPi * 150.0 * t); });
   const vmd::Result r = vmd::decompose(x, {.modes = 2});
   ASSERT_EQ(r.modes.rows(), 1001);
   EXPECT_GT(r.centre_frequencies[0], r.centre_frequencies[1]);
@@ -190,9 +187,8 @@ TEST(VmdPlugin, DecomposesThroughTheRegistryAndReportsCentreFrequenciesInHertz) 
       {"decomposition/vmd", params_from_assignments(registry, "decomposition/vmd", {"modes=2"})});
   RunContext ctx;
   ctx.time_s = Eigen::VectorXd::LinSpaced(1000, 0.0, 9.99);  // 100 Hz
-  const Eigen::VectorXd x = sampled(1000, 100.0, [](double t) {
-    return std::cos(2.0 * kPi * 2.0 * t) + std::cos(2.0 * kPi * 30.0 * t);
-  });
+  const Eigen::VectorXd x =
+      sampled(1000, 100.0, [](double t) { return std::cos(2.0 * kPi * 2.0 * t) + std::cos(2.0 * kPi * 30.0 * t); });
   const Decomposition d = plugin->decompose(x, ctx);
   EXPECT_EQ(d.imfs.cols(), 2);
   const auto hz = ctx.diagnostics["centre_frequencies_hz"].get<std::vector<double>>();

@@ -166,8 +166,8 @@ TEST(WaveletDenoise, PaddedLengthsAndEveryFamilyRoundTripWithZeroThreshold) {
            {wavelet::Family::Haar, 2}, {wavelet::Family::DaubechiesCentered, 4}, {wavelet::Family::Bspline, 309}}) {
     // Hard rule at a zero threshold: a noiseless ramp squared has many zero finest details only for
     // the Daubechies family; check the transform pair through the configuration's full path.
-    const wavelet::Result r = wavelet::denoise(x, {.family = family, .order = order, .levels = 1,
-                                                   .shrink = wavelet::Shrink::Hard});
+    const wavelet::Result r =
+        wavelet::denoise(x, {.family = family, .order = order, .levels = 1, .shrink = wavelet::Shrink::Hard});
     ASSERT_EQ(r.denoised.size(), 777);
     EXPECT_LT(std::sqrt(mse(r.denoised, x)), 0.01) << order;
   }

@@ -59,8 +59,8 @@ TEST(AllanCommand, WritesIntervalsTermsAndAPlotForAWhiteNoiseRecord) {
   const auto dir = scratch_dir("allan_white");
   const auto csv = white_noise_csv(dir);
   const auto out = dir / "allan.csv", json = dir / "summary.json", svg = dir / "allan.svg";
-  const auto r = run_driftlab("allan --data " + csv.string() + " --fs 100 --out " + out.string() +
-                              " --json " + json.string() + " --plot " + svg.string());
+  const auto r = run_driftlab("allan --data " + csv.string() + " --fs 100 --out " + out.string() + " --json " +
+                              json.string() + " --plot " + svg.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::string header;
   const auto rows = read_csv_rows(out, header);
@@ -116,14 +116,14 @@ TEST(AllanCommand, SaysWhichGnuplotItCouldNotRunWhenAPlotIsAsked) {
 }
 
 TEST(AllanCommand, ReproducesThePublishedAdis16405AllanVariance) {
-  const auto data = std::filesystem::path(DRIFTLAB_SHARED_DATA) / "real" / "smac-imudata-static" /
-                    "adis16405_imu1_gyro_dps.csv";
+  const auto data =
+      std::filesystem::path(DRIFTLAB_SHARED_DATA) / "real" / "smac-imudata-static" / "adis16405_imu1_gyro_dps.csv";
   if (!std::filesystem::exists(data)) GTEST_SKIP() << "shared reference data not found: " << data;
   const auto dir = scratch_dir("allan_adis");
   const auto out = dir / "allan.csv";
-  const auto r = run_driftlab("allan --data " + data.string() +
-                              " --column rate=gyro_x_dps:deg/s --fs 100 --taus 0.02,1.28,2621.44 --out " +
-                              out.string());
+  const auto r =
+      run_driftlab("allan --data " + data.string() +
+                   " --column rate=gyro_x_dps:deg/s --fs 100 --taus 0.02,1.28,2621.44 --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::string header;
   const auto rows = read_csv_rows(out, header);
@@ -203,8 +203,8 @@ TEST(AllanCommand, FitsAGmwmModelBesideTheSlopeFit) {
   const auto o = nlohmann::json::parse(read_text(dir / "other.json"))["gmwm"];
   EXPECT_EQ(o["components"][0]["parameters"][0]["value"], g["components"][0]["parameters"][0]["value"]);
   EXPECT_NE(o["components"][0]["parameters"][0]["interval"], g["components"][0]["parameters"][0]["interval"]);
-  const auto bad = run_driftlab("allan --data " + csv.string() + " --out " + (dir / "b.csv").string() +
-                                " --gmwm wn+flicker");
+  const auto bad =
+      run_driftlab("allan --data " + csv.string() + " --out " + (dir / "b.csv").string() + " --gmwm wn+flicker");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_THAT(bad.err, HasSubstr("--gmwm"));
   EXPECT_THAT(bad.err, HasSubstr("flicker"));
@@ -227,9 +227,9 @@ TEST(AllanCommand, AnalysesTheLsm6dsmBurstRecordPerBurst) {
     SCOPED_TRACE("options:" + gap);
     const auto out = dir / "allan.csv", json = dir / "summary.json";
     std::filesystem::remove(json);
-    const auto r = run_driftlab("allan --data " + kLsm6dsm.string() +
-                                " --column time=time_s:s --column rate=gyro_x_rad_s:rad/s" + gap + " --out " +
-                                out.string() + " --json " + json.string());
+    const auto r =
+        run_driftlab("allan --data " + kLsm6dsm.string() + " --column time=time_s:s --column rate=gyro_x_rad_s:rad/s" +
+                     gap + " --out " + out.string() + " --json " + json.string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_THAT(r.out, HasSubstr("25 regular bursts"));
     EXPECT_THAT(r.out, HasSubstr("per burst"));
@@ -257,9 +257,9 @@ TEST(AllanCommand, RefusesTheIrregularMpu6050RecordNamingTheFirstGap) {
   const auto dir = scratch_dir("allan_irregular");
   for (const std::string gap : {"", " --max-gap 0"}) {
     SCOPED_TRACE("options:" + gap);
-    const auto r = run_driftlab("allan --data " + kMpu6050.string() +
-                                " --column time=time_s:s --column rate=gyro_z_dps:deg/s" + gap + " --out " +
-                                (dir / "allan.csv").string());
+    const auto r =
+        run_driftlab("allan --data " + kMpu6050.string() + " --column time=time_s:s --column rate=gyro_z_dps:deg/s" +
+                     gap + " --out " + (dir / "allan.csv").string());
     EXPECT_EQ(r.exit_code, 3);
     EXPECT_THAT(r.err, HasSubstr("assumes even sampling"));
     EXPECT_THAT(r.err, HasSubstr("the first of"));
@@ -279,14 +279,16 @@ TEST(RunCommand, RefusesBurstAndIrregularRecordsNamingTheFirstGap) {
   const std::string pipeline = std::string(DRIFTLAB_SOURCE_DIR) + "/models/pipelines/polynomial_baseline.yaml";
   const auto bursts = run_driftlab("--quiet run --pipeline " + pipeline + " --data " + kLsm6dsm.string() +
                                    " --column time=time_s:s --column rate=gyro_x_rad_s:rad/s"
-                                   " --column temperature=temp_C_est:degC --max-gap 0 --out " + (dir / "b").string());
+                                   " --column temperature=temp_C_est:degC --max-gap 0 --out " +
+                                   (dir / "b").string());
   EXPECT_EQ(bursts.exit_code, 3);
   EXPECT_THAT(bursts.err, HasSubstr("25 regular bursts"));
   EXPECT_THAT(bursts.err, HasSubstr("driftlab allan"));
   EXPECT_FALSE(std::filesystem::exists(dir / "b" / "outputs.csv"));
   const auto irregular = run_driftlab("--quiet run --pipeline " + pipeline + " --data " + kMpu6050.string() +
                                       " --column time=time_s:s --column rate=gyro_z_dps:deg/s"
-                                      " --column temperature=temp_C:degC --out " + (dir / "i").string());
+                                      " --column temperature=temp_C:degC --out " +
+                                      (dir / "i").string());
   EXPECT_EQ(irregular.exit_code, 3);
   EXPECT_THAT(irregular.err, HasSubstr("irregular"));
   EXPECT_THAT(irregular.err, HasSubstr("Resample"));

@@ -85,9 +85,7 @@ outputs: {smoothed: smooth.signal}
     ASSERT_EQ(r.exit_code, 0) << r.err;
     inputs_.push_back("model.json");
   }
-  void expect_clean(const std::string& what) {
-    EXPECT_THAT(stray_files(dir_, inputs_), ::testing::IsEmpty()) << what;
-  }
+  void expect_clean(const std::string& what) { EXPECT_THAT(stray_files(dir_, inputs_), ::testing::IsEmpty()) << what; }
   fs::path dir_;
   std::vector<std::string> inputs_;
 };
@@ -113,8 +111,7 @@ TEST_F(BadInput, EveryDataCommandRefusesEveryBadCsvClassWithFileLineColumnAndNoO
   const std::vector<CsvClass> classes{
       {"non_numeric.csv", replace_line(7, "0.5,abc,20"), "non_numeric.csv:7: rate_dps", "expected a number"},
       {"nan.csv", replace_line(9, "0.7,nan,20"), "nan.csv:9: rate_dps", "NaN/Inf"},
-      {"huge_cell.csv", replace_line(5, "0.3," + huge + "\x01\x02,20"), "huge_cell.csv:5: rate_dps",
-       "bytes in all"},
+      {"huge_cell.csv", replace_line(5, "0.3," + huge + "\x01\x02,20"), "huge_cell.csv:5: rate_dps", "bytes in all"},
       {"binary_cell.csv", replace_line(6, std::string("0.4,\x1b[31m\x7f\x80,20")), "binary_cell.csv:6: rate_dps",
        "\\x1b[31m\\x7f\\x80"},
       {"overflow.csv", replace_line(11, "0.9,1e308,20"), "overflow.csv:11: rate_dps", "too large to compute with"},
@@ -155,7 +152,8 @@ TEST_F(BadInput, AnOffsetUnitConvertsOnlyAbsoluteValues) {
   std::string text = "t_s,temp_k\n";
   char line[96];
   for (int i = 0; i < 512; ++i) {
-    std::snprintf(line, sizeof line, "%.1f,%.9f\n", i * 0.1, 300.0 + 0.5 * std::sin(0.37 * i) + 1e-3 * std::sin(7.3 * i * i));
+    std::snprintf(line, sizeof line, "%.1f,%.9f\n", i * 0.1,
+                  300.0 + 0.5 * std::sin(0.37 * i) + 1e-3 * std::sin(7.3 * i * i));
     text += line;
   }
   write(dir_ / "kelvin.csv", text);
@@ -197,9 +195,9 @@ TEST_F(BadInput, ARoleAcceptsOnlyUnitsOfItsDimension) {
 
 TEST_F(BadInput, TheColumnOrderOfTheReadmeWorksForEverySingleChannelCommand) {
   const std::string columns = " --column time=t_s:s --column rate=rate_dps:deg/s";
-  for (const auto& command : {"allan --data " + p("good.csv") + columns + " --out " + p("a.csv"),
-                              "entropy --data " + p("good.csv") + columns,
-                              "decompose --data " + p("good.csv") + columns + " --out " + p("d.csv")}) {
+  for (const auto& command :
+       {"allan --data " + p("good.csv") + columns + " --out " + p("a.csv"), "entropy --data " + p("good.csv") + columns,
+        "decompose --data " + p("good.csv") + columns + " --out " + p("d.csv")}) {
     const auto r = run_driftlab(command);
     EXPECT_EQ(r.exit_code, 0) << command << "\n" << r.err;
   }
@@ -246,7 +244,8 @@ TEST_F(BadInput, PipelineDuplicateKeysAndWrongTypesAreConfigErrorsWithFileLineKe
   for (const auto& [name, text, expected] : cases) {
     write(dir_ / name, text);
     inputs_.push_back(name);
-    for (const std::string& extra : {std::string(" --validate-only"), " --data " + p("good.csv") + " --out " + p("run")}) {
+    for (const std::string& extra :
+         {std::string(" --validate-only"), " --data " + p("good.csv") + " --out " + p("run")}) {
       const auto r = run_driftlab("run --pipeline " + p(name) + extra);
       EXPECT_EQ(r.exit_code, 2) << name << ": " << r.err;
       EXPECT_THAT(r.err, HasSubstr(expected)) << name;
@@ -267,7 +266,8 @@ TEST_F(BadInput, DeviceFilesAreCheckedAgainstThePhysics) {
     EXPECT_NE(at, std::string::npos) << from;
     return s.replace(at, from.size(), to);
   };
-  const auto line = std::to_string(std::count(device.begin(), device.begin() + device.find("reference_temp_c:"), '\n') + 1);
+  const auto line =
+      std::to_string(std::count(device.begin(), device.begin() + device.find("reference_temp_c:"), '\n') + 1);
   const auto next_line = std::to_string(std::stoi(line) + 1);
   const std::vector<std::tuple<std::string, std::string, std::string>> cases{
       {"absolute_zero.yaml", variant("reference_temp_c: 25", "reference_temp_c: -273.15"),
@@ -280,10 +280,9 @@ TEST_F(BadInput, DeviceFilesAreCheckedAgainstThePhysics) {
   for (const auto& [name, text, expected] : cases) {
     write(dir_ / name, text);
     inputs_.push_back(name);
-    for (const std::string& command : {"devices describe " + p(name),
-                                      "simulate --device " + p(name) + " --duration 10 --out " + p("sim.csv"),
-                                      "discrepancy --device " + p(name) + " --data " + p("good.csv") +
-                                          " --report " + p("r.json")}) {
+    for (const std::string& command :
+         {"devices describe " + p(name), "simulate --device " + p(name) + " --duration 10 --out " + p("sim.csv"),
+          "discrepancy --device " + p(name) + " --data " + p("good.csv") + " --report " + p("r.json")}) {
       const auto r = run_driftlab(command);
       EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
       EXPECT_THAT(r.err, HasSubstr(expected)) << command;
@@ -305,7 +304,8 @@ TEST_F(BadInput, OutputsArePlannedUpFrontAndAppearTogetherOrNotAtAll) {
       {"discrepancy --data " + p("good.csv") + " --report " + p("r.json") + " --series " + p("good.csv"), ""},
       {"allan --data " + p("good.csv") + " --out " + p("."), "--out"},
       {"calibrate --data " + p("good.csv") + " --bin 1 --out " + missing + ".json", "--out"},
-      {"calibrate --data " + p("good.csv") + " --bin 1 --out " + p("m.json") + " --report " + p("good.csv"), "--report"},
+      {"calibrate --data " + p("good.csv") + " --bin 1 --out " + p("m.json") + " --report " + p("good.csv"),
+       "--report"},
       {"compensate --data " + p("good.csv") + " --model " + p("model.json") + " --out " + p("model.json"), "--out"},
       {"run --pipeline " + p("smooth.yaml") + " --data " + p("good.csv") + " --out " + p("good.csv"), "--out"},
       {"compare --data " + p("good.csv") + " --pipeline " + p("smooth.yaml") + " --out " + p("smooth.yaml"), "--out"},
@@ -369,8 +369,8 @@ TEST_F(BadInput, HostilePluginLibrariesAreRefusedWithTheLibraryNamed) {
       {"throwing", "libdriftlab_test_throwing.so", "the hostile fixture refuses to register"},
   };
   for (const auto& [dir, library, message] : cases) {
-    for (const auto& how : {std::string("--plugin-path ") + (hostile / dir).string() + " plugins list",
-                            std::string("plugins list")}) {
+    for (const auto& how :
+         {std::string("--plugin-path ") + (hostile / dir).string() + " plugins list", std::string("plugins list")}) {
       const auto env = how.starts_with("--") ? std::string() : "DRIFTLAB_PLUGIN_PATH=" + (hostile / dir).string();
       const auto r = run_driftlab(how, env);
       EXPECT_EQ(r.exit_code, 2) << dir << "\n" << r.err;

@@ -51,9 +51,10 @@ TEST_F(CalibrateCli, StreamingOutputEqualsBatchOutputRowForRow) {
 }
 
 TEST_F(CalibrateCli, ABadModelFileIsAConfigurationErrorNamingTheKey) {
-  std::ofstream(dir_ + "/bad.json") << R"({"format": "driftlab-calibration/1", "kind": "poly", "reference_temp_c": 25})";
-  const auto r = run_driftlab("compensate --model " + dir_ + "/bad.json --data " + dir_ + "/oven.csv --out " + dir_ +
-                              "/x.csv");
+  std::ofstream(dir_ + "/bad.json")
+      << R"({"format": "driftlab-calibration/1", "kind": "poly", "reference_temp_c": 25})";
+  const auto r =
+      run_driftlab("compensate --model " + dir_ + "/bad.json --data " + dir_ + "/oven.csv --out " + dir_ + "/x.csv");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("valid_range_c"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir_ + "/x.csv"));
@@ -61,8 +62,8 @@ TEST_F(CalibrateCli, ABadModelFileIsAConfigurationErrorNamingTheKey) {
 
 TEST_F(CalibrateCli, AMissingTemperatureColumnIsADataError) {
   std::ofstream(dir_ + "/notemp.csv") << "t_s,rate_dps\n0,0.1\n1,0.2\n";
-  const auto r = run_driftlab("compensate --model " + dir_ + "/poly.json --data " + dir_ + "/notemp.csv --out " + dir_ +
-                              "/y.csv");
+  const auto r =
+      run_driftlab("compensate --model " + dir_ + "/poly.json --data " + dir_ + "/notemp.csv --out " + dir_ + "/y.csv");
   EXPECT_EQ(r.exit_code, 3) << r.err;
   const std::string command = std::string(DRIFTLAB_EXE) + " compensate --model " + dir_ + "/poly.json --stream < " +
                               dir_ + "/notemp.csv > /dev/null 2>" + dir_ + "/err.txt";
@@ -154,8 +155,9 @@ TEST_F(CalibrateCli, TheKalmanStageSmoothsAndStreamsLikeTheBatch) {
 }
 
 TEST_F(CalibrateCli, TheReportScoresEveryModelOnAHeldOutRunOfAnotherProfile) {
-  const auto sim = run_driftlab("simulate --device fmvmg --fs 2 --seed 4 --profile " + std::string(DRIFTLAB_SOURCE_DIR) +
-                                "/models/calibration/heldout_profile.yaml --out " + dir_ + "/heldout.csv");
+  const auto sim =
+      run_driftlab("simulate --device fmvmg --fs 2 --seed 4 --profile " + std::string(DRIFTLAB_SOURCE_DIR) +
+                   "/models/calibration/heldout_profile.yaml --out " + dir_ + "/heldout.csv");
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
   const auto r = run_driftlab("-q calibrate --data " + dir_ + "/oven.csv --model physical --out " + dir_ +
                               "/phys.json --evaluate " + dir_ + "/heldout.csv --report " + dir_ + "/report");
@@ -201,12 +203,14 @@ TEST_F(CalibrateCli, TheReportScoresEveryModelOnAHeldOutRunOfAnotherProfile) {
 TEST_F(CalibrateCli, ThePaperPipelineIsScoredOnTheHeldOutRecordByItsFinalStage) {
   // The main job's pipeline as the offline reference: its final stage (the last rate output,
   // rbf_ga_kf in li2023.yaml) is scored beside the causal models.
-  const auto sim = run_driftlab("simulate --device fmvmg --fs 2 --seed 5 --profile " + std::string(DRIFTLAB_SOURCE_DIR) +
-                                "/models/calibration/heldout_profile.yaml --out " + dir_ + "/heldout_paper.csv");
+  const auto sim =
+      run_driftlab("simulate --device fmvmg --fs 2 --seed 5 --profile " + std::string(DRIFTLAB_SOURCE_DIR) +
+                   "/models/calibration/heldout_profile.yaml --out " + dir_ + "/heldout_paper.csv");
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
-  const auto r = run_driftlab("-q calibrate --data " + dir_ + "/oven.csv --model poly --out " + dir_ +
-                              "/poly_paper.json --evaluate " + dir_ + "/heldout_paper.csv --report " + dir_ +
-                              "/report_paper --paper-pipeline " + DRIFTLAB_SOURCE_DIR + "/models/pipelines/li2023.yaml");
+  const auto r =
+      run_driftlab("-q calibrate --data " + dir_ + "/oven.csv --model poly --out " + dir_ +
+                   "/poly_paper.json --evaluate " + dir_ + "/heldout_paper.csv --report " + dir_ +
+                   "/report_paper --paper-pipeline " + DRIFTLAB_SOURCE_DIR + "/models/pipelines/li2023.yaml");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(read_text(dir_ + "/report_paper/report.json"));
   const auto& methods = j["evaluations"][0]["methods"];
@@ -255,7 +259,6 @@ TEST_F(CalibrateCli, TheQualityGateNamesWhatTheOvenRunLacksAndStrictRefusesIt) {
   EXPECT_EQ(strict.exit_code, 3);
   EXPECT_NE(strict.err.find("quality gate (--strict)"), std::string::npos) << strict.err;
   EXPECT_FALSE(std::filesystem::exists(dir_ + "/strict.json"));
-
 }
 
 TEST_F(CalibrateCli, EveryCommandHasHelp) {
@@ -283,7 +286,8 @@ class ExportCli : public ::testing::Test {
     const auto s = run_driftlab("simulate --device " + std::string(DRIFTLAB_SOURCE_DIR) +
                                 "/devices/imu3.yaml --fs 2 --seed 1 --out " + dir_ + "/imu.csv");
     ASSERT_EQ(s.exit_code, 0) << s.err;
-    const auto c = run_driftlab("-q calibrate --data " + dir_ + "/imu.csv --channels gyro,accel --model poly --out " + dir_ + "/m.json");
+    const auto c = run_driftlab("-q calibrate --data " + dir_ + "/imu.csv --channels gyro,accel --model poly --out " +
+                                dir_ + "/m.json");
     ASSERT_EQ(c.exit_code, 0) << c.err;
     model_ = nlohmann::json::parse(read_text(dir_ + "/m.json"));
     ASSERT_EQ(model_["channels"].size(), 12u);
@@ -321,8 +325,8 @@ TEST_F(ExportCli, Px4ParamsCarryEveryAxisOfBothGyrosAndAccelerometers) {
   EXPECT_NE(text.find("\tTC_A_ENABLE\t1\t6"), std::string::npos);
   for (const std::string role : {"gyro_x", "gyro1_y", "accel_z", "accel1_x"}) {
     const auto& c = channel(role);
-    const std::string block = std::string("TC_") + (c["sensor"] == "gyro" ? "G" : "A") +
-                              std::to_string(c["instance"].get<int>()) + "_";
+    const std::string block =
+        std::string("TC_") + (c["sensor"] == "gyro" ? "G" : "A") + std::to_string(c["instance"].get<int>()) + "_";
     const int axis = c["axis"].get<std::string>()[0] - 'x';
     const auto& bias = c["model"]["bias"].begin().value();  // polynomial_rad_s_per_k_i / _m_s2_per_k_i
     EXPECT_EQ(value(text, "1\t1\t", block + "TREF", '\t'), c["model"]["reference_temp_c"].get<double>());
@@ -344,7 +348,8 @@ TEST_F(ExportCli, ArduPilotParmCarriesBothImusAtThe35DegreeReference) {
     const auto& a = c["model"]["bias"].begin().value();
     const double d = 35.0 - c["model"]["reference_temp_c"].get<double>();
     double slope = 0.0;  // the coefficient of (T - 35)^1: the derivative at 35 degC
-    for (std::size_t i = 1; i < a.size(); ++i) slope += static_cast<double>(i) * a[i].get<double>() * std::pow(d, i - 1.0);
+    for (std::size_t i = 1; i < a.size(); ++i)
+      slope += static_cast<double>(i) * a[i].get<double>() * std::pow(d, i - 1.0);
     const std::string name = "INS_TCAL" + std::to_string(n) + "_" + (c["sensor"] == "gyro" ? "GYR" : "ACC") + "1_" +
                              static_cast<char>(std::toupper(c["axis"].get<std::string>()[0]));
     if (a.size() <= 4) {  // order <= 3 is exact (a higher order is a least-squares cubic: calibration_exports_test)
@@ -367,8 +372,8 @@ TEST_F(ExportCli, KalibrYamlHoldsTheMeasuredAccelerometerNoiseOfTheChosenInstanc
                           noise["unresolved_upper"].contains("acceleration_random_walk_m_s2_sqrt_s"));
   }
   ASSERT_TRUE(bounded);
-  const auto refused = run_driftlab("export --model " + dir_ + "/m.json --format kalibr --instance 0 --out " + dir_ +
-                                    "/refused.yaml");
+  const auto refused =
+      run_driftlab("export --model " + dir_ + "/m.json --format kalibr --instance 0 --out " + dir_ + "/refused.yaml");
   EXPECT_EQ(refused.exit_code, 2);
   EXPECT_NE(refused.err.find("not resolved"), std::string::npos) << refused.err;
   EXPECT_FALSE(std::filesystem::exists(dir_ + "/refused.yaml"));

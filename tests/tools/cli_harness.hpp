@@ -35,7 +35,8 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
 
 // `args` is appended to the executable path as shell words (quote paths with spaces yourself);
 // standard input is the file `input`.
-inline CliResult run_driftlab(const std::string& args, const std::string& env = "", const std::string& input = "/dev/null") {
+inline CliResult run_driftlab(const std::string& args, const std::string& env = "",
+                              const std::string& input = "/dev/null") {
   static int calls = 0;  // ctest runs test processes in parallel: name captures by pid and call
   const auto dir = scratch_dir("capture_" + std::to_string(::getpid()) + "_" + std::to_string(++calls));
   const auto out = dir / "stdout", err = dir / "stderr";

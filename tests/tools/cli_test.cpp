@@ -47,8 +47,8 @@ TEST(Cli, DescribesEachParameterWithTypeDefaultUnitRangeAndDoc) {
 TEST(Cli, APipelineWithThreeMistakesExitsTwoAndNamesAllThreeWithTheirLines) {
   const auto dir = scratch_dir("three_mistakes");
   const auto pipeline = kData + "/pipelines/cli_three_mistakes.yaml";
-  const auto r = run_driftlab(kPlugins + " run --pipeline " + pipeline + " --data " + kData +
-                              "/csv/good.csv --out " + dir.string());
+  const auto r = run_driftlab(kPlugins + " run --pipeline " + pipeline + " --data " + kData + "/csv/good.csv --out " +
+                              dir.string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr(pipeline + ":7: smooth.params.window: window must be odd"));
   EXPECT_THAT(r.err, HasSubstr(pipeline + ":11: again.params.width: unknown parameter"));
@@ -76,8 +76,8 @@ TEST(Cli, RunsAPipelineWithAnExternalPluginAndTheEffectivePipelineReproducesIt) 
   EXPECT_THAT(read_text(dir / "report.json"), HasSubstr("\"status\": \"ok\""));
 
   const auto again = scratch_dir("external_again");
-  const auto r2 = run_driftlab(kPlugins + " run --pipeline " + (dir / "pipeline.effective.yaml").string() +
-                               " --data " + kData + "/csv/good.csv --out " + again.string());
+  const auto r2 = run_driftlab(kPlugins + " run --pipeline " + (dir / "pipeline.effective.yaml").string() + " --data " +
+                               kData + "/csv/good.csv --out " + again.string());
   ASSERT_EQ(r2.exit_code, 0) << r2.err;
   EXPECT_EQ(read_text(again / "outputs.csv"), outputs);
 }

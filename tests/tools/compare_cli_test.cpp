@@ -15,11 +15,11 @@
 namespace driftlab {
 namespace {
 
+using ::testing::HasSubstr;
+using ::testing::Not;
 using testing_cli::read_text;
 using testing_cli::run_driftlab;
 using testing_cli::scratch_dir;
-using ::testing::HasSubstr;
-using ::testing::Not;
 
 namespace fs = std::filesystem;
 
@@ -37,8 +37,12 @@ std::vector<std::string> files_in(const fs::path& dir) {
 TEST(CompareCli, RunsEveryPipelineOnTheSameRecordAndWritesOneReport) {
   const auto dir = scratch_dir("compare_runs");
   const auto csv = (dir / "sim.csv").string();
-  ASSERT_EQ(run_driftlab("simulate --device " + kSource + "/devices/fmvmg.yaml --profile oven --fs 1 --duration 1800 "
-                         "--seed 1 --out " + csv).exit_code, 0);
+  ASSERT_EQ(run_driftlab("simulate --device " + kSource +
+                         "/devices/fmvmg.yaml --profile oven --fs 1 --duration 1800 "
+                         "--seed 1 --out " +
+                         csv)
+                .exit_code,
+            0);
   const std::string poly = kSource + "/models/pipelines/polynomial_baseline.yaml";
   const auto r = run_driftlab("--quiet compare --data " + csv + " --pipeline " + poly + " --pipeline " + poly +
                               " --out " + (dir / "out").string());
@@ -87,8 +91,12 @@ class CompareOutputs : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     record_dir_ = new fs::path(scratch_dir("compare_outputs_record"));
-    ASSERT_EQ(run_driftlab("simulate --device " + kSource + "/devices/fmvmg.yaml --profile oven --fs 1 --duration 1800 "
-                           "--seed 1 --out " + (*record_dir_ / "sim.csv").string()).exit_code, 0);
+    ASSERT_EQ(run_driftlab("simulate --device " + kSource +
+                           "/devices/fmvmg.yaml --profile oven --fs 1 --duration 1800 "
+                           "--seed 1 --out " +
+                           (*record_dir_ / "sim.csv").string())
+                  .exit_code,
+              0);
   }
   static void TearDownTestSuite() {
     fs::remove_all(*record_dir_);
@@ -108,7 +116,8 @@ TEST_F(CompareOutputs, AnOutputDirectoryThatCannotBeMadeIsAUsageErrorBeforeTheDa
   // would name it, with exit code 3.
   const auto missing = (dir_ / "missing.csv").string();
   for (const auto& out : {dir_ / "file.txt" / "out", dir_ / "file.txt"}) {
-    const auto r = run_driftlab("--quiet compare --data " + missing + " --pipeline " + kPolynomial + " --out " + out.string());
+    const auto r =
+        run_driftlab("--quiet compare --data " + missing + " --pipeline " + kPolynomial + " --out " + out.string());
     EXPECT_EQ(r.exit_code, 2) << out << "\n" << r.err;
     EXPECT_THAT(r.err, HasSubstr("--out: cannot create the directory")) << out;
     EXPECT_THAT(r.err, Not(HasSubstr("missing.csv"))) << out;
@@ -153,8 +162,8 @@ TEST_F(CompareOutputs, AFailureLeavesNoPartialReportAndKeepsTheEarlierOne) {
   // appear, and the report.json of an earlier run stays as it was.
   fs::create_directories(dir_ / "out");
   std::ofstream(dir_ / "out" / "report.json") << "earlier report\n";
-  const auto r = run_driftlab("--quiet compare --data " + record().string() + " --pipeline " + kPolynomial +
-                                  " --out " + (dir_ / "out").string(),
+  const auto r = run_driftlab("--quiet compare --data " + record().string() + " --pipeline " + kPolynomial + " --out " +
+                                  (dir_ / "out").string(),
                               "DRIFTLAB_GNUPLOT=/bin/false");
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_THAT(r.err, HasSubstr("gnuplot"));

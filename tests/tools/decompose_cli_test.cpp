@@ -123,9 +123,9 @@ TEST(DecomposeCommand, RunsTheEnsemblePluginsWithTheSameOutputForAnyThreadCount)
   std::string outputs[2];
   for (int threads : {1, 2}) {
     const auto out = dir / ("imfs" + std::to_string(threads) + ".csv");
-    const auto r = run_driftlab("--threads " + std::to_string(threads) + " decompose --data " + csv.string() +
-                                " --plugin decomposition/ceemdan --set ensemble_size=8 --set seed=5 --out " +
-                                out.string());
+    const auto r =
+        run_driftlab("--threads " + std::to_string(threads) + " decompose --data " + csv.string() +
+                     " --plugin decomposition/ceemdan --set ensemble_size=8 --set seed=5 --out " + out.string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
     outputs[threads - 1] = read_text(out);
   }

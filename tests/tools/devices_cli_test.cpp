@@ -67,8 +67,10 @@ TEST(DevicesCli, SimulatesTheContractColumnsReproduciblyWithEffects) {
 
 TEST(DevicesCli, SimulatesAWholeImuWithEveryChannelInTheImuNames) {
   const auto dir = scratch_dir("simulate_imu");
-  const auto r = run_driftlab("simulate --device " + kSource + "/devices/imu3.yaml --profile oven --fs 10 --duration 600 "
-                              "--seed 1 --out " + (dir / "x.csv").string());
+  const auto r = run_driftlab("simulate --device " + kSource +
+                              "/devices/imu3.yaml --profile oven --fs 10 --duration 600 "
+                              "--seed 1 --out " +
+                              (dir / "x.csv").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::string instance[2];
   for (const std::string i : {"", "1"}) {
@@ -81,15 +83,16 @@ TEST(DevicesCli, SimulatesAWholeImuWithEveryChannelInTheImuNames) {
   }
   const std::string text = read_text(dir / "x.csv");
   EXPECT_EQ(text.substr(0, text.find('\n')), "t_s" + instance[0] + instance[1]);
-  EXPECT_TRUE(text.starts_with("t_s,gyro_x_dps,gyro_y_dps,gyro_z_dps,accel_x_mps2,accel_y_mps2,accel_z_mps2,temp_c,"
-                               "true_gyro_x_dps,"));
+  EXPECT_TRUE(
+      text.starts_with("t_s,gyro_x_dps,gyro_y_dps,gyro_z_dps,accel_x_mps2,accel_y_mps2,accel_z_mps2,temp_c,"
+                       "true_gyro_x_dps,"));
 
   // The CSV reader knows every column by its default names.
   const TimeSeries record = read_csv(dir / "x.csv", {.required_roles = {}});
   EXPECT_EQ(record.size(), 6000);
-  for (const char* role : {"gyro_x", "accel_z", "temperature", "true_gyro_x", "true_accel_z", "systematic_gyro_y",
-                           "systematic_accel_z", "gyro1_z", "accel1_x", "temperature1", "true_accel1_z",
-                           "systematic_accel1_y"})
+  for (const char* role :
+       {"gyro_x", "accel_z", "temperature", "true_gyro_x", "true_accel_z", "systematic_gyro_y", "systematic_accel_z",
+        "gyro1_z", "accel1_x", "temperature1", "true_accel1_z", "systematic_accel1_y"})
     EXPECT_TRUE(record.has(role)) << role;
   EXPECT_DOUBLE_EQ(record.channel("true_accel_z").values[0], 9.80665);
   EXPECT_EQ(record.channel("true_accel_x").values[0], 0.0);
@@ -116,8 +119,8 @@ TEST(DevicesCli, SimulatesAProfileFile) {
     profile << "format: driftlab-profile/1\nchamber: {start_c: 20, segments: [{to_c: 30, duration_s: 60}]}\n"
                "rate: {start_dps: 0, segments: [{hold_s: 30}, {to_dps: 50, duration_s: 0}, {hold_s: 30}]}\n";
   }
-  const auto r = run_driftlab("simulate --device fmvmg --fs 5 --profile " + (dir / "table.yaml").string() +
-                              " --out " + (dir / "sim.csv").string());
+  const auto r = run_driftlab("simulate --device fmvmg --fs 5 --profile " + (dir / "table.yaml").string() + " --out " +
+                              (dir / "sim.csv").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const TimeSeries record = read_csv(dir / "sim.csv", {.required_roles = {"rate", "true_rate"}});
   EXPECT_EQ(record.size(), 300);

@@ -101,9 +101,11 @@ TEST(DiscrepancyCommand, ReportsABiasStepAtOneTemperatureAsUnexplainedWithItsLev
   constexpr double kStepSizeDph = 30.0;  // 10 %: the joint fit's size scatters with the noise; measured -3 .. +1.4 %
   const auto dir = scratch_dir("discrepancy_step");
   const auto csv = with_bias_step(simulated(dir, ""), 20.0, 300.0);
-  for (const std::string device : {" --device fmvmg", " --column time=t_s:s --column rate=rate_dps:deg/s "
-                                                      "--column temperature=temp_c:degC --column true_rate=true_rate_dps:deg/s"}) {
-    const auto r = run_driftlab("discrepancy --data " + csv.string() + device + " --report " + (dir / "r.json").string());
+  for (const std::string device : {" --device fmvmg",
+                                   " --column time=t_s:s --column rate=rate_dps:deg/s "
+                                   "--column temperature=temp_c:degC --column true_rate=true_rate_dps:deg/s"}) {
+    const auto r =
+        run_driftlab("discrepancy --data " + csv.string() + device + " --report " + (dir / "r.json").string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_THAT(r.out, HasSubstr("unexplained: structure remains that no candidate explains, in the temperature view"));
     EXPECT_THAT(r.out, ::testing::Not(HasSubstr("named "))) << device;
@@ -166,7 +168,8 @@ std::filesystem::path filtered(const std::filesystem::path& csv, const std::stri
 TEST(DiscrepancyCommand, TakesSearchBoundsFromTheCommandLineValidatedByTheParameterTables) {
   const auto dir = scratch_dir("discrepancy_set");
   const auto csv = simulated(dir, "");
-  const std::string base = "discrepancy --data " + csv.string() + " --device fmvmg --report " + (dir / "r.json").string();
+  const std::string base =
+      "discrepancy --data " + csv.string() + " --device fmvmg --report " + (dir / "r.json").string();
   const auto bad = run_driftlab(base + " --set effect/thermal_lag.tau_max_s=-3 --set thermal_lag.tau_typo=1");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_THAT(bad.err, HasSubstr("--set effect/thermal_lag.tau_max_s: value -3 is out of range"));
@@ -189,7 +192,8 @@ TEST(DiscrepancyCommand, ReadsARecordOfRegularBurstsWithoutFlagsAndRefusesIrregu
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("named periodic_disturbance"));
 
-  const auto holes = filtered(csv, "holes.csv", [](double t) { return t < 3000.0 || (t > 4000 && t < 6500) || t > 12000; });
+  const auto holes =
+      filtered(csv, "holes.csv", [](double t) { return t < 3000.0 || (t > 4000 && t < 6500) || t > 12000; });
   const std::string holes_args =
       "discrepancy --data " + holes.string() + " --device fmvmg --report " + (dir / "holes.json").string();
   const auto refused = run_driftlab(holes_args);

@@ -50,8 +50,8 @@ testing_cli::CliResult run_fleet(const fs::path& out, int workers, const fs::pat
 class FleetCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    const auto s = run_driftlab("simulate --fleet " + std::to_string(kUnits) +
-                                " --device imu3 --fs 1 --seed 7 --out " + kSim.string());
+    const auto s = run_driftlab("simulate --fleet " + std::to_string(kUnits) + " --device imu3 --fs 1 --seed 7 --out " +
+                                kSim.string());
     ASSERT_EQ(s.exit_code, 0) << s.err;
     one_ = new testing_cli::CliResult(run_fleet(kDir / "w1", 1));
     two_ = new testing_cli::CliResult(run_fleet(kDir / "w2", 2));
@@ -145,8 +145,7 @@ TEST_F(FleetCli, TwoShardsAndAMergeGiveTheSingleRunsFoldersAndReport) {
       EXPECT_EQ(read_text(e.path()), read_text(out / fs::relative(e.path(), kDir / "w1"))) << e.path();
     }
   }
-  for (const char* f : {"report.json", "units.csv"})
-    EXPECT_EQ(read_text(kDir / "w1" / f), read_text(out / f)) << f;
+  for (const char* f : {"report.json", "units.csv"}) EXPECT_EQ(read_text(kDir / "w1" / f), read_text(out / f)) << f;
 }
 
 TEST_F(FleetCli, ThreeMpiRanksGiveTheSingleRunsFoldersAndReport) {
@@ -157,14 +156,15 @@ TEST_F(FleetCli, ThreeMpiRanksGiveTheSingleRunsFoldersAndReport) {
       "fleet --manifest " + (kSim / "manifest.csv").string() + " --out " + out.string() + " --channels gyro",
       "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe -np 3");
   EXPECT_NE(r.exit_code, 0) << "a unit failed: rank 0 exits 1";
-  EXPECT_THAT(r.out, HasSubstr(std::to_string(kUnits) + " units: " + std::to_string(kUnits - 1) + " calibrated, 1 failed")) << r.err;
+  EXPECT_THAT(r.out,
+              HasSubstr(std::to_string(kUnits) + " units: " + std::to_string(kUnits - 1) + " calibrated, 1 failed"))
+      << r.err;
   for (const auto& e : fs::recursive_directory_iterator(kDir / "w1" / "units")) {
     if (e.is_regular_file()) {
       EXPECT_EQ(read_text(e.path()), read_text(out / fs::relative(e.path(), kDir / "w1"))) << e.path();
     }
   }
-  for (const char* f : {"report.json", "units.csv"})
-    EXPECT_EQ(read_text(kDir / "w1" / f), read_text(out / f)) << f;
+  for (const char* f : {"report.json", "units.csv"}) EXPECT_EQ(read_text(kDir / "w1" / f), read_text(out / f)) << f;
 }
 
 TEST_F(FleetCli, ARerunSkipsFinishedUnitsAndRedoesOnlyADeletedOne) {
@@ -236,7 +236,8 @@ TEST_F(FleetCli, SpecLimitsFromTheManifestGiveTheYieldWithoutRedoingUnits) {
   const auto r = run_fleet(out, 1, m);
   EXPECT_EQ(r.exit_code, 1) << r.err;
   const auto spec = read_json(out / "report.json");
-  const int expected_within = report["passed"].get<int>() - (read_json(out / "units" / "unit001" / "status.json")["status"] == "passed");
+  const int expected_within =
+      report["passed"].get<int>() - (read_json(out / "units" / "unit001" / "status.json")["status"] == "passed");
   EXPECT_EQ(spec["within_spec"], expected_within);
   EXPECT_DOUBLE_EQ(spec["yield"].get<double>(), expected_within / static_cast<double>(kUnits));
   for (const auto& u : spec["unit_results"]) {
@@ -303,8 +304,10 @@ TEST(FleetSimulate, TheOptionsPlantTheFaultsTheyNameAndSetTheSpread) {
   // number to rounding (measured 2e-15).
   constexpr double kOnTheLsb = 1e-6;
   const fs::path sim = kDir / "options";
-  const auto s = run_driftlab("simulate --fleet 8 --device imu3 --fs 0.2 --duration 3000 --seed 11 --spread 0 "
-                              "--outliers lag:1,dead_axis:2,lsb:1,hysteresis:0 --out " + sim.string());
+  const auto s = run_driftlab(
+      "simulate --fleet 8 --device imu3 --fs 0.2 --duration 3000 --seed 11 --spread 0 "
+      "--outliers lag:1,dead_axis:2,lsb:1,hysteresis:0 --out " +
+      sim.string());
   ASSERT_EQ(s.exit_code, 0) << s.err;
   const auto key = read_json(sim / "key.json");
   std::map<std::string, int> kinds;
@@ -344,14 +347,15 @@ TEST(FleetSimulate, TheDefaultOptionsAreTheFourFaultsWithATenPercentSpread) {
   const auto spread = read_json(kDir / "default_a" / "key.json");
   std::vector<double> x;
   for (const auto& u : spread["units"])
-    if (u["fault"].is_null()) x.push_back(csv_column(kDir / "default_a" / u["data"].get<std::string>(),
-                                                     "systematic_gyro_x_dps")[0]);
+    if (u["fault"].is_null())
+      x.push_back(csv_column(kDir / "default_a" / u["data"].get<std::string>(), "systematic_gyro_x_dps")[0]);
   ASSERT_GE(x.size(), 2u);
   EXPECT_NE(x[0], x[1]) << "a spread fleet's units differ";
 }
 
 TEST(FleetSimulate, BadSpreadOrOutliersAreRefusedNamingTheOption) {
-  const std::string common = "simulate --fleet 6 --device imu3 --fs 0.2 --duration 600 --out " + (kDir / "bad_sim").string();
+  const std::string common =
+      "simulate --fleet 6 --device imu3 --fs 0.2 --duration 600 --out " + (kDir / "bad_sim").string();
   const auto a = run_driftlab(common + " --outliers lag:1,wobble:2");
   EXPECT_EQ(a.exit_code, 2);
   EXPECT_THAT(a.err, ::testing::AllOf(HasSubstr("--outliers"), HasSubstr("wobble:2"), HasSubstr("dead_axis")));
@@ -421,10 +425,10 @@ TEST(FleetOf200, EveryPlantedFaultIsFoundForItsReasonAndTheYieldIsTheKeys) {
                         o["figure"].get<std::string>().rfind(expected["figure"].get<std::string>() + "_", 0) == 0);
       // The whole-model distance flags every passed fault unit, naming the fault's channel among
       // its drivers (the noisy unit's three channels are all expected).
-      distance = distance || (o["rule"] == "distance" &&
-                              (o["text"].get<std::string>().find(expected["channel"].get<std::string>()) !=
-                                   std::string::npos ||
-                               u["fault"]["kind"] == "noisy"));
+      distance = distance ||
+                 (o["rule"] == "distance" &&
+                  (o["text"].get<std::string>().find(expected["channel"].get<std::string>()) != std::string::npos ||
+                   u["fault"]["kind"] == "noisy"));
     }
     EXPECT_TRUE(found) << id << " (" << u["fault"]["description"] << ") is not flagged on " << expected << ": "
                        << nlohmann::json(findings[id]).dump(1);
@@ -468,7 +472,8 @@ TEST(FleetFamilies, TwoLotsOfDifferentThermalBehaviourAreTwoFamilies) {
   device.replace(device.find(slope), slope.size(), "bias_polynomial_dps: [0.35, -0.021, 1.2e-4]");
   std::ofstream(kDir / "lot_b.yaml") << device;
   std::string manifest = "unit,data\n";
-  for (const auto& [lot, file] : {std::pair<std::string, std::string>{"a", "imu3"}, {"b", (kDir / "lot_b.yaml").string()}}) {
+  for (const auto& [lot, file] :
+       {std::pair<std::string, std::string>{"a", "imu3"}, {"b", (kDir / "lot_b.yaml").string()}}) {
     const fs::path dir = kDir / ("lot_" + lot);
     const auto s = run_driftlab("simulate --fleet 8 --device " + file + " --fs 0.2 --seed " + (lot == "a" ? "1" : "2") +
                                 " --outliers none --out " + dir.string());
@@ -483,7 +488,8 @@ TEST(FleetFamilies, TwoLotsOfDifferentThermalBehaviourAreTwoFamilies) {
   ASSERT_EQ(families["k"], 2) << families.dump();
   const auto report = read_json(kDir / "lots_out" / "report.json");
   std::map<char, std::set<int>> lot_families;
-  for (const auto& u : report["unit_results"]) lot_families[u["unit"].get<std::string>()[0]].insert(u["family"].get<int>());
+  for (const auto& u : report["unit_results"])
+    lot_families[u["unit"].get<std::string>()[0]].insert(u["family"].get<int>());
   EXPECT_EQ(lot_families['a'].size(), 1u);
   EXPECT_EQ(lot_families['b'].size(), 1u);
   EXPECT_NE(*lot_families['a'].begin(), *lot_families['b'].begin());
@@ -494,8 +500,8 @@ TEST(FleetFamilies, TwoLotsOfDifferentThermalBehaviourAreTwoFamilies) {
 // checked.
 TEST(FleetDiscrepancy, TheCheckNamesThePlantedHysteresisOnItsChannelOnly) {
   const fs::path sim = kDir / "disc";
-  const auto s = run_driftlab("simulate --fleet 5 --device imu3 --fs 0.2 --seed 5 --outliers hysteresis:1 --out " +
-                              sim.string());
+  const auto s =
+      run_driftlab("simulate --fleet 5 --device imu3 --fs 0.2 --seed 5 --outliers hysteresis:1 --out " + sim.string());
   ASSERT_EQ(s.exit_code, 0) << s.err;
   const auto r = run_driftlab("fleet --manifest " + (sim / "manifest.csv").string() + " --out " +
                               (kDir / "disc_out").string() + " --workers 2 --channels gyro_x --discrepancy");
@@ -526,7 +532,8 @@ TEST(FleetDiscrepancy, TheCheckNamesThePlantedHysteresisOnItsChannelOnly) {
 // manifest error naming line and unit.
 TEST(FleetManifest, AUnitsOwnColumnMappingsReadItsLog) {
   const fs::path sim = kDir / "columns";
-  const auto s = run_driftlab("simulate --fleet 2 --device imu3 --fs 0.2 --seed 5 --outliers none --out " + sim.string());
+  const auto s =
+      run_driftlab("simulate --fleet 2 --device imu3 --fs 0.2 --seed 5 --outliers none --out " + sim.string());
   ASSERT_EQ(s.exit_code, 0) << s.err;
   {  // unit002's log with the gyro columns of instance 0 renamed gx, gy, gz (in deg/s)
     std::string text = read_text(sim / "unit002.csv");
@@ -538,8 +545,9 @@ TEST(FleetManifest, AUnitsOwnColumnMappingsReadItsLog) {
     }
     std::ofstream(sim / "renamed.csv") << header << text.substr(header_end);
   }
-  std::ofstream(sim / "m.csv") << "unit,data,columns\nunit001,unit001.csv,\n"
-                                  "unit002,renamed.csv,gyro_x=gx:deg/s;gyro_y=gy:deg/s;gyro_z=gz:deg/s;temperature=temp_c:degC\n";
+  std::ofstream(sim / "m.csv")
+      << "unit,data,columns\nunit001,unit001.csv,\n"
+         "unit002,renamed.csv,gyro_x=gx:deg/s;gyro_y=gy:deg/s;gyro_z=gz:deg/s;temperature=temp_c:degC\n";
   std::ofstream(sim / "m.yaml") << "units:\n  - {unit: unit001, data: unit001.csv}\n"
                                    "  - {unit: unit002, data: renamed.csv, columns: [gyro_x=gx:deg/s, gyro_y=gy:deg/s, "
                                    "gyro_z=gz:deg/s, temperature=temp_c:degC]}\n";
@@ -572,10 +580,12 @@ TEST(FleetManifest, AUnitsOwnColumnMappingsReadItsLog) {
 // A YAML manifest with the CSV manifest's content gives the same unit folders and report.
 TEST(FleetManifest, AYamlManifestIsTheCsvOne) {
   const fs::path sim = kDir / "yaml";
-  const auto s = run_driftlab("simulate --fleet 4 --device imu3 --fs 0.2 --seed 9 --outliers none --out " + sim.string());
+  const auto s =
+      run_driftlab("simulate --fleet 4 --device imu3 --fs 0.2 --seed 9 --outliers none --out " + sim.string());
   ASSERT_EQ(s.exit_code, 0) << s.err;
-  std::ofstream(sim / "m.csv") << "unit,data,gyro.holdout_dph_max\nunit001,unit001.csv,0.001\nunit002,unit002.csv;unit002.csv,\n"
-                                  "unit003,unit003.csv,\nunit004,unit004.csv,\n";
+  std::ofstream(sim / "m.csv")
+      << "unit,data,gyro.holdout_dph_max\nunit001,unit001.csv,0.001\nunit002,unit002.csv;unit002.csv,\n"
+         "unit003,unit003.csv,\nunit004,unit004.csv,\n";
   std::ofstream(sim / "m.yaml") << "units:\n"
                                    "  - {unit: unit001, data: unit001.csv, limits: {gyro.holdout_dph_max: 0.001}}\n"
                                    "  - unit: unit002\n    data: [unit002.csv, unit002.csv]\n"
@@ -587,7 +597,8 @@ TEST(FleetManifest, AYamlManifestIsTheCsvOne) {
   std::size_t files = 0;
   for (const auto& e : fs::recursive_directory_iterator(kDir / "yaml_csv" / "units"))
     if (e.is_regular_file()) {
-      EXPECT_EQ(read_text(e.path()), read_text(kDir / "yaml_yaml" / fs::relative(e.path(), kDir / "yaml_csv"))) << e.path();
+      EXPECT_EQ(read_text(e.path()), read_text(kDir / "yaml_yaml" / fs::relative(e.path(), kDir / "yaml_csv")))
+          << e.path();
       ++files;
     }
   EXPECT_EQ(files, 16u);
@@ -604,9 +615,10 @@ TEST(FleetManifest, ABadYamlManifestIsRefusedNamingFileLineAndKey) {
                       "  - {unit: a, data: a2.csv, colour: red}\n";
   const auto r = run_fleet(kDir / "bad_yaml", 1, m);
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_THAT(r.err, ::testing::AllOf(HasSubstr("bad_manifest.yaml:4"), HasSubstr("data"),
-                                      HasSubstr("bad_manifest.yaml:5"), HasSubstr("units[1].limits.gyro.bogus_max"),
-                                      HasSubstr("bad_manifest.yaml:6"), HasSubstr("appears twice"), HasSubstr("colour")));
+  EXPECT_THAT(r.err,
+              ::testing::AllOf(HasSubstr("bad_manifest.yaml:4"), HasSubstr("data"), HasSubstr("bad_manifest.yaml:5"),
+                               HasSubstr("units[1].limits.gyro.bogus_max"), HasSubstr("bad_manifest.yaml:6"),
+                               HasSubstr("appears twice"), HasSubstr("colour")));
 }
 
 TEST(FleetCalibrate, CalibrateRefusesTwoUnitsGivenAsOneDevice) {

@@ -50,8 +50,8 @@ class ImuCalibrateCli : public ::testing::Test {
     }
     // The polynomial model: these checks are about the whole-IMU flow and its exports (model
     // selection on real and simulated records is tests/models/calibration_real_test.cpp's).
-    const auto c = run_driftlab("-q --threads 2 calibrate --data " + (kDir / "cal.csv").string() + " --model poly --out " +
-                                (kDir / "imu.json").string());
+    const auto c = run_driftlab("-q --threads 2 calibrate --data " + (kDir / "cal.csv").string() +
+                                " --model poly --out " + (kDir / "imu.json").string());
     ASSERT_EQ(c.exit_code, 0) << c.err;
   }
 };
@@ -99,8 +99,8 @@ void expect_every_channel_at_the_floors(const std::filesystem::path& model, cons
       for (const char axis : {'x', 'y', 'z'}) {
         const imu::ChannelId id{sensor, axis, instance};
         const auto floor = [&](const TimeSeries& ts) {
-          return evaluation::block_mean_rms(
-              ts.time(), ts.channel(id.role()).values - ts.channel(imu::systematic_role(id)).values);
+          return evaluation::block_mean_rms(ts.time(),
+                                            ts.channel(id.role()).values - ts.channel(imu::systematic_role(id)).values);
         };
         const Eigen::VectorXd truth = in.channel(imu::truth_role(id)).values;
         const double raw = evaluation::block_mean_rms(in.time(), in.channel(id.role()).values - truth);
@@ -233,7 +233,8 @@ TEST_F(ImuCalibrateCli, CompensateKeepsEveryInputColumnAndStreamsLikeTheBatch) {
 TEST_F(ImuCalibrateCli, AColumnMappedTwiceIsAnErrorNamingBothColumns) {
   const auto r = run_driftlab("calibrate --data " + (kDir / "cal.csv").string() +
                               " --column rate=gyro_x_dps:deg/s --column rate=gyro_y_dps:deg/s --column "
-                              "temperature=temp_c:degC --out " + (kDir / "twice.json").string());
+                              "temperature=temp_c:degC --out " +
+                              (kDir / "twice.json").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, AllOf(HasSubstr("gyro_x_dps"), HasSubstr("gyro_y_dps"), HasSubstr("rate")));
   EXPECT_FALSE(std::filesystem::exists(kDir / "twice.json"));
@@ -245,10 +246,9 @@ TEST_F(ImuCalibrateCli, AModelIsNotAppliedToAnotherAxis) {
   ASSERT_EQ(x.exit_code, 0) << x.err;
   EXPECT_EQ(nlohmann::json::parse(read_text(kDir / "x.json"))["channels"].size(), 1u);
   // The user maps the file's y column: the x model finds no gyro_x and says so.
-  const auto r = run_driftlab("compensate --model " + (kDir / "x.json").string() + " --data " +
-                              (kDir / "held_out.csv").string() +
-                              " --column gyro_y=gyro_y_dps:deg/s --column temperature=temp_c:degC --out " +
-                              (kDir / "wrong_axis.csv").string());
+  const auto r = run_driftlab(
+      "compensate --model " + (kDir / "x.json").string() + " --data " + (kDir / "held_out.csv").string() +
+      " --column gyro_y=gyro_y_dps:deg/s --column temperature=temp_c:degC --out " + (kDir / "wrong_axis.csv").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, AllOf(HasSubstr("gyro_x"), HasSubstr("gyro_y (gyro_y_dps)"), HasSubstr("not in this record")));
   EXPECT_FALSE(std::filesystem::exists(kDir / "wrong_axis.csv"));
@@ -266,8 +266,8 @@ std::filesystem::path other_device() {
 
 TEST_F(ImuCalibrateCli, RecordsOfTwoDevicesAreRefusedUnlessSaidToBeOne) {
   const auto other = kDir / "other.csv";
-  const auto s = run_driftlab("simulate --device " + other_device().string() + " --profile oven --fs 5 --seed 3 --out " +
-                              other.string());
+  const auto s = run_driftlab("simulate --device " + other_device().string() +
+                              " --profile oven --fs 5 --seed 3 --out " + other.string());
   ASSERT_EQ(s.exit_code, 0) << s.err;
   const std::string data = " --data " + (kDir / "cal.csv").string() + " --data " + other.string();
   const auto r = run_driftlab("-q calibrate" + data + " --out " + (kDir / "two.json").string());
@@ -275,13 +275,13 @@ TEST_F(ImuCalibrateCli, RecordsOfTwoDevicesAreRefusedUnlessSaidToBeOne) {
   EXPECT_THAT(r.err, AllOf(HasSubstr("gyro_x"), HasSubstr("other.csv"), HasSubstr("cal.csv"), HasSubstr("two devices"),
                            HasSubstr("--same-device")));
   EXPECT_FALSE(std::filesystem::exists(kDir / "two.json"));
-  const auto forced = run_driftlab("-q calibrate" + data + " --channels gyro_x --same-device --out " +
-                                   (kDir / "two.json").string());
+  const auto forced =
+      run_driftlab("-q calibrate" + data + " --channels gyro_x --same-device --out " + (kDir / "two.json").string());
   EXPECT_EQ(forced.exit_code, 0) << forced.err;
   // Two runs of one device are one device.
-  const auto same = run_driftlab("-q calibrate --data " + (kDir / "cal.csv").string() + " --data " +
-                                 (kDir / "held_out.csv").string() + " --channels gyro --out " +
-                                 (kDir / "same.json").string());
+  const auto same =
+      run_driftlab("-q calibrate --data " + (kDir / "cal.csv").string() + " --data " +
+                   (kDir / "held_out.csv").string() + " --channels gyro --out " + (kDir / "same.json").string());
   EXPECT_EQ(same.exit_code, 0) << same.err;
 }
 

@@ -70,7 +70,8 @@ TEST_F(LogCli, ExportWritesTheImuRecordTheCsvReaderReadsBack) {
 
   const auto one = run_driftlab("log export " + p("gyros.ulg") + " --instance 1 --out " + p("one.csv"));
   ASSERT_EQ(one.exit_code, 0) << one.err;
-  EXPECT_THAT(read_text(p("one.csv")).substr(0, 60), HasSubstr("t_s,gyro1_x_rad_s,gyro1_y_rad_s,gyro1_z_rad_s,temp1_c"));
+  EXPECT_THAT(read_text(p("one.csv")).substr(0, 60),
+              HasSubstr("t_s,gyro1_x_rad_s,gyro1_y_rad_s,gyro1_z_rad_s,temp1_c"));
 }
 
 TEST_F(LogCli, RecordCommandsReadALogWithAColumnMapping) {
@@ -86,9 +87,9 @@ TEST_F(LogCli, BadLogsExitWithThreeNamingFileAndOffset) {
   const std::string good = two_gyros(50);
   write(dir_ / "cut.ulg", good.substr(0, good.size() - 5));
   write(dir_ / "unknown.ulg", Writer().flag_bits().message('Z', "??").bytes());
-  for (const auto& args : {"log info " + p("cut.ulg"), "log export " + p("cut.ulg") + " --out " + p("x.csv"),
-                           "allan --data " + p("cut.ulg") + " --column rate=gyro_z --out " + p("x.csv"),
-                           "log info " + p("unknown.ulg")}) {
+  for (const auto& args :
+       {"log info " + p("cut.ulg"), "log export " + p("cut.ulg") + " --out " + p("x.csv"),
+        "allan --data " + p("cut.ulg") + " --column rate=gyro_z --out " + p("x.csv"), "log info " + p("unknown.ulg")}) {
     SCOPED_TRACE(args);
     const auto r = run_driftlab(args);
     EXPECT_EQ(r.exit_code, 3);
@@ -119,10 +120,12 @@ TEST(LogCliPyulog, InfoOnEachFixture) {
 // --- ArduPilot DataFlash ------------------------------------------------------------------------
 
 fs::path dataflash_logs() { return fs::path(DRIFTLAB_TEST_DATA) / "logs"; }
-const fs::path kSpark404 = dataflash_logs() / "spark404-dataflashlog" / "log.bin";  // 1 258 IMU + IMU2, pymavlink's counts
+const fs::path kSpark404 =
+    dataflash_logs() / "spark404-dataflashlog" / "log.bin";  // 1 258 IMU + IMU2, pymavlink's counts
 
 TEST(LogCliDataflash, InfoOnEachFixture) {
-  for (const char* file : {"pymavlink/test.BIN", "spark404-dataflashlog/log.bin", "methodic-configurator/backend_log_80k.bin"}) {
+  for (const char* file :
+       {"pymavlink/test.BIN", "spark404-dataflashlog/log.bin", "methodic-configurator/backend_log_80k.bin"}) {
     SCOPED_TRACE(file);
     const auto r = run_driftlab("log info " + (dataflash_logs() / file).string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -133,7 +136,8 @@ TEST(LogCliDataflash, InfoOnEachFixture) {
   EXPECT_THAT(spark.out, AllOf(HasSubstr("instance 0: 1258 messages at 24.7 Hz, 27.18 to 27.68 degC"),
                                HasSubstr("gyro  device id 2163722 (0x21040a) (INS_GYR_ID)"),
                                HasSubstr("temperature calibration: no INS_TCAL* parameters")));
-  const auto newer = run_driftlab("log info " + (dataflash_logs() / "methodic-configurator" / "backend_log_80k.bin").string());
+  const auto newer =
+      run_driftlab("log info " + (dataflash_logs() / "methodic-configurator" / "backend_log_80k.bin").string());
   EXPECT_THAT(newer.out, AllOf(HasSubstr("IMU messages by I"), HasSubstr("INS_TCAL1_ENABLE 0 (off"),
                                HasSubstr("INS_GYR1_CALTEMP = 30.7045"), HasSubstr("its last 2 bytes left out")));
 }
@@ -151,9 +155,11 @@ TEST(LogCliDataflash, ExportWritesEveryInstanceTheCsvReaderReadsBack) {
   EXPECT_EQ(record.channel("temperature").values[0], 27.466842651367188);
   EXPECT_EQ(record.device_id(0), "2163722");
   EXPECT_EQ(record.device_id(1), "2228490");
-  const auto gyros = run_driftlab("log export " + kSpark404.string() + " --sensor gyro1 --out " + (dir / "g1.csv").string());
+  const auto gyros =
+      run_driftlab("log export " + kSpark404.string() + " --sensor gyro1 --out " + (dir / "g1.csv").string());
   ASSERT_EQ(gyros.exit_code, 0) << gyros.err;
-  EXPECT_THAT(read_text(dir / "g1.csv").substr(0, 60), HasSubstr("t_s,gyro1_x_rad_s,gyro1_y_rad_s,gyro1_z_rad_s,temp1_c"));
+  EXPECT_THAT(read_text(dir / "g1.csv").substr(0, 60),
+              HasSubstr("t_s,gyro1_x_rad_s,gyro1_y_rad_s,gyro1_z_rad_s,temp1_c"));
 }
 
 TEST(LogCliDataflash, CalibrateCompensateAndAllanReadTheBinDirectly) {
@@ -170,16 +176,18 @@ TEST(LogCliDataflash, CalibrateCompensateAndAllanReadTheBinDirectly) {
                                   (dir / "g.json").string());
   ASSERT_EQ(gyros.exit_code, 0) << gyros.err;
   EXPECT_THAT(gyros.out, HasSubstr("3 channels"));
-  const auto flat = run_driftlab("-q calibrate --data " + bin + " --instance 1 --bin 2 --force --out " + (dir / "g1.json").string());
+  const auto flat =
+      run_driftlab("-q calibrate --data " + bin + " --instance 1 --bin 2 --force --out " + (dir / "g1.json").string());
   EXPECT_EQ(flat.exit_code, 3);
   EXPECT_THAT(flat.err, AllOf(HasSubstr("log.bin"), HasSubstr("IMU2")));
 
   // compensate on the .bin writes what it writes on the log's export
   const auto exported = run_driftlab("log export " + bin + " --out " + (dir / "imu.csv").string());
   ASSERT_EQ(exported.exit_code, 0) << exported.err;
-  const auto from_csv = run_driftlab("-q compensate --model " + model + " --data " + (dir / "imu.csv").string() + " --out " +
-                                     (dir / "c1.csv").string());
-  const auto from_bin = run_driftlab("-q compensate --model " + model + " --data " + bin + " --out " + (dir / "c2.csv").string());
+  const auto from_csv = run_driftlab("-q compensate --model " + model + " --data " + (dir / "imu.csv").string() +
+                                     " --out " + (dir / "c1.csv").string());
+  const auto from_bin =
+      run_driftlab("-q compensate --model " + model + " --data " + bin + " --out " + (dir / "c2.csv").string());
   ASSERT_EQ(from_csv.exit_code, 0) << from_csv.err;
   ASSERT_EQ(from_bin.exit_code, 0) << from_bin.err;
   EXPECT_EQ(read_text(dir / "c1.csv"), read_text(dir / "c2.csv"));

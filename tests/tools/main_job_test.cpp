@@ -126,13 +126,13 @@ TEST(MainJob, ABlockSwappedByConfigurationStillRunsAndSameSeedsGiveIdenticalOutp
   const auto swapped = dir / "swapped.yaml";
   std::ofstream(swapped) << text;
   for (const std::string out : {"a", "b"}) {
-    const auto r = run_driftlab("run --pipeline " + swapped.string() + " --data " + record + " --out " +
-                                (dir / out).string());
+    const auto r =
+        run_driftlab("run --pipeline " + swapped.string() + " --data " + record + " --out " + (dir / out).string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
   EXPECT_EQ(read_text(dir / "a" / "outputs.csv"), read_text(dir / "b" / "outputs.csv"));
-  const auto threads = run_driftlab("--threads 2 run --pipeline " + swapped.string() + " --data " + record +
-                                    " --out " + (dir / "c").string());
+  const auto threads = run_driftlab("--threads 2 run --pipeline " + swapped.string() + " --data " + record + " --out " +
+                                    (dir / "c").string());
   ASSERT_EQ(threads.exit_code, 0) << threads.err;
   EXPECT_EQ(read_text(dir / "a" / "outputs.csv"), read_text(dir / "c" / "outputs.csv"));
   std::filesystem::remove_all(dir);

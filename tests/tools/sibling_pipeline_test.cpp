@@ -13,18 +13,19 @@
 namespace driftlab {
 namespace {
 
+using ::testing::HasSubstr;
 using testing_cli::read_text;
 using testing_cli::run_driftlab;
 using testing_cli::scratch_dir;
-using ::testing::HasSubstr;
 
 const std::string kSource = DRIFTLAB_SOURCE_DIR;
 const std::string kPipeline = kSource + "/models/pipelines/iceemdan_tfpf_elm.yaml";
 
 std::filesystem::path short_record(const std::filesystem::path& dir) {
   const auto csv = dir / "sim.csv";
-  const auto r = run_driftlab("simulate --device " + kSource + "/devices/fmvmg.yaml --profile oven --fs 1 --duration 900 --seed 1 --out " +
-                              csv.string());
+  const auto r =
+      run_driftlab("simulate --device " + kSource +
+                   "/devices/fmvmg.yaml --profile oven --fs 1 --duration 900 --seed 1 --out " + csv.string());
   EXPECT_EQ(r.exit_code, 0) << r.err;
   return csv;
 }

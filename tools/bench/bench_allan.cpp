@@ -24,16 +24,15 @@ namespace {
 
 // Integrates a fresh copy of the record in place into `angle` (the copy and the release of the
 // previous angle are not timed) and returns the default octave grid for `kind`.
-std::vector<std::size_t> integrate_copy(benchmark::State& state, const bench::BenchSignal& signal,
-                                        allan::Kind kind, Eigen::VectorXd& angle) {
+std::vector<std::size_t> integrate_copy(benchmark::State& state, const bench::BenchSignal& signal, allan::Kind kind,
+                                        Eigen::VectorXd& angle) {
   state.PauseTiming();
   angle = Eigen::VectorXd();
   angle = signal.rate_rad_s;
   state.ResumeTiming();
   const double tau0 = 1.0 / signal.sample_rate_hz;
   angle = allan::angle_from_rate(std::move(angle), tau0);
-  return allan::averaging_factors(allan::TauGrid{}, kind, static_cast<std::size_t>(angle.size()),
-                                  tau0);
+  return allan::averaging_factors(allan::TauGrid{}, kind, static_cast<std::size_t>(angle.size()), tau0);
 }
 
 void run_deviation(benchmark::State& state, allan::Kind kind) {

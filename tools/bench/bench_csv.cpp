@@ -9,8 +9,8 @@
 namespace {
 
 void BM_CsvRead(benchmark::State& state) {
-  const auto path = std::filesystem::path(driftlab::bench::bench_signal_dir()) /
-                    ("gyro_N" + std::to_string(state.range(0)) + ".csv");
+  const auto path =
+      std::filesystem::path(driftlab::bench::bench_signal_dir()) / ("gyro_N" + std::to_string(state.range(0)) + ".csv");
   if (!std::filesystem::exists(path)) {
     state.SkipWithError(("missing " + path.string()).c_str());
     return;

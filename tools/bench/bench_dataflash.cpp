@@ -12,7 +12,8 @@
 namespace {
 
 void BM_ReadDataflash(benchmark::State& state) {
-  const auto path = std::filesystem::path(DRIFTLAB_SOURCE_DIR) / "tests" / "data" / "logs" / "spark404-dataflashlog" / "log.bin";
+  const auto path =
+      std::filesystem::path(DRIFTLAB_SOURCE_DIR) / "tests" / "data" / "logs" / "spark404-dataflashlog" / "log.bin";
   driftlab::dataflash::ReadOptions options;
   options.keep_all = state.range(0) == 1;
   options.keep_types = driftlab::dataflash::imu_types();

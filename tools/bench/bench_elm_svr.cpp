@@ -16,9 +16,10 @@ namespace {
 void BM_ElmFit(benchmark::State& state) { bench::run_regressor(state, "regressor/elm", {}); }
 
 void BM_ElmNsga2Fit(benchmark::State& state) {
-  bench::run_regressor(state, "regressor/elm",
-                       {"tune=true",
-                        "optimizer={plugin: optimizer/pagmo, params: {algorithm: nsga2, population: 16, generations: 10}}"});
+  bench::run_regressor(
+      state, "regressor/elm",
+      {"tune=true",
+       "optimizer={plugin: optimizer/pagmo, params: {algorithm: nsga2, population: 16, generations: 10}}"});
 }
 
 void BM_SvrFit(benchmark::State& state) { bench::run_regressor(state, "regressor/svr", {}); }

@@ -12,8 +12,8 @@ namespace driftlab {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kArw = 0.3 * (kPi / 180.0) / 60.0;             // rad/s/sqrt(Hz)
-constexpr double kRrw = 1.0 * (kPi / 180.0) / 3600.0 / 60.0;    // rad/s^2/sqrt(Hz)
+constexpr double kArw = 0.3 * (kPi / 180.0) / 60.0;           // rad/s/sqrt(Hz)
+constexpr double kRrw = 1.0 * (kPi / 180.0) / 3600.0 / 60.0;  // rad/s^2/sqrt(Hz)
 
 const Eigen::VectorXd* rate_or_skip(benchmark::State& state) {
   try {

@@ -34,7 +34,8 @@ void BM_Li2023Pipeline(benchmark::State& state) {
     const double n_ref = allan::analyze_rate(signal->rate_rad_s, fs, {.fit_terms = false}).arw_rad_sqrt_s;
     for (const auto& [name, out] : outputs)
       benchmark::DoNotOptimize(evaluation::score_stage(name, out.columns.col(0), signal->time_s, fs, n_ref, nullptr));
-    const auto baseline = calibration::fit_px4_style({{"bench", signal->time_s, signal->rate_rad_s, signal->temp_c, {}, {}}}, {});
+    const auto baseline =
+        calibration::fit_px4_style({{"bench", signal->time_s, signal->rate_rad_s, signal->temp_c, {}, {}}}, {});
     benchmark::DoNotOptimize(calibration::compensate(baseline, signal->time_s, signal->rate_rad_s, signal->temp_c));
   }
   state.SetItemsProcessed(state.iterations() * state.range(0));

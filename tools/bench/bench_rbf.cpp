@@ -14,7 +14,8 @@ namespace {
 void BM_RbfFit(benchmark::State& state) { bench::run_regressor(state, "regressor/rbf", {}); }
 
 void BM_RbfGaFit(benchmark::State& state) {
-  bench::run_regressor(state, "regressor/rbf", {"tune=true", "optimizer={plugin: optimizer/ga, params: {population: 16, generations: 10}}"});
+  bench::run_regressor(state, "regressor/rbf",
+                       {"tune=true", "optimizer={plugin: optimizer/ga, params: {population: 16, generations: 10}}"});
 }
 
 BENCHMARK(BM_RbfFit)->Arg(10000)->Arg(1000000)->Unit(benchmark::kMillisecond);

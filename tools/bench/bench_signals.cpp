@@ -35,14 +35,17 @@ BenchSignal load(std::size_t n) {
     const auto bytes = std::filesystem::file_size(f64);
     s.rate_rad_s.resize(static_cast<Eigen::Index>(bytes / sizeof(double)));
     std::FILE* f = std::fopen(f64.c_str(), "rb");
-    const auto got = f ? std::fread(s.rate_rad_s.data(), sizeof(double), static_cast<std::size_t>(s.rate_rad_s.size()), f) : 0;
+    const auto got =
+        f ? std::fread(s.rate_rad_s.data(), sizeof(double), static_cast<std::size_t>(s.rate_rad_s.size()), f) : 0;
     if (f) std::fclose(f);
     if (got != static_cast<std::size_t>(s.rate_rad_s.size())) throw std::runtime_error("cannot read " + f64.string());
     s.rate_rad_s *= 3.14159265358979323846 / 180.0;
-    s.time_s = Eigen::VectorXd::LinSpaced(s.rate_rad_s.size(), 0.0, static_cast<double>(s.rate_rad_s.size() - 1) / 100.0);
+    s.time_s =
+        Eigen::VectorXd::LinSpaced(s.rate_rad_s.size(), 0.0, static_cast<double>(s.rate_rad_s.size() - 1) / 100.0);
     return s;
   }
-  throw std::runtime_error("benchmark signal " + csv.string() + " (or .f64) not found; generate the signals with\n"
+  throw std::runtime_error("benchmark signal " + csv.string() +
+                           " (or .f64) not found; generate the signals with\n"
                            "  python3 ../shared/bench/gen_signals.py --out DIR\nand set DRIFTLAB_BENCH_SIGNALS=DIR");
 }
 

@@ -25,8 +25,9 @@ double rate_hz(std::size_t count, std::int64_t first_ns, std::int64_t last_ns) {
 
 std::string span(const std::vector<std::int64_t>& time_ns) {
   if (time_ns.empty()) return "no messages";
-  return std::to_string(time_ns.size()) + " samples at " + fixed(rate_hz(time_ns.size(), time_ns.front(), time_ns.back()), 1) +
-         " Hz, " + fixed(seconds(time_ns.front()), 3) + " to " + fixed(seconds(time_ns.back()), 3) + " s";
+  return std::to_string(time_ns.size()) + " samples at " +
+         fixed(rate_hz(time_ns.size(), time_ns.front(), time_ns.back()), 1) + " Hz, " +
+         fixed(seconds(time_ns.front()), 3) + " to " + fixed(seconds(time_ns.back()), 3) + " s";
 }
 
 }  // namespace
@@ -46,20 +47,20 @@ void print_bag_info(const std::string& path, std::ostream& out) {
   }
   out << "messages: " << messages;
   if (messages > 0)
-    out << ", " << fixed(seconds(first), 3) << " to " << fixed(seconds(last), 3) << " s (" << fixed(seconds(last - first), 3)
-        << " s; the bag's message times, s since the epoch of the recording clock)";
+    out << ", " << fixed(seconds(first), 3) << " to " << fixed(seconds(last), 3) << " s ("
+        << fixed(seconds(last - first), 3) << " s; the bag's message times, s since the epoch of the recording clock)";
   out << "\ntopics: " << bag.topics.size() << "\n";
   char row[512];
-  std::snprintf(row, sizeof row, "  %-36s %-36s %-8s %9s %9s %16s %16s\n", "name", "type", "encoding", "messages", "rate Hz",
-                "from s", "to s");
+  std::snprintf(row, sizeof row, "  %-36s %-36s %-8s %9s %9s %16s %16s\n", "name", "type", "encoding", "messages",
+                "rate Hz", "from s", "to s");
   out << row;
   for (const auto& t : bag.topics) {
     if (t.count == 0)
       std::snprintf(row, sizeof row, "  %-36s %-36s %-8s %9d\n", t.name.c_str(), t.type.c_str(), t.encoding.c_str(), 0);
     else
       std::snprintf(row, sizeof row, "  %-36s %-36s %-8s %9llu %9.1f %16.3f %16.3f\n", t.name.c_str(), t.type.c_str(),
-                    t.encoding.c_str(), static_cast<unsigned long long>(t.count), rate_hz(t.count, t.first_ns, t.last_ns),
-                    seconds(t.first_ns), seconds(t.last_ns));
+                    t.encoding.c_str(), static_cast<unsigned long long>(t.count),
+                    rate_hz(t.count, t.first_ns, t.last_ns), seconds(t.first_ns), seconds(t.last_ns));
     out << row;
   }
   if (s.layout.instances.empty()) {
@@ -74,11 +75,14 @@ void print_bag_info(const std::string& path, std::ostream& out) {
       const auto t = std::find_if(s.temperatures.begin(), s.temperatures.end(),
                                   [&](const imu::TemperatureStream& x) { return x.instance == instance.instance; });
       if (t == s.temperatures.end()) {
-        out << "    temperature: " << (instance.temperature_topic.empty() ? "no topic pairs with it" : instance.temperature_topic + ", none usable") << "\n";
+        out << "    temperature: "
+            << (instance.temperature_topic.empty() ? "no topic pairs with it"
+                                                   : instance.temperature_topic + ", none usable")
+            << "\n";
       } else {
         const auto [lo, hi] = std::minmax_element(t->values.begin(), t->values.end());
-        out << "    temperature: " << instance.temperature_topic << ", " << span(t->time) << ", " << fixed(*lo, 2) << " to "
-            << fixed(*hi, 2) << " degC\n";
+        out << "    temperature: " << instance.temperature_topic << ", " << span(t->time) << ", " << fixed(*lo, 2)
+            << " to " << fixed(*hi, 2) << " degC\n";
       }
     }
   }

@@ -12,12 +12,13 @@
 namespace driftlab::cli {
 
 void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, bool repeatable) {
-  auto* opt = cmd->add_option("--data", data.paths,
-                              repeatable ? "input record(s): CSV, PX4 ULog (.ulg), ArduPilot DataFlash (.bin) or ROS bag "
-                                           "(.bag, .db3, .mcap, rosbag2 directory); repeat to combine several runs of one "
-                                           "IMU (CSV columns: see --column)"
-                                         : "input record: CSV, PX4 ULog (.ulg), ArduPilot DataFlash (.bin) or ROS bag (.bag, "
-                                           ".db3, .mcap, rosbag2 directory)");
+  auto* opt =
+      cmd->add_option("--data", data.paths,
+                      repeatable ? "input record(s): CSV, PX4 ULog (.ulg), ArduPilot DataFlash (.bin) or ROS bag "
+                                   "(.bag, .db3, .mcap, rosbag2 directory); repeat to combine several runs of one "
+                                   "IMU (CSV columns: see --column)"
+                                 : "input record: CSV, PX4 ULog (.ulg), ArduPilot DataFlash (.bin) or ROS bag (.bag, "
+                                   ".db3, .mcap, rosbag2 directory)");
   opt->required();
   if (!repeatable) opt->expected(1);
   add_calibration_channel_options(cmd, data);
@@ -32,15 +33,17 @@ void add_calibration_channel_options(CLI::App* cmd, CalibrationDataOptions& data
   cmd->add_option("--axis", data.axis, "axis of a single-axis 'rate' column (an IMU column names its own axis)")
       ->check(CLI::IsMember({"x", "y", "z"}))
       ->capture_default_str();
-  add_record_read_options(cmd, data,
-                  "column mapping role=column:unit (repeatable). Roles: gyro_x..gyro_z, accel_x..accel_z (gyro1_x, "
-                  "accel2_z for instances 1, 2), temperature (temperature1, ...), true_gyro_x (reference input), "
-                  "time; rate for a single-axis gyro. Raw counts: gyro_x=gx:lsb*0.061:mdps. Without --column, "
-                  "headers such as t_s, time_us, timestamp, gyro_x, gx, GyrX, gyro_x_dps, acc_z, accel_z_g, temp, "
-                  "temp_c, T, rate_dps are recognised (no unit suffix: rad/s, m/s^2, degC)");
+  add_record_read_options(
+      cmd, data,
+      "column mapping role=column:unit (repeatable). Roles: gyro_x..gyro_z, accel_x..accel_z (gyro1_x, "
+      "accel2_z for instances 1, 2), temperature (temperature1, ...), true_gyro_x (reference input), "
+      "time; rate for a single-axis gyro. Raw counts: gyro_x=gx:lsb*0.061:mdps. Without --column, "
+      "headers such as t_s, time_us, timestamp, gyro_x, gx, GyrX, gyro_x_dps, acc_z, accel_z_g, temp, "
+      "temp_c, T, rate_dps are recognised (no unit suffix: rad/s, m/s^2, degC)");
 }
 
-std::vector<ChannelRecords> load_channel_records(const std::vector<std::string>& paths, const CalibrationDataOptions& data) {
+std::vector<ChannelRecords> load_channel_records(const std::vector<std::string>& paths,
+                                                 const CalibrationDataOptions& data) {
   const CsvReadOptions options = csv_read_options(data);
   std::vector<TimeSeries> series;
   for (const auto& p : paths) {
@@ -95,9 +98,10 @@ void print_model_summary(std::ostream& out, const calibration::ChannelCalibratio
     for (std::size_t j = 0; j < m.scale_factor_per_k.size(); ++j) out << " " << m.scale_factor_per_k[j] << " dT^" << j;
     out << "\n";
   }
-  std::snprintf(line, sizeof line, "  held-out residual (%g-s bins): %.4g %s; in-sample %.4g %s; uncompensated %.4g %s\n",
-                m.fit.bin_s, m.fit.holdout_rms_rad_s * display, display_unit, m.fit.train_rms_rad_s * display,
-                display_unit, m.fit.uncompensated_rms_rad_s * display, display_unit);
+  std::snprintf(line, sizeof line,
+                "  held-out residual (%g-s bins): %.4g %s; in-sample %.4g %s; uncompensated %.4g %s\n", m.fit.bin_s,
+                m.fit.holdout_rms_rad_s * display, display_unit, m.fit.train_rms_rad_s * display, display_unit,
+                m.fit.uncompensated_rms_rad_s * display, display_unit);
   out << line << "  held out: " << m.fit.holdout_design << "\n  selection: " << m.fit.selection << "\n";
 }
 

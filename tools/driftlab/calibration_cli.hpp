@@ -20,10 +20,10 @@ namespace driftlab::cli {
 
 // The records of a calibration command, read alike (cli.hpp RecordReadOptions), and the channels taken.
 struct CalibrationDataOptions : RecordReadOptions {
-  std::vector<std::string> paths;     // --data (repeatable)
-  std::string channels;               // --channels (empty: every channel)
-  std::string axis = "z";             // --axis: the axis of a single-axis "rate" column
-  bool same_device = false;           // --same-device: records of several devices are not refused
+  std::vector<std::string> paths;  // --data (repeatable)
+  std::string channels;            // --channels (empty: every channel)
+  std::string axis = "z";          // --axis: the axis of a single-axis "rate" column
+  bool same_device = false;        // --same-device: records of several devices are not refused
 };
 
 void add_calibration_data_options(CLI::App* cmd, CalibrationDataOptions& data, bool repeatable);
@@ -39,9 +39,10 @@ using calibration::run_quality_gate;
 
 // Reads every file (CSV or a log, by content: framework/record_reader.hpp) and collects the selected
 // channels (calibration::channel_records with --channels, --axis, --same-device).
-std::vector<ChannelRecords> load_channel_records(const std::vector<std::string>& paths, const CalibrationDataOptions& data);
+std::vector<ChannelRecords> load_channel_records(const std::vector<std::string>& paths,
+                                                 const CalibrationDataOptions& data);
 
-calibration::ModelKind model_kind_option(const std::string& text);  // ConfigError naming --model
+calibration::ModelKind model_kind_option(const std::string& text);         // ConfigError naming --model
 calibration::Extrapolation extrapolation_option(const std::string& text);  // ConfigError naming --extrapolation
 
 // The model of one channel in words, in the channel's display unit (deg/h for a gyro, mg for an

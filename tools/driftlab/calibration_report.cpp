@@ -64,7 +64,7 @@ Eigen::VectorXd truth_of(const calibration::Record& r) {
 }
 
 MethodScore score(const std::string& name, const std::string& description, const calibration::Record& r,
-             const RecordBlocks& blocks, const Eigen::VectorXd& out, const calibration::Compensated* compensated) {
+                  const RecordBlocks& blocks, const Eigen::VectorXd& out, const calibration::Compensated* compensated) {
   MethodScore s{name, description, ""};
   const Eigen::VectorXd error = out - truth_of(r);
   s.drift_dph = evaluation::block_mean_rms(r.time_s, error) * kDphPerRadPerSec;
@@ -128,8 +128,7 @@ void add_bias_points(PlotPanel& p, const std::string& what, const calibration::R
 
 // The figures of one held-out record (see the header).
 void add_figures(HtmlReport& html, const ReportInput& in, const std::vector<RecordBlocks>& calibration_blocks,
-                 const calibration::Record& r, const RecordBlocks& blocks,
-                 const std::vector<MethodScore>& scores) {
+                 const calibration::Record& r, const RecordBlocks& blocks, const std::vector<MethodScore>& scores) {
   {
     PlotPanel p{"Bias against temperature (60-s block means) and each model's correction on " + r.name,
                 "temperature (°C)", "bias (°/h)"};
@@ -142,8 +141,8 @@ void add_figures(HtmlReport& html, const ReportInput& in, const std::vector<Reco
       p.series.push_back(std::move(line));
     }
     html.figure_or_note({{p}, 900, 420, 1, ""},
-               "Bias (measured - true rate) of the calibration records and of " + r.name +
-                   ", heating and cooling apart, with the correction each model applies to " + r.name);
+                        "Bias (measured - true rate) of the calibration records and of " + r.name +
+                            ", heating and cooling apart, with the correction each model applies to " + r.name);
   }
   PlotPanel by_temp{"|Residual| against temperature (60-s block means of output - true rate)", "temperature (°C)",
                     "|residual| (°/h)"};
@@ -209,7 +208,8 @@ nlohmann::json model_json(const CompetingModel& m) {
 
 }  // namespace
 
-std::vector<HeldOutScores> write_calibration_report(const ReportInput& in, const ReportFiles& files, OutputSet& outputs) {
+std::vector<HeldOutScores> write_calibration_report(const ReportInput& in, const ReportFiles& files,
+                                                    OutputSet& outputs) {
   nlohmann::json j;
   j["format"] = "driftlab-calibrate-report/1";
   j["command"] = in.command;
@@ -225,7 +225,8 @@ std::vector<HeldOutScores> write_calibration_report(const ReportInput& in, const
       {"extrapolated_fraction", "share of samples whose model temperature was outside the calibrated range"}};
   j["quality_gate"] = nlohmann::json::array();
   for (const auto& f : in.gate)
-    j["quality_gate"].push_back({{"severity", calibration::to_string(f.severity)}, {"code", f.code}, {"message", f.message}});
+    j["quality_gate"].push_back(
+        {{"severity", calibration::to_string(f.severity)}, {"code", f.code}, {"message", f.message}});
   j["chosen"] = in.chosen;
   j["notes"] = in.notes;
   j["models"] = nlohmann::json::array();
@@ -243,13 +244,16 @@ std::vector<HeldOutScores> write_calibration_report(const ReportInput& in, const
   {
     HtmlTable t{"Oven-run quality gate on the calibration records", {"severity", "finding", "what was measured"}};
     for (const auto& f : in.gate) t.rows.push_back({calibration::to_string(f.severity), f.code, f.message});
-    if (t.rows.empty()) t.rows.push_back({std::string("–"), std::string("none"), std::string("the run passes every check")});
+    if (t.rows.empty())
+      t.rows.push_back({std::string("–"), std::string("none"), std::string("the run passes every check")});
     t.note = "Errors stop the fit; warnings become errors with --strict (models/calibration/oven_run.hpp).";
     html.table(t);
   }
   for (const auto& n : in.notes) html.paragraph("Note: " + n);
   {
-    HtmlTable t{"Competing models, all fitted on the calibration records", {"name", "kind", "order", "terms", "valid range (°C)", "extrapolation", "fitted on", "held-out CV residual (°/h)"}};
+    HtmlTable t{"Competing models, all fitted on the calibration records",
+                {"name", "kind", "order", "terms", "valid range (°C)", "extrapolation", "fitted on",
+                 "held-out CV residual (°/h)"}};
     for (const auto& m : in.models) {
       if (!m.model) {
         t.rows.push_back({m.name, std::string("none"), std::string("-"), std::string("-"), std::string("-"),
@@ -263,8 +267,9 @@ std::vector<HeldOutScores> write_calibration_report(const ReportInput& in, const
                         std::string(m.model->fit.heating_only ? "heating only" : "heating and cooling"),
                         m.model->fit.holdout_rms_rad_s * kDphPerRadPerSec});
     }
-    t.note = "Held-out CV residual: pooled RMS of fitting-bin residuals on the held-out legs, runs or time blocks "
-             "of the calibration records (each model's fit.holdout_design).";
+    t.note =
+        "Held-out CV residual: pooled RMS of fitting-bin residuals on the held-out legs, runs or time blocks "
+        "of the calibration records (each model's fit.holdout_design).";
     html.table(t);
   }
 
@@ -297,16 +302,21 @@ std::vector<HeldOutScores> write_calibration_report(const ReportInput& in, const
                       {"temperature_range_c", {r.temp_c.minCoeff(), r.temp_c.maxCoeff()}}};
     ej["legs"] = nlohmann::json::array();
     for (const auto& leg : blocks.legs)
-      ej["legs"].push_back({{"direction", leg.name()}, {"from_c", leg.from_c}, {"to_c", leg.to_c},
-                            {"start_s", leg.start_s}, {"end_s", leg.end_s}});
+      ej["legs"].push_back({{"direction", leg.name()},
+                            {"from_c", leg.from_c},
+                            {"to_c", leg.to_c},
+                            {"start_s", leg.start_s},
+                            {"end_s", leg.end_s}});
     std::optional<double> floor_dph;
     if (r.systematic_rad_s.size()) {
-      floor_dph = evaluation::block_mean_rms(r.time_s, Eigen::VectorXd(r.rate_rad_s - r.systematic_rad_s)) * kDphPerRadPerSec;
+      floor_dph =
+          evaluation::block_mean_rms(r.time_s, Eigen::VectorXd(r.rate_rad_s - r.systematic_rad_s)) * kDphPerRadPerSec;
       ej["intrinsic_floor_drift_dph"] = *floor_dph;
     }
     const auto number_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
     ej["methods"] = nlohmann::json::array();
-    HtmlTable t{"Held-out record " + r.name, {"method", "residual drift (°/h)", "B (°/h)", "N (°/h/√Hz)", "output bandwidth", "extrapolated (%)"}};
+    HtmlTable t{"Held-out record " + r.name,
+                {"method", "residual drift (°/h)", "B (°/h)", "N (°/h/√Hz)", "output bandwidth", "extrapolated (%)"}};
     std::vector<std::string> leg_header{"method"};
     for (const auto& leg : blocks.legs) leg_header.push_back(leg_text(leg) + " (°/h)");
     HtmlTable by_leg{"Residual drift of every method on each leg of " + r.name, leg_header};
@@ -329,20 +339,21 @@ std::vector<HeldOutScores> write_calibration_report(const ReportInput& in, const
                                {"output_bandwidth", s.bandwidth},
                                {"extrapolated_fraction", s.extrapolated}});
       const HtmlCell b = !std::isfinite(s.b_dph) ? HtmlCell(std::string("–"))
-                         : s.b_resolved            ? HtmlCell(s.b_dph)
-                                                   : HtmlCell("< " + format_number(s.b_dph) + " (not resolved within tau ≤ " +
-                                                              format_number(s.b_within_tau_s) + " s)");
+                         : s.b_resolved          ? HtmlCell(s.b_dph)
+                                        : HtmlCell("< " + format_number(s.b_dph) + " (not resolved within tau ≤ " +
+                                                   format_number(s.b_within_tau_s) + " s)");
       t.rows.push_back({s.name, s.drift_dph, b, s.n_dph_rthz, s.bandwidth, 100.0 * s.extrapolated});
     }
-    t.note = "Residual drift: rms of 60-s block means of (output - true rate). B and N need an evenly sampled "
-             "record (none for burst records); B is a value only where the Allan deviation has a floor, otherwise "
-             "the bound '< x'. " +
-             (r.systematic_rad_s.size()
-                  ? "Intrinsic floor (measured - true systematic rate): " +
-                        format_number(*floor_dph) + " °/h."
-                  : std::string("No systematic-rate column: no intrinsic floor."));
-    by_leg.note = "Legs as the quality gate finds them (zig-zag reversals of the 60-s temperature means); – where "
-                  "a leg is shorter than one 60-s block.";
+    t.note =
+        "Residual drift: rms of 60-s block means of (output - true rate). B and N need an evenly sampled "
+        "record (none for burst records); B is a value only where the Allan deviation has a floor, otherwise "
+        "the bound '< x'. " +
+        (r.systematic_rad_s.size()
+             ? "Intrinsic floor (measured - true systematic rate): " + format_number(*floor_dph) + " °/h."
+             : std::string("No systematic-rate column: no intrinsic floor."));
+    by_leg.note =
+        "Legs as the quality gate finds them (zig-zag reversals of the 60-s temperature means); – where "
+        "a leg is shorter than one 60-s block.";
     html.section("Held-out record " + r.name + " (" + std::to_string(r.time_s.size()) + " samples)");
     html.table(t);
     if (!blocks.legs.empty()) html.table(by_leg);

@@ -27,8 +27,8 @@
 namespace driftlab::cli {
 
 struct CompetingModel {
-  std::string name;         // "PX4-style poly", "poly", "physical", "rbf"
-  std::string description;  // how it was fitted
+  std::string name;                                    // "PX4-style poly", "poly", "physical", "rbf"
+  std::string description;                             // how it was fitted
   std::optional<calibration::CalibrationModel> model;  // empty: no compensation
 };
 
@@ -46,10 +46,10 @@ struct ReportInput {
   std::vector<CompetingModel> models;
   std::vector<calibration::Record> evaluations;  // held-out records
   std::vector<ExternalOutput> external;
-  std::string truth_note;                        // what "truth" is for these records
-  std::vector<calibration::Finding> gate;        // the oven-run quality gate on the calibration records
-  std::string chosen;                            // the model written, and why (its selection)
-  std::vector<std::string> notes;                // e.g. a baseline that could not be fitted
+  std::string truth_note;                  // what "truth" is for these records
+  std::vector<calibration::Finding> gate;  // the oven-run quality gate on the calibration records
+  std::string chosen;                      // the model written, and why (its selection)
+  std::vector<std::string> notes;          // e.g. a baseline that could not be fitted
 };
 
 // One method's scores on one held-out record, in deg/h.
@@ -58,22 +58,23 @@ struct MethodScore {
   double drift_dph = 0, b_dph = NAN, n_dph_rthz = NAN, extrapolated = 0;  // extrapolated: share of samples
   bool b_resolved = false;  // b_dph is B; otherwise only the bound B < b_dph (models/allan/analysis.hpp)
   double b_within_tau_s = 0;
-  std::vector<double> block_mean_dph;   // per 60-s block: mean of output - truth
-  std::vector<double> block_bias_dph;   // per block: mean of the correction applied (models only)
-  std::vector<double> leg_drift_dph;    // per leg: residual drift over the leg (NaN: shorter than a block)
-  std::vector<allan::Estimate> allan;   // OADEV of output - truth, rad/s (evenly sampled records)
+  std::vector<double> block_mean_dph;  // per 60-s block: mean of output - truth
+  std::vector<double> block_bias_dph;  // per block: mean of the correction applied (models only)
+  std::vector<double> leg_drift_dph;   // per leg: residual drift over the leg (NaN: shorter than a block)
+  std::vector<allan::Estimate> allan;  // OADEV of output - truth, rad/s (evenly sampled records)
 };
 
 // Every method's scores on one held-out record.
 struct HeldOutScores {
   std::string record;
-  std::vector<MethodScore> methods;                // the models in input order, then the external outputs
+  std::vector<MethodScore> methods;                 // the models in input order, then the external outputs
   std::optional<double> intrinsic_floor_drift_dph;  // measured - systematic, when the record has it
 };
 
 // Scores every model on every held-out record and stages `files` (report.json, report.html; planned
 // with plan_report_files, cli.hpp) in `outputs` (figures need gnuplot; without it the HTML says so);
 // the caller commits. Returns the scores per held-out record.
-std::vector<HeldOutScores> write_calibration_report(const ReportInput& input, const ReportFiles& files, OutputSet& outputs);
+std::vector<HeldOutScores> write_calibration_report(const ReportInput& input, const ReportFiles& files,
+                                                    OutputSet& outputs);
 
 }  // namespace driftlab::cli

@@ -72,9 +72,10 @@ inline constexpr double kMaxSeed = 9007199254740992.0;  // 2^53: every seed surv
 // the one definition of the two sampling options every record-reading command shares.
 void add_sampling_options(CLI::App* command, double& sample_rate_hz, double& max_gap_factor,
                           const std::string& fs_help = "sample rate in Hz, for files without a time column",
-                          const std::string& gap_help = "a time step longer than this multiple of the median step "
-                                                        "is a gap, an error (0 reads gaps; allan, run, compare, "
-                                                        "decompose and entropy still find them at 3x)");
+                          const std::string& gap_help =
+                              "a time step longer than this multiple of the median step "
+                              "is a gap, an error (0 reads gaps; allan, run, compare, "
+                              "decompose and entropy still find them at 3x)");
 // Adds --column (with the command's help), --fs and --max-gap, and the log options --topic,
 // --instance and --sensor, to a subcommand.
 void add_record_read_options(CLI::App* command, RecordReadOptions& read, const std::string& column_help);
@@ -115,8 +116,8 @@ std::string primary_role(const DataOptions& data);
 std::string display_unit(const TimeSeries& record, const std::string& role, const DataOptions& data);
 
 // Throws ConfigError when `output` could not be planned as an output (an input, an existing path
-// that is not a regular file, a missing or unwritable directory; see OutputSet::plan). For a command with one output written by
-// a library that writes atomically itself; commands with several outputs use an OutputSet
+// that is not a regular file, a missing or unwritable directory; see OutputSet::plan). For a command with one output
+// written by a library that writes atomically itself; commands with several outputs use an OutputSet
 // (framework/output_set.hpp), which also commits them together.
 void check_output(const std::string& output, const std::vector<std::string>& inputs);
 

@@ -40,20 +40,25 @@ struct AllanOptions {
   std::string out;
   std::string json;
   std::string plot;
-  std::string gmwm;                      // composite model, e.g. "wn+rw+gm"; empty: none
-  std::size_t gmwm_bootstrap = 50;       // replicates of the parametric bootstrap; 0: asymptotic intervals
-  std::uint64_t seed = 1;                // of the bootstrap's simulations
+  std::string gmwm;                 // composite model, e.g. "wn+rw+gm"; empty: none
+  std::size_t gmwm_bootstrap = 50;  // replicates of the parametric bootstrap; 0: asymptotic intervals
+  std::uint64_t seed = 1;           // of the bootstrap's simulations
   unsigned threads = 1;
 };
 
 // Units of the fitted terms when the channel is not an angular rate: built from its unit u.
 std::string generic_unit(allan::Term term, const std::string& u) {
   switch (term) {
-    case allan::Term::Q: return u + "*s";
-    case allan::Term::N: return u + "*sqrt(s)";
-    case allan::Term::B: return u;
-    case allan::Term::K: return u + "/sqrt(s)";
-    case allan::Term::R: return u + "/s";
+    case allan::Term::Q:
+      return u + "*s";
+    case allan::Term::N:
+      return u + "*sqrt(s)";
+    case allan::Term::B:
+      return u;
+    case allan::Term::K:
+      return u + "/sqrt(s)";
+    case allan::Term::R:
+      return u + "/s";
   }
   return u;
 }
@@ -68,8 +73,10 @@ std::pair<std::string, double> gmwm_unit(const allan::gmwm::Parameter& p, bool a
   };
   if (p.name == "T") return {"s", 1.0};
   if (p.name == "sigma") return angular ? ieee(allan::Term::B) : std::pair<std::string, double>(u, 1.0);
-  const allan::Term t = p.name == "N" ? allan::Term::N : p.name == "Q" ? allan::Term::Q
-                        : p.name == "K" ? allan::Term::K : allan::Term::R;
+  const allan::Term t = p.name == "N"   ? allan::Term::N
+                        : p.name == "Q" ? allan::Term::Q
+                        : p.name == "K" ? allan::Term::K
+                                        : allan::Term::R;
   return angular ? ieee(t) : std::pair<std::string, double>(generic_unit(t, u), 1.0);
 }
 
@@ -89,8 +96,8 @@ nlohmann::json gmwm_json(const allan::gmwm::Fit& f, bool angular, const std::str
       }
       parameters.push_back(j);
     }
-    components.push_back({{"process", allan::gmwm::to_string(c.process)}, {"observable", c.observable},
-                          {"parameters", parameters}});
+    components.push_back(
+        {{"process", allan::gmwm::to_string(c.process)}, {"observable", c.observable}, {"parameters", parameters}});
   }
   std::vector<allan::gmwm::Process> model;
   for (const auto& c : f.components) model.push_back(c.process);
@@ -127,7 +134,8 @@ nlohmann::json summary_json(const AllanOptions& o, const allan::NoiseFit& fit, b
     for (const auto& c : allan::kIeee952Units) j[std::string(c.key)] = term_json(fit[c.term], c.factor, c.unit);
     const auto& d = allan::kNoiseDensityDegPerHour;
     j[std::string(d.key)] = term_json(fit[d.term], d.factor, d.unit);
-    for (const auto& c : allan::kKalibrUnits) j["kalibr"][std::string(c.key)] = term_json(fit[c.term], c.factor, c.unit);
+    for (const auto& c : allan::kKalibrUnits)
+      j["kalibr"][std::string(c.key)] = term_json(fit[c.term], c.factor, c.unit);
     for (const auto& c : allan::kIeee952Units) {
       j["si"][std::string(c.key)] = term_json(fit[c.term], 1.0, generic_unit(c.term, "rad/s"));
     }
@@ -143,10 +151,15 @@ nlohmann::json summary_json(const AllanOptions& o, const allan::NoiseFit& fit, b
   j["input"] = o.input;
   j["kind"] = o.kind;
   j["confidence"] = o.confidence;
-  j["fit"] = {{"curve", "oadev"}, {"points", fit.points}, {"dof", fit.dof}, {"chi2", fit.chi2},
-              {"chi2_per_dof", fit.reduced_chi2()}, {"covariance_scale", fit.scale},
-              {"resolved", "kept by the fit and c = term^2 more than one sigma above 0; otherwise only the bound 'upper'"},
-              {"model", "sigma^2 = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2"}};
+  j["fit"] = {
+      {"curve", "oadev"},
+      {"points", fit.points},
+      {"dof", fit.dof},
+      {"chi2", fit.chi2},
+      {"chi2_per_dof", fit.reduced_chi2()},
+      {"covariance_scale", fit.scale},
+      {"resolved", "kept by the fit and c = term^2 more than one sigma above 0; otherwise only the bound 'upper'"},
+      {"model", "sigma^2 = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2"}};
   return j;
 }
 
@@ -155,9 +168,13 @@ nlohmann::json readings_json(const allan::Analysis& a, bool angular, const std::
   const double f = angular ? kDphPerRadPerSec : 1.0;
   const std::string unit = angular ? "deg/h" : channel_unit;
   const auto& b = a.bias_instability;
-  nlohmann::json floor{{"resolved", b.resolved}, {"tau_s", b.tau_s}, {"longest_tau_s", b.longest_tau_s}, {"unit", unit},
-                       {"how", "min OADEV / 0.664 (IEEE 952 Annex C), a value only where the curve has a floor "
-                               "(models/allan/analysis.hpp); otherwise the bound 'upper'"}};
+  nlohmann::json floor{{"resolved", b.resolved},
+                       {"tau_s", b.tau_s},
+                       {"longest_tau_s", b.longest_tau_s},
+                       {"unit", unit},
+                       {"how",
+                        "min OADEV / 0.664 (IEEE 952 Annex C), a value only where the curve has a floor "
+                        "(models/allan/analysis.hpp); otherwise the bound 'upper'"}};
   if (b.resolved) {
     floor["value"] = b.value * f;
     floor["interval"] = {b.low * f, b.high * f};
@@ -166,20 +183,22 @@ nlohmann::json readings_json(const allan::Analysis& a, bool angular, const std::
     floor["upper"] = b.high * f;
   }
   return {{"B_flat_floor", floor},
-          {"N_at_1s", {{"value", a.arw_rad_sqrt_s * f}, {"unit", angular ? "deg/h/sqrt(Hz)" : channel_unit + "*sqrt(s)"},
-                       {"how", "-1/2 slope line at tau = 1 s"}}}};
+          {"N_at_1s",
+           {{"value", a.arw_rad_sqrt_s * f},
+            {"unit", angular ? "deg/h/sqrt(Hz)" : channel_unit + "*sqrt(s)"},
+            {"how", "-1/2 slope line at tau = 1 s"}}}};
 }
 
-Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& curve,
-                    const allan::NoiseFit* fit, const allan::gmwm::Fit* gmwm, double scale, const std::string& unit) {
+Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& curve, const allan::NoiseFit* fit,
+                    const allan::gmwm::Fit* gmwm, double scale, const std::string& unit) {
   PlotPanel panel;
   panel.title = o.kind + " of " + o.data.path;
   panel.x_label = "tau (s)";
   panel.y_label = o.kind + " (" + unit + ")";
   panel.log_x = panel.log_y = true;
-  panel.series.push_back(allan_series(o.kind + " with " + std::to_string(o.confidence * 100.0).substr(0, 4) +
-                                          " % interval",
-                                      curve, 1.0 / scale, PlotSeries::Style::Markers, PlotSeries::Interval::Bars));
+  panel.series.push_back(
+      allan_series(o.kind + " with " + std::to_string(o.confidence * 100.0).substr(0, 4) + " % interval", curve,
+                   1.0 / scale, PlotSeries::Style::Markers, PlotSeries::Interval::Bars));
   if ((fit != nullptr || gmwm != nullptr) && !curve.empty()) {
     const double first = curve.front().tau;
     const double last = curve.back().tau;
@@ -201,7 +220,8 @@ Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& c
         add_line(std::string(c.key) + " term", PlotSeries::Style::Dashed,
                  [&](double t) { return fit->term_deviation(c.term, t); });
       }
-      add_line("fitted model (IEEE 952 terms)", PlotSeries::Style::Line, [&](double t) { return fit->model_deviation(t); });
+      add_line("fitted model (IEEE 952 terms)", PlotSeries::Style::Line,
+               [&](double t) { return fit->model_deviation(t); });
     }
     if (gmwm) {
       std::vector<allan::gmwm::Process> model;
@@ -234,7 +254,8 @@ void allan_command(const AllanOptions& o) {
   const std::string role = primary_role(o.data);
   const auto& channel = record.channel(role);
   const bool constant_record = (channel.values.array() == channel.values[0]).all();
-  const std::string why = constant_record ? " (the record is constant: every deviation is 0, there is no noise to fit)" : "";
+  const std::string why =
+      constant_record ? " (the record is constant: every deviation is 0, there is no noise to fit)" : "";
   const double fs = sampling::rate_within_segments_hz(record.time(), facts);
   if (!(fs > 0.0)) throw DataError({o.data.path, 0, "t_s"}, "cannot derive a sample interval");
   const double tau0 = 1.0 / fs;
@@ -243,8 +264,9 @@ void allan_command(const AllanOptions& o) {
   std::size_t samples = 0;
   for (const auto& segment : facts.segments) {
     const auto values = channel.values.segment(segment.first, segment.samples);
-    angles.push_back(input == allan::InputType::Rate ? allan::angle_from_rate(Eigen::Ref<const Eigen::VectorXd>(values), tau0)
-                                                     : Eigen::VectorXd(values));
+    angles.push_back(input == allan::InputType::Rate
+                         ? allan::angle_from_rate(Eigen::Ref<const Eigen::VectorXd>(values), tau0)
+                         : Eigen::VectorXd(values));
     samples += static_cast<std::size_t>(segment.samples);
   }
   std::vector<std::size_t> lengths;
@@ -260,8 +282,11 @@ void allan_command(const AllanOptions& o) {
   const auto display = find_unit(unit);
   const double scale = display ? display->scale : 1.0;
   // Deviations are differences: a unit with an offset (K) converts them by its scale only.
-  std::vector<CsvColumn> columns{{"tau_s", {}, "s"}, {"dev", {}, unit, false}, {"dev_lo", {}, unit, false},
-                                 {"dev_hi", {}, unit, false}, {"n", {}, "1"}};
+  std::vector<CsvColumn> columns{{"tau_s", {}, "s"},
+                                 {"dev", {}, unit, false},
+                                 {"dev_lo", {}, unit, false},
+                                 {"dev_hi", {}, unit, false},
+                                 {"n", {}, "1"}};
   for (auto& c : columns) c.values.resize(static_cast<Eigen::Index>(curve.size()));
   for (std::size_t i = 0; i < curve.size(); ++i) {
     const auto k = static_cast<Eigen::Index>(i);
@@ -307,7 +332,8 @@ void allan_command(const AllanOptions& o) {
     if (!analysis) throw DataError({o.data.path, 0, role}, "no Allan curve for the GMWM fit" + why);
     if (bursts && o.gmwm_bootstrap > 0)
       throw ConfigError({"", 0, "--gmwm-bootstrap"},
-                        "the bootstrap simulates a contiguous record and this one is " + std::to_string(facts.segments.size()) +
+                        "the bootstrap simulates a contiguous record and this one is " +
+                            std::to_string(facts.segments.size()) +
                             " bursts; give --gmwm-bootstrap 0 for the asymptotic intervals");
     gmwm = allan::gmwm::fit(analysis->curve, fs, model);
     if (o.gmwm_bootstrap > 0)
@@ -315,7 +341,8 @@ void allan_command(const AllanOptions& o) {
   }
   const std::string sampled = sampling::describe(facts, record.time());
   const nlohmann::json sampling_json{
-      {"layout", bursts ? "regular_bursts" : "even"}, {"bursts", bursts ? facts.segments.size() : 1},
+      {"layout", bursts ? "regular_bursts" : "even"},
+      {"bursts", bursts ? facts.segments.size() : 1},
       {"description", sampled},
       {"how", bursts ? "overlapping Allan variance of every burst pooled (no difference spans a gap), edf of all "
                        "bursts summed, tau up to the grid of the median burst"
@@ -326,31 +353,37 @@ void allan_command(const AllanOptions& o) {
     if (gmwm) summary["gmwm"] = gmwm_json(*gmwm, angular, channel.unit);
     outputs.write(o.json, summary.dump(2) + "\n");
   }
-  if (!o.plot.empty()) outputs.write(o.plot, render_svg(allan_figure(o, curve, fit, gmwm ? &*gmwm : nullptr, scale, unit)));
+  if (!o.plot.empty())
+    outputs.write(o.plot, render_svg(allan_figure(o, curve, fit, gmwm ? &*gmwm : nullptr, scale, unit)));
   outputs.commit();
 
-  std::cout << o.kind << " of " << role << ": " << curve.size() << " taus from " << curve.front().tau
-            << " s to " << curve.back().tau << " s, " << samples << " samples, " << sampled << "\n";
+  std::cout << o.kind << " of " << role << ": " << curve.size() << " taus from " << curve.front().tau << " s to "
+            << curve.back().tau << " s, " << samples << " samples, " << sampled << "\n";
   if (bursts)
     std::cout << "per burst: the " << o.kind << " of every burst pooled (no difference spans a gap), the edf of all "
               << facts.segments.size() << " bursts summed; tau only up to " << curve.back().tau << " s\n";
   if (analysis && angular) {
     const auto& b = analysis->bias_instability;
     if (b.resolved) {
-      std::printf("B = %.4g deg/h (flat floor of the OADEV / 0.664, IEEE 952) at tau = %g s, 68.3 %% interval [%.3g, %.3g]\n",
-                  b.value * kDphPerRadPerSec, b.tau_s, b.low * kDphPerRadPerSec, b.high * kDphPerRadPerSec);
+      std::printf(
+          "B = %.4g deg/h (flat floor of the OADEV / 0.664, IEEE 952) at tau = %g s, 68.3 %% interval [%.3g, %.3g]\n",
+          b.value * kDphPerRadPerSec, b.tau_s, b.low * kDphPerRadPerSec, b.high * kDphPerRadPerSec);
     } else {
-      std::printf("B < %.3g deg/h (not resolved within tau <= %g s: the OADEV has no floor there, its minimum is at "
-                  "tau = %g s; 68.3 %% bound)\n",
-                  b.high * kDphPerRadPerSec, b.longest_tau_s, b.tau_s);
+      std::printf(
+          "B < %.3g deg/h (not resolved within tau <= %g s: the OADEV has no floor there, its minimum is at "
+          "tau = %g s; 68.3 %% bound)\n",
+          b.high * kDphPerRadPerSec, b.longest_tau_s, b.tau_s);
     }
-    std::printf("N = %.4g deg/h/sqrt(Hz) (-1/2 slope line at tau = 1 s)\n", analysis->arw_rad_sqrt_s * kDphPerRadPerSec);
+    std::printf("N = %.4g deg/h/sqrt(Hz) (-1/2 slope line at tau = 1 s)\n",
+                analysis->arw_rad_sqrt_s * kDphPerRadPerSec);
     std::fflush(stdout);
   }
   if (fit && angular) {
     char head[160];
-    std::snprintf(head, sizeof head, "least-squares fit of the five IEEE 952 terms (chi2/dof = %.3g, %zu points, %zu dof; "
-                  "one-sigma intervals):\n", fit->reduced_chi2(), fit->points, fit->dof);
+    std::snprintf(head, sizeof head,
+                  "least-squares fit of the five IEEE 952 terms (chi2/dof = %.3g, %zu points, %zu dof; "
+                  "one-sigma intervals):\n",
+                  fit->reduced_chi2(), fit->points, fit->dof);
     std::cout << head;
     for (const auto& c : allan::kIeee952Units) {
       const auto& t = (*fit)[c.term];
@@ -360,7 +393,8 @@ void allan_command(const AllanOptions& o) {
         std::snprintf(line, sizeof line, "%s = %.4g +- %.2g %s [%.3g, %.3g]\n", key.c_str(), t.value * c.factor,
                       t.sigma * c.factor, term_unit.c_str(), t.low * c.factor, t.high * c.factor);
       } else {
-        std::snprintf(line, sizeof line, "%s < %.3g %s  (not resolved%s)\n", key.c_str(), t.high * c.factor, term_unit.c_str(),
+        std::snprintf(line, sizeof line, "%s < %.3g %s  (not resolved%s)\n", key.c_str(), t.high * c.factor,
+                      term_unit.c_str(),
                       t.fitted ? ": kept by the fit, but within one sigma of 0" : ": set to 0 by the fit");
       }
       std::cout << line;

@@ -27,8 +27,8 @@ namespace {
 struct CalibrateOptions {
   CalibrationDataOptions data;
   std::string model = "physical";
-  bool strict = false;                // quality-gate warnings are errors
-  bool force = false;                 // write a model even when its held-out error exceeds the raw one
+  bool strict = false;  // quality-gate warnings are errors
+  bool force = false;   // write a model even when its held-out error exceeds the raw one
   std::string out;
   std::string extrapolation = "clamp";
   calibration::FitOptions fit;        // the numeric options are bound to its fields directly
@@ -37,14 +37,16 @@ struct CalibrateOptions {
   std::string report;                 // report directory
   std::string paper_pipeline;         // optional offline reference pipeline (e.g. models/pipelines/li2023.yaml)
   std::string command_line;
-  std::string device;                 // free text stored in the model
+  std::string device;  // free text stored in the model
 };
 
 calibration::FitOptions fit_options(const CalibrateOptions& o, const CommandEnv& env, const std::string& channel) {
   calibration::FitOptions f = o.fit;
   f.kind = model_kind_option(o.model);
   f.extrapolation = extrapolation_option(o.extrapolation);
-  f.progress = [&env, channel](const std::string& label, double fraction) { env.progress(channel + ": " + label, fraction); };
+  f.progress = [&env, channel](const std::string& label, double fraction) {
+    env.progress(channel + ": " + label, fraction);
+  };
   return f;
 }
 
@@ -74,9 +76,9 @@ void check_ga_cost(const CalibrateOptions& o, const std::vector<ChannelRecords>&
 std::vector<calibration::Record> matching(const std::vector<ChannelRecords>& channels, const ChannelRecords& ch) {
   for (const auto& c : channels)
     if (c.role == ch.role) return c.records;
-  throw DataError({channels.empty() || channels.front().records.empty() ? "" : channels.front().records.front().name, 1,
-                   ch.role},
-                  "the held-out record has no '" + ch.role + "' channel (column " + ch.column + ")");
+  throw DataError(
+      {channels.empty() || channels.front().records.empty() ? "" : channels.front().records.front().name, 1, ch.role},
+      "the held-out record has no '" + ch.role + "' channel (column " + ch.column + ")");
 }
 
 void report_channel(const CalibrateOptions& o, CommandEnv& env, const ChannelRecords& ch,
@@ -100,22 +102,23 @@ void report_channel(const CalibrateOptions& o, CommandEnv& env, const ChannelRec
   {
     auto px4 = calibration::fit_px4_style(records, base);
     if (px4.fit.heating_only) {
-      in.models.push_back({"PX4-style poly", "order 3, heating samples only, clamped outside the range", std::move(px4)});
+      in.models.push_back(
+          {"PX4-style poly", "order 3, heating samples only, clamped outside the range", std::move(px4)});
     } else {
       in.notes.push_back("PX4-style baseline fitted on all samples: too few heating bins (dT/dt > 0)");
       std::cerr << "note: " << ch.role << ": " << in.notes.back() << "\n";
-      in.models.push_back({"PX4-style poly", "order 3, all samples (no heating leg), clamped outside the range",
-                           std::move(px4)});
+      in.models.push_back(
+          {"PX4-style poly", "order 3, all samples (no heating leg), clamped outside the range", std::move(px4)});
     }
   }
-  for (const auto kind : {calibration::ModelKind::Polynomial, calibration::ModelKind::Physical,
-                          calibration::ModelKind::Rbf}) {
+  for (const auto kind :
+       {calibration::ModelKind::Polynomial, calibration::ModelKind::Physical, calibration::ModelKind::Rbf}) {
     calibration::FitOptions f = base;
     f.kind = kind;
     const std::string name = calibration::to_string(kind);
-    in.models.push_back({name, "ours: heating and cooling, causal, " + o.extrapolation + " outside the range",
-                         kind == chosen.model.kind && !o.fit.heating_only ? chosen.model
-                                                                           : calibration::fit_calibration(records, f)});
+    in.models.push_back(
+        {name, "ours: heating and cooling, causal, " + o.extrapolation + " outside the range",
+         kind == chosen.model.kind && !o.fit.heating_only ? chosen.model : calibration::fit_calibration(records, f)});
   }
   if (!o.paper_pipeline.empty()) {
     const auto& registry = env.registry();
@@ -165,8 +168,9 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
     for (const auto& data : o.data.paths) {
       std::error_code error;
       if (std::filesystem::equivalent(held, data, error))
-        throw ConfigError({held, 0, "--evaluate"}, "is also a --data record: the model is fitted on it, so its "
-                                                   "score would not be held out; give a record not used for the fit");
+        throw ConfigError({held, 0, "--evaluate"},
+                          "is also a --data record: the model is fitted on it, so its "
+                          "score would not be held out; give a record not used for the fit");
     }
   auto channels = load_channel_records(o.data.paths, o.data);
   if (o.model == "rbf") check_ga_cost(o, channels);
@@ -180,7 +184,8 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
     if (gyros == 0) throw ConfigError({"", 0, "--report"}, "--report scores gyro channels, and none is selected");
     for (std::size_t c = 0; c < channels.size(); ++c) {
       if (channels[c].id.sensor != imu::Sensor::Gyro) continue;
-      const std::filesystem::path dir = gyros == 1 ? std::filesystem::path(o.report) : std::filesystem::path(o.report) / channels[c].role;
+      const std::filesystem::path dir =
+          gyros == 1 ? std::filesystem::path(o.report) : std::filesystem::path(o.report) / channels[c].role;
       report_files[c] = plan_report_files(files, dir, "--report");
     }
   }
@@ -203,7 +208,8 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
       held_out[c].push_back(calibration::slice(whole, o.train_until_s, INFINITY));
       held_out[c].back().name += " (t >= " + std::to_string(o.train_until_s) + " s)";
       fitted[c].front().name += " (t < " + std::to_string(o.train_until_s) + " s)";
-      if (held_out[c].back().time_s.size() < 2) throw DataError({whole.name, 0, "t_s"}, "nothing left after --train-until");
+      if (held_out[c].back().time_s.size() < 2)
+        throw DataError({whole.name, 0, "t_s"}, "nothing left after --train-until");
     }
     if (!evaluate.empty()) {
       const auto more = matching(evaluate, ch);
@@ -219,17 +225,19 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
   if (!o.force) check_holdout_error(model);
   files.write(o.out, calibration::to_json_text(model));
   for (std::size_t c = 0; c < channels.size(); ++c)
-    if (report_files[c]) report_channel(o, env, channels[c], fitted[c], held_out[c], model.channels[c], gate, *report_files[c], files);
+    if (report_files[c])
+      report_channel(o, env, channels[c], fitted[c], held_out[c], model.channels[c], gate, *report_files[c], files);
   files.commit();
   for (const auto& ch : model.channels) print_model_summary(std::cout, ch);
-  std::cout << "wrote " << o.out << " (" << model.channels.size() << " channel" << (model.channels.size() == 1 ? "" : "s")
-            << ")\n";
+  std::cout << "wrote " << o.out << " (" << model.channels.size() << " channel"
+            << (model.channels.size() == 1 ? "" : "s") << ")\n";
   if (o.report.empty() && (!o.evaluate.empty() || o.train_until_s > 0))
     std::cout << "note: held-out records are scored only with --report DIR\n";
   for (const auto& r : report_files)
     if (r) std::cout << "wrote " << r->json.string() << " and " << r->html.string() << "\n";
   if (!o.report.empty() && gyros < channels.size())
-    std::cout << "note: --report scores the gyro channels; the accelerometer channels' held-out figures are in the model\n";
+    std::cout
+        << "note: --report scores the gyro channels; the accelerometer channels' held-out figures are in the model\n";
 }
 
 }  // namespace
@@ -241,9 +249,10 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
       "fit a causal temperature-calibration model for every gyro and accelerometer channel of an IMU's oven "
       "records (bias, and scale factor when a varying true rate exists); write driftlab-calibration/2 JSON");
   add_calibration_data_options(cmd, o->data, true);
-  cmd->add_option("--model", o->model, "the richest model considered: poly (polynomial, order by held-out blocks); "
-                                       "physical (+ lag, dT/dt, hysteresis, each kept only when determinable, "
-                                       "significant, plausible and transferring); rbf (+ a GA-tuned RBF network)")
+  cmd->add_option("--model", o->model,
+                  "the richest model considered: poly (polynomial, order by held-out blocks); "
+                  "physical (+ lag, dT/dt, hysteresis, each kept only when determinable, "
+                  "significant, plausible and transferring); rbf (+ a GA-tuned RBF network)")
       ->check(CLI::IsMember({"poly", "physical", "rbf"}))
       ->capture_default_str();
   cmd->add_option("--out", o->out, "model JSON to write (atomically)")->required();
@@ -253,7 +262,9 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
       ->capture_default_str();
   cmd->add_option("--reference-temp", o->fit.reference_temp_c, "reference temperature T0 of the polynomial, degC")
       ->capture_default_str();
-  cmd->add_option("--min-order", o->fit.min_order, "lowest polynomial order scored")->check(CLI::Range(0, 12))->capture_default_str();
+  cmd->add_option("--min-order", o->fit.min_order, "lowest polynomial order scored")
+      ->check(CLI::Range(0, 12))
+      ->capture_default_str();
   cmd->add_option("--max-order", o->fit.max_order, "highest polynomial order scored (= --min-order: fixed)")
       ->check(CLI::Range(0, 12))
       ->capture_default_str();
@@ -263,18 +274,25 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--bin", o->fit.bin_s, "fitting bin length, s (features and target are averaged per bin)")
       ->check(finite_number(0.0, 1e12, true))
       ->capture_default_str();
-  cmd->add_option("--derivative-tau", o->fit.derivative_tau_s, "smoothing time constant of the causal dT/dt estimate, s")
+  cmd->add_option("--derivative-tau", o->fit.derivative_tau_s,
+                  "smoothing time constant of the causal dT/dt estimate, s")
       ->check(finite_number(0.0, 1e12, true))
       ->capture_default_str();
-  cmd->add_flag("--strict", o->strict, "treat quality-gate warnings (span, one direction, no soak, fast ramp, short "
-                                       "leg, dropouts) as errors");
+  cmd->add_flag("--strict", o->strict,
+                "treat quality-gate warnings (span, one direction, no soak, fast ramp, short "
+                "leg, dropouts) as errors");
   cmd->add_flag("--force", o->force, "write the model even when its held-out error exceeds the uncompensated error");
   cmd->add_flag("--heating-only", o->fit.heating_only, "fit on heating samples only (PX4 practice; for comparison)");
   cmd->add_option("--device", o->device, "device name stored in the model");
-  cmd->add_option("--ga-population", o->fit.ga_population, "RBF tuning: GA population")->check(CLI::Range(2, 1000))->capture_default_str();
-  cmd->add_option("--ga-generations", o->fit.ga_generations, "RBF tuning: GA generations")->check(CLI::Range(1, 1000))->capture_default_str();
+  cmd->add_option("--ga-population", o->fit.ga_population, "RBF tuning: GA population")
+      ->check(CLI::Range(2, 1000))
+      ->capture_default_str();
+  cmd->add_option("--ga-generations", o->fit.ga_generations, "RBF tuning: GA generations")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
   cmd->add_option("--seed", o->fit.seed, "seed of the RBF tuning (k-means, holdout, GA)")->capture_default_str();
-  cmd->add_option("--evaluate", o->evaluate, "held-out record(s) to score in the report (other seed / profile; not a --data record)");
+  cmd->add_option("--evaluate", o->evaluate,
+                  "held-out record(s) to score in the report (other seed / profile; not a --data record)");
   cmd->add_option("--train-until", o->train_until_s,
                   "calibrate on t < this (s) of the single --data record and score the rest in the report")
       ->check(finite_number(0.0, 1e12, true));
@@ -289,7 +307,8 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
     for (const auto* opt : cmd->get_options()) {
       for (const auto& v : opt->results()) o->command_line += " " + opt->get_name() + " " + v;
     }
-    if (o->fit.min_order > o->fit.max_order) throw ConfigError({"", 0, "--min-order"}, "--min-order exceeds --max-order");
+    if (o->fit.min_order > o->fit.max_order)
+      throw ConfigError({"", 0, "--min-order"}, "--min-order exceeds --max-order");
     calibrate_command(*o, env);
   });
 }

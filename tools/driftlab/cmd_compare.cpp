@@ -29,7 +29,6 @@
 namespace driftlab::cli {
 namespace {
 
-
 struct CompareOptions {
   std::vector<std::string> pipelines;
   DataOptions data;
@@ -59,7 +58,8 @@ double stage_seconds(const PipelineResult& r, const std::string& output) {
 
 std::string unique_label(const std::string& file, std::set<std::string>& taken) {
   std::string label = std::filesystem::path(file).stem().string();
-  for (int k = 2; taken.count(label); ++k) label = std::filesystem::path(file).stem().string() + "_" + std::to_string(k);
+  for (int k = 2; taken.count(label); ++k)
+    label = std::filesystem::path(file).stem().string() + "_" + std::to_string(k);
   taken.insert(label);
   return label;
 }
@@ -107,14 +107,16 @@ void compare(const CompareOptions& o, CommandEnv& env) {
   inputs.insert(inputs.end(), o.pipelines.begin(), o.pipelines.end());
   OutputSet files(inputs);  // planned before the data is read, committed together at the end
   const auto [report_json, report_html] = plan_report_files(files, o.out, "--out");
-  const auto record = load_evenly_sampled_record(o.data, std::vector<std::string>(roles_needed.begin(), roles_needed.end()),
-                                                 "A pipeline (its decompositions, filters and Allan scores)");
+  const auto record =
+      load_evenly_sampled_record(o.data, std::vector<std::string>(roles_needed.begin(), roles_needed.end()),
+                                 "A pipeline (its decompositions, filters and Allan scores)");
 
   for (std::size_t i = 0; i < results.size(); ++i) {
     auto& r = results[i];
     PipelineRunOptions options;
     options.threads = env.threads;
-    const std::string prefix = "[" + std::to_string(i + 1) + "/" + std::to_string(results.size()) + " " + r.label + "] ";
+    const std::string prefix =
+        "[" + std::to_string(i + 1) + "/" + std::to_string(results.size()) + " " + r.label + "] ";
     options.progress = [&](std::size_t k, std::size_t n, const std::string& name, double f) {
       env.progress(prefix + "[" + std::to_string(k + 1) + "/" + std::to_string(n) + "] " + name, f);
     };
@@ -151,9 +153,9 @@ void compare(const CompareOptions& o, CommandEnv& env) {
   panel.y_label = "OADEV (°/h)";
   panel.log_x = panel.log_y = true;
   for (const auto& s : first.stages)
-    if (!is_pipeline_stage(s))
-      panel.series.push_back(curve_series(s.stage, s.analysis, PlotSeries::Style::Dashed));
-  if (first.intrinsic) panel.series.push_back(curve_series("intrinsic floor", *first.intrinsic, PlotSeries::Style::Dashed));
+    if (!is_pipeline_stage(s)) panel.series.push_back(curve_series(s.stage, s.analysis, PlotSeries::Style::Dashed));
+  if (first.intrinsic)
+    panel.series.push_back(curve_series("intrinsic floor", *first.intrinsic, PlotSeries::Style::Dashed));
   for (const auto& r : results)
     for (const auto& s : r.scores.stages)
       if (is_pipeline_stage(s))
@@ -162,9 +164,12 @@ void compare(const CompareOptions& o, CommandEnv& env) {
   figure.panels.push_back(panel);
   figure.panel_height = 520;
 
-  nlohmann::json report{{"format", "driftlab-compare-report/1"}, {"driftlab_version", kVersion},
-                        {"data", o.data.path},                  {"samples", record.size()},
-                        {"threads", env.threads},               {"pipelines", nlohmann::json::array()}};
+  nlohmann::json report{{"format", "driftlab-compare-report/1"},
+                        {"driftlab_version", kVersion},
+                        {"data", o.data.path},
+                        {"samples", record.size()},
+                        {"threads", env.threads},
+                        {"pipelines", nlohmann::json::array()}};
   for (const auto& st : first.stages)
     if (!is_pipeline_stage(st)) report[st.stage] = stage_json(first, st);
   if (first.intrinsic) report["intrinsic_floor"] = intrinsic_floor_json(*first.intrinsic);
@@ -176,7 +181,8 @@ void compare(const CompareOptions& o, CommandEnv& env) {
     p["seconds"] = r.seconds;
     p["steps"] = nlohmann::json::array();
     for (const auto& s : r.report.value("steps", nlohmann::json::array()))
-      p["steps"].push_back({{"name", s.value("name", "")}, {"plugin", s.value("plugin", "")}, {"seconds", s.value("seconds", 0.0)}});
+      p["steps"].push_back(
+          {{"name", s.value("name", "")}, {"plugin", s.value("plugin", "")}, {"seconds", s.value("seconds", 0.0)}});
     for (std::size_t i = 0; i < r.scores.stages.size(); ++i)  // table2 has one row per stage, in order
       if (is_pipeline_stage(r.scores.stages[i])) p["table2"][i]["seconds"] = stage_seconds(r, r.scores.stages[i].stage);
     report["pipelines"].push_back(p);
@@ -184,21 +190,26 @@ void compare(const CompareOptions& o, CommandEnv& env) {
   files.write(report_json, report.dump(2) + "\n");
 
   HtmlReport html("driftlab compare on " + o.data.path);
-  html.paragraph("Pipelines: " + [&] {
-    std::string s;
-    for (const auto& r : results) s += (s.empty() ? "" : ", ") + r.label + " (" + r.file + ")";
-    return s;
-  }() + ". Record: " + std::to_string(record.size()) + " samples at " + format_number(record.sample_rate_hz()) + " Hz.");
+  html.paragraph("Pipelines: " +
+                 [&] {
+                   std::string s;
+                   for (const auto& r : results) s += (s.empty() ? "" : ", ") + r.label + " (" + r.file + ")";
+                   return s;
+                 }() +
+                 ". Record: " + std::to_string(record.size()) + " samples at " +
+                 format_number(record.sample_rate_hz()) + " Hz.");
   html.table(table);
-  html.figure(figure, "Allan deviation of the record, the PX4-style baseline, the intrinsic floor (when the record "
-                      "has a systematic column) and every pipeline output");
+  html.figure(figure,
+              "Allan deviation of the record, the PX4-style baseline, the intrinsic floor (when the record "
+              "has a systematic column) and every pipeline output");
   files.write(report_html, html.html());
   files.commit();
 
   for (const auto& cells : table.rows) {
     std::string line;
     for (const auto& c : cells) {
-      const std::string text = std::holds_alternative<double>(c) ? format_number(std::get<double>(c)) : std::get<std::string>(c);
+      const std::string text =
+          std::holds_alternative<double>(c) ? format_number(std::get<double>(c)) : std::get<std::string>(c);
       line += (line.empty() ? "" : "  ") + text;
     }
     std::cout << line << "\n";
@@ -210,8 +221,9 @@ void compare(const CompareOptions& o, CommandEnv& env) {
 
 void add_compare_command(CLI::App& app, CommandEnv& env) {
   auto opts = std::make_shared<CompareOptions>();
-  auto* cmd = app.add_subcommand("compare", "run several pipelines on the same record; writes one report (report.json, "
-                                            "report.html: Table 2 columns per pipeline and stage, Allan curves)");
+  auto* cmd = app.add_subcommand("compare",
+                                 "run several pipelines on the same record; writes one report (report.json, "
+                                 "report.html: Table 2 columns per pipeline and stage, Allan curves)");
   cmd->add_option("--pipeline", opts->pipelines, "pipeline description (YAML); repeatable")->required();
   add_data_options(cmd, opts->data, "column mapping role=column:unit (e.g. rate=gyro_z:rad/s); repeatable");
   cmd->add_option("--out", opts->out, "output directory (created if missing)")->required();

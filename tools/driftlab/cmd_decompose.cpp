@@ -48,7 +48,9 @@ double mean_frequency_hz(const Eigen::VectorXd& c, double sample_rate_hz) {
   return static_cast<double>(crossings) / 2.0 / (static_cast<double>(c.size()) / sample_rate_hz);
 }
 
-nlohmann::json entropy_json(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json("Inf"); }
+nlohmann::json entropy_json(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json("Inf");
+}
 
 Figure component_figure(const DecomposeOptions& o, const Eigen::VectorXd& t, const Eigen::VectorXd& x,
                         const Eigen::MatrixXd& imfs, const Eigen::VectorXd& residue, double scale,

@@ -28,7 +28,8 @@ void describe_channels(const devices::DeviceDefinition& d, std::ostream& out) {
     const double scale = unit ? unit->scale : 1.0;
     out << "  " << std::left << std::setw(12) << c.name << " role " << std::setw(16) << c.role << " unit "
         << std::setw(6) << c.unit;
-    if (std::isfinite(c.range_min)) out << "  range [" << in_unit(c.range_min, c.unit) << ", " << in_unit(c.range_max, c.unit) << "]";
+    if (std::isfinite(c.range_min))
+      out << "  range [" << in_unit(c.range_min, c.unit) << ", " << in_unit(c.range_max, c.unit) << "]";
     if (c.resolution > 0) out << "  resolution " << c.resolution / scale;
     if (c.noise > 0) out << "  noise " << c.noise / scale;
     if (c.scale_factor_mv_per_dps > 0) out << "  scale factor " << c.scale_factor_mv_per_dps << " mV/(deg/s)";
@@ -105,11 +106,10 @@ void describe(const devices::DeviceDefinition& d, std::ostream& out) {
   describe_identity(d, out);
   out << std::setprecision(6);
   out << "structure: E " << s.youngs_modulus_pa / 1e9 << " GPa (TCE " << s.youngs_modulus_tc_per_k * 1e6
-      << " ppm/K), nu " << s.poisson_ratio << ", rho " << s.density_kg_m3 << " kg/m^3, " << s.length_m * 1e6
-      << " x " << s.width_m * 1e6 << " x " << s.thickness_m * 1e6 << " um\n"
+      << " ppm/K), nu " << s.poisson_ratio << ", rho " << s.density_kg_m3 << " kg/m^3, " << s.length_m * 1e6 << " x "
+      << s.width_m * 1e6 << " x " << s.thickness_m * 1e6 << " um\n"
       << "  proof mass " << model.proof_mass_kg() * 1e6 << " mg (" << s.proof_mass_area_fraction * 100
-      << " % of the footprint), " << s.beams_per_mode << " beams of width " << s.beam_width_m * 1e6
-      << " um per mode\n";
+      << " % of the footprint), " << s.beams_per_mode << " beams of width " << s.beam_width_m * 1e6 << " um per mode\n";
   out << "modes at T0 = " << p.reference_temp_c << " degC:\n";
   for (const auto* mode : {&p.drive, &p.sense}) {
     out << "  " << (mode == &p.drive ? "drive" : "sense") << "  f " << mode->frequency_hz << " Hz  Q "
@@ -189,7 +189,8 @@ void add_devices_command(CLI::App& app, CommandEnv&) {
   });
 
   auto* describe_cmd = devices->add_subcommand("describe", "validate a device file and show its model");
-  describe_cmd->add_option("file", options->file, "device file, or the name of one in the devices directory")->required();
+  describe_cmd->add_option("file", options->file, "device file, or the name of one in the devices directory")
+      ->required();
   describe_cmd->callback([options] {
     describe(devices::load_device_file(resolve_device_file(options->file, options->devices_dir)), std::cout);
   });

@@ -81,9 +81,9 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
   outputs.write(o.report, discrepancy::report_json(result, info).dump(2) + "\n");
   if (!o.series.empty())
     outputs.write_csv(o.series, {{"t_s", record.time(), "s"},
-                         {"measured_dps", record.channel(role::kRate).values, "deg/s"},
-                         {"model_initial_dps", result.model_initial_rad_s, "deg/s"},
-                         {"model_final_dps", result.model_final_rad_s, "deg/s"}});
+                                 {"measured_dps", record.channel(role::kRate).values, "deg/s"},
+                                 {"model_initial_dps", result.model_initial_rad_s, "deg/s"},
+                                 {"model_final_dps", result.model_final_rad_s, "deg/s"}});
   if (!o.html.empty()) outputs.write(o.html, discrepancy_html(result, info));
   std::vector<std::string> not_written;
   if (!o.update_device.empty()) {
@@ -97,24 +97,24 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
       for (const auto& p : step.parameters) e.values.push_back({p.key, p.unit, p.values});
       named.push_back(std::move(e));
     }
-    outputs.write(o.update_device,
-                          devices::add_effects_to_device_text(
-                              read_config_text(device_path, "device file"), o.update_device, named,
-                              "effects named by `driftlab discrepancy` on " + o.data.path));
+    outputs.write(o.update_device, devices::add_effects_to_device_text(
+                                       read_config_text(device_path, "device file"), o.update_device, named,
+                                       "effects named by `driftlab discrepancy` on " + o.data.path));
   }
   outputs.commit();
 
-  std::cout << "gap " << result.gap_initial_rad_s * kDphPerRadPerSec << " -> " << result.gap_final_rad_s * kDphPerRadPerSec
-            << " deg/h (noise floor " << result.noise_floor_rad_s * kDphPerRadPerSec << " deg/h, " << result.blocks
-            << " blocks of " << result.block_s << " s)\n";
+  std::cout << "gap " << result.gap_initial_rad_s * kDphPerRadPerSec << " -> "
+            << result.gap_final_rad_s * kDphPerRadPerSec << " deg/h (noise floor "
+            << result.noise_floor_rad_s * kDphPerRadPerSec << " deg/h, " << result.blocks << " blocks of "
+            << result.block_s << " s)\n";
   const auto& unexplained = result.unexplained;
   if (result.steps.empty() && !unexplained.found) std::cout << "nothing significant is missing\n";
   for (const auto& step : result.steps) {
     std::cout << "named " << step.effect << " (delta BIC " << step.delta_bic << "):";
     for (const auto& p : step.parameters)
       for (std::size_t i = 0; i < p.values.size(); ++i) std::cout << " " << p.key << "=" << p.values[i];
-    std::cout << "; gap " << step.gap_before_rad_s * kDphPerRadPerSec << " -> " << step.gap_after_rad_s * kDphPerRadPerSec
-              << " deg/h\n";
+    std::cout << "; gap " << step.gap_before_rad_s * kDphPerRadPerSec << " -> "
+              << step.gap_after_rad_s * kDphPerRadPerSec << " deg/h\n";
   }
   if (unexplained.found) {
     const auto& v = unexplained.views.front();

@@ -45,7 +45,9 @@ void entropy_command(const EntropyOptions& o) {
 
   std::cout << "SampEn(m=" << o.m << ", r=" << o.r << ") = ";
   switch (result.status) {
-    case sampen::Status::Finite: std::cout << number(std::max(0.0, result.value), "%.6f") << "\n"; break;  // A <= B: never -0
+    case sampen::Status::Finite:
+      std::cout << number(std::max(0.0, result.value), "%.6f") << "\n";
+      break;  // A <= B: never -0
     case sampen::Status::NoMatches:
       std::cout << "Inf  (no template pairs match over m+1 = " << o.m + 1 << " samples: A = 0)\n";
       break;

@@ -45,7 +45,7 @@ struct FleetOptions {
   std::string extrapolation = "clamp";
   CalibrationDataOptions data;  // --column, --channels, --axis, --fs, --max-gap, log selection
   bool strict = false, force = false;
-  std::string shard;  // "i/N": only the manifest's units i, i + N, ... (1-based i); no report
+  std::string shard;                   // "i/N": only the manifest's units i, i + N, ... (1-based i); no report
   bool discrepancy = false;            // --discrepancy: the discrepancy check of every gyro channel
   bool timings = false;                // --timings: each unit's stage times on its console line
   const Registry* registry = nullptr;  // its candidate effects (every effect/* plugin)
@@ -129,10 +129,14 @@ std::vector<ManifestUnit> read_manifest_csv(const fs::path& path) {
     if (header.empty()) {
       header = cells;
       for (int c = 0; c < static_cast<int>(header.size()); ++c) {
-        if (header[c] == "unit") unit_col = c;
-        else if (header[c] == "data") data_col = c;
-        else if (header[c] == "columns") columns_col = c;
-        else limit_cols.emplace_back(c, parse_spec_column(header[c], {path.string(), number, header[c]}));
+        if (header[c] == "unit")
+          unit_col = c;
+        else if (header[c] == "data")
+          data_col = c;
+        else if (header[c] == "columns")
+          columns_col = c;
+        else
+          limit_cols.emplace_back(c, parse_spec_column(header[c], {path.string(), number, header[c]}));
       }
       if (unit_col < 0 || data_col < 0)
         throw ConfigError({path.string(), number, unit_col < 0 ? "unit" : "data"},
@@ -200,8 +204,10 @@ std::vector<ManifestUnit> read_manifest_yaml(const fs::path& path) {
         add_record(u, data.as<std::string>(), base);
       } else if (data && data.IsSequence()) {
         for (const auto& d : data) {
-          if (d.IsScalar()) add_record(u, d.as<std::string>(), base);
-          else f.problem(d, at + ".data", "expected a record path");
+          if (d.IsScalar())
+            add_record(u, d.as<std::string>(), base);
+          else
+            f.problem(d, at + ".data", "expected a record path");
         }
       }
       if (data && u.data.empty()) f.problem(data, at + ".data", "expected a record path or a list of them");
@@ -217,15 +223,18 @@ std::vector<ManifestUnit> read_manifest_yaml(const fs::path& path) {
         add(columns);
       } else if (columns && columns.IsSequence()) {
         for (const auto& c : columns) {
-          if (c.IsScalar()) add(c);
-          else f.problem(c, at + ".columns", "expected a column mapping ROLE=COLUMN:UNIT");
+          if (c.IsScalar())
+            add(c);
+          else
+            f.problem(c, at + ".columns", "expected a column mapping ROLE=COLUMN:UNIT");
         }
       } else if (columns) {
         f.problem(columns, at + ".columns", "expected a column mapping or a list of them");
       }
       const YAML::Node limits = f.child(node, at, "limits", false);
       if (limits && !limits.IsMap()) f.problem(limits, at + ".limits", "expected a map <channels>.<figure>_max: limit");
-      for (auto it = limits && limits.IsMap() ? limits.begin() : YAML::const_iterator(); limits && limits.IsMap() && it != limits.end(); ++it) {
+      for (auto it = limits && limits.IsMap() ? limits.begin() : YAML::const_iterator();
+           limits && limits.IsMap() && it != limits.end(); ++it) {
         const std::string key = it->first.as<std::string>();
         const std::string where = at + ".limits." + key;
         try {
@@ -241,7 +250,8 @@ std::vector<ManifestUnit> read_manifest_yaml(const fs::path& path) {
       units.push_back(std::move(u));
     }
   }
-  if (problems.empty() && units.empty()) problems.push_back({{path.string(), 1, "units"}, "the manifest lists no unit"});
+  if (problems.empty() && units.empty())
+    problems.push_back({{path.string(), 1, "units"}, "the manifest lists no unit"});
   if (!problems.empty()) throw ConfigError(std::move(problems));
   return units;
 }
@@ -272,9 +282,10 @@ std::string input_hash(const ManifestUnit& u, const FleetOptions& o) {
   std::ostringstream opts;
   opts.precision(17);
   opts << "driftlab-fleet-unit/2 " << kVersion << "\nmodel " << o.model << "\nextrapolation " << o.extrapolation
-       << "\nstrict " << o.strict << "\nforce " << o.force << "\ndiscrepancy " << o.discrepancy << "\nchannels " << o.data.channels << "\naxis "
-       << o.data.axis << "\nfs " << o.data.sample_rate_hz << "\nmax_gap " << o.data.max_gap_factor << "\ntopic "
-       << o.data.log.topic << "\ninstance " << o.data.log.instance << "\nsensor " << o.data.log.sensor << "\n";
+       << "\nstrict " << o.strict << "\nforce " << o.force << "\ndiscrepancy " << o.discrepancy << "\nchannels "
+       << o.data.channels << "\naxis " << o.data.axis << "\nfs " << o.data.sample_rate_hz << "\nmax_gap "
+       << o.data.max_gap_factor << "\ntopic " << o.data.log.topic << "\ninstance " << o.data.log.instance << "\nsensor "
+       << o.data.log.sensor << "\n";
   for (const auto& c : o.data.columns) opts << "column " << c << "\n";
   for (const auto& c : u.columns) opts << "unit column " << c << "\n";
   f.add(opts.str());
@@ -312,7 +323,8 @@ nlohmann::json discrepancy_check(const ChannelRecords& ch, const Registry& regis
   TimeSeries record(r.time_s);
   record.set_channel({role::kRate, "rad/s", ch.column, r.rate_rad_s});
   record.set_channel({role::kTemperature, "degC", ch.temperature_column, r.temp_c});
-  if (r.true_rate_rad_s.size() == r.time_s.size()) record.set_channel({role::kTrueRate, "rad/s", "", r.true_rate_rad_s});
+  if (r.true_rate_rad_s.size() == r.time_s.size())
+    record.set_channel({role::kTrueRate, "rad/s", "", r.true_rate_rad_s});
   const auto candidates = discrepancy::make_candidates(registry, {}, {}, false);
   const auto result = discrepancy::find_missing_effects(record, candidates.candidates, {});
   nlohmann::json named = nlohmann::json::array();
@@ -462,8 +474,8 @@ void report_command(const std::vector<ManifestUnit>& units, const FleetOptions& 
   }
   const auto outliers = find_outliers(summaries);
   const auto families = find_families(summaries);
-  write_fleet_report(summaries, outliers, families, out, "driftlab fleet --manifest " + o.manifest + " --model " + o.model,
-                     report_files);
+  write_fleet_report(summaries, outliers, families, out,
+                     "driftlab fleet --manifest " + o.manifest + " --model " + o.model, report_files);
   report_files.commit();
 
   std::size_t failed = 0, outside = 0;
@@ -494,7 +506,8 @@ std::pair<std::size_t, std::size_t> parse_shard(const std::string& text) {
 
 void fleet_command(const FleetOptions& o) {
   if (o.manifest.empty() || o.out.empty())
-    throw ConfigError({"", 0, o.manifest.empty() ? "--manifest" : "--out"}, "driftlab fleet needs --manifest and --out");
+    throw ConfigError({"", 0, o.manifest.empty() ? "--manifest" : "--out"},
+                      "driftlab fleet needs --manifest and --out");
   const auto units = read_manifest(o.manifest);
   const fs::path out(o.out);
   // The directory stays when a unit fails: units are written (and resumed) one by one.
@@ -521,10 +534,12 @@ void fleet_command(const FleetOptions& o) {
   }
   if (o.shard.empty()) return report_command(units, o);
   std::size_t failed = 0;
-  for (const std::size_t i : mine) failed += read_unit_summary(out / "units" / units[i].id / "status.json").status != "passed";
+  for (const std::size_t i : mine)
+    failed += read_unit_summary(out / "units" / units[i].id / "status.json").status != "passed";
   std::cout << "shard " << o.shard << ": " << mine.size() << " units, " << failed
             << " failed; `driftlab fleet merge` writes the report once every shard has run\n";
-  if (failed > 0) throw Error(std::to_string(failed) + " of the shard's " + std::to_string(mine.size()) + " units failed");
+  if (failed > 0)
+    throw Error(std::to_string(failed) + " of the shard's " + std::to_string(mine.size()) + " units failed");
 }
 
 }  // namespace
@@ -532,8 +547,9 @@ void fleet_command(const FleetOptions& o) {
 void add_fleet_command(CLI::App& app, CommandEnv& env) {
   auto o = std::make_shared<FleetOptions>();
   auto* cmd = app.add_subcommand(
-      "fleet", "calibrate every unit of a manifest (as calibrate does), each into OUT/units/<id>/, resumable, then a "
-               "fleet report with outliers and spec yield; exit 1 when a unit failed or is outside spec");
+      "fleet",
+      "calibrate every unit of a manifest (as calibrate does), each into OUT/units/<id>/, resumable, then a "
+      "fleet report with outliers and spec yield; exit 1 when a unit failed or is outside spec");
   cmd->add_option("--manifest", o->manifest,
                   "CSV: unit,data[,columns][,<channels>.<figure>_max ...]; data = record paths separated by ';' "
                   "(relative to the manifest), columns = the unit's --column mappings separated by ';'; or YAML "

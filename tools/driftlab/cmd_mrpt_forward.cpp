@@ -54,7 +54,8 @@ void add_mrpt_command(CLI::App& app, CommandEnv& env) {
 }
 
 void add_nav_command(CLI::App& app, CommandEnv& env) {
-  add_forwarding_command(app, env, "nav", "vehicle navigation demonstration: an MRPT EKF on raw and compensated yaw rates");
+  add_forwarding_command(app, env, "nav",
+                         "vehicle navigation demonstration: an MRPT EKF on raw and compensated yaw rates");
 }
 
 }  // namespace driftlab::cli

@@ -38,8 +38,8 @@ void markdown_table(const Registry& registry, std::ostream& out) {
   for (const auto* info : registry.list()) {
     out << "| **" << info->name << "** | | | | | | " << info->summary << " |\n";
     for (const auto& p : info->params.params)
-      out << "| | `" << p.key << "` | " << to_string(p.type) << " | `" << default_text(p) << "` | " << p.unit
-          << " | " << p.constraint_text() << " | " << p.doc << " |\n";
+      out << "| | `" << p.key << "` | " << to_string(p.type) << " | `" << default_text(p) << "` | " << p.unit << " | "
+          << p.constraint_text() << " | " << p.doc << " |\n";
   }
 }
 
@@ -62,7 +62,8 @@ void add_plugins_command(CLI::App& app, CommandEnv& env) {
     }
   });
 
-  auto* describe_cmd = plugins->add_subcommand("describe", "describe plugins: parameters with type, default, unit, range, doc");
+  auto* describe_cmd =
+      plugins->add_subcommand("describe", "describe plugins: parameters with type, default, unit, range, doc");
   struct Options {
     std::vector<std::string> names;
     bool markdown = false;

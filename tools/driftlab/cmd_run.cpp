@@ -48,7 +48,8 @@ void run(const RunOptions& o, CommandEnv& env) {
   std::vector<std::string> roles;
   for (const auto& [name, role] : pipeline.inputs)
     if (role != "time") roles.push_back(role);
-  const auto record = load_evenly_sampled_record(o.data, roles, "A pipeline (its decompositions, filters and Allan scores)");
+  const auto record =
+      load_evenly_sampled_record(o.data, roles, "A pipeline (its decompositions, filters and Allan scores)");
 
   nlohmann::json report{{"format", "driftlab-run-report/1"},
                         {"driftlab_version", kVersion},
@@ -102,7 +103,8 @@ void run(const RunOptions& o, CommandEnv& env) {
   files.write(report_json, report.dump(2) + "\n");
   if (scores) {
     env.progress("figures (gnuplot)", 0.0);
-    write_run_html(files.stage_path(report_html), "driftlab run: " + pipeline.file, record, pipeline, outputs, step_signals, report, *scores);
+    write_run_html(files.stage_path(report_html), "driftlab run: " + pipeline.file, record, pipeline, outputs,
+                   step_signals, report, *scores);
     env.progress("figures (gnuplot)", 1.0);
     std::cout << table2_text(*scores);
   } else {
@@ -118,8 +120,9 @@ void run(const RunOptions& o, CommandEnv& env) {
 
 void add_run_command(CLI::App& app, CommandEnv& env) {
   auto opts = std::make_shared<RunOptions>();
-  auto* cmd = app.add_subcommand("run", "run a pipeline on a record; writes outputs.csv, pipeline.effective.yaml, "
-                                        "report.json and report.html (Table 2, figures) into --out");
+  auto* cmd = app.add_subcommand("run",
+                                 "run a pipeline on a record; writes outputs.csv, pipeline.effective.yaml, "
+                                 "report.json and report.html (Table 2, figures) into --out");
   cmd->add_option("--pipeline", opts->pipeline, "pipeline description (YAML, driftlab-pipeline/1)")->required();
   add_data_options(cmd, opts->data, "column mapping role=column:unit (e.g. rate=gyro_z:rad/s); repeatable");
   cmd->add_option("--out", opts->out, "output directory (created if missing)");

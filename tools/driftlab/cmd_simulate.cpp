@@ -40,9 +40,9 @@ struct SimulateOptions {
   double fs = 100.0;
   double duration = 0.0;
   std::uint64_t seed = 1;
-  std::size_t fleet = 0;  // > 0: that many units into the directory --out (simulate_fleet)
-  std::string spread = "0.1";                                 // --spread (devices::parse_fleet_spread)
-  std::string outliers = devices::kDefaultOutliers;           // --outliers (devices::parse_fault_plan)
+  std::size_t fleet = 0;                             // > 0: that many units into the directory --out (simulate_fleet)
+  std::string spread = "0.1";                        // --spread (devices::parse_fleet_spread)
+  std::string outliers = devices::kDefaultOutliers;  // --outliers (devices::parse_fault_plan)
 };
 
 // A column in `unit`, snapped to the output's resolution (devices::written_values); values are
@@ -106,9 +106,10 @@ void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::De
   check_memory_estimate(samples * 800.0 * static_cast<double>(device.imu->instances.size()) * env.threads,
                         {"", 0, "--fs, --duration"}, what);
   const double per_unit = kSimulateSecondsPerSample * static_cast<double>(device.imu->instances.size());
-  std::snprintf(what, sizeof what, "%.3g samples (--fs x --duration) for %zu units at %.2g s each", samples, fleet.size(),
-                per_unit);
-  check_time_estimate(samples * per_unit * static_cast<double>(fleet.size()), {"", 0, "--fs, --duration, --fleet"}, what);
+  std::snprintf(what, sizeof what, "%.3g samples (--fs x --duration) for %zu units at %.2g s each", samples,
+                fleet.size(), per_unit);
+  check_time_estimate(samples * per_unit * static_cast<double>(fleet.size()), {"", 0, "--fs, --duration, --fleet"},
+                      what);
   // Each unit is its own item (its own seed and file): the files do not depend on --threads.
   parallel_for(fleet.size(), env.threads, [&](std::size_t u) {
     const auto& unit = fleet[u];
@@ -141,8 +142,8 @@ void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::De
               {gyro ? "a1_dph_per_k" : "a1_mg_per_k", coefficient(1)},
               {gyro ? "N_dph_rthz" : "N_mg_rthz", axis.noise.arw_rad_sqrt_s * display}};
         }
-    nlohmann::json entry = {{"unit", unit.id}, {"data", unit.id + ".csv"}, {"seed", unit.seed}, {"device_ids", ids},
-                            {"truth", truth},     {"fault", nullptr}};
+    nlohmann::json entry = {{"unit", unit.id},   {"data", unit.id + ".csv"}, {"seed", unit.seed},
+                            {"device_ids", ids}, {"truth", truth},           {"fault", nullptr}};
     if (unit.fault) {
       const auto expected = devices::expected_finding(*unit.fault);
       entry["fault"] = {{"kind", devices::to_string(*unit.fault)},
@@ -158,8 +159,9 @@ void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::De
       {"sample_rate_hz", o.fs},
       {"seed", o.seed},
       {"spread",
-       {{"distribution", "each parameter x (1 + sigma z), z ~ N(0, 1) per unit and parameter; noise terms and time "
-                         "constants at least 0"},
+       {{"distribution",
+         "each parameter x (1 + sigma z), z ~ N(0, 1) per unit and parameter; noise terms and time "
+         "constants at least 0"},
         {"bias_polynomial_sigma", spread.bias},
         {"scale_factor_polynomial_sigma", spread.scale_factor},
         {"noise_terms_sigma", spread.noise},
@@ -184,8 +186,8 @@ void simulate_command(const SimulateOptions& o, CommandEnv& env) {
   const auto device_path = resolve_device_file(o.device, o.devices_dir);
   auto device = devices::load_device_file(device_path);
   if (device.imu && !o.effects.empty())
-    throw ConfigError({"", 0, "--effect"}, "effects apply to single-axis devices; " + device.name +
-                                               " (" + device_path.string() + ") is a whole IMU");
+    throw ConfigError({"", 0, "--effect"}, "effects apply to single-axis devices; " + device.name + " (" +
+                                               device_path.string() + ") is a whole IMU");
   for (const auto& effect : o.effects) devices::apply_effect_option(effect, device.error_model.effects);
   const auto profile = o.profile == "oven" ? devices::default_oven_profile() : devices::load_profile_file(o.profile);
   if (o.fleet > 0) return simulate_fleet(o, env, device, device_path, profile);
@@ -203,7 +205,8 @@ void simulate_command(const SimulateOptions& o, CommandEnv& env) {
   char what[96];
   std::snprintf(what, sizeof what, "%.3g samples (--fs x --duration) at %.0f bytes each", samples, bytes);
   check_memory_estimate(samples * bytes, {"", 0, "--fs, --duration"}, what);
-  const double seconds = kSimulateSecondsPerSample * (device.imu ? static_cast<double>(device.imu->instances.size()) : 1.0);
+  const double seconds =
+      kSimulateSecondsPerSample * (device.imu ? static_cast<double>(device.imu->instances.size()) : 1.0);
   std::snprintf(what, sizeof what, "%.3g samples (--fs x --duration) at %.2g s each", samples, seconds);
   check_time_estimate(samples * seconds, {"", 0, "--fs, --duration"}, what);
   env.progress("simulate " + device.name, 0.0);
@@ -257,9 +260,9 @@ void add_simulate_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--effect", options->effects, effect_help());
   cmd->add_option("--devices-dir", options->devices_dir, "directory of device files");
   auto* fleet = cmd->add_option("--fleet", options->fleet,
-                                 "simulate this many units of a whole-IMU device, spread unit to unit, with planted "
-                                 "faults (--outliers): --out is then a directory that receives <unit>.csv, "
-                                 "manifest.csv and key.json (the answer key)")
+                                "simulate this many units of a whole-IMU device, spread unit to unit, with planted "
+                                "faults (--outliers): --out is then a directory that receives <unit>.csv, "
+                                "manifest.csv and key.json (the answer key)")
                     ->check(whole_number(1, 100000));
   cmd->add_option("--spread", options->spread,
                   "with --fleet, the unit-to-unit relative sigma of the device parameters: S for every group, or "

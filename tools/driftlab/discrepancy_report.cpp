@@ -119,25 +119,25 @@ std::string parameter_text(const discrepancy::ReportedValue& v) {
 std::string discrepancy_html(const discrepancy::Result& r, const discrepancy::ReportInfo& info) {
   HtmlReport html("driftlab discrepancy: " + info.data);
   const std::string initial_model = info.device.empty() ? "the bias polynomial" : "the device's model";
-  html.paragraph("Data: " + info.data + "; device: " + (info.device.empty() ? "none (bias polynomial only)" : info.device) +
-                 ".");
+  html.paragraph("Data: " + info.data +
+                 "; device: " + (info.device.empty() ? "none (bias polynomial only)" : info.device) + ".");
   html.paragraph("Gap (rms of the block-mean residual, " + std::to_string(r.blocks) + " blocks of " +
-                 format_number(r.block_s) + " s): " + format_number(dph(r.gap_initial_rad_s)) +
-                 " deg/h with " + initial_model + ", " + format_number(dph(r.gap_final_rad_s)) +
+                 format_number(r.block_s) + " s): " + format_number(dph(r.gap_initial_rad_s)) + " deg/h with " +
+                 initial_model + ", " + format_number(dph(r.gap_final_rad_s)) +
                  " deg/h after the named effects. Noise alone would leave about " +
                  format_number(dph(r.noise_floor_rad_s)) + " deg/h.");
   html.section("Named effects");
   if (r.unexplained.found) {
     const auto& v = r.unexplained.views.front();
-    html.paragraph("Unexplained: structure remains that no candidate explains, in the " + v.view + " view (ΔBIC = " +
-                   one_decimal(v.delta_bic) + ", " + format_number(dph(v.size_rad_s)) + " deg/h rms): " + v.where +
-                   ". See the residual plots below.");
+    html.paragraph("Unexplained: structure remains that no candidate explains, in the " + v.view +
+                   " view (ΔBIC = " + one_decimal(v.delta_bic) + ", " + format_number(dph(v.size_rad_s)) +
+                   " deg/h rms): " + v.where + ". See the residual plots below.");
   }
   if (r.steps.empty() && !r.unexplained.found) {
     std::string text = "Nothing significant is missing";
     if (!r.final_scores.empty() && r.final_scores.front().applicable)
-      text += " (best candidate " + r.final_scores.front().effect + ", ΔBIC = " +
-              one_decimal(r.final_scores.front().delta_bic) + ", needs > " +
+      text += " (best candidate " + r.final_scores.front().effect +
+              ", ΔBIC = " + one_decimal(r.final_scores.front().delta_bic) + ", needs > " +
               format_number(info.options->significance) + ")";
     html.paragraph(text + ".");
   } else if (!r.steps.empty()) {
@@ -159,8 +159,8 @@ std::string discrepancy_html(const discrepancy::Result& r, const discrepancy::Re
   HtmlTable scores{"", {"effect", "Δχ²", "ΔBIC", "parameters added"}};
   for (const auto& s : r.final_scores) {
     if (s.applicable)
-      scores.rows.push_back({s.effect, one_decimal(s.delta_chi2), one_decimal(s.delta_bic),
-                             static_cast<double>(s.added_parameters)});
+      scores.rows.push_back(
+          {s.effect, one_decimal(s.delta_chi2), one_decimal(s.delta_bic), static_cast<double>(s.added_parameters)});
     else
       scores.rows.push_back({s.effect, "not applicable: " + s.note, std::string(), std::string()});
   }

@@ -16,8 +16,9 @@ using RunOverMpi = int (*)(std::size_t, const std::function<std::string(std::siz
 
 RunOverMpi load_engine() {
   if (!DRIFTLAB_HAVE_MPI)
-    throw ConfigError({"", 0, "mpirun"}, "this driftlab was built without MPI (CMake DRIFTLAB_WITH_MPI; Debian "
-                                         "libboost-mpi-dev, openmpi-bin): run the fleet in one process, or --shard");
+    throw ConfigError({"", 0, "mpirun"},
+                      "this driftlab was built without MPI (CMake DRIFTLAB_WITH_MPI; Debian "
+                      "libboost-mpi-dev, openmpi-bin): run the fleet in one process, or --shard");
   std::error_code ec;
   const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
   const auto module = (ec ? std::filesystem::path("driftlab") : self).parent_path() / "libdriftlab_fleet_mpi.so";
@@ -25,9 +26,9 @@ RunOverMpi load_engine() {
   const char* error = handle ? nullptr : dlerror();
   const auto run = handle ? reinterpret_cast<RunOverMpi>(dlsym(handle, "driftlab_run_over_mpi")) : nullptr;
   if (!run)
-    throw ConfigError({module.string(), 0, "mpirun"},
-                      std::string("cannot load the fleet's MPI engine (") + (error ? error : "no driftlab_run_over_mpi") +
-                          "; Debian: libboost-mpi1.74.0, openmpi-bin)");
+    throw ConfigError({module.string(), 0, "mpirun"}, std::string("cannot load the fleet's MPI engine (") +
+                                                          (error ? error : "no driftlab_run_over_mpi") +
+                                                          "; Debian: libboost-mpi1.74.0, openmpi-bin)");
   return run;
 }
 

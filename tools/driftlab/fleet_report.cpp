@@ -17,7 +17,7 @@
 namespace driftlab::cli {
 namespace {
 
-using signal::kMadToSigma;                    // Phi^-1(3/4): MAD = 0.6745 sigma for normal data
+using signal::kMadToSigma;  // Phi^-1(3/4): MAD = 0.6745 sigma for normal data
 using signal::median;
 constexpr double kMeanAdToSigma = 1.253314;  // sqrt(pi/2): mean|x - median| = sigma / 1.2533
 
@@ -109,7 +109,8 @@ SpecLimit parse_spec_column(const std::string& header, const Location& where) {
       known += " " + figure_key(f, sensor);
     }
   throw ConfigError(where, "spec limit '" + header + "': '" + limit.figure_key +
-                               "' is no figure of the channels selected (one sensor per column; figures:" + known + ")");
+                               "' is no figure of the channels selected (one sensor per column; figures:" + known +
+                               ")");
 }
 
 UnitSummary read_unit_summary(const std::filesystem::path& status_json) {
@@ -129,7 +130,8 @@ UnitSummary read_unit_summary(const std::filesystem::path& status_json) {
                                  q.at("sample_sigma").get<double>(), q.at("quantised").get<bool>()};
     for (const auto& [channel, curve] : j.at("bias_curves").items())
       u.bias_curves[channel] = curve.get<std::vector<double>>();
-    for (const auto& [channel, check] : j.at("discrepancy").items()) u.discrepancy.push_back(check.at("text").get<std::string>());
+    for (const auto& [channel, check] : j.at("discrepancy").items())
+      u.discrepancy.push_back(check.at("text").get<std::string>());
     return u;
   } catch (const nlohmann::json::exception& e) {
     throw ConfigError({status_json.string(), 0, ""}, std::string("not a fleet unit status file: ") + e.what());
@@ -221,8 +223,8 @@ std::vector<Outlier> find_outliers(const std::vector<UnitSummary>& units) {
     std::string drivers;
     for (std::size_t i = 0; i < std::min(kDistanceDrivers, d.terms.size()); ++i)
       drivers += (i ? ", " : "") + d.terms[i].second;
-    Outlier o{d.unit->unit, "model", "distance", consistent, boost::math::median(chi2), consistent / threshold, "",
-              "distance"};
+    Outlier o{d.unit->unit,           "model", "distance", consistent, boost::math::median(chi2),
+              consistent / threshold, "",      "distance"};
     o.text = "whole model: robust distance^2 " + number(consistent) + " > " + number(threshold) + " (chi-square, " +
              std::to_string(d.terms.size()) + " figures, " + number(kDistanceQuantile) + "; fleet median " +
              number(o.median) + "); driven by " + drivers;
@@ -238,12 +240,12 @@ std::vector<Outlier> find_outliers(const std::vector<UnitSummary>& units) {
     for (const auto& [channel, q] : u.quantisation) {
       if (!q.quantised) continue;
       const double fleet = median(lsbs[channel]);
-      Outlier o{u.unit, channel, quantisation_key(channel), q.lsb, fleet,
-                q.sample_sigma > 0 ? q.lsb / q.sample_sigma : std::numeric_limits<double>::infinity(), "",
-                "quantisation"};
+      Outlier o{
+          u.unit, channel,       quantisation_key(channel),
+          q.lsb,  fleet,         q.sample_sigma > 0 ? q.lsb / q.sample_sigma : std::numeric_limits<double>::infinity(),
+          "",     "quantisation"};
       o.text = channel + " quantised: " + number(100.0 * q.share) + " % of samples on multiples of one LSB " +
-               number(q.lsb) + " (fleet median LSB " + number(fleet) + "), per-sample noise " +
-               number(q.sample_sigma);
+               number(q.lsb) + " (fleet median LSB " + number(fleet) + "), per-sample noise " + number(q.sample_sigma);
       out.push_back(std::move(o));
     }
   }
@@ -368,7 +370,8 @@ Families find_families(const std::vector<UnitSummary>& units) {
   const auto n = members.size();
   for (const auto* u : members) f.family[u->unit] = 0;
   if (n < 4 || f.channels.empty()) return f;
-  Eigen::MatrixXd x(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(f.channels.size() * std::size(kFamilyGridC)));
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(n),
+                    static_cast<Eigen::Index>(f.channels.size() * std::size(kFamilyGridC)));
   for (std::size_t i = 0; i < n; ++i) {
     Eigen::Index c = 0;
     for (const auto& ch : f.channels)
@@ -485,8 +488,9 @@ std::string family_sizes(const Families& families) {
   for (const auto& [unit, family] : families.family) ++size[family];
   std::string text;
   for (std::size_t f = 0; f < families.k; ++f)
-    text += (f ? ", " : "") + std::string("family ") + std::to_string(f + 1) + " (" + kFamilyColours[f % std::size(kFamilyColours)] +
-            "): " + std::to_string(size[f]) + " units, medoid " + families.medoids[f];
+    text += (f ? ", " : "") + std::string("family ") + std::to_string(f + 1) + " (" +
+            kFamilyColours[f % std::size(kFamilyColours)] + "): " + std::to_string(size[f]) + " units, medoid " +
+            families.medoids[f];
   return text;
 }
 
@@ -522,12 +526,19 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
   nlohmann::json dist = nlohmann::json::object();
   for (const auto& [where, values] : samples(units)) {
     const Distribution d = distribution(values);
-    dist[where.first][where.second] = {{"n", d.n}, {"median", d.median}, {"mad", d.mad}, {"min", d.min}, {"max", d.max}};
+    dist[where.first][where.second] = {
+        {"n", d.n}, {"median", d.median}, {"mad", d.mad}, {"min", d.min}, {"max", d.max}};
   }
   nlohmann::json outlier_list = nlohmann::json::array();
   for (const auto& o : outliers)
-    outlier_list.push_back({{"unit", o.unit}, {"rule", o.rule}, {"channel", o.channel}, {"figure", o.figure_key},
-                            {"value", o.value}, {"fleet_median", o.median}, {"robust_z", o.z}, {"text", o.text}});
+    outlier_list.push_back({{"unit", o.unit},
+                            {"rule", o.rule},
+                            {"channel", o.channel},
+                            {"figure", o.figure_key},
+                            {"value", o.value},
+                            {"fleet_median", o.median},
+                            {"robust_z", o.z},
+                            {"text", o.text}});
   const double yield = units.empty() ? 0.0 : static_cast<double>(within) / static_cast<double>(units.size());
   const nlohmann::json report = {
       {"format", "driftlab-fleet-report/1"},
@@ -537,20 +548,25 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
       {"failed", units.size() - passed},
       {"within_spec", within},
       {"yield", yield},
-      {"figure_units", "gyro figures in deg/h (a1 deg/h/K, N deg/h/sqrt(Hz)), accelerometer figures in mg (a1 "
-                       "mg/K, N mg/sqrt(Hz)), as each key's suffix says"},
+      {"figure_units",
+       "gyro figures in deg/h (a1 deg/h/K, N deg/h/sqrt(Hz)), accelerometer figures in mg (a1 "
+       "mg/K, N mg/sqrt(Hz)), as each key's suffix says"},
       {"outlier_rule",
-       {{"statistic", "modified z-score 0.6745 (x - median) / MAD per channel and figure over the passed units "
-                      "(Iglewicz & Hoaglin 1993); MAD = 0: (x - median) / (1.2533 mean |x - median|); the scale is at "
-                      "least the channel's fleet-median held-out residual for a0 and hysteresis, half of it for "
-                      "holdout"},
+       {{"statistic",
+         "modified z-score 0.6745 (x - median) / MAD per channel and figure over the passed units "
+         "(Iglewicz & Hoaglin 1993); MAD = 0: (x - median) / (1.2533 mean |x - median|); the scale is at "
+         "least the channel's fleet-median held-out residual for a0 and hysteresis, half of it for "
+         "holdout"},
         {"threshold", kOutlierZ},
-        {"distance", "robust distance^2 = sum of the unit's squared robust z over its figures; flagged above the "
-                     "chi-square quantile " + number(kDistanceQuantile) + " with as many degrees of freedom as "
-                     "figures; robust_z of a distance finding is D^2 / threshold"},
+        {"distance",
+         "robust distance^2 = sum of the unit's squared robust z over its figures; flagged above the "
+         "chi-square quantile " +
+             number(kDistanceQuantile) +
+             " with as many degrees of freedom as "
+             "figures; robust_z of a distance finding is D^2 / threshold"},
         {"quantisation", "raw output on multiples of its smallest step (share >= " + number(kQuantisedShare) +
-                         ") and that step >= the per-sample noise; robust_z of a quantisation finding is LSB / "
-                         "noise"}}},
+                             ") and that step >= the per-sample noise; robust_z of a quantisation finding is LSB / "
+                             "noise"}}},
       {"families",
        {{"k", families.k},
         {"silhouette", families.silhouette},
@@ -558,9 +574,9 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
         {"medoids", families.medoids},
         {"channels", families.channels},
         {"rule", "k-medoids (PAM) of the gyro bias curves at " + std::to_string(std::size(kFamilyGridC)) +
-                     " temperatures, k = 2.." + std::to_string(kMaxFamilies) + " by mean silhouette >= " +
-                     number(kFamilySilhouette) + ", smallest family >= " + number(100 * kMinFamilyShare) +
-                     " % of the units; else one family"}}},
+                     " temperatures, k = 2.." + std::to_string(kMaxFamilies) +
+                     " by mean silhouette >= " + number(kFamilySilhouette) +
+                     ", smallest family >= " + number(100 * kMinFamilyShare) + " % of the units; else one family"}}},
       {"distributions", dist},
       {"outliers", outlier_list},
       {"failures", failures},
@@ -599,16 +615,22 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
                                     " units calibrated; " + std::to_string(within) + " within spec (yield " +
                                     number(100.0 * yield) + " %); " + std::to_string(outliers.size()) +
                                     " outlier figures. Command: " + command);
-  HtmlTable failed{"Units that failed", {"unit", "exit class", "reason"}, {}, "exit class: 1 failure, 2 configuration, 3 bad input data"};
+  HtmlTable failed{"Units that failed",
+                   {"unit", "exit class", "reason"},
+                   {},
+                   "exit class: 1 failure, 2 configuration, 3 bad input data"};
   const auto unit_link = [](const std::string& unit) -> HtmlCell {
     return HtmlLink{unit, "units/" + unit + "/status.json"};
   };
   for (const auto& u : units)
     if (u.status != "passed") failed.rows.push_back({unit_link(u.unit), static_cast<double>(u.exit_class), u.reason});
-  HtmlTable flagged{"Outliers", {"unit", "model", "rule", "channel", "figure", "value", "fleet median", "z"}, {},
+  HtmlTable flagged{"Outliers",
+                    {"unit", "model", "rule", "channel", "figure", "value", "fleet median", "z"},
+                    {},
                     "robust_z: modified z-score over the passed units, |z| > " + number(kOutlierZ) +
                         "; distance: the whole model's robust distance^2 above the chi-square " +
-                        number(kDistanceQuantile) + " quantile (z = D^2 / threshold); quantisation: output on "
+                        number(kDistanceQuantile) +
+                        " quantile (z = D^2 / threshold); quantisation: output on "
                         "multiples of one LSB above the noise (z = LSB / noise); gyro figures in deg/h, "
                         "accelerometer figures in mg (see the key's suffix); each unit links to its status, "
                         "its model is beside it"};
@@ -623,23 +645,32 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
     all.rows.push_back({unit_link(units[i].unit), units[i].status,
                         std::string(units[i].status == "passed" && spec[i].empty() ? "yes" : "no"), f, v});
   }
-  HtmlTable figures{"Figures of a channel", {"figure", "gyro key", "accelerometer key"}, {},
+  HtmlTable figures{"Figures of a channel",
+                    {"figure", "gyro key", "accelerometer key"},
+                    {},
                     "gyro figures in deg/h, accelerometer figures in mg, as each key's suffix says"};
   for (const auto& f : kFigures)
     figures.rows.push_back({std::string(f.doc), figure_key(f, imu::Sensor::Gyro), figure_key(f, imu::Sensor::Accel)});
   html.section("Failures").table(failed).section("Outliers").table(flagged);
   if (const Figure f = holdout_figure(units, outliers); !f.panels.empty())
-    html.figure_or_note(f, "Held-out residual of every calibrated unit per channel; red: a unit with a finding on that channel");
-  html.section("Families").paragraph(
-      families.k == 1 ? "One family: no split of the gyro bias-vs-temperature curves is supported (best mean silhouette " +
-                            number(families.silhouette_by_k.empty() ? 0.0 : *std::max_element(families.silhouette_by_k.begin(), families.silhouette_by_k.end())) +
-                            " below " + number(kFamilySilhouette) + ", or a family smaller than " +
-                            number(100 * kMinFamilyShare) + " % of the units)."
-                      : std::to_string(families.k) + " families of gyro bias-vs-temperature curves (mean silhouette " +
-                            number(families.silhouette) + "); " + family_sizes(families) + ".");
+    html.figure_or_note(
+        f, "Held-out residual of every calibrated unit per channel; red: a unit with a finding on that channel");
+  html.section("Families")
+      .paragraph(
+          families.k == 1
+              ? "One family: no split of the gyro bias-vs-temperature curves is supported (best mean silhouette " +
+                    number(families.silhouette_by_k.empty()
+                               ? 0.0
+                               : *std::max_element(families.silhouette_by_k.begin(), families.silhouette_by_k.end())) +
+                    " below " + number(kFamilySilhouette) + ", or a family smaller than " +
+                    number(100 * kMinFamilyShare) + " % of the units)."
+              : std::to_string(families.k) + " families of gyro bias-vs-temperature curves (mean silhouette " +
+                    number(families.silhouette) + "); " + family_sizes(families) + ".");
   if (const Figure f = family_figure(units, families); !f.panels.empty())
     html.figure_or_note(f, "Fitted gyro bias against temperature, one line per unit, coloured by family");
-  HtmlTable checks{"Discrepancy check (--discrepancy)", {"unit", "channel: named effects"}, {},
+  HtmlTable checks{"Discrepancy check (--discrepancy)",
+                   {"unit", "channel: named effects"},
+                   {},
                    "driftlab discrepancy without a device file on each gyro channel's first record; an effect is named "
                    "when its delta BIC exceeds 10"};
   for (const auto& u : units)

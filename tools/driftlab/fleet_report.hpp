@@ -72,7 +72,7 @@
 
 namespace driftlab::cli {
 
-inline constexpr double kOutlierZ = 3.5;  // Iglewicz & Hoaglin's cut for the modified z-score
+inline constexpr double kOutlierZ = 3.5;            // Iglewicz & Hoaglin's cut for the modified z-score
 inline constexpr double kDistanceQuantile = 0.999;  // chi-square quantile of the whole-model distance
 inline constexpr std::size_t kDistanceDrivers = 3;  // figures named in a distance flag
 inline constexpr double kQuantisationTolerance = 1e-6;
@@ -127,9 +127,9 @@ struct UnitSummary {
   int exit_class = 0;  // of a failed unit: 1 failure, 2 configuration, 3 bad data
   std::string reason;
   std::map<std::string, std::map<std::string, double>> figures;  // channel role -> key -> value
-  std::vector<SpecLimit> limits;  // this unit's (non-empty cells)
-  std::map<std::string, Quantisation> quantisation;       // channel role -> check, display units
-  std::map<std::string, std::vector<double>> bias_curves;  // channel role -> bias_curve
+  std::vector<SpecLimit> limits;                                 // this unit's (non-empty cells)
+  std::map<std::string, Quantisation> quantisation;              // channel role -> check, display units
+  std::map<std::string, std::vector<double>> bias_curves;        // channel role -> bias_curve
   std::vector<std::string> discrepancy;  // per gyro channel checked (--discrepancy): "gyro_x: ... named, delta BIC ..."
 };
 // A unit's summary from its status.json (the format cmd_fleet writes); ConfigError naming the file
@@ -138,9 +138,9 @@ UnitSummary read_unit_summary(const std::filesystem::path& status_json);
 
 // A finding about one unit. rule "robust_z": channel, figure_key, value, fleet median, z;
 // "distance": channel "model", figure_key "distance", value the consistent D^2, median chi2_p(0.5)
-// (the fleet's median after the correction), z = D^2 / threshold; "quantisation": figure_key "quantisation_<suffix>", value the LSB, median the fleet's
-// LSB of that channel, z = LSB / per-sample noise (infinite, null in report.json, when the output
-// does not move between samples at all).
+// (the fleet's median after the correction), z = D^2 / threshold; "quantisation": figure_key "quantisation_<suffix>",
+// value the LSB, median the fleet's LSB of that channel, z = LSB / per-sample noise (infinite, null in report.json,
+// when the output does not move between samples at all).
 struct Outlier {
   std::string unit, channel, figure_key;
   double value = 0.0, median = 0.0, z = 0.0;
@@ -153,11 +153,11 @@ std::vector<Outlier> find_outliers(const std::vector<UnitSummary>& units);
 
 struct Families {
   std::size_t k = 1;
-  double silhouette = 0.0;                        // of the k kept (0 for one family)
-  std::vector<double> silhouette_by_k;            // k = 2.. (empty: fewer than 4 units)
-  std::map<std::string, std::size_t> family;      // unit -> 0-based family (medoid order)
-  std::vector<std::string> medoids;               // the unit of each family
-  std::vector<std::string> channels;              // the curves' channels, in order
+  double silhouette = 0.0;                    // of the k kept (0 for one family)
+  std::vector<double> silhouette_by_k;        // k = 2.. (empty: fewer than 4 units)
+  std::map<std::string, std::size_t> family;  // unit -> 0-based family (medoid order)
+  std::vector<std::string> medoids;           // the unit of each family
+  std::vector<std::string> channels;          // the curves' channels, in order
 };
 Families find_families(const std::vector<UnitSummary>& units);
 

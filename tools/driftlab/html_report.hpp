@@ -33,11 +33,11 @@ struct HtmlLink {
 using HtmlCell = std::variant<std::string, double, HtmlLink>;  // text (left), number (right-aligned) or link
 
 struct HtmlTable {
-  std::string caption;               // "Table N. caption"; empty = unnumbered
-  std::vector<std::string> header;   // column names with units, e.g. "B (°/h)"
+  std::string caption;              // "Table N. caption"; empty = unnumbered
+  std::vector<std::string> header;  // column names with units, e.g. "B (°/h)"
   std::vector<std::vector<HtmlCell>> rows;
-  std::string note;                  // below the table: sources, estimator, confidence level
-  int digits = 4;                    // significant digits of non-integer numbers
+  std::string note;  // below the table: sources, estimator, confidence level
+  int digits = 4;    // significant digits of non-integer numbers
 };
 
 class HtmlReport {
@@ -46,7 +46,7 @@ class HtmlReport {
 
   HtmlReport& section(const std::string& heading, int level = 2);  // <h2> (level 2..4)
   HtmlReport& paragraph(const std::string& text);
-  HtmlReport& preformatted(const std::string& text);                // commands, file paths, logs
+  HtmlReport& preformatted(const std::string& text);  // commands, file paths, logs
   HtmlReport& table(const HtmlTable& table);
   HtmlReport& figure(const Figure& figure, const std::string& caption);
   HtmlReport& figure_svg(const std::string& svg, const std::string& caption);

@@ -37,23 +37,23 @@ class PlotError : public Error {
 };
 
 struct PlotSeries {
-  std::string label;                  // legend entry; empty = not in the legend
+  std::string label;  // legend entry; empty = not in the legend
   std::vector<double> x, y;
   std::vector<double> y_low, y_high;  // optional interval per point (same length as y)
   enum class Style { Line, Dashed, Markers } style = Style::Line;
   enum class Interval { Bars, Band } interval = Interval::Bars;  // how y_low/y_high are drawn
-  bool right_axis = false;            // drawn against the panel's second y axis
-  std::vector<double> z;              // optional colour value per point (same length as y; Markers)
-  std::string color;                  // "#rrggbb"; empty = the palette colour of its index
+  bool right_axis = false;                                       // drawn against the panel's second y axis
+  std::vector<double> z;  // optional colour value per point (same length as y; Markers)
+  std::string color;      // "#rrggbb"; empty = the palette colour of its index
 };
 
 struct PlotPanel {
   std::string title, x_label, y_label;  // labels carry units, e.g. "tau (s)"
   bool log_x = false, log_y = false;
   std::vector<PlotSeries> series;
-  std::string y2_label;                 // right axis, used by series with right_axis
+  std::string y2_label;  // right axis, used by series with right_axis
   bool log_y2 = false;
-  std::string z_label;                  // colour bar of the series with z values
+  std::string z_label;  // colour bar of the series with z values
   // Auto: the corner with the least data, else above the data (the y range grows to make room).
   // No legend when no series is labelled, or the only label repeats the panel's title.
   enum class Legend { TopRight, TopLeft, BottomRight, BottomLeft, Auto, None } legend = Legend::Auto;
@@ -65,9 +65,9 @@ struct Figure {
                                   // much wider figures get small text there
   int panel_height = 260;         // px, each row
   int columns = 1;
-  std::string title;              // above all panels; may be empty
-  bool shared_x = false;          // one x range for all panels, labelled only under the bottom row
-                                  // (rows with a panel below every one of theirs are 40 px shorter)
+  std::string title;      // above all panels; may be empty
+  bool shared_x = false;  // one x range for all panels, labelled only under the bottom row
+                          // (rows with a panel below every one of theirs are 40 px shorter)
 };
 
 // An Allan curve as a series: (tau, dev) with its interval [dev_lo, dev_hi], each deviation times

@@ -33,7 +33,8 @@ Figure raw_figure(const TimeSeries& record) {
   p.x_label = "time (h)";
   p.y_label = "rate (°/h)";
   p.y2_label = "temperature (°C)";
-  p.series.push_back(line("rate", record.time(), record.channel(role::kRate).values, kHoursPerSecond, kDphPerRadPerSec));
+  p.series.push_back(
+      line("rate", record.time(), record.channel(role::kRate).values, kHoursPerSecond, kDphPerRadPerSec));
   if (record.has(role::kSystematic))
     p.series.push_back(line("true systematic rate", record.time(), record.channel(role::kSystematic).values,
                             kHoursPerSecond, kDphPerRadPerSec));
@@ -59,7 +60,8 @@ Figure imf_figure(const std::string& step, const Signal& imfs, const Signal* res
     PlotPanel p;
     p.title = k < imfs.columns.cols() ? imfs.labels[static_cast<std::size_t>(k)] : "residue";
     p.legend = PlotPanel::Legend::None;
-    const Eigen::VectorXd values = k < imfs.columns.cols() ? Eigen::VectorXd(imfs.columns.col(k)) : residue->columns.col(0);
+    const Eigen::VectorXd values =
+        k < imfs.columns.cols() ? Eigen::VectorXd(imfs.columns.col(k)) : residue->columns.col(0);
     p.series.push_back(line("", time, values, kHoursPerSecond, ys));
     f.panels.push_back(p);
   }
@@ -158,8 +160,16 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
   html.section("Table 2: Allan figures per stage");
   HtmlTable t;
   t.caption = "The stages of the pipeline beside the paper's Table 2, the intrinsic floor and a PX4-style baseline";
-  t.header = {"stage", "paper B (°/h)", "paper N (°/h/√Hz)", "B (°/h)", "B interval (°/h)", "minimum at tau (s)",
-              "N (°/h/√Hz)", "noise bandwidth (Hz)", "residual drift (°/h)", "max error / floor"};
+  t.header = {"stage",
+              "paper B (°/h)",
+              "paper N (°/h/√Hz)",
+              "B (°/h)",
+              "B interval (°/h)",
+              "minimum at tau (s)",
+              "N (°/h/√Hz)",
+              "noise bandwidth (Hz)",
+              "residual drift (°/h)",
+              "max error / floor"};
   // B: a value and its interval where the deviation has a floor, otherwise the bound.
   const auto b_cells = [](const allan::FloorReading& b) -> std::pair<HtmlCell, HtmlCell> {
     if (b.resolved)
@@ -181,9 +191,9 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
     row.push_back(st.residual_drift_rad_s ? HtmlCell(*st.residual_drift_rad_s * kDphPerRadPerSec)
                                           : HtmlCell(std::string("–")));
     const auto it = scores.against_floor.find(st.stage);
-    row.push_back(it != scores.against_floor.end()
-                      ? HtmlCell(fmt(it->second.max_ratio, "%.2f") + (it->second.within ? " (within 1.5x)" : " (above)"))
-                      : HtmlCell(std::string("–")));
+    row.push_back(it != scores.against_floor.end() ? HtmlCell(fmt(it->second.max_ratio, "%.2f") +
+                                                              (it->second.within ? " (within 1.5x)" : " (above)"))
+                                                   : HtmlCell(std::string("–")));
     t.rows.push_back(row);
   }
   if (scores.intrinsic) {
@@ -204,8 +214,9 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
       "noise (measured - true systematic rate); 'within 1.5x' when every tau is, allowing for both intervals. "
       "px4_polynomial: third-order polynomial in temperature fitted on the first heating leg, clipped to it.";
   html.table(t);
-  html.figure(allan_figure(scores), "Allan deviation of the original record, every stage, the PX4-style baseline and "
-                                    "the intrinsic floor, with 68.3 % intervals (bands)");
+  html.figure(allan_figure(scores),
+              "Allan deviation of the original record, every stage, the PX4-style baseline and "
+              "the intrinsic floor, with 68.3 % intervals (bands)");
 
   html.section("The record");
   html.figure(raw_figure(record), "Rate and case temperature over time (paper Fig. 10)");
@@ -233,8 +244,8 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
       g.caption = step.name + ": the group of each IMF and why";
       g.header = {"IMF", "sample entropy", "group", "reason"};
       for (const auto& e : imfs)
-        g.rows.push_back({e["imf"].get<double>(), e["score"].is_number() ? HtmlCell(e["score"].get<double>())
-                                                                          : HtmlCell(std::string("Inf")),
+        g.rows.push_back({e["imf"].get<double>(),
+                          e["score"].is_number() ? HtmlCell(e["score"].get<double>()) : HtmlCell(std::string("Inf")),
                           e["group"].get<std::string>(), e["reason"].get<std::string>()});
       html.table(g);
     }
@@ -246,7 +257,8 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
     p.title = "Temperature and its trend (paper Fig. 13)";
     p.x_label = "time (h)";
     p.y_label = "temperature (°C)";
-    p.series.push_back(line("case temperature", record.time(), record.channel(role::kTemperature).values, kHoursPerSecond, 1.0));
+    p.series.push_back(
+        line("case temperature", record.time(), record.channel(role::kTemperature).values, kHoursPerSecond, 1.0));
     for (const auto& [name, s] : step_signals)
       if (s.unit == "degC" && s.columns.cols() == 1 && name.size() > 7 && name.substr(name.size() - 7) == ".signal")
         p.series.push_back(line(name, record.time(), s.columns.col(0), kHoursPerSecond, 1.0));
@@ -285,11 +297,13 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
     filtered.title = "Filter steps on a rate, input and output, first 10 minutes";
     filtered.x_label = "time (s)";
     filtered.y_label = "rate (°/h)";
-    const auto first = std::min<Eigen::Index>(record.size(), static_cast<Eigen::Index>(600.0 * record.sample_rate_hz()));
+    const auto first =
+        std::min<Eigen::Index>(record.size(), static_cast<Eigen::Index>(600.0 * record.sample_rate_hz()));
     const auto add_rate = [&](const std::string& name) {
       const auto it = step_signals.find(name);
       if (it != step_signals.end() && it->second.unit == "rad/s" && it->second.columns.cols() == 1)
-        filtered.series.push_back(line(name, record.time().head(first), it->second.columns.col(0).head(first), 1.0, kDphPerRadPerSec));
+        filtered.series.push_back(
+            line(name, record.time().head(first), it->second.columns.col(0).head(first), 1.0, kDphPerRadPerSec));
     };
     for (const auto& step : pipeline.steps) {
       if (step.plugin.rfind("filter/", 0) != 0) continue;

@@ -13,14 +13,14 @@
 
 namespace driftlab::cli {
 
+using evaluation::intrinsic_floor_json;
+using evaluation::is_pipeline_stage;
 using evaluation::rate_stages;
 using evaluation::RunScores;
 using evaluation::score_run;
 using evaluation::scores_json;
-using evaluation::StageScore;
-using evaluation::is_pipeline_stage;
 using evaluation::stage_json;
-using evaluation::intrinsic_floor_json;
+using evaluation::StageScore;
 using evaluation::table2_text;
 
 // report.html: Table 2 with the honest columns, the IMF groups and their reasons, and the paper's

@@ -25,12 +25,12 @@
 namespace driftlab::mrpt_bridge {
 
 struct NavNoise {
-  double arw_rad_sqrt_s = 0.0;              // N
-  double bias_instability_rad_s = 0.0;      // B
+  double arw_rad_sqrt_s = 0.0;                 // N
+  double bias_instability_rad_s = 0.0;         // B
   double rate_random_walk_rad_s_sqrt_s = 0.0;  // K
-  double bias_correlation_time_s = 5000.0;  // tau_b for the B term
-  double speed_sigma_mps = 0.0;             // odometry speed noise, per sample
-  double fix_sigma_m = 3.0;                 // position-fix standard deviation, per axis
+  double bias_correlation_time_s = 5000.0;     // tau_b for the B term
+  double speed_sigma_mps = 0.0;                // odometry speed noise, per sample
+  double fix_sigma_m = 3.0;                    // position-fix standard deviation, per axis
 };
 
 struct NavState {

@@ -25,8 +25,9 @@ NavScenario parse_nav_scenario(const std::string& yaml_text, const std::string& 
   devices::YamlFields y(file, problems);
   NavScenario s;
   s.source = file;
-  if (y.map(root, "", {"format", "sample_rate_hz", "seed", "calibration_seed", "cabin", "yaw_rate", "speed",
-                       "odometry", "fixes"})) {
+  if (y.map(root, "",
+            {"format", "sample_rate_hz", "seed", "calibration_seed", "cabin", "yaw_rate", "speed", "odometry",
+             "fixes"})) {
     if (auto format = y.text(root, "", "format", true); format && *format != "driftlab-nav-scenario/1")
       y.problem(y.child(root, "", "format", false), "format",
                 "unsupported format '" + *format + "'; expected driftlab-nav-scenario/1");
@@ -40,8 +41,8 @@ NavScenario parse_nav_scenario(const std::string& yaml_text, const std::string& 
     if (auto n = y.child(root, "", "speed", true); n.IsDefined())
       s.speed_mps = devices::read_profile_section(y, n, "speed", "mps", 1.0, 0.0, {});
     if (auto n = y.child(root, "", "odometry", false); n.IsDefined() && y.map(n, "odometry", {"speed_sigma_mps"}))
-      s.odometry_speed_sigma_mps = y.number_or(n, "odometry", "speed_sigma_mps", s.odometry_speed_sigma_mps,
-                                               Bounds::non_negative());
+      s.odometry_speed_sigma_mps =
+          y.number_or(n, "odometry", "speed_sigma_mps", s.odometry_speed_sigma_mps, Bounds::non_negative());
     if (auto n = y.child(root, "", "fixes", false); n.IsDefined() && y.map(n, "fixes", {"period_s", "sigma_m"})) {
       s.fix_period_s = y.number_or(n, "fixes", "period_s", 0.0, Bounds::non_negative());
       s.fix_sigma_m = y.number_or(n, "fixes", "sigma_m", s.fix_sigma_m, Bounds::positive());
@@ -141,8 +142,8 @@ NavTrack run_nav(const NavInput& input, const Eigen::VectorXd& rate, const NavNo
   const auto& t = input.time_s;
   const Eigen::Index n = t.size();
   if (rate.size() != n)
-    throw DataError(Location{"", 0, "rate"}, "the yaw rate has " + std::to_string(rate.size()) +
-                                                 " samples, the record " + std::to_string(n));
+    throw DataError(Location{"", 0, "rate"},
+                    "the yaw rate has " + std::to_string(rate.size()) + " samples, the record " + std::to_string(n));
   NavState start;
   start.heading_rad = input.heading_rad[0];
   start.x_m = input.x_m[0];

@@ -36,7 +36,7 @@ struct NavScenario {
   double sample_rate_hz = 50.0;
   std::uint64_t seed = 7;
   std::uint64_t calibration_seed = 1001;
-  devices::Profile cabin_c{25.0};       // degC
+  devices::Profile cabin_c{25.0};        // degC
   devices::Profile yaw_rate_rad_s{0.0};  // rad/s
   devices::Profile speed_mps{0.0};       // m/s
   double odometry_speed_sigma_mps = 0.05;
@@ -54,9 +54,9 @@ NavScenario parse_nav_scenario(const std::string& yaml_text, const std::string& 
 // The simulated drive. Truth: heading by the trapezoid rule on the true yaw rate (exact for the
 // piecewise-linear profile), position by the midpoint rule the filter uses.
 struct DriveRecord {
-  devices::SimulationRecord gyro;  // time_s, rate_rad_s (measured), temp_c, true_rate_rad_s, ...
-  Eigen::VectorXd speed_mps;       // true forward speed
-  Eigen::VectorXd odometry_speed_mps;  // measured
+  devices::SimulationRecord gyro;         // time_s, rate_rad_s (measured), temp_c, true_rate_rad_s, ...
+  Eigen::VectorXd speed_mps;              // true forward speed
+  Eigen::VectorXd odometry_speed_mps;     // measured
   Eigen::VectorXd x_m, y_m, heading_rad;  // truth
   std::vector<Eigen::Index> fix_index;    // samples with a position fix
   std::vector<Eigen::Vector2d> fix_m;     // the fixes (truth + noise)

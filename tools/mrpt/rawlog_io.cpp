@@ -35,7 +35,7 @@ namespace {
 namespace fs = std::filesystem;
 using mrpt::obs::CObservationIMU;
 
-constexpr double kTicksPerSecond = 1e7;                 // mrpt::Clock: 100 ns ticks
+constexpr double kTicksPerSecond = 1e7;                         // mrpt::Clock: 100 ns ticks
 constexpr std::int64_t kUnixEpochTicks = 116444736000000000LL;  // 1970-01-01 in FILETIME ticks
 
 DataError data_error(const fs::path& file, const std::string& message) {
@@ -231,7 +231,8 @@ void read_in_child_first(const fs::path& path) {
       continue;
     }
     char buffer[4096];
-    for (ssize_t n; (n = ::read(pipe_fds[0], buffer, sizeof buffer)) > 0;) message.append(buffer, static_cast<std::size_t>(n));
+    for (ssize_t n; (n = ::read(pipe_fds[0], buffer, sizeof buffer)) > 0;)
+      message.append(buffer, static_cast<std::size_t>(n));
     break;
   }
   ::close(pipe_fds[0]);
@@ -255,7 +256,8 @@ class RawlogWriter {
   RawlogWriter(const fs::path& path, std::vector<fs::path> inputs) : output_(std::move(inputs)) {
     output_.plan(path, "");
     const fs::path temp = output_.stage_path(path);
-    if (!out_.open(temp.string())) throw data_error(path, "cannot write the rawlog (temporary file " + temp.string() + ")");
+    if (!out_.open(temp.string()))
+      throw data_error(path, "cannot write the rawlog (temporary file " + temp.string() + ")");
   }
   void write(const mrpt::serialization::CSerializable& object) {
     auto archive = mrpt::serialization::archiveFrom(out_);
@@ -328,7 +330,9 @@ struct Walker {
       on_object(object, k);
     }
     stats.objects = reader.count();
-    stats.format = saw_frames && saw_observations ? "mixed" : saw_frames ? "actions/sensory-frame" : "observations-only";
+    stats.format = saw_frames && saw_observations ? "mixed"
+                   : saw_frames                   ? "actions/sensory-frame"
+                                                  : "observations-only";
     stats.imu_labels.assign(labels.begin(), labels.end());
   }
   void count(const mrpt::obs::CObservation::Ptr& obs) {
@@ -344,9 +348,9 @@ std::string choose_label(const fs::path& path, const std::vector<std::string>& l
     if (std::find(labels.begin(), labels.end(), wanted) == labels.end()) {
       std::string all;
       for (const auto& l : labels) all += (all.empty() ? "" : ", ") + ("'" + l + "'");
-      throw ConfigError(Location{path.string(), 0, "--sensor-label"},
-                        "no IMU observation labelled '" + wanted + "'; IMU labels in the file: " +
-                            (all.empty() ? "none" : all));
+      throw ConfigError(
+          Location{path.string(), 0, "--sensor-label"},
+          "no IMU observation labelled '" + wanted + "'; IMU labels in the file: " + (all.empty() ? "none" : all));
     }
     return wanted;
   }
@@ -354,8 +358,9 @@ std::string choose_label(const fs::path& path, const std::vector<std::string>& l
   if (labels.size() > 1) {
     std::string all;
     for (const auto& l : labels) all += (all.empty() ? "" : ", ") + ("'" + l + "'");
-    throw ConfigError(Location{path.string(), 0, "--sensor-label"},
-                      "the rawlog has IMU observations of several sensors (" + all + "); choose one with --sensor-label");
+    throw ConfigError(
+        Location{path.string(), 0, "--sensor-label"},
+        "the rawlog has IMU observations of several sensors (" + all + "); choose one with --sensor-label");
   }
   return labels.front();
 }
@@ -390,12 +395,18 @@ const std::vector<ImuColumn>& imu_columns() {
       {IMU_ORI_QUAT_Y, "IMU_ORI_QUAT_Y", "quat_y", "1", "orientation quaternion y (IMU_ORI_QUAT_Y)"},
       {IMU_ORI_QUAT_Z, "IMU_ORI_QUAT_Z", "quat_z", "1", "orientation quaternion z (IMU_ORI_QUAT_Z)"},
       {IMU_ORI_QUAT_W, "IMU_ORI_QUAT_W", "quat_w", "1", "orientation quaternion w (IMU_ORI_QUAT_W)"},
-      {IMU_YAW_VEL_GLOBAL, "IMU_YAW_VEL_GLOBAL", "wz_global_rps", "rad/s", "global yaw rate (IMU_YAW_VEL_GLOBAL), rad/s"},
-      {IMU_PITCH_VEL_GLOBAL, "IMU_PITCH_VEL_GLOBAL", "wy_global_rps", "rad/s", "global pitch rate (IMU_PITCH_VEL_GLOBAL), rad/s"},
-      {IMU_ROLL_VEL_GLOBAL, "IMU_ROLL_VEL_GLOBAL", "wx_global_rps", "rad/s", "global roll rate (IMU_ROLL_VEL_GLOBAL), rad/s"},
-      {IMU_X_ACC_GLOBAL, "IMU_X_ACC_GLOBAL", "acc_x_global_mps2", "1", "global acceleration x (IMU_X_ACC_GLOBAL), m/s^2"},
-      {IMU_Y_ACC_GLOBAL, "IMU_Y_ACC_GLOBAL", "acc_y_global_mps2", "1", "global acceleration y (IMU_Y_ACC_GLOBAL), m/s^2"},
-      {IMU_Z_ACC_GLOBAL, "IMU_Z_ACC_GLOBAL", "acc_z_global_mps2", "1", "global acceleration z (IMU_Z_ACC_GLOBAL), m/s^2"},
+      {IMU_YAW_VEL_GLOBAL, "IMU_YAW_VEL_GLOBAL", "wz_global_rps", "rad/s",
+       "global yaw rate (IMU_YAW_VEL_GLOBAL), rad/s"},
+      {IMU_PITCH_VEL_GLOBAL, "IMU_PITCH_VEL_GLOBAL", "wy_global_rps", "rad/s",
+       "global pitch rate (IMU_PITCH_VEL_GLOBAL), rad/s"},
+      {IMU_ROLL_VEL_GLOBAL, "IMU_ROLL_VEL_GLOBAL", "wx_global_rps", "rad/s",
+       "global roll rate (IMU_ROLL_VEL_GLOBAL), rad/s"},
+      {IMU_X_ACC_GLOBAL, "IMU_X_ACC_GLOBAL", "acc_x_global_mps2", "1",
+       "global acceleration x (IMU_X_ACC_GLOBAL), m/s^2"},
+      {IMU_Y_ACC_GLOBAL, "IMU_Y_ACC_GLOBAL", "acc_y_global_mps2", "1",
+       "global acceleration y (IMU_Y_ACC_GLOBAL), m/s^2"},
+      {IMU_Z_ACC_GLOBAL, "IMU_Z_ACC_GLOBAL", "acc_z_global_mps2", "1",
+       "global acceleration z (IMU_Z_ACC_GLOBAL), m/s^2"},
   };
   return columns;
 }
@@ -452,7 +463,8 @@ ImuTable read_imu_csv(const fs::path& path) {
       continue;
     }
     if (name == "rate_dps" || name == "rate_rps") {
-      if (have_rate) throw DataError(Location{path.string(), line, name}, "two yaw-rate columns (rate_dps and rate_rps)");
+      if (have_rate)
+        throw DataError(Location{path.string(), line, name}, "two yaw-rate columns (rate_dps and rate_rps)");
       options.columns.push_back({"rate", name, name == "rate_dps" ? "deg/s" : "rad/s"});
       wanted.emplace_back("rate", "rate_rps");
       have_rate = true;
@@ -471,7 +483,8 @@ ImuTable read_imu_csv(const fs::path& path) {
     wanted.emplace_back(role, known->column);
   }
   if (!have_time) throw DataError(Location{path.string(), line, "t_s"}, "missing time column t_s");
-  if (!have_rate) throw DataError(Location{path.string(), line, "rate_rps"}, "missing yaw-rate column rate_rps or rate_dps");
+  if (!have_rate)
+    throw DataError(Location{path.string(), line, "rate_rps"}, "missing yaw-rate column rate_rps or rate_dps");
   const TimeSeries series = read_csv(path, options);
 
   ImuTable table;
@@ -510,8 +523,8 @@ ImuTable import_rawlog(const fs::path& path, const std::string& sensor_label, Ra
         if (!imu || (!sensor_label.empty() && imu->sensorLabel != sensor_label)) return;
         auto& c = by_label[imu->sensorLabel];
         if (!imu->has(mrpt::obs::IMU_WZ))
-          throw data_error(path, index_text(k, j) + "IMU observation '" + imu->sensorLabel +
-                                     "' has no yaw rate (IMU_WZ)");
+          throw data_error(path,
+                           index_text(k, j) + "IMU observation '" + imu->sensorLabel + "' has no yaw rate (IMU_WZ)");
         const auto ticks = ticks_of(imu->timestamp);
         if (!c.ticks.empty() && ticks <= c.ticks.back())
           throw data_error(path, index_text(k, j) + "IMU observation '" + imu->sensorLabel +
@@ -563,7 +576,9 @@ ImuTable import_rawlog(const fs::path& path, const std::string& sensor_label, Ra
   const std::int64_t t0 = c.ticks.front();
   for (Eigen::Index i = 0; i < n; ++i) table.time_s[i] = static_cast<double>(c.ticks[i] - t0) / kTicksPerSecond;
   table.start_unix_s = static_cast<double>(t0 - kUnixEpochTicks) / kTicksPerSecond;
-  auto vec = [](const std::vector<double>& v) { return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(v.data(), v.size())); };
+  auto vec = [](const std::vector<double>& v) {
+    return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(v.data(), v.size()));
+  };
   for (std::size_t i = 0; i < c.fields.size(); ++i)
     table.columns.push_back({field_name(c.fields[i]), vec(c.values[i]), "1"});
   if (any_odometry) {
@@ -587,7 +602,8 @@ void export_rawlog(const ImuTable& table, const fs::path& path) {
                         "times from 1601 to about year 14000");
   std::vector<std::pair<mrpt::obs::TIMUDataIndex, const Eigen::VectorXd*>> fields;
   for (const auto& col : imu_columns())
-    if (table.has(col.column)) fields.emplace_back(static_cast<mrpt::obs::TIMUDataIndex>(col.field), &table.values(col.column));
+    if (table.has(col.column))
+      fields.emplace_back(static_cast<mrpt::obs::TIMUDataIndex>(col.field), &table.values(col.column));
   const bool odometry = table.has_odometry();
   const bool speed = table.has("odom_speed_mps");
 
@@ -623,7 +639,8 @@ void export_rawlog(const ImuTable& table, const fs::path& path) {
 
 RawlogStats rawlog_stats(const fs::path& path) {
   Walker walker;
-  walker.walk(path, [](const auto&, std::size_t, int) {}, [](const auto&, std::size_t) {}, [](const auto&, std::size_t) {});
+  walker.walk(
+      path, [](const auto&, std::size_t, int) {}, [](const auto&, std::size_t) {}, [](const auto&, std::size_t) {});
   return walker.stats;
 }
 
@@ -631,10 +648,14 @@ int imu_field(imu::Sensor sensor, char axis) {
   using namespace mrpt::obs;
   const bool gyro = sensor == imu::Sensor::Gyro;
   switch (axis) {
-    case 'x': return gyro ? IMU_WX : IMU_X_ACC;
-    case 'y': return gyro ? IMU_WY : IMU_Y_ACC;
-    case 'z': return gyro ? IMU_WZ : IMU_Z_ACC;
-    default: throw ConfigError(Location{"", 0, "axis"}, std::string("no CObservationIMU field for axis '") + axis + "'");
+    case 'x':
+      return gyro ? IMU_WX : IMU_X_ACC;
+    case 'y':
+      return gyro ? IMU_WY : IMU_Y_ACC;
+    case 'z':
+      return gyro ? IMU_WZ : IMU_Z_ACC;
+    default:
+      throw ConfigError(Location{"", 0, "axis"}, std::string("no CObservationIMU field for axis '") + axis + "'");
   }
 }
 
@@ -647,7 +668,8 @@ std::string imu_field_name(int field) {
 CompensateStats compensate_rawlog(const fs::path& in, const fs::path& out,
                                   const std::vector<FieldCorrection>& corrections, const std::string& sensor_label) {
   RawlogWriter writer(out, {in});  // checked (and its temporary file made) before the input is read
-  if (corrections.empty()) throw ConfigError(Location{in.string(), 0, ""}, "nothing to compensate: no field correction given");
+  if (corrections.empty())
+    throw ConfigError(Location{in.string(), 0, ""}, "nothing to compensate: no field correction given");
   std::set<int> corrected;
   for (const auto& c : corrections)
     if (!corrected.insert(c.field).second)

@@ -40,8 +40,13 @@ extern "C" void driftlab_register_plugins(driftlab::Registry& registry) {
   registry.add({.name = "filter/moving_average",
                 .summary = "centred moving average (external plugin example)",
                 .reference = "",
-                .params = ParamTable{{param::integer("window", 5, "samples", "odd window length").at_least(1).must(
-                    "odd", [](const ParamValue& v) { return std::get<std::int64_t>(v) % 2 ? "" : "window must be odd"; },
-                    std::int64_t{4})}},
+                .params = ParamTable{{param::integer("window", 5, "samples", "odd window length")
+                                          .at_least(1)
+                                          .must(
+                                              "odd",
+                                              [](const ParamValue& v) {
+                                                return std::get<std::int64_t>(v) % 2 ? "" : "window must be odd";
+                                              },
+                                              std::int64_t{4})}},
                 .make = [](const ParamValues& p, const Registry&) { return std::make_unique<MovingAverage>(p); }});
 }
