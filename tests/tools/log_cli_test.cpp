@@ -138,6 +138,37 @@ TEST(LogCliDataflash, InfoOnEachFixture) {
                                HasSubstr("INS_GYR1_CALTEMP = 30.7045"), HasSubstr("its last 2 bytes left out")));
 }
 
+// AHRS_ORIENTATION: ArduPilot logs IMU values in the body frame; the record is in the sensor frame.
+TEST(LogCliDataflash, ABoardRotationIsReportedAndUndoneAndACustomOneIsRefused) {
+  const auto dir = scratch_dir("log_cli_dataflash_orientation");
+  const auto test_bin = (dataflash_logs() / "pymavlink" / "test.BIN").string();  // AHRS_ORIENTATION 8 (ROLL_180)
+  const auto info = run_driftlab("log info " + test_bin);
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_THAT(info.out, HasSubstr("AHRS_ORIENTATION 8 (ROTATION_ROLL_180): IMU values are logged in the body frame"));
+  const auto exported = run_driftlab("log export " + test_bin + " --out " + (dir / "imu.csv").string());
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  EXPECT_THAT(exported.err, HasSubstr("rotated back into the sensor frame"));
+  CsvReadOptions options;
+  options.required_roles = {"gyro_y", "accel_z"};
+  options.max_gap_factor = 0.0;
+  const auto record = read_csv(dir / "imu.csv", options);
+  // pymavlink DFReader's first IMU message (test.BIN.reference.txt) has AccZ -9.780994415283203 in
+  // the body frame: the sensor's z axis points the other way on a board mounted upside down.
+  EXPECT_EQ(record.channel("accel_z").values[0], 9.780994415283203);
+
+  testing_dataflash::Writer w;
+  testing_dataflash::define_imu_log(w);
+  testing_dataflash::parm(w, 0, "AHRS_ORIENTATION", 100);  // ROTATION_CUSTOM
+  for (int i = 0; i < 5; ++i) testing_dataflash::imu(w, 1e6 + 1e4 * i, 0, 0.01, 0.02, 0.03, 0.1, 0.2, -9.8, 30);
+  write(dir / "custom.bin", w.bytes());
+  const auto custom = run_driftlab("log export " + (dir / "custom.bin").string() + " --out " + (dir / "c.csv").string());
+  EXPECT_EQ(custom.exit_code, 3);
+  EXPECT_THAT(custom.err, AllOf(HasSubstr("custom.bin"), HasSubstr("AHRS_ORIENTATION is 100"), HasSubstr("body frame")));
+  const auto custom_info = run_driftlab("log info " + (dir / "custom.bin").string());
+  EXPECT_EQ(custom_info.exit_code, 0) << custom_info.err;
+  EXPECT_THAT(custom_info.out, HasSubstr("AHRS_ORIENTATION 100: not one of ArduPilot's fixed rotations 0..43"));
+}
+
 TEST(LogCliDataflash, ExportWritesEveryInstanceTheCsvReaderReadsBack) {
   const auto dir = scratch_dir("log_cli_dataflash_export");
   const auto out = (dir / "imu.csv").string();

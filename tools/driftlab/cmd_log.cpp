@@ -196,6 +196,22 @@ void dataflash_imu_lines(const dataflash::Log& log) {
   if (!any) std::cout << "IMU: no IMU messages\n";
 }
 
+// AHRS_ORIENTATION: the frame the IMU values are logged in and what the record makes of it.
+void dataflash_orientation_line(const dataflash::Log& log) {
+  const auto value = log.parameter("AHRS_ORIENTATION");
+  std::cout << "board orientation: ";
+  if (!value || *value == 0.0) {
+    std::cout << "AHRS_ORIENTATION " << (value ? "0" : "not logged (default 0)") << ": body frame = sensor frame\n";
+    return;
+  }
+  std::cout << "AHRS_ORIENTATION " << *value;
+  if (const auto rotation = dataflash::board_rotation(*value))
+    std::cout << " (" << rotation->name << "): IMU values are logged in the body frame; the record rotates them back "
+              << "into the sensor frame\n";
+  else
+    std::cout << ": not one of ArduPilot's fixed rotations 0..43; the IMU record is refused\n";
+}
+
 void dataflash_tcal_lines(const dataflash::Log& log) {
   std::vector<const dataflash::Parameter*> tcal;
   std::vector<std::string> seen;
@@ -284,6 +300,7 @@ void dataflash_info(const std::string& path) {
     std::cout << row;
   }
   dataflash_imu_lines(log);
+  dataflash_orientation_line(log);
   dataflash_tcal_lines(log);
   dataflash_tclr_lines(log);
 }
