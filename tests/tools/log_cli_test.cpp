@@ -3,6 +3,7 @@
 // read back by the CSV reader; calibrate, compensate and allan reading a .bin directly.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "framework/csv.hpp"
 #include "tests/framework/dataflash_writer.hpp"
@@ -80,6 +81,56 @@ TEST_F(LogCli, RecordCommandsReadALogWithAColumnMapping) {
   EXPECT_EQ(no_rate.exit_code, 3);
   EXPECT_THAT(no_rate.err, HasSubstr("--column rate=gyro_z"));
   EXPECT_FALSE(fs::exists(p("b.csv")));
+}
+
+// calibrate reads a ULog directly: the two gyros of a simulated imu3 oven run (16 200 samples at
+// 1 Hz, temperatures and device ids) written as sensor_gyro multi_id 0 and 1 fit the models that
+// calibrate fits on the log's CSV export (the same float32 values), with the device ids.
+TEST(LogCliUlog, CalibrateOnAUlogFitsWhatItFitsOnTheLogsExport) {
+  const auto dir = scratch_dir("log_cli_ulog_calibrate");
+  const auto sim = dir / "imu3.csv";
+  const auto s = run_driftlab("simulate --device " + std::string(DRIFTLAB_SOURCE_DIR) + "/devices/imu3.yaml --fs 1 --seed 1 --out " +
+                              sim.string());
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  CsvReadOptions options;
+  options.required_roles = {"gyro_x", "gyro1_x", "temperature", "temperature1"};
+  const TimeSeries record = read_csv(sim, options);
+  Writer w;
+  w.flag_bits().format(testing_ulog::kSensorGyroFormat).add(0, 1, "sensor_gyro").add(1, 2, "sensor_gyro");
+  for (Eigen::Index i = 0; i < record.size(); ++i) {
+    const auto t = static_cast<std::uint64_t>(std::llround(1e6 + record.time()[i] * 1e6));
+    for (int instance = 0; instance < 2; ++instance) {
+      const std::string n = instance == 0 ? "" : "1";
+      auto v = [&](const std::string& role) { return static_cast<float>(record.channel(role).values[i]); };
+      w.data(static_cast<std::uint16_t>(instance + 1),
+             testing_ulog::sensor_gyro(t + 3000 * static_cast<std::uint64_t>(instance), instance == 0 ? 2424842u : 2490378u,
+                                       v("gyro" + n + "_x"), v("gyro" + n + "_y"), v("gyro" + n + "_z"), v("temperature" + n)));
+    }
+  }
+  const auto ulg = (dir / "oven.ulg").string();
+  write(ulg, w.bytes());
+
+  const auto from_ulg = run_driftlab("-q calibrate --data " + ulg + " --out " + (dir / "ulg.json").string());
+  ASSERT_EQ(from_ulg.exit_code, 0) << from_ulg.err;
+  EXPECT_THAT(from_ulg.out, HasSubstr("6 channels"));
+  const auto exported = run_driftlab("log export " + ulg + " --out " + (dir / "export.csv").string());
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  const auto from_csv = run_driftlab("-q calibrate --data " + (dir / "export.csv").string() + " --out " + (dir / "csv.json").string());
+  ASSERT_EQ(from_csv.exit_code, 0) << from_csv.err;
+  auto a = nlohmann::json::parse(read_text(dir / "ulg.json")), b = nlohmann::json::parse(read_text(dir / "csv.json"));
+  ASSERT_EQ(a["channels"].size(), 6u);
+  ASSERT_EQ(b["channels"].size(), 6u);
+  for (std::size_t i = 0; i < 6; ++i) {
+    SCOPED_TRACE(a["channels"][i]["role"].get<std::string>());
+    EXPECT_EQ(a["channels"][i]["role"], b["channels"][i]["role"]);
+    EXPECT_EQ(a["channels"][i]["device_id"], a["channels"][i]["instance"] == 0 ? "2424842" : "2490378");
+    auto& ma = a["channels"][i]["model"];
+    auto& mb = b["channels"][i]["model"];
+    ma["fit"].erase("records");  // the file each was fitted on
+    mb["fit"].erase("records");
+    EXPECT_EQ(ma, mb);
+  }
+  fs::remove_all(dir);
 }
 
 TEST_F(LogCli, BadLogsExitWithThreeNamingFileAndOffset) {
