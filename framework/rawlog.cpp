@@ -58,10 +58,17 @@ bool sniff(const std::filesystem::path& path) {
   unsigned char head[128] = {};
   const int got = gzread(in, head, sizeof head);
   gzclose(in);
-  if (got < 2 || head[0] <= 0x80) return false;
-  const int length = head[0] & 0x7F;
-  if (got < 1 + length) return false;
-  const std::string name(reinterpret_cast<const char*>(head + 1), static_cast<std::size_t>(length));
+  if (got < 2) return false;
+  int length = 0, offset = 0;
+  if (head[0] > 0x80) {
+    length = head[0] & 0x7F;
+    offset = 1;
+  } else if (got >= 4 && head[0] > 0 && head[1] == 0 && head[2] == 0 && head[3] == 0) {
+    length = head[0];
+    offset = 4;
+  }
+  if (length == 0 || got < offset + length) return false;
+  const std::string name(reinterpret_cast<const char*>(head + offset), static_cast<std::size_t>(length));
   for (const char c : name)
     if (!is_name_char(static_cast<unsigned char>(c))) return false;
   const std::string bare = name.substr(name.rfind(':') == std::string::npos ? 0 : name.rfind(':') + 1);

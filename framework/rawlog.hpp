@@ -6,7 +6,8 @@
 //
 // Recognition (sniff): the file's first bytes, read through zlib (gzip'ed or plain, as
 // CFileGZInputStream reads them), are an MRPT archive's first object header: one byte 0x80 | n
-// (n = 1..127) and then n characters of a class name, the name of a rawlog's top-level object:
+// (n = 1..127; the older header: n as a little-endian uint32) and then n characters of a class
+// name, the name of a rawlog's top-level object:
 // CObservation..., CSensoryFrame or CActionCollection, with or without MRPT 2's namespace
 // ("mrpt::obs::CObservationIMU"). Nothing else a driftlab reader takes starts so.
 //

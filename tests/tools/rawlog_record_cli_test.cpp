@@ -121,6 +121,16 @@ TEST(RawlogRecord, TheRegistryChoosesTheRawlogReaderByContentGzippedOrPlain) {
     gzclose(out);
   }
   EXPECT_EQ(sniff_record_format(gz_csv), RecordFormat::Csv);
+  // The header of older archives (the name's length as a uint32) is recognised too; a byte 0x80 | n
+  // followed by anything but a rawlog object's class name is not.
+  const auto header = [&](const std::string& name, const std::string& bytes) {
+    std::ofstream(f.dir / name, std::ios::binary) << bytes << std::string(64, '\0');
+    return sniff_record_format(f.dir / name);
+  };
+  EXPECT_EQ(header("old.rawlog", std::string("\x0f\0\0\0CObservationIMU", 19)), RecordFormat::Rawlog);
+  EXPECT_EQ(header("frame.rawlog", "\x8d" "CSensoryFrame"), RecordFormat::Rawlog);
+  EXPECT_EQ(header("other.rawlog", "\x8e" "mrpt::poses::X"), RecordFormat::Csv);
+  EXPECT_EQ(header("text.rawlog", "\x8ds_t,rate_dps\n"), RecordFormat::Csv);
 
   CsvReadOptions options;
   options.required_roles = {};
