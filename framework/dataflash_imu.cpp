@@ -16,8 +16,8 @@ namespace driftlab::dataflash {
 namespace {
 
 constexpr double kReferenceTemperature = 35.0;  // degC, TEMP_REFERENCE of AP_InertialSensor_tempcal.cpp
-constexpr double kCoefficientScale = 1e-6;       // INV_SCALE_FACTOR: parameters are stored x 1e6
-constexpr int kParameterInstances = 3;           // INS_GYR_ID..INS_GYR3_ID, INS_TCAL1..3
+constexpr double kCoefficientScale = 1e-6;      // INV_SCALE_FACTOR: parameters are stored x 1e6
+constexpr int kParameterInstances = 3;          // INS_GYR_ID..INS_GYR3_ID, INS_TCAL1..3
 constexpr char kAxisNames[3] = {'X', 'Y', 'Z'};
 
 [[noreturn]] void fail(const Log& log, const std::string& field, const std::string& message) {
@@ -55,8 +55,10 @@ double polynomial(const std::array<std::array<double, 3>, 3>& c, int axis, doubl
 
 const std::vector<double>& field(const Log& log, const MessageType& t, const std::string& name) {
   if (!t.has_column(name))
-    fail(log, t.name + "." + name, "message type '" + t.name + "' has no column '" + name + "' (an IMU message has TimeUS, "
-                                   "GyrX..Z, AccX..Z and T)");
+    fail(log, t.name + "." + name,
+         "message type '" + t.name + "' has no column '" + name +
+             "' (an IMU message has TimeUS, "
+             "GyrX..Z, AccX..Z and T)");
   return t.column(name);
 }
 
@@ -64,14 +66,15 @@ const std::vector<double>& field(const Log& log, const MessageType& t, const std
 std::string no_imu_detail(const Log& log) {
   std::string out;
   if (!log.unknown_types.empty()) {
-    const auto first = std::min_element(log.unknown_types.begin(), log.unknown_types.end(), [](const auto& a, const auto& b) {
-      return a.second.first_offset < b.second.first_offset;
-    });
+    const auto first =
+        std::min_element(log.unknown_types.begin(), log.unknown_types.end(),
+                         [](const auto& a, const auto& b) { return a.second.first_offset < b.second.first_offset; });
     out += "; " + std::to_string(log.unknown_types.size()) + " message type(s) without an FMT, the first (" +
            std::to_string(first->first) + ") at byte " + std::to_string(first->second.first_offset) +
            ": did the log lose its FMT messages?";
   }
-  if (log.truncated_bytes > 0) out += "; the file ends within a message (" + std::to_string(log.truncated_bytes) + " bytes)";
+  if (log.truncated_bytes > 0)
+    out += "; the file ends within a message (" + std::to_string(log.truncated_bytes) + " bytes)";
   return out;
 }
 
@@ -90,7 +93,8 @@ std::map<int, Instance> instances(const Log& log) {
     for (std::size_t i = 0; i < ids.size(); ++i) {
       const double id = ids[i];
       if (!(id >= 0 && id <= 255 && id == std::floor(id)))
-        fail(log, "IMU.I", "instance " + std::to_string(id) + " of IMU message " + std::to_string(i) + " is not an integer 0..255");
+        fail(log, "IMU.I",
+             "instance " + std::to_string(id) + " of IMU message " + std::to_string(i) + " is not an integer 0..255");
       out[static_cast<int>(id)].messages.push_back(i);
     }
     for (auto& [id, in] : out) {
@@ -169,10 +173,14 @@ constexpr Euler kRotations[] = {
 std::pair<double, double> cos_sin(double deg) {
   if (deg == std::floor(deg / 90.0) * 90.0) {
     switch (static_cast<int>(deg / 90.0) % 4) {
-      case 0: return {1.0, 0.0};
-      case 1: return {0.0, 1.0};
-      case 2: return {-1.0, 0.0};
-      default: return {0.0, -1.0};
+      case 0:
+        return {1.0, 0.0};
+      case 1:
+        return {0.0, 1.0};
+      case 2:
+        return {-1.0, 0.0};
+      default:
+        return {0.0, -1.0};
     }
   }
   const double rad = deg * std::numbers::pi / 180.0;
@@ -210,7 +218,8 @@ std::optional<BoardRotation> log_board_rotation(const Log& log, std::vector<std:
     std::string text = "AHRS_ORIENTATION " + orientation_text(*value) + " (" + rotation->name +
                        "): the IMU values are logged in the body frame; the record holds them rotated back into the "
                        "sensor frame, as ArduPilot's tempcal_IMU.py does";
-    if (!changed(log, {"AHRS_ORIENTATION"}).empty()) text += "; AHRS_ORIENTATION changes within the log: the first value is used";
+    if (!changed(log, {"AHRS_ORIENTATION"}).empty())
+      text += "; AHRS_ORIENTATION changes within the log: the first value is used";
     notes->push_back(text);
   }
   return rotation;
@@ -226,19 +235,21 @@ void set_device_id(const Log& log, imu::SensorStream& s, std::vector<std::string
 }
 
 // Removes the firmware's INS_TCAL correction from the gyro and accel streams of one instance.
-void remove_tcal(const Log& log, int instance, const std::string& label, imu::SensorStream& gyro, imu::SensorStream& accel,
-                 std::vector<std::string>* notes) {
+void remove_tcal(const Log& log, int instance, const std::string& label, imu::SensorStream& gyro,
+                 imu::SensorStream& accel, std::vector<std::string>* notes) {
   if (instance >= kParameterInstances) return;
   const std::string n = std::to_string(instance + 1);
   const auto enable = log.parameter("INS_TCAL" + n + "_ENABLE");
   if (!enable || *enable != 1.0) return;
-  const std::string what = label + ": recorded with INS_TCAL" + n + "_ENABLE=1 (the firmware's temperature correction on)";
+  const std::string what =
+      label + ": recorded with INS_TCAL" + n + "_ENABLE=1 (the firmware's temperature correction on)";
   auto note = [&](const std::string& text) {
     if (notes) notes->push_back(what + "; " + text);
   };
   std::string missing;
   const auto tcal = temperature_calibration(log, instance, &missing);
-  if (!tcal) return note("the correction is not removed: parameter " + missing + " is not in the log; values as logged");
+  if (!tcal)
+    return note("the correction is not removed: parameter " + missing + " is not in the log; values as logged");
   if (gyro.temperature.empty())
     return note("the correction is not removed: the IMU messages carry no temperature; values as logged");
   for (imu::SensorStream* s : {&gyro, &accel})
@@ -247,13 +258,15 @@ void remove_tcal(const Log& log, int instance, const std::string& label, imu::Se
         double& v = s->axes[a][i];
         v += firmware_correction(*tcal, s->sensor, a, gyro.temperature[i]);
         if (!std::isfinite(v) || std::abs(v) > kMaxMagnitude)
-          fail(log, "INS_TCAL" + n, label + ": removing the firmware's temperature correction gives " +
-                                        (std::isfinite(v) ? "a value beyond 1e100" : "a non-finite value") + " at time stamp " +
-                                        std::to_string(s->time[i]) + " us: are the INS_TCAL" + n + " parameters corrupt?");
+          fail(log, "INS_TCAL" + n,
+               label + ": removing the firmware's temperature correction gives " +
+                   (std::isfinite(v) ? "a value beyond 1e100" : "a non-finite value") + " at time stamp " +
+                   std::to_string(s->time[i]) + " us: are the INS_TCAL" + n + " parameters corrupt?");
       }
   char range[96];
   std::snprintf(range, sizeof range, "TMIN %g, TMAX %g degC", tcal->tmin, tcal->tmax);
-  std::string text = std::string("removed (") + range + "), as ArduPilot's tempcal_IMU.py does; gyro and accel are the raw values";
+  std::string text =
+      std::string("removed (") + range + "), as ArduPilot's tempcal_IMU.py does; gyro and accel are the raw values";
   if (const auto later = changed(log, tcal_names(instance)); !later.empty())
     text += "; " + later.front() + (later.size() > 1 ? " and others change" : " changes") +
             " within the log: the values at boot are used";
@@ -338,12 +351,14 @@ std::optional<BoardRotation> board_rotation(double ahrs_orientation) {
 
 TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector<std::string>* notes) {
   if (!selection.topic.empty() && selection.topic != "IMU")
-    throw ConfigError({"", 0, "--topic"}, "'" + selection.topic + "': a DataFlash log's IMU is read from its IMU messages "
-                                          "(--topic IMU, or leave --topic out)");
+    throw ConfigError({"", 0, "--topic"}, "'" + selection.topic +
+                                              "': a DataFlash log's IMU is read from its IMU messages "
+                                              "(--topic IMU, or leave --topic out)");
   const auto by_instance = instances(log);
   if (by_instance.empty())
-    fail(log, "IMU", "no IMU messages in the log (" + std::to_string(log.messages) + " messages of " +
-                         std::to_string(log.types.size()) + " types read)" + no_imu_detail(log));
+    fail(log, "IMU",
+         "no IMU messages in the log (" + std::to_string(log.messages) + " messages of " +
+             std::to_string(log.types.size()) + " types read)" + no_imu_detail(log));
 
   const auto rotation = log_board_rotation(log, notes);
   std::vector<imu::SensorStream> all;

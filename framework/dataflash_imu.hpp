@@ -80,8 +80,8 @@ std::optional<std::uint32_t> device_id(const Log& log, imu::Sensor sensor, int i
 // INS_TCALn of one IMU instance (n = instance + 1), as first logged.
 struct TemperatureCalibration {
   int instance = 0;
-  double enable = 0.0;                       // INS_TCALn_ENABLE: 0 off, 1 on, 2 learning
-  double tmin = 0.0, tmax = 0.0;             // degC
+  double enable = 0.0;                                   // INS_TCALn_ENABLE: 0 off, 1 on, 2 learning
+  double tmin = 0.0, tmax = 0.0;                         // degC
   std::array<std::array<double, 3>, 3> gyro{}, accel{};  // [order - 1][axis x y z], as logged (x 1e6)
   double gyro_cal_temp = 0.0, accel_cal_temp = 0.0;      // INS_GYRn_CALTEMP, INS_ACCn_CALTEMP (degC)
 };
@@ -96,8 +96,8 @@ double firmware_correction(const TemperatureCalibration& tcal, imu::Sensor senso
 // The board rotation of an AHRS_ORIENTATION value (see above), or nullopt for a value that is not
 // one of ArduPilot's fixed rotations 0..43.
 struct BoardRotation {
-  std::string name;                                          // "ROTATION_ROLL_180"
-  std::array<std::array<double, 3>, 3> body_from_sensor{};   // R: body = R sensor
+  std::string name;                                         // "ROTATION_ROLL_180"
+  std::array<std::array<double, 3>, 3> body_from_sensor{};  // R: body = R sensor
 };
 std::optional<BoardRotation> board_rotation(double ahrs_orientation);
 

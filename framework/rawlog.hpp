@@ -54,7 +54,7 @@ struct Info {
     std::string label;
     std::size_t samples = 0;
     double start_unix_s = 0.0, duration_s = 0.0;  // first observation (Unix time, s) and span, s
-    std::vector<std::string> fields;               // MRPT's names of the fields it carries ("IMU_WZ")
+    std::vector<std::string> fields;              // MRPT's names of the fields it carries ("IMU_WZ")
     bool has_temperature = false;
     double temperature_min_c = 0.0, temperature_max_c = 0.0;
   };

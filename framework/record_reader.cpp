@@ -31,7 +31,8 @@ std::string role_list(const TimeSeries& record) {
 std::string named_channel(const TimeSeries& imu_record, const ColumnMapping& m, const std::string& file) {
   if (imu_record.has(m.column)) return m.column;
   if (const auto match = imu::recognize_imu_column(m.column); match && imu_record.has(match->role)) return match->role;
-  throw DataError({file, 0, m.column}, "the log has no channel '" + m.column + "' (it has: " + role_list(imu_record) + ")");
+  throw DataError({file, 0, m.column},
+                  "the log has no channel '" + m.column + "' (it has: " + role_list(imu_record) + ")");
 }
 
 TimeSeries mapped_record(const TimeSeries& imu_record, const CsvReadOptions& options, const std::string& file) {
@@ -70,7 +71,8 @@ TimeSeries read_log_record(LogReader reader, const std::filesystem::path& path, 
                            const LogSelection& selection, std::vector<std::string>* notes) {
   const std::string file = path.string();
   if (options.sample_rate_hz > 0.0)
-    throw ConfigError({file, 0, "--fs"}, "a log carries its own time stamps; --fs is for CSV files without a time column");
+    throw ConfigError({file, 0, "--fs"},
+                      "a log carries its own time stamps; --fs is for CSV files without a time column");
   if (!std::isfinite(options.max_gap_factor)) throw ConfigError({file, 0, "--max-gap"}, "must be a finite number");
   const TimeSeries imu_record = reader(path, selection, notes);
   TimeSeries record = options.columns.empty() ? imu_record : mapped_record(imu_record, options, file);
@@ -105,11 +107,16 @@ RecordFormat sniff_record_format(const std::filesystem::path& path) {
 TimeSeries read_record(const std::filesystem::path& path, const CsvReadOptions& options, const LogSelection& selection,
                        std::vector<std::string>* notes) {
   switch (sniff_record_format(path)) {
-    case RecordFormat::Ulog: return read_log_record(ulog::read_imu, path, options, selection, notes);
-    case RecordFormat::DataFlash: return read_log_record(dataflash::read_imu, path, options, selection, notes);
-    case RecordFormat::RosBag: return read_log_record(ros::read_imu, path, options, selection, notes);
-    case RecordFormat::Rawlog: return read_log_record(rawlog::read_imu, path, options, selection, notes);
-    case RecordFormat::Csv: break;
+    case RecordFormat::Ulog:
+      return read_log_record(ulog::read_imu, path, options, selection, notes);
+    case RecordFormat::DataFlash:
+      return read_log_record(dataflash::read_imu, path, options, selection, notes);
+    case RecordFormat::RosBag:
+      return read_log_record(ros::read_imu, path, options, selection, notes);
+    case RecordFormat::Rawlog:
+      return read_log_record(rawlog::read_imu, path, options, selection, notes);
+    case RecordFormat::Csv:
+      break;
   }
   return read_csv(path, options);
 }

@@ -35,12 +35,12 @@ namespace driftlab {
 
 // What to take from a log (ignored for CSV).
 struct LogSelection {
-  std::string topic;     // "" = the reader's default (ULog: sensor_gyro/sensor_accel, else sensor_combined;
-                         // DataFlash: IMU; ROS: every Imu topic; rawlog: the only IMU sensor label),
-                         // ROS: a comma-separated list (ros_imu.hpp); rawlog: a sensor label
-  int instance = -1;     // -1 = every instance; else only this one (ULog multi_id, DataFlash IMU's I,
-                         // ROS: Imu topic number)
-  std::string sensor;    // imu::parse_selection text ("gyro", "accel", "gyro1", "gyro_z"); "" = all
+  std::string topic;   // "" = the reader's default (ULog: sensor_gyro/sensor_accel, else sensor_combined;
+                       // DataFlash: IMU; ROS: every Imu topic; rawlog: the only IMU sensor label),
+                       // ROS: a comma-separated list (ros_imu.hpp); rawlog: a sensor label
+  int instance = -1;   // -1 = every instance; else only this one (ULog multi_id, DataFlash IMU's I,
+                       // ROS: Imu topic number)
+  std::string sensor;  // imu::parse_selection text ("gyro", "accel", "gyro1", "gyro_z"); "" = all
 };
 
 enum class RecordFormat { Csv, Ulog, DataFlash, RosBag, Rawlog };

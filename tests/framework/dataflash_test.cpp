@@ -44,9 +44,8 @@ struct Fixture {
   const char* dir;
   const char* file;
 };
-const Fixture kFixtures[] = {{"pymavlink", "test.BIN"},
-                             {"spark404-dataflashlog", "log.bin"},
-                             {"methodic-configurator", "backend_log_80k.bin"}};
+const Fixture kFixtures[] = {
+    {"pymavlink", "test.BIN"}, {"spark404-dataflashlog", "log.bin"}, {"methodic-configurator", "backend_log_80k.bin"}};
 
 std::string read_file(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -167,7 +166,8 @@ TEST_P(DataflashFixture, EachImuInstanceHasDfReadersCountFirstAndLastValuesAndDe
     const TimeSeries record = dataflash::read_imu(path(), one, &notes);
     const std::string suffix = instance == 0 ? "" : std::to_string(instance);
     ASSERT_EQ(static_cast<std::uint64_t>(record.size()), count) << ::testing::PrintToString(notes);
-    for (const auto& [which, values] : {std::pair{0, ref.imu_first.at(instance)}, std::pair{-1, ref.imu_last.at(instance)}}) {
+    for (const auto& [which, values] :
+         {std::pair{0, ref.imu_first.at(instance)}, std::pair{-1, ref.imu_last.at(instance)}}) {
       const Eigen::Index i = which == 0 ? 0 : record.size() - 1;
       EXPECT_NEAR(record.time()[i], values.at("TimeUS") * kSecondsPerMicrosecond, kTimeTolerance);
       const char* axes = "XYZ";
@@ -204,18 +204,18 @@ TEST_P(DataflashFixture, TheWholeImuRecordHasEveryInstanceAndReadsThroughTheRegi
   for (const auto& [instance, count] : ref.imu_count) {
     const std::string suffix = instance == 0 ? "" : std::to_string(instance);
     for (const char* role : {"gyro", "accel"})
-      for (const char* axis : {"_x", "_y", "_z"}) EXPECT_TRUE(record.has(role + suffix + axis)) << role << suffix << axis;
+      for (const char* axis : {"_x", "_y", "_z"})
+        EXPECT_TRUE(record.has(role + suffix + axis)) << role << suffix << axis;
     EXPECT_TRUE(record.has("temperature" + suffix));
   }
   EXPECT_EQ(static_cast<std::uint64_t>(record.size()), ref.imu_count.begin()->second);  // instances share time stamps
 }
 
-INSTANTIATE_TEST_SUITE_P(RealLogs, DataflashFixture, ::testing::ValuesIn(kFixtures),
-                         [](const auto& test) {
-                           std::string name = test.param.dir;
-                           std::replace(name.begin(), name.end(), '-', '_');
-                           return name;
-                         });
+INSTANTIATE_TEST_SUITE_P(RealLogs, DataflashFixture, ::testing::ValuesIn(kFixtures), [](const auto& test) {
+  std::string name = test.param.dir;
+  std::replace(name.begin(), name.end(), '-', '_');
+  return name;
+});
 
 TEST(DataflashRealLogs, TheNewFormatLogHasUnitsMultipliersAndAnInstanceColumn) {
   const auto log = dataflash::read(logs_dir() / "methodic-configurator" / "backend_log_80k.bin");
@@ -240,7 +240,8 @@ TEST(DataflashRealLogs, CutAtManyOffsetsEachReadIsAPrefixOrADataErrorNamingTheOf
   for (std::size_t cut = 0; cut < bytes.size(); cut += 331) {
     SCOPED_TRACE(cut);
     try {
-      const auto log = dataflash::parse(std::string_view(bytes).substr(0, cut), "cut.bin", {false, dataflash::imu_types()});
+      const auto log =
+          dataflash::parse(std::string_view(bytes).substr(0, cut), "cut.bin", {false, dataflash::imu_types()});
       EXPECT_LE(log.messages, full.messages);
       EXPECT_LT(log.truncated_bytes, 256u);
       for (const auto& t : log.types)
@@ -261,7 +262,8 @@ TEST(DataflashRealLogs, CutAtManyOffsetsEachReadIsAPrefixOrADataErrorNamingTheOf
 std::string small_log(int samples) {
   Writer w;
   df::define_imu_log(w);
-  w.message(df::kUnit, {0.0, double('E'), std::string("rad/s")}).message(df::kUnit, {0.0, double('O'), std::string("degC")});
+  w.message(df::kUnit, {0.0, double('E'), std::string("rad/s")})
+      .message(df::kUnit, {0.0, double('O'), std::string("degC")});
   w.message(df::kMult, {0.0, double('F'), 1e-6});
   w.message(df::kFmtu, {0.0, double(df::kImu), std::string("s#EEEnnn--O----"), std::string("F-000000-0-----")});
   df::parm(w, 1000, "INS_GYR_ID", 2621706).message(df::kParm, {1000.0, std::string("INS_ACC2_ID"), 2688010.0, 0.0});
@@ -289,9 +291,10 @@ TEST(DataflashStructure, FormatCharactersDecodeAsTheTableSays) {
   ASSERT_TRUE(num && txt);
   EXPECT_EQ(num->length, 3u + 8 + 1 + 1 + 2 + 2 + 4 + 4 + 8 + 4 + 8 + 2 + 2 + 4 + 4 + 4 + 1);
   EXPECT_EQ(txt->length, 3u + 8 + 2 + 4 + 16 + 64 + 64);
-  const std::map<std::string, double> expected{
-      {"b", -5},   {"B", 250},   {"h", -30000}, {"H", 60000}, {"i", -2e9}, {"I", 4e9},          {"q", -5e12},
-      {"f", 0.25}, {"d", 1e300}, {"c", -12.34}, {"C", 65.53}, {"e", -2e6}, {"E", 4e7}, {"L", -35.1332423}, {"M", 3}};
+  const std::map<std::string, double> expected{{"b", -5},    {"B", 250},         {"h", -30000}, {"H", 60000},
+                                               {"i", -2e9},  {"I", 4e9},         {"q", -5e12},  {"f", 0.25},
+                                               {"d", 1e300}, {"c", -12.34},      {"C", 65.53},  {"e", -2e6},
+                                               {"E", 4e7},   {"L", -35.1332423}, {"M", 3}};
   for (const auto& [column, value] : expected) EXPECT_DOUBLE_EQ(num->column(column).front(), value) << column;
   EXPECT_EQ(txt->column("g").front(), -1.5);
   EXPECT_EQ(num->time_us, std::vector<std::uint64_t>{7});
@@ -317,13 +320,15 @@ TEST(DataflashStructure, FmtuUnitMultAndParametersAreRead) {
 
 TEST(DataflashStructure, OldLogsTimedInMillisecondsWithImu2AreInstances) {
   Writer w;
-  w.fmt(70, "IMU", "Iffffff", "TimeMS,GyrX,GyrY,GyrZ,AccX,AccY,AccZ").fmt(71, "IMU2", "Iffffff", "TimeMS,GyrX,GyrY,GyrZ,AccX,AccY,AccZ");
+  w.fmt(70, "IMU", "Iffffff", "TimeMS,GyrX,GyrY,GyrZ,AccX,AccY,AccZ")
+      .fmt(71, "IMU2", "Iffffff", "TimeMS,GyrX,GyrY,GyrZ,AccX,AccY,AccZ");
   for (int i = 0; i < 5; ++i) {
     w.message(70, {1000.0 + 20 * i, 0.1, 0.2, 0.3, 1.0, 2.0, -9.0});
     w.message(71, {1000.0 + 20 * i, -0.1, -0.2, -0.3, -1.0, -2.0, -9.5});
   }
   std::vector<std::string> notes;
-  const auto record = dataflash::imu_record(dataflash::parse(w.bytes(), "old.bin", {false, dataflash::imu_types()}), {}, &notes);
+  const auto record =
+      dataflash::imu_record(dataflash::parse(w.bytes(), "old.bin", {false, dataflash::imu_types()}), {}, &notes);
   EXPECT_EQ(record.size(), 5);
   EXPECT_NEAR(record.time()[1], 1.02, kTimeTolerance);
   EXPECT_FLOAT_EQ(static_cast<float>(record.channel("gyro1_z").values[0]), -0.3f);
@@ -355,11 +360,13 @@ TEST(DataflashStructure, OutOfOrderAndRepeatedTimeStampsAreSortedAndDroppedWithN
   df::define_imu_log(w);
   for (const double t : {1000.0, 3000.0, 2000.0, 3000.0, 4000.0}) df::imu(w, t, 0, t * 1e-6, 0, 0, 0, 0, -9.8, 25);
   std::vector<std::string> notes;
-  const auto record = dataflash::imu_record(dataflash::parse(w.bytes(), "order.bin", {false, dataflash::imu_types()}), {}, &notes);
+  const auto record =
+      dataflash::imu_record(dataflash::parse(w.bytes(), "order.bin", {false, dataflash::imu_types()}), {}, &notes);
   ASSERT_EQ(record.size(), 4);
   EXPECT_FLOAT_EQ(static_cast<float>(record.channel("gyro_x").values[1]), 2000.0f * 1e-6f);
-  EXPECT_THAT(::testing::PrintToString(notes), AllOf(HasSubstr("IMU I=0: 1 samples earlier than the one before; sorted"),
-                                                      HasSubstr("IMU I=0: 1 repeated time stamps")));
+  EXPECT_THAT(::testing::PrintToString(notes),
+              AllOf(HasSubstr("IMU I=0: 1 samples earlier than the one before; sorted"),
+                    HasSubstr("IMU I=0: 1 repeated time stamps")));
 }
 
 // --- the firmware's temperature correction (INS_TCALn) ----------------------------------------
@@ -378,8 +385,8 @@ std::array<double, 3> unrotated(std::array<double, 3> v) { return v; }
 
 TcalLog tcal_log(double enable, double orientation, const BodyFromSensor& to_body = unrotated) {
   const double tmin = 20, tmax = 60, gyro_cal = 30, accel_cal = -300;  // accel offsets never calibrated
-  const double g1 = 1000, g2 = -20, g3 = 0.5;   // INS_TCAL1_GYRk_X (x 1e6)
-  const double a1 = 40000, a2 = 300, a3 = -2;   // INS_TCAL1_ACCk_Z (x 1e6)
+  const double g1 = 1000, g2 = -20, g3 = 0.5;                          // INS_TCAL1_GYRk_X (x 1e6)
+  const double a1 = 40000, a2 = 300, a3 = -2;                          // INS_TCAL1_ACCk_Z (x 1e6)
   auto p = [](double c1, double c2, double c3, double t) {
     const double d = t - 35.0;
     return (c1 * d + c2 * d * d + c3 * d * d * d) * 1e-6;
@@ -425,14 +432,15 @@ constexpr double kFloatLogged = 1e-6;  // the firmware logs float: ~1e-7 relativ
 TEST(DataflashTemperatureCalibration, ALogRecordedWithTcalOnGivesTheRawValuesBack) {
   const TcalLog log = tcal_log(1, 0);
   std::vector<std::string> notes;
-  const auto record = dataflash::imu_record(dataflash::parse(log.bytes, "tcal.bin", {false, dataflash::imu_types()}), {}, &notes);
+  const auto record =
+      dataflash::imu_record(dataflash::parse(log.bytes, "tcal.bin", {false, dataflash::imu_types()}), {}, &notes);
   ASSERT_EQ(record.size(), 50);
   for (Eigen::Index i = 0; i < record.size(); ++i) {
     EXPECT_NEAR(record.channel("gyro_x").values[i], log.raw_gyro_x[static_cast<std::size_t>(i)], kFloatLogged) << i;
     EXPECT_NEAR(record.channel("accel_z").values[i], log.raw_accel_z[static_cast<std::size_t>(i)], kFloatLogged) << i;
   }
-  EXPECT_THAT(::testing::PrintToString(notes), AllOf(HasSubstr("INS_TCAL1_ENABLE=1"), HasSubstr("removed"),
-                                                      HasSubstr("tempcal_IMU.py")));
+  EXPECT_THAT(::testing::PrintToString(notes),
+              AllOf(HasSubstr("INS_TCAL1_ENABLE=1"), HasSubstr("removed"), HasSubstr("tempcal_IMU.py")));
 }
 
 TEST(DataflashTemperatureCalibration, TheCorrectionIsThePolynomialOfTheFirmware) {
@@ -442,17 +450,18 @@ TEST(DataflashTemperatureCalibration, TheCorrectionIsThePolynomialOfTheFirmware)
   t.tmax = 60;
   t.gyro[0][1] = 1e6;  // 1 (rad/s)/degC on y
   t.gyro_cal_temp = 35;
-  EXPECT_DOUBLE_EQ(dataflash::firmware_correction(t, imu::Sensor::Gyro, 1, 45), 10.0);   // (45-35) - 0
-  EXPECT_DOUBLE_EQ(dataflash::firmware_correction(t, imu::Sensor::Gyro, 1, 80), 25.0);   // clamped to 60
-  EXPECT_DOUBLE_EQ(dataflash::firmware_correction(t, imu::Sensor::Gyro, 0, 80), 0.0);    // no x coefficient
-  t.gyro_cal_temp = -300;                                                                 // clamped to TMIN
+  EXPECT_DOUBLE_EQ(dataflash::firmware_correction(t, imu::Sensor::Gyro, 1, 45), 10.0);  // (45-35) - 0
+  EXPECT_DOUBLE_EQ(dataflash::firmware_correction(t, imu::Sensor::Gyro, 1, 80), 25.0);  // clamped to 60
+  EXPECT_DOUBLE_EQ(dataflash::firmware_correction(t, imu::Sensor::Gyro, 0, 80), 0.0);   // no x coefficient
+  t.gyro_cal_temp = -300;                                                               // clamped to TMIN
   EXPECT_DOUBLE_EQ(dataflash::firmware_correction(t, imu::Sensor::Gyro, 1, 35), 15.0);
 }
 
 TEST(DataflashTemperatureCalibration, NotRemovedWhenDisabled) {
   const TcalLog off = tcal_log(0, 0);
   std::vector<std::string> notes;
-  const auto raw = dataflash::imu_record(dataflash::parse(off.bytes, "off.bin", {false, dataflash::imu_types()}), {}, &notes);
+  const auto raw =
+      dataflash::imu_record(dataflash::parse(off.bytes, "off.bin", {false, dataflash::imu_types()}), {}, &notes);
   EXPECT_EQ(raw.channel("gyro_x").values[3], static_cast<float>(off.raw_gyro_x[3]));
   EXPECT_THAT(::testing::PrintToString(notes), ::testing::Not(HasSubstr("TCAL")));
 }
@@ -465,11 +474,16 @@ TEST(DataflashTemperatureCalibration, NotRemovedWhenDisabled) {
 TEST(DataflashBoardOrientation, ARotatedBoardsBodyFrameValuesComeBackInTheSensorFrameWithTcalRemoved) {
   constexpr double kHalfSqrt2 = 0.70710678118654757;
   const std::pair<double, BodyFromSensor> boards[] = {
-      {8, [](std::array<double, 3> v) { return std::array<double, 3>{v[0], -v[1], -v[2]}; }},  // ROLL_180
-      {1, [&](std::array<double, 3> v) {  // YAW_45
+      {8,
+       [](std::array<double, 3> v) {
+         return std::array<double, 3>{v[0], -v[1], -v[2]};
+       }},  // ROLL_180
+      {1,
+       [&](std::array<double, 3> v) {  // YAW_45
          return std::array<double, 3>{kHalfSqrt2 * (v[0] - v[1]), kHalfSqrt2 * (v[0] + v[1]), v[2]};
        }},
-      {42, [&](std::array<double, 3> v) {  // ROLL_45
+      {42,
+       [&](std::array<double, 3> v) {  // ROLL_45
          return std::array<double, 3>{v[0], kHalfSqrt2 * (v[1] - v[2]), kHalfSqrt2 * (v[1] + v[2])};
        }},
   };
@@ -477,7 +491,8 @@ TEST(DataflashBoardOrientation, ARotatedBoardsBodyFrameValuesComeBackInTheSensor
     SCOPED_TRACE(orientation);
     const TcalLog log = tcal_log(1, orientation, to_body);
     std::vector<std::string> notes;
-    const auto record = dataflash::imu_record(dataflash::parse(log.bytes, "rot.bin", {false, dataflash::imu_types()}), {}, &notes);
+    const auto record =
+        dataflash::imu_record(dataflash::parse(log.bytes, "rot.bin", {false, dataflash::imu_types()}), {}, &notes);
     ASSERT_EQ(record.size(), 50);
     for (Eigen::Index i = 0; i < record.size(); ++i) {
       const auto k = static_cast<std::size_t>(i);
@@ -488,8 +503,8 @@ TEST(DataflashBoardOrientation, ARotatedBoardsBodyFrameValuesComeBackInTheSensor
       EXPECT_NEAR(record.channel("accel_y").values[i], 0.2, kFloatLogged) << i;
       EXPECT_NEAR(record.channel("accel_z").values[i], log.raw_accel_z[k], kFloatLogged) << i;
     }
-    EXPECT_THAT(::testing::PrintToString(notes), AllOf(HasSubstr("body frame"), HasSubstr("sensor frame"),
-                                                        HasSubstr("removed (TMIN")));
+    EXPECT_THAT(::testing::PrintToString(notes),
+                AllOf(HasSubstr("body frame"), HasSubstr("sensor frame"), HasSubstr("removed (TMIN")));
   }
 }
 
@@ -571,7 +586,8 @@ TEST(DataflashBadInput, ASmallLogCutAtEveryOffsetIsAPrefixOrADataError) {
   for (std::size_t cut = 0; cut <= bytes.size(); ++cut) {
     SCOPED_TRACE(cut);
     const auto reason = error_of([&] {
-      const auto log = dataflash::parse(std::string_view(bytes).substr(0, cut), "cut.bin", {false, dataflash::imu_types()});
+      const auto log =
+          dataflash::parse(std::string_view(bytes).substr(0, cut), "cut.bin", {false, dataflash::imu_types()});
       dataflash::imu_record(log, {});
     });
     if (reason != "no error") {
@@ -593,7 +609,8 @@ TEST(DataflashBadInput, CorruptFmtMessagesAreDataErrorsNamingTheOffset) {
   for (const auto& [expected, write] : cases) {
     Writer w;
     write(w);
-    EXPECT_THAT(error_of([&] { dataflash::parse(w.bytes(), "bad.bin"); }), AllOf(HasSubstr("bad.bin"), HasSubstr(at), HasSubstr(expected)));
+    EXPECT_THAT(error_of([&] { dataflash::parse(w.bytes(), "bad.bin"); }),
+                AllOf(HasSubstr("bad.bin"), HasSubstr(at), HasSubstr(expected)));
   }
   Writer redefined;
   redefined.fmt(70, "AAA", "Qf", "TimeUS,F").message(70, {1.0, 2.0}).fmt(70, "BBB", "Qff", "TimeUS,F,G");
@@ -618,22 +635,27 @@ TEST(DataflashBadInput, MissingImuUnknownTypesAndBadSelectionsAreNamed) {
   df::parm(w, 0, "INS_GYR_ID", 1);
   w.raw(std::string("\xA3\x95\x09", 3) + std::string(60, 'x'));  // IMU data whose FMT was lost
   const auto log = dataflash::parse(w.bytes(), "noimu.bin", {false, dataflash::imu_types()});
-  EXPECT_THAT(error_of([&] { dataflash::imu_record(log, {}); }),
-              AllOf(HasSubstr("noimu.bin"), HasSubstr("no IMU messages"), HasSubstr("without an FMT, the first (9) at byte")));
+  EXPECT_THAT(
+      error_of([&] { dataflash::imu_record(log, {}); }),
+      AllOf(HasSubstr("noimu.bin"), HasSubstr("no IMU messages"), HasSubstr("without an FMT, the first (9) at byte")));
 
   const auto small = dataflash::parse(small_log(5), "small.bin", {false, dataflash::imu_types()});
   LogSelection topic;
   topic.topic = "sensor_gyro";
-  EXPECT_THAT(error_of([&] { dataflash::imu_record(small, topic); }), AllOf(HasSubstr("ConfigError"), HasSubstr("--topic")));
+  EXPECT_THAT(error_of([&] { dataflash::imu_record(small, topic); }),
+              AllOf(HasSubstr("ConfigError"), HasSubstr("--topic")));
   LogSelection instance;
   instance.instance = 4;
   EXPECT_THAT(error_of([&] { dataflash::imu_record(small, instance); }),
-              AllOf(HasSubstr("DataError: small.bin"), HasSubstr("it has: IMU I=0 gyro, IMU I=0 accel, IMU I=1 gyro, IMU I=1 accel")));
+              AllOf(HasSubstr("DataError: small.bin"),
+                    HasSubstr("it has: IMU I=0 gyro, IMU I=0 accel, IMU I=1 gyro, IMU I=1 accel")));
 
   Writer nan;
   df::define_imu_log(nan);
   for (int i = 0; i < 3; ++i) df::imu(nan, 1000.0 * (i + 1), 0, i == 1 ? NAN : 0.1, 0, 0, 0, 0, -9.8, 25);
-  EXPECT_THAT(error_of([&] { dataflash::imu_record(dataflash::parse(nan.bytes(), "nan.bin", {false, dataflash::imu_types()}), {}); }),
+  EXPECT_THAT(error_of([&] {
+                dataflash::imu_record(dataflash::parse(nan.bytes(), "nan.bin", {false, dataflash::imu_types()}), {});
+              }),
               AllOf(HasSubstr("nan.bin"), HasSubstr("non-finite value at time stamp 2000 us")));
 }
 

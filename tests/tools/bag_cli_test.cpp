@@ -28,20 +28,26 @@ std::string fixture(const std::string& name) { return (logs() / name).string(); 
 TEST(BagCli, InfoListsTopicsInstancesAndTemperatureOfEachFixture) {
   const auto ros1 = run_driftlab("log info " + fixture("ros1-robot-localization/test2.bag"));
   ASSERT_EQ(ros1.exit_code, 0) << ros1.err;
-  EXPECT_THAT(ros1.out, AllOf(HasSubstr("ROS 1 bag v2.0, 533743 bytes"), HasSubstr("messages: 6121, 47.580 to 108.781 s"),
-                              HasSubstr("/imu/data                            sensor_msgs/Imu"),
-                              HasSubstr("instance 0: /imu/data"), HasSubstr("gyro:  3061 samples at 50.0 Hz, 47.580 to 108.780 s"),
-                              HasSubstr("temperature: no topic pairs with it")));
+  EXPECT_THAT(
+      ros1.out,
+      AllOf(HasSubstr("ROS 1 bag v2.0, 533743 bytes"), HasSubstr("messages: 6121, 47.580 to 108.781 s"),
+            HasSubstr("/imu/data                            sensor_msgs/Imu"), HasSubstr("instance 0: /imu/data"),
+            HasSubstr("gyro:  3061 samples at 50.0 Hz, 47.580 to 108.780 s"),
+            HasSubstr("temperature: no topic pairs with it")));
 
   const auto mcap = run_driftlab("log info " + fixture("ros2-robot-localization/imu_zstd.mcap"));
   ASSERT_EQ(mcap.exit_code, 0) << mcap.err;
-  EXPECT_THAT(mcap.out, AllOf(HasSubstr("MCAP (profile ros2, zstd chunks, summary)"), HasSubstr("sensor_msgs/msg/Imu"),
-                              HasSubstr("cdr           3061      50.0"),
-                              HasSubstr("temperature: /imu/temperature, 307 samples at 5.0 Hz, 47.580 to 108.780 s, 20.00 to 35.30 degC")));
+  EXPECT_THAT(
+      mcap.out,
+      AllOf(
+          HasSubstr("MCAP (profile ros2, zstd chunks, summary)"), HasSubstr("sensor_msgs/msg/Imu"),
+          HasSubstr("cdr           3061      50.0"),
+          HasSubstr("temperature: /imu/temperature, 307 samples at 5.0 Hz, 47.580 to 108.780 s, 20.00 to 35.30 degC")));
 
   const auto db3 = run_driftlab("log info " + fixture("ros2-robot-localization/imu_db3"));
   ASSERT_EQ(db3.exit_code, 0) << db3.err;
-  EXPECT_THAT(db3.out, AllOf(HasSubstr("rosbag2 directory, sqlite3 storage (1 file)"), HasSubstr("20.00 to 22.45 degC")));
+  EXPECT_THAT(db3.out,
+              AllOf(HasSubstr("rosbag2 directory, sqlite3 storage (1 file)"), HasSubstr("20.00 to 22.45 degC")));
 
   const auto talker = run_driftlab("log info " + fixture("ros2-rosbag2/talker-mcap"));
   ASSERT_EQ(talker.exit_code, 0) << talker.err;
@@ -99,7 +105,8 @@ TEST(BagCli, InfoListsEveryRos2FixtureWithTheIndependentReadersMessageTotal) {
 
 TEST(BagCli, ExportWritesTheImuRecordTheCsvReaderReadsBack) {
   const auto dir = scratch_dir("bag_export");
-  const auto r = run_driftlab("log export " + fixture("ros2-robot-localization/imu_zstd.mcap") + " --out " + (dir / "imu.csv").string());
+  const auto r = run_driftlab("log export " + fixture("ros2-robot-localization/imu_zstd.mcap") + " --out " +
+                              (dir / "imu.csv").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("3061 samples, 7 channels"));
   CsvReadOptions options;
@@ -115,16 +122,21 @@ TEST(BagCli, ExportWritesTheImuRecordTheCsvReaderReadsBack) {
 TEST(BagCli, CalibrateOnABagFitsWhatCalibrateOnItsCsvFits) {
   const auto dir = scratch_dir("bag_calibrate");
   const std::string csv = (dir / "imu3.csv").string(), bag = (dir / "imu3.bag").string();
-  const auto s = run_driftlab("simulate --device " + std::string(DRIFTLAB_SOURCE_DIR) + "/devices/imu3.yaml --fs 1 --seed 1 --out " + csv);
+  const auto s = run_driftlab("simulate --device " + std::string(DRIFTLAB_SOURCE_DIR) +
+                              "/devices/imu3.yaml --fs 1 --seed 1 --out " + csv);
   ASSERT_EQ(s.exit_code, 0) << s.err;
   const int status = std::system(("/usr/bin/python3 " + std::string(DRIFTLAB_SOURCE_DIR) +
-                                  "/tests/framework/write_ros1_bags.py from-csv " + csv + " " + bag + " 2>/dev/null").c_str());
-  if (WIFEXITED(status) && WEXITSTATUS(status) == 77) GTEST_SKIP() << "python3-rosbag or python3-sensor-msgs is not installed";
+                                  "/tests/framework/write_ros1_bags.py from-csv " + csv + " " + bag + " 2>/dev/null")
+                                     .c_str());
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 77)
+    GTEST_SKIP() << "python3-rosbag or python3-sensor-msgs is not installed";
   ASSERT_EQ(status, 0);
 
-  const auto from_csv = run_driftlab("-q calibrate --data " + csv + " --channels gyro --out " + (dir / "csv.json").string());
+  const auto from_csv =
+      run_driftlab("-q calibrate --data " + csv + " --channels gyro --out " + (dir / "csv.json").string());
   ASSERT_EQ(from_csv.exit_code, 0) << from_csv.err;
-  const auto from_bag = run_driftlab("-q calibrate --data " + bag + " --channels gyro --out " + (dir / "bag.json").string());
+  const auto from_bag =
+      run_driftlab("-q calibrate --data " + bag + " --channels gyro --out " + (dir / "bag.json").string());
   ASSERT_EQ(from_bag.exit_code, 0) << from_bag.err;
   const auto a = nlohmann::json::parse(read_text(dir / "csv.json"));
   const auto b = nlohmann::json::parse(read_text(dir / "bag.json"));
@@ -156,15 +168,18 @@ TEST(BagCli, BadBagsExitWithThreeNamingFileAndPlace) {
   const std::string good = read_text(logs() / "ros2-robot-localization" / "imu_lz4.mcap");
   std::ofstream(dir / "cut.mcap", std::ios::binary) << good.substr(0, good.size() / 2);
   fs::create_directories(dir / "empty_dir");
-  for (const auto& args : {"log info " + (dir / "cut.mcap").string(), "log export " + (dir / "cut.mcap").string() + " --out " + (dir / "x.csv").string(),
-                           "allan --data " + (dir / "cut.mcap").string() + " --column rate=gyro_z --out " + (dir / "x.csv").string()}) {
+  for (const auto& args :
+       {"log info " + (dir / "cut.mcap").string(),
+        "log export " + (dir / "cut.mcap").string() + " --out " + (dir / "x.csv").string(),
+        "allan --data " + (dir / "cut.mcap").string() + " --column rate=gyro_z --out " + (dir / "x.csv").string()}) {
     SCOPED_TRACE(args);
     const auto r = run_driftlab(args);
     EXPECT_EQ(r.exit_code, 3);
     EXPECT_THAT(r.err, AllOf(HasSubstr("cut.mcap: byte "), Not(HasSubstr("failed"))));
     EXPECT_FALSE(fs::exists(dir / "x.csv"));
   }
-  const auto topic = run_driftlab("log export " + fixture("ros1-robot-localization/test2.bag") + " --topic /imu --out " + (dir / "x.csv").string());
+  const auto topic = run_driftlab("log export " + fixture("ros1-robot-localization/test2.bag") +
+                                  " --topic /imu --out " + (dir / "x.csv").string());
   EXPECT_EQ(topic.exit_code, 3);
   EXPECT_THAT(topic.err, HasSubstr("topic '/imu' is not in the bag (IMU topics it has: /imu/data)"));
   const auto not_a_bag = run_driftlab("log info " + (dir / "empty_dir").string());

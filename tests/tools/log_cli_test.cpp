@@ -71,7 +71,8 @@ TEST_F(LogCli, ExportWritesTheImuRecordTheCsvReaderReadsBack) {
 
   const auto one = run_driftlab("log export " + p("gyros.ulg") + " --instance 1 --out " + p("one.csv"));
   ASSERT_EQ(one.exit_code, 0) << one.err;
-  EXPECT_THAT(read_text(p("one.csv")).substr(0, 60), HasSubstr("t_s,gyro1_x_rad_s,gyro1_y_rad_s,gyro1_z_rad_s,temp1_c"));
+  EXPECT_THAT(read_text(p("one.csv")).substr(0, 60),
+              HasSubstr("t_s,gyro1_x_rad_s,gyro1_y_rad_s,gyro1_z_rad_s,temp1_c"));
 }
 
 TEST_F(LogCli, RecordCommandsReadALogWithAColumnMapping) {
@@ -89,8 +90,8 @@ TEST_F(LogCli, RecordCommandsReadALogWithAColumnMapping) {
 TEST(LogCliUlog, CalibrateOnAUlogFitsWhatItFitsOnTheLogsExport) {
   const auto dir = scratch_dir("log_cli_ulog_calibrate");
   const auto sim = dir / "imu3.csv";
-  const auto s = run_driftlab("simulate --device " + std::string(DRIFTLAB_SOURCE_DIR) + "/devices/imu3.yaml --fs 1 --seed 1 --out " +
-                              sim.string());
+  const auto s = run_driftlab("simulate --device " + std::string(DRIFTLAB_SOURCE_DIR) +
+                              "/devices/imu3.yaml --fs 1 --seed 1 --out " + sim.string());
   ASSERT_EQ(s.exit_code, 0) << s.err;
   CsvReadOptions options;
   options.required_roles = {"gyro_x", "gyro1_x", "temperature", "temperature1"};
@@ -103,8 +104,9 @@ TEST(LogCliUlog, CalibrateOnAUlogFitsWhatItFitsOnTheLogsExport) {
       const std::string n = instance == 0 ? "" : "1";
       auto v = [&](const std::string& role) { return static_cast<float>(record.channel(role).values[i]); };
       w.data(static_cast<std::uint16_t>(instance + 1),
-             testing_ulog::sensor_gyro(t + 3000 * static_cast<std::uint64_t>(instance), instance == 0 ? 2424842u : 2490378u,
-                                       v("gyro" + n + "_x"), v("gyro" + n + "_y"), v("gyro" + n + "_z"), v("temperature" + n)));
+             testing_ulog::sensor_gyro(t + 3000 * static_cast<std::uint64_t>(instance),
+                                       instance == 0 ? 2424842u : 2490378u, v("gyro" + n + "_x"), v("gyro" + n + "_y"),
+                                       v("gyro" + n + "_z"), v("temperature" + n)));
     }
   }
   const auto ulg = (dir / "oven.ulg").string();
@@ -115,7 +117,8 @@ TEST(LogCliUlog, CalibrateOnAUlogFitsWhatItFitsOnTheLogsExport) {
   EXPECT_THAT(from_ulg.out, HasSubstr("6 channels"));
   const auto exported = run_driftlab("log export " + ulg + " --out " + (dir / "export.csv").string());
   ASSERT_EQ(exported.exit_code, 0) << exported.err;
-  const auto from_csv = run_driftlab("-q calibrate --data " + (dir / "export.csv").string() + " --out " + (dir / "csv.json").string());
+  const auto from_csv =
+      run_driftlab("-q calibrate --data " + (dir / "export.csv").string() + " --out " + (dir / "csv.json").string());
   ASSERT_EQ(from_csv.exit_code, 0) << from_csv.err;
   auto a = nlohmann::json::parse(read_text(dir / "ulg.json")), b = nlohmann::json::parse(read_text(dir / "csv.json"));
   ASSERT_EQ(a["channels"].size(), 6u);
@@ -137,9 +140,9 @@ TEST_F(LogCli, BadLogsExitWithThreeNamingFileAndOffset) {
   const std::string good = two_gyros(50);
   write(dir_ / "cut.ulg", good.substr(0, good.size() - 5));
   write(dir_ / "unknown.ulg", Writer().flag_bits().message('Z', "??").bytes());
-  for (const auto& args : {"log info " + p("cut.ulg"), "log export " + p("cut.ulg") + " --out " + p("x.csv"),
-                           "allan --data " + p("cut.ulg") + " --column rate=gyro_z --out " + p("x.csv"),
-                           "log info " + p("unknown.ulg")}) {
+  for (const auto& args :
+       {"log info " + p("cut.ulg"), "log export " + p("cut.ulg") + " --out " + p("x.csv"),
+        "allan --data " + p("cut.ulg") + " --column rate=gyro_z --out " + p("x.csv"), "log info " + p("unknown.ulg")}) {
     SCOPED_TRACE(args);
     const auto r = run_driftlab(args);
     EXPECT_EQ(r.exit_code, 3);
@@ -170,10 +173,12 @@ TEST(LogCliPyulog, InfoOnEachFixture) {
 // --- ArduPilot DataFlash ------------------------------------------------------------------------
 
 fs::path dataflash_logs() { return fs::path(DRIFTLAB_TEST_DATA) / "logs"; }
-const fs::path kSpark404 = dataflash_logs() / "spark404-dataflashlog" / "log.bin";  // 1 258 IMU + IMU2, pymavlink's counts
+const fs::path kSpark404 =
+    dataflash_logs() / "spark404-dataflashlog" / "log.bin";  // 1 258 IMU + IMU2, pymavlink's counts
 
 TEST(LogCliDataflash, InfoOnEachFixture) {
-  for (const char* file : {"pymavlink/test.BIN", "spark404-dataflashlog/log.bin", "methodic-configurator/backend_log_80k.bin"}) {
+  for (const char* file :
+       {"pymavlink/test.BIN", "spark404-dataflashlog/log.bin", "methodic-configurator/backend_log_80k.bin"}) {
     SCOPED_TRACE(file);
     const auto r = run_driftlab("log info " + (dataflash_logs() / file).string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -184,7 +189,8 @@ TEST(LogCliDataflash, InfoOnEachFixture) {
   EXPECT_THAT(spark.out, AllOf(HasSubstr("instance 0: 1258 messages at 24.7 Hz, 27.18 to 27.68 degC"),
                                HasSubstr("gyro  device id 2163722 (0x21040a) (INS_GYR_ID)"),
                                HasSubstr("temperature calibration: no INS_TCAL* parameters")));
-  const auto newer = run_driftlab("log info " + (dataflash_logs() / "methodic-configurator" / "backend_log_80k.bin").string());
+  const auto newer =
+      run_driftlab("log info " + (dataflash_logs() / "methodic-configurator" / "backend_log_80k.bin").string());
   EXPECT_THAT(newer.out, AllOf(HasSubstr("IMU messages by I"), HasSubstr("INS_TCAL1_ENABLE 0 (off"),
                                HasSubstr("INS_GYR1_CALTEMP = 30.7045"), HasSubstr("its last 2 bytes left out")));
 }
@@ -212,9 +218,11 @@ TEST(LogCliDataflash, ABoardRotationIsReportedAndUndoneAndACustomOneIsRefused) {
   testing_dataflash::parm(w, 0, "AHRS_ORIENTATION", 100);  // ROTATION_CUSTOM
   for (int i = 0; i < 5; ++i) testing_dataflash::imu(w, 1e6 + 1e4 * i, 0, 0.01, 0.02, 0.03, 0.1, 0.2, -9.8, 30);
   write(dir / "custom.bin", w.bytes());
-  const auto custom = run_driftlab("log export " + (dir / "custom.bin").string() + " --out " + (dir / "c.csv").string());
+  const auto custom =
+      run_driftlab("log export " + (dir / "custom.bin").string() + " --out " + (dir / "c.csv").string());
   EXPECT_EQ(custom.exit_code, 3);
-  EXPECT_THAT(custom.err, AllOf(HasSubstr("custom.bin"), HasSubstr("AHRS_ORIENTATION is 100"), HasSubstr("body frame")));
+  EXPECT_THAT(custom.err,
+              AllOf(HasSubstr("custom.bin"), HasSubstr("AHRS_ORIENTATION is 100"), HasSubstr("body frame")));
   const auto custom_info = run_driftlab("log info " + (dir / "custom.bin").string());
   EXPECT_EQ(custom_info.exit_code, 0) << custom_info.err;
   EXPECT_THAT(custom_info.out, HasSubstr("AHRS_ORIENTATION 100: not one of ArduPilot's fixed rotations 0..43"));
@@ -233,9 +241,11 @@ TEST(LogCliDataflash, ExportWritesEveryInstanceTheCsvReaderReadsBack) {
   EXPECT_EQ(record.channel("temperature").values[0], 27.466842651367188);
   EXPECT_EQ(record.device_id(0), "2163722");
   EXPECT_EQ(record.device_id(1), "2228490");
-  const auto gyros = run_driftlab("log export " + kSpark404.string() + " --sensor gyro1 --out " + (dir / "g1.csv").string());
+  const auto gyros =
+      run_driftlab("log export " + kSpark404.string() + " --sensor gyro1 --out " + (dir / "g1.csv").string());
   ASSERT_EQ(gyros.exit_code, 0) << gyros.err;
-  EXPECT_THAT(read_text(dir / "g1.csv").substr(0, 60), HasSubstr("t_s,gyro1_x_rad_s,gyro1_y_rad_s,gyro1_z_rad_s,temp1_c"));
+  EXPECT_THAT(read_text(dir / "g1.csv").substr(0, 60),
+              HasSubstr("t_s,gyro1_x_rad_s,gyro1_y_rad_s,gyro1_z_rad_s,temp1_c"));
 }
 
 TEST(LogCliDataflash, CalibrateCompensateAndAllanReadTheBinDirectly) {
@@ -252,16 +262,18 @@ TEST(LogCliDataflash, CalibrateCompensateAndAllanReadTheBinDirectly) {
                                   (dir / "g.json").string());
   ASSERT_EQ(gyros.exit_code, 0) << gyros.err;
   EXPECT_THAT(gyros.out, HasSubstr("3 channels"));
-  const auto flat = run_driftlab("-q calibrate --data " + bin + " --instance 1 --bin 2 --force --out " + (dir / "g1.json").string());
+  const auto flat =
+      run_driftlab("-q calibrate --data " + bin + " --instance 1 --bin 2 --force --out " + (dir / "g1.json").string());
   EXPECT_EQ(flat.exit_code, 3);
   EXPECT_THAT(flat.err, AllOf(HasSubstr("log.bin"), HasSubstr("IMU2")));
 
   // compensate on the .bin writes what it writes on the log's export
   const auto exported = run_driftlab("log export " + bin + " --out " + (dir / "imu.csv").string());
   ASSERT_EQ(exported.exit_code, 0) << exported.err;
-  const auto from_csv = run_driftlab("-q compensate --model " + model + " --data " + (dir / "imu.csv").string() + " --out " +
-                                     (dir / "c1.csv").string());
-  const auto from_bin = run_driftlab("-q compensate --model " + model + " --data " + bin + " --out " + (dir / "c2.csv").string());
+  const auto from_csv = run_driftlab("-q compensate --model " + model + " --data " + (dir / "imu.csv").string() +
+                                     " --out " + (dir / "c1.csv").string());
+  const auto from_bin =
+      run_driftlab("-q compensate --model " + model + " --data " + bin + " --out " + (dir / "c2.csv").string());
   ASSERT_EQ(from_csv.exit_code, 0) << from_csv.err;
   ASSERT_EQ(from_bin.exit_code, 0) << from_bin.err;
   EXPECT_EQ(read_text(dir / "c1.csv"), read_text(dir / "c2.csv"));

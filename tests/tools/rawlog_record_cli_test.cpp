@@ -34,8 +34,8 @@ using namespace testing_cli;
 // The bridge's CSV names (tools/mrpt/rawlog_io.hpp) of the fields a 3-axis IMU carries, and the
 // record role each becomes.
 const std::pair<const char*, const char*> kBridgeColumns[] = {
-    {"rate_rps", "gyro_z"},      {"wx_rps", "gyro_x"},        {"wy_rps", "gyro_y"},        {"acc_x_mps2", "accel_x"},
-    {"acc_y_mps2", "accel_y"},   {"acc_z_mps2", "accel_z"},   {"temp_c", "temperature"}};
+    {"rate_rps", "gyro_z"},    {"wx_rps", "gyro_x"},      {"wy_rps", "gyro_y"},     {"acc_x_mps2", "accel_x"},
+    {"acc_y_mps2", "accel_y"}, {"acc_z_mps2", "accel_z"}, {"temp_c", "temperature"}};
 
 struct Fixture {
   fs::path dir, rawlog, truth;  // the rawlog and the record it holds (instance 0 of a simulated imu3 run)
@@ -53,8 +53,8 @@ const Fixture& fixture() {
     Fixture out;
     out.dir = fixture_dir() = scratch_dir("rawlog_record");
     const auto sim = out.dir / "imu3.csv";
-    const auto s = run_driftlab("simulate --device " + std::string(DRIFTLAB_SOURCE_DIR) + "/devices/imu3.yaml --fs 1 --seed 1 --out " +
-                                sim.string());
+    const auto s = run_driftlab("simulate --device " + std::string(DRIFTLAB_SOURCE_DIR) +
+                                "/devices/imu3.yaml --fs 1 --seed 1 --out " + sim.string());
     EXPECT_EQ(s.exit_code, 0) << s.err;
     CsvReadOptions options;
     options.required_roles = {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z", "temperature"};
@@ -128,8 +128,14 @@ TEST(RawlogRecord, TheRegistryChoosesTheRawlogReaderByContentGzippedOrPlain) {
     return sniff_record_format(f.dir / name);
   };
   EXPECT_EQ(header("old.rawlog", std::string("\x0f\0\0\0CObservationIMU", 19)), RecordFormat::Rawlog);
-  EXPECT_EQ(header("frame.rawlog", "\x8d" "CSensoryFrame"), RecordFormat::Rawlog);
-  EXPECT_EQ(header("other.rawlog", "\x8e" "mrpt::poses::X"), RecordFormat::Csv);
+  EXPECT_EQ(header("frame.rawlog",
+                   "\x8d"
+                   "CSensoryFrame"),
+            RecordFormat::Rawlog);
+  EXPECT_EQ(header("other.rawlog",
+                   "\x8e"
+                   "mrpt::poses::X"),
+            RecordFormat::Csv);
   EXPECT_EQ(header("text.rawlog", "\x8ds_t,rate_dps\n"), RecordFormat::Csv);
 
   CsvReadOptions options;
@@ -161,16 +167,21 @@ TEST(RawlogRecord, LogInfoAndLogExportGiveTheRecordTheRawlogWasWrittenFrom) {
   CsvReadOptions bridge;
   bridge.required_roles = {};
   for (const auto& [column, role] : kBridgeColumns)
-    bridge.columns.push_back({role, column, std::string(role) == "temperature" ? "degC" : role[0] == 'g' ? "rad/s" : "m/s^2"});
+    bridge.columns.push_back({role, column,
+                              std::string(role) == "temperature" ? "degC"
+                              : role[0] == 'g'                   ? "rad/s"
+                                                                 : "m/s^2"});
   const TimeSeries truth = read_csv(f.truth, bridge);
   ASSERT_EQ(got.size(), truth.size());
   EXPECT_EQ(got.time(), truth.time());
-  for (const auto& [column, role] : kBridgeColumns) EXPECT_EQ(got.channel(role).values, truth.channel(role).values) << role;
+  for (const auto& [column, role] : kBridgeColumns)
+    EXPECT_EQ(got.channel(role).values, truth.channel(role).values) << role;
 
   const auto gyros = run_driftlab("log export " + path_of(f.rawlog) + " --sensor gyro --topic IMU0 --out " +
                                   path_of(f.dir / "gyros.csv"));
   ASSERT_EQ(gyros.exit_code, 0) << gyros.err;
-  EXPECT_THAT(read_text(f.dir / "gyros.csv").substr(0, 60), HasSubstr("t_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,temp_c"));
+  EXPECT_THAT(read_text(f.dir / "gyros.csv").substr(0, 60),
+              HasSubstr("t_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,temp_c"));
 }
 
 // Each command on the rawlog writes what it writes on the rawlog's CSV export.
@@ -186,7 +197,8 @@ TEST(RawlogRecord, EveryRecordCommandReadsTheRawlogAsItReadsItsCsv) {
   ASSERT_EQ(cal_raw.exit_code, 0) << cal_raw.err;
   const auto cal_csv = run_driftlab("-q calibrate --data " + csv + " --channels gyro --out " + d + "/csv.json");
   ASSERT_EQ(cal_csv.exit_code, 0) << cal_csv.err;
-  auto a = nlohmann::json::parse(read_text(f.dir / "raw.json")), b = nlohmann::json::parse(read_text(f.dir / "csv.json"));
+  auto a = nlohmann::json::parse(read_text(f.dir / "raw.json")),
+       b = nlohmann::json::parse(read_text(f.dir / "csv.json"));
   ASSERT_EQ(a["channels"].size(), 3u);
   ASSERT_EQ(b["channels"].size(), 3u);
   for (std::size_t i = 0; i < 3; ++i) {
@@ -200,16 +212,19 @@ TEST(RawlogRecord, EveryRecordCommandReadsTheRawlogAsItReadsItsCsv) {
   }
 
   // compensate: the same output, byte for byte
-  const auto c_raw = run_driftlab("-q compensate --model " + d + "/csv.json --data " + raw + " --out " + d + "/c_raw.csv");
+  const auto c_raw =
+      run_driftlab("-q compensate --model " + d + "/csv.json --data " + raw + " --out " + d + "/c_raw.csv");
   ASSERT_EQ(c_raw.exit_code, 0) << c_raw.err;
-  const auto c_csv = run_driftlab("-q compensate --model " + d + "/csv.json --data " + csv + " --out " + d + "/c_csv.csv");
+  const auto c_csv =
+      run_driftlab("-q compensate --model " + d + "/csv.json --data " + csv + " --out " + d + "/c_csv.csv");
   ASSERT_EQ(c_csv.exit_code, 0) << c_csv.err;
   EXPECT_EQ(read_text(f.dir / "c_raw.csv"), read_text(f.dir / "c_csv.csv"));
 
   // allan: the same deviations
   const auto al_raw = run_driftlab("-q allan --data " + raw + " --column rate=gyro_z --out " + d + "/al_raw.csv");
   ASSERT_EQ(al_raw.exit_code, 0) << al_raw.err;
-  const auto al_csv = run_driftlab("-q allan --data " + csv + " --column rate=gyro_z_rad_s:rad/s --out " + d + "/al_csv.csv");
+  const auto al_csv =
+      run_driftlab("-q allan --data " + csv + " --column rate=gyro_z_rad_s:rad/s --out " + d + "/al_csv.csv");
   ASSERT_EQ(al_csv.exit_code, 0) << al_csv.err;
   EXPECT_EQ(read_text(f.dir / "al_raw.csv"), read_text(f.dir / "al_csv.csv"));
 
@@ -218,19 +233,23 @@ TEST(RawlogRecord, EveryRecordCommandReadsTheRawlogAsItReadsItsCsv) {
   const auto run_raw = run_driftlab("-q run --pipeline " + pipeline + " --data " + raw +
                                     " --column rate=gyro_z --column temperature=temperature --out " + d + "/run_raw");
   ASSERT_EQ(run_raw.exit_code, 0) << run_raw.err;
-  const auto run_csv = run_driftlab("-q run --pipeline " + pipeline + " --data " + csv +
-                                    " --column rate=gyro_z_rad_s:rad/s --column temperature=temp_c:degC --out " + d + "/run_csv");
+  const auto run_csv =
+      run_driftlab("-q run --pipeline " + pipeline + " --data " + csv +
+                   " --column rate=gyro_z_rad_s:rad/s --column temperature=temp_c:degC --out " + d + "/run_csv");
   ASSERT_EQ(run_csv.exit_code, 0) << run_csv.err;
   EXPECT_EQ(read_text(f.dir / "run_raw" / "outputs.csv"), read_text(f.dir / "run_csv" / "outputs.csv"));
 
   // discrepancy: the same report numbers
-  const auto dis_raw = run_driftlab("-q discrepancy --data " + raw + " --column rate=gyro_z --column temperature=temperature --report " +
-                                    d + "/dis_raw.json");
+  const auto dis_raw =
+      run_driftlab("-q discrepancy --data " + raw + " --column rate=gyro_z --column temperature=temperature --report " +
+                   d + "/dis_raw.json");
   ASSERT_EQ(dis_raw.exit_code, 0) << dis_raw.err;
   const auto dis_csv = run_driftlab("-q discrepancy --data " + csv +
-                                    " --column rate=gyro_z_rad_s:rad/s --column temperature=temp_c:degC --report " + d + "/dis_csv.json");
+                                    " --column rate=gyro_z_rad_s:rad/s --column temperature=temp_c:degC --report " + d +
+                                    "/dis_csv.json");
   ASSERT_EQ(dis_csv.exit_code, 0) << dis_csv.err;
-  const auto r1 = nlohmann::json::parse(read_text(f.dir / "dis_raw.json")), r2 = nlohmann::json::parse(read_text(f.dir / "dis_csv.json"));
+  const auto r1 = nlohmann::json::parse(read_text(f.dir / "dis_raw.json")),
+             r2 = nlohmann::json::parse(read_text(f.dir / "dis_csv.json"));
   EXPECT_EQ(r1["gap_initial"], r2["gap_initial"]);
   EXPECT_EQ(r1["named_effects"], r2["named_effects"]);
 }
@@ -252,17 +271,20 @@ TEST(RawlogRecord, BadRawlogsAndSelectionsAreNamedWithTheirExitCodes) {
   const auto cut = run_driftlab("log export " + path_of(dir / "cut.rawlog") + " --out " + path_of(dir / "x.csv"));
   EXPECT_EQ(cut.exit_code, 3);
   EXPECT_THAT(cut.err, AllOf(HasSubstr("cut.rawlog"), HasSubstr("object"), HasSubstr("truncated")));
-  const auto cal = run_driftlab("-q calibrate --data " + path_of(dir / "cut.rawlog") + " --out " + path_of(dir / "m.json"));
+  const auto cal =
+      run_driftlab("-q calibrate --data " + path_of(dir / "cut.rawlog") + " --out " + path_of(dir / "m.json"));
   EXPECT_EQ(cal.exit_code, 3);
 
   // A label that is not there, an instance other than 0, a sensor the rawlog lacks.
   const auto label = run_driftlab("log export " + path_of(f.rawlog) + " --topic GYRO --out " + path_of(dir / "y.csv"));
   EXPECT_EQ(label.exit_code, 2);
   EXPECT_THAT(label.err, AllOf(HasSubstr("'GYRO'"), HasSubstr("'IMU0'")));
-  const auto instance = run_driftlab("log export " + path_of(f.rawlog) + " --instance 1 --out " + path_of(dir / "z.csv"));
+  const auto instance =
+      run_driftlab("log export " + path_of(f.rawlog) + " --instance 1 --out " + path_of(dir / "z.csv"));
   EXPECT_EQ(instance.exit_code, 2);
   EXPECT_THAT(instance.err, HasSubstr("instance 0"));
-  const auto sensor = run_driftlab("allan --data " + path_of(f.rawlog) + " --column rate=gyro1_z --out " + path_of(dir / "a.csv"));
+  const auto sensor =
+      run_driftlab("allan --data " + path_of(f.rawlog) + " --column rate=gyro1_z --out " + path_of(dir / "a.csv"));
   EXPECT_EQ(sensor.exit_code, 3);
   EXPECT_THAT(sensor.err, AllOf(HasSubstr("gyro1_z"), HasSubstr("gyro_z")));
   fs::remove_all(dir);

@@ -38,9 +38,10 @@ RecordFormat require_log(const std::string& path) {
   if (format == RecordFormat::RosBag) return format;  // a file, or a rosbag2 directory
   check_data_input(path);
   if (format == RecordFormat::Csv)
-    throw DataError({path, 0, ""}, "not a log driftlab reads (a PX4 ULog, an ArduPilot DataFlash log, a ROS 1 bag, a "
-                                   "ROS 2 bag (.db3, .mcap, or its directory), an MRPT rawlog); CSV records are read by "
-                                   "the other commands directly");
+    throw DataError({path, 0, ""},
+                    "not a log driftlab reads (a PX4 ULog, an ArduPilot DataFlash log, a ROS 1 bag, a "
+                    "ROS 2 bag (.db3, .mcap, or its directory), an MRPT rawlog); CSV records are read by "
+                    "the other commands directly");
   return format;
 }
 
@@ -52,7 +53,8 @@ std::string fixed(double v, int digits) {
 
 double rate_hz(const ulog::Topic& t) {
   if (t.count < 2 || t.last_timestamp_us <= t.first_timestamp_us) return 0.0;
-  return static_cast<double>(t.count - 1) / (static_cast<double>(t.last_timestamp_us - t.first_timestamp_us) * kSecondsPerMicrosecond);
+  return static_cast<double>(t.count - 1) /
+         (static_cast<double>(t.last_timestamp_us - t.first_timestamp_us) * kSecondsPerMicrosecond);
 }
 
 std::string seconds(std::uint64_t us) { return fixed(static_cast<double>(us) * kSecondsPerMicrosecond, 3); }
@@ -76,7 +78,8 @@ std::string imu_line(const ulog::Topic& t) {
   if (t.has_column("device_id") && !t.column("device_id").empty())
     out += "device_id " + device_text(t.column("device_id").front()) + ", ";
   out += std::to_string(t.count) + " messages at " + fixed(rate_hz(t), 1) + " Hz";
-  if (t.has_column("temperature") && !t.column("temperature").empty()) out += ", " + span(t.column("temperature"), 2, "degC");
+  if (t.has_column("temperature") && !t.column("temperature").empty())
+    out += ", " + span(t.column("temperature"), 2, "degC");
   return out;
 }
 
@@ -107,7 +110,9 @@ void ulog_info(const std::string& path) {
     longest_ms = std::max<std::uint64_t>(longest_ms, d.duration_ms);
   }
   std::cout << "dropouts: " << log.dropouts.size();
-  if (!log.dropouts.empty()) std::cout << ", " << fixed(static_cast<double>(dropped_ms) * 1e-3, 3) << " s in all, longest " << longest_ms << " ms";
+  if (!log.dropouts.empty())
+    std::cout << ", " << fixed(static_cast<double>(dropped_ms) * 1e-3, 3) << " s in all, longest " << longest_ms
+              << " ms";
   std::cout << "\nparameters: " << log.parameters.size() << " (" << log.parameter_changes.size()
             << " changes during the log, " << log.default_parameters.size() << " defaults)\n";
   std::cout << "logged messages: " << log.logged.size() << "\n";
@@ -122,7 +127,8 @@ void ulog_info(const std::string& path) {
   for (const auto& t : log.topics) with_data += t.count > 0;
   std::cout << "topics: " << log.topics.size() << " subscribed, " << with_data << " with data\n";
   char row[256];
-  std::snprintf(row, sizeof row, "  %-36s %8s %10s %10s %12s %12s\n", "name", "multi_id", "messages", "rate Hz", "from s", "to s");
+  std::snprintf(row, sizeof row, "  %-36s %8s %10s %10s %12s %12s\n", "name", "multi_id", "messages", "rate Hz",
+                "from s", "to s");
   std::cout << row;
   for (const auto& t : log.topics) {
     if (t.count == 0)
@@ -156,7 +162,8 @@ void ulog_info(const std::string& path) {
 
 double rate_hz(const dataflash::MessageType& t) {
   if (t.count < 2 || t.last_time_us <= t.first_time_us) return 0.0;
-  return static_cast<double>(t.count - 1) / (static_cast<double>(t.last_time_us - t.first_time_us) * kSecondsPerMicrosecond);
+  return static_cast<double>(t.count - 1) /
+         (static_cast<double>(t.last_time_us - t.first_time_us) * kSecondsPerMicrosecond);
 }
 
 // Rate of `count` samples between two time stamps (us), 0 when it cannot be told.
@@ -181,7 +188,9 @@ void dataflash_imu_lines(const dataflash::Log& log) {
     if (!any) std::cout << "IMU instances (" << (by_column ? "IMU messages by I" : "IMU, IMU2, IMU3") << "):\n";
     any = true;
     std::cout << "  instance " << instance << ": " << rows.size() << " messages at "
-              << fixed(rate_hz(rows.size(), static_cast<double>(t->time_us[rows.front()]), static_cast<double>(t->time_us[rows.back()])), 1)
+              << fixed(rate_hz(rows.size(), static_cast<double>(t->time_us[rows.front()]),
+                               static_cast<double>(t->time_us[rows.back()])),
+                       1)
               << " Hz";
     if (t->has_column("T")) {
       std::vector<double> temp;
@@ -191,8 +200,8 @@ void dataflash_imu_lines(const dataflash::Log& log) {
     std::cout << "\n";
     for (const auto sensor : {imu::Sensor::Gyro, imu::Sensor::Accel})
       if (const auto id = dataflash::device_id(log, sensor, instance))
-        std::cout << "    " << (sensor == imu::Sensor::Gyro ? "gyro " : "accel") << " device id " << device_text(*id) << " ("
-                  << dataflash::device_id_parameter(sensor, instance) << ")\n";
+        std::cout << "    " << (sensor == imu::Sensor::Gyro ? "gyro " : "accel") << " device id " << device_text(*id)
+                  << " (" << dataflash::device_id_parameter(sensor, instance) << ")\n";
   }
   if (!any) std::cout << "IMU: no IMU messages\n";
 }
@@ -217,8 +226,9 @@ void dataflash_tcal_lines(const dataflash::Log& log) {
   std::vector<const dataflash::Parameter*> tcal;
   std::vector<std::string> seen;
   for (const auto& p : log.parameters) {
-    const bool calibration = p.name.starts_with("INS_TCAL") ||
-                             ((p.name.starts_with("INS_GYR") || p.name.starts_with("INS_ACC")) && p.name.ends_with("_CALTEMP"));
+    const bool calibration =
+        p.name.starts_with("INS_TCAL") ||
+        ((p.name.starts_with("INS_GYR") || p.name.starts_with("INS_ACC")) && p.name.ends_with("_CALTEMP"));
     if (!calibration || std::find(seen.begin(), seen.end(), p.name) != seen.end()) continue;
     seen.push_back(p.name);
     tcal.push_back(&p);
@@ -233,8 +243,9 @@ void dataflash_tcal_lines(const dataflash::Log& log) {
     if (!enable) continue;
     std::cout << "  instance " << instance << ": INS_TCAL" << instance + 1 << "_ENABLE " << *enable;
     if (*enable == 1.0)
-      std::cout << " (the firmware corrected the logged values; the record has the correction removed, see the notes of "
-                   "log export)";
+      std::cout
+          << " (the firmware corrected the logged values; the record has the correction removed, see the notes of "
+             "log export)";
     else if (*enable == 2.0)
       std::cout << " (learning: TCLR messages hold the samples)";
     else
@@ -258,8 +269,11 @@ void dataflash_tclr_lines(const dataflash::Log& log) {
   for (std::size_t i = 0; i < t->count; ++i)
     temps[{small(t->column("I")[i]), small(t->column("SType")[i])}].push_back(t->column("Temp")[i]);
   for (const auto& [key, values] : temps)
-    std::cout << "  instance " << key.first << " " << (key.second == 0 ? "accel" : key.second == 1 ? "gyro " : "other") << ": "
-              << values.size() << " averages, " << span(values, 2, "degC") << "\n";
+    std::cout << "  instance " << key.first << " "
+              << (key.second == 0   ? "accel"
+                  : key.second == 1 ? "gyro "
+                                    : "other")
+              << ": " << values.size() << " averages, " << span(values, 2, "degC") << "\n";
 }
 
 void dataflash_info(const std::string& path) {
@@ -277,27 +291,33 @@ void dataflash_info(const std::string& path) {
   }
   std::cout << path << ": ArduPilot DataFlash log, " << log.file_size << " bytes, " << log.messages << " messages\n";
   if (last > first)
-    std::cout << "time span: " << seconds(first) << " to " << seconds(last) << " s since boot (" << seconds(last - first) << " s)\n";
+    std::cout << "time span: " << seconds(first) << " to " << seconds(last) << " s since boot ("
+              << seconds(last - first) << " s)\n";
   std::cout << "skipped: " << log.skipped_bytes << " bytes of garbage";
-  if (log.skipped_runs > 0) std::cout << " in " << log.skipped_runs << " places, the first at byte " << log.first_skip_offset;
+  if (log.skipped_runs > 0)
+    std::cout << " in " << log.skipped_runs << " places, the first at byte " << log.first_skip_offset;
   std::cout << " (resynchronised on the next message header)\n";
   for (const auto& [type, u] : log.unknown_types)
-    std::cout << "unknown message type " << static_cast<int>(type) << " (no FMT): " << u.headers << " headers skipped, the first at byte "
-              << u.first_offset << "\n";
-  if (log.truncated_bytes > 0) std::cout << "the file ends within a message: its last " << log.truncated_bytes << " bytes left out\n";
+    std::cout << "unknown message type " << static_cast<int>(type) << " (no FMT): " << u.headers
+              << " headers skipped, the first at byte " << u.first_offset << "\n";
+  if (log.truncated_bytes > 0)
+    std::cout << "the file ends within a message: its last " << log.truncated_bytes << " bytes left out\n";
   std::cout << "parameters: " << log.parameters.size() << " PARM messages\n";
   std::cout << "message types: " << log.types.size() << " defined, " << with_data << " with messages\n";
   char row[256];
-  std::snprintf(row, sizeof row, "  %-6s %5s %10s %10s %12s %12s\n", "name", "type", "messages", "rate Hz", "from s", "to s");
+  std::snprintf(row, sizeof row, "  %-6s %5s %10s %10s %12s %12s\n", "name", "type", "messages", "rate Hz", "from s",
+                "to s");
   std::cout << row;
   for (const auto& t : log.types) {
     if (t.count == 0) continue;
     if (t.timed)
       std::snprintf(row, sizeof row, "  %-6s %5d %10llu %10.1f %12.3f %12.3f\n", t.name.c_str(), t.type,
-                    static_cast<unsigned long long>(t.count), rate_hz(t), static_cast<double>(t.first_time_us) * kSecondsPerMicrosecond,
+                    static_cast<unsigned long long>(t.count), rate_hz(t),
+                    static_cast<double>(t.first_time_us) * kSecondsPerMicrosecond,
                     static_cast<double>(t.last_time_us) * kSecondsPerMicrosecond);
     else
-      std::snprintf(row, sizeof row, "  %-6s %5d %10llu\n", t.name.c_str(), t.type, static_cast<unsigned long long>(t.count));
+      std::snprintf(row, sizeof row, "  %-6s %5d %10llu\n", t.name.c_str(), t.type,
+                    static_cast<unsigned long long>(t.count));
     std::cout << row;
   }
   dataflash_imu_lines(log);
@@ -326,11 +346,16 @@ void rawlog_info(const std::string& path) {
 
 void info_command(const std::string& path) {
   switch (require_log(path)) {
-    case RecordFormat::Ulog: return ulog_info(path);
-    case RecordFormat::DataFlash: return dataflash_info(path);
-    case RecordFormat::RosBag: return print_bag_info(path, std::cout);
-    case RecordFormat::Rawlog: return rawlog_info(path);
-    case RecordFormat::Csv: break;  // refused by require_log
+    case RecordFormat::Ulog:
+      return ulog_info(path);
+    case RecordFormat::DataFlash:
+      return dataflash_info(path);
+    case RecordFormat::RosBag:
+      return print_bag_info(path, std::cout);
+    case RecordFormat::Rawlog:
+      return rawlog_info(path);
+    case RecordFormat::Csv:
+      break;  // refused by require_log
   }
 }
 
@@ -357,27 +382,35 @@ void export_command(const ExportOptions& o) {
 }  // namespace
 
 void add_log_command(CLI::App& app, CommandEnv&) {
-  auto* log = app.add_subcommand("log", "read the logs IMUs are recorded in (PX4 ULog, ArduPilot DataFlash, ROS 1 and "
-                                        "ROS 2 bags, MRPT rawlogs): list what they hold, export the IMU as CSV");
+  auto* log = app.add_subcommand("log",
+                                 "read the logs IMUs are recorded in (PX4 ULog, ArduPilot DataFlash, ROS 1 and "
+                                 "ROS 2 bags, MRPT rawlogs): list what they hold, export the IMU as CSV");
   log->require_subcommand(1);
 
   auto path = std::make_shared<std::string>();
   auto* info = log->add_subcommand(
-      "info", "list a log: topics or message types (messages, rate in Hz, time span in s), IMU instances (device id, "
-              "temperature span in degC); ULog: system info, dropouts (ms), parameters; DataFlash: skipped bytes, "
-              "INS_TCAL* temperature calibration, TCLR; bags: topic types, the temperature topics of each Imu topic; "
-              "rawlogs: objects, IMU sensor labels with their fields");
-  info->add_option("file", *path, "PX4 ULog, ArduPilot DataFlash (.bin), ROS 1 bag, ROS 2 bag (.db3, .mcap or its "
-                                  "directory), MRPT rawlog")->required();
+      "info",
+      "list a log: topics or message types (messages, rate in Hz, time span in s), IMU instances (device id, "
+      "temperature span in degC); ULog: system info, dropouts (ms), parameters; DataFlash: skipped bytes, "
+      "INS_TCAL* temperature calibration, TCLR; bags: topic types, the temperature topics of each Imu topic; "
+      "rawlogs: objects, IMU sensor labels with their fields");
+  info->add_option("file", *path,
+                   "PX4 ULog, ArduPilot DataFlash (.bin), ROS 1 bag, ROS 2 bag (.db3, .mcap or its "
+                   "directory), MRPT rawlog")
+      ->required();
   info->callback([path] { info_command(*path); });
 
   auto o = std::make_shared<ExportOptions>();
   auto* exp = log->add_subcommand(
-      "export", "write a log's IMU record as CSV: t_s (ULog, DataFlash: s since boot; bags: header stamps, s since the "
-                "epoch; rawlogs: s since the first IMU observation), gyro*_rad_s (rad/s), accel*_m_s2 (m/s^2), temp*_c (degC), device_id*; other streams "
-                "interpolated onto the first gyro's time stamps");
-  exp->add_option("file", o->path, "PX4 ULog, ArduPilot DataFlash (.bin), ROS 1 bag, ROS 2 bag (.db3, .mcap or its "
-                                   "directory), MRPT rawlog")->required();
+      "export",
+      "write a log's IMU record as CSV: t_s (ULog, DataFlash: s since boot; bags: header stamps, s since the "
+      "epoch; rawlogs: s since the first IMU observation), gyro*_rad_s (rad/s), accel*_m_s2 (m/s^2), temp*_c (degC), "
+      "device_id*; other streams "
+      "interpolated onto the first gyro's time stamps");
+  exp->add_option("file", o->path,
+                  "PX4 ULog, ArduPilot DataFlash (.bin), ROS 1 bag, ROS 2 bag (.db3, .mcap or its "
+                  "directory), MRPT rawlog")
+      ->required();
   exp->add_option("--out", o->out, "output CSV (written atomically)")->required();
   add_log_selection_options(exp, o->log);
   exp->callback([o] { export_command(*o); });

@@ -22,8 +22,10 @@ std::string label_list(const std::vector<std::string>& labels) {
 
 std::string chosen_label(const fs::path& path, const std::vector<std::string>& labels, const LogSelection& selection) {
   if (selection.instance > 0)
-    throw ConfigError({path.string(), 0, "--instance"}, "a rawlog's IMU is instance 0 (one sensor label; pick another "
-                                                        "label with --topic): its labels are " + label_list(labels));
+    throw ConfigError({path.string(), 0, "--instance"},
+                      "a rawlog's IMU is instance 0 (one sensor label; pick another "
+                      "label with --topic): its labels are " +
+                          label_list(labels));
   if (labels.empty()) throw DataError({path.string(), 0, ""}, "the rawlog has no CObservationIMU observations");
   if (!selection.topic.empty()) {
     if (std::find(labels.begin(), labels.end(), selection.topic) == labels.end())
@@ -61,7 +63,8 @@ extern "C" void driftlab_rawlog_read_imu(const std::filesystem::path& path, cons
   const auto stats = mrpt_bridge::rawlog_stats(path);
   const std::string label = chosen_label(path, stats.imu_labels, selection);
   const auto table = mrpt_bridge::import_rawlog(path, label);
-  const imu::Selection sel = selection.sensor.empty() ? imu::Selection{} : imu::parse_selection(selection.sensor, "--sensor");
+  const imu::Selection sel =
+      selection.sensor.empty() ? imu::Selection{} : imu::parse_selection(selection.sensor, "--sensor");
 
   TimeSeries record(table.time_s);
   std::string have;
@@ -74,14 +77,16 @@ extern "C" void driftlab_rawlog_read_imu(const std::filesystem::path& path, cons
     const Eigen::VectorXd& v = table.values(f.column);
     for (Eigen::Index i = 0; i < v.size(); ++i)
       if (!imu::usable_value(v[i]))
-        throw DataError({file, 0, source}, imu::unusable_value(v[i]) + " at t = " + std::to_string(table.time_s[i]) + " s");
+        throw DataError({file, 0, source},
+                        imu::unusable_value(v[i]) + " at t = " + std::to_string(table.time_s[i]) + " s");
     const std::string unit = imu::internal_unit(id->sensor);
     record.set_channel({f.role, unit, source, v, unit});
   }
   if (record.channels().empty())
-    throw DataError({file, 0, "--sensor"}, "the selection (sensor '" + (selection.sensor.empty() ? std::string("all") : selection.sensor) +
-                                               "') matches no channel of IMU sensor '" + label + "' (it has: " +
-                                               (have.empty() ? std::string("no gyro or accelerometer field") : have) + ")");
+    throw DataError({file, 0, "--sensor"},
+                    "the selection (sensor '" + (selection.sensor.empty() ? std::string("all") : selection.sensor) +
+                        "') matches no channel of IMU sensor '" + label +
+                        "' (it has: " + (have.empty() ? std::string("no gyro or accelerometer field") : have) + ")");
   if (table.has("temp_c")) {
     std::vector<double> t(table.values("temp_c").data(), table.values("temp_c").data() + table.values("temp_c").size());
     imu::check_temperature(t, file, label + ".IMU_TEMPERATURE", "IMU sensor '" + label + "'", notes);
