@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <map>
+#include <numbers>
+#include <utility>
 
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
@@ -114,6 +117,114 @@ std::map<int, Instance> instances(const Log& log) {
   return out;
 }
 
+struct Euler {
+  const char* name;
+  double roll, pitch, yaw;  // deg
+};
+// ArduPilot's enum Rotation 0..43, the angles of AP_Math/tests/test_rotations.cpp.
+constexpr Euler kRotations[] = {
+    {"ROTATION_NONE", 0, 0, 0},
+    {"ROTATION_YAW_45", 0, 0, 45},
+    {"ROTATION_YAW_90", 0, 0, 90},
+    {"ROTATION_YAW_135", 0, 0, 135},
+    {"ROTATION_YAW_180", 0, 0, 180},
+    {"ROTATION_YAW_225", 0, 0, 225},
+    {"ROTATION_YAW_270", 0, 0, 270},
+    {"ROTATION_YAW_315", 0, 0, 315},
+    {"ROTATION_ROLL_180", 180, 0, 0},
+    {"ROTATION_ROLL_180_YAW_45", 180, 0, 45},
+    {"ROTATION_ROLL_180_YAW_90", 180, 0, 90},
+    {"ROTATION_ROLL_180_YAW_135", 180, 0, 135},
+    {"ROTATION_PITCH_180", 0, 180, 0},
+    {"ROTATION_ROLL_180_YAW_225", 180, 0, 225},
+    {"ROTATION_ROLL_180_YAW_270", 180, 0, 270},
+    {"ROTATION_ROLL_180_YAW_315", 180, 0, 315},
+    {"ROTATION_ROLL_90", 90, 0, 0},
+    {"ROTATION_ROLL_90_YAW_45", 90, 0, 45},
+    {"ROTATION_ROLL_90_YAW_90", 90, 0, 90},
+    {"ROTATION_ROLL_90_YAW_135", 90, 0, 135},
+    {"ROTATION_ROLL_270", 270, 0, 0},
+    {"ROTATION_ROLL_270_YAW_45", 270, 0, 45},
+    {"ROTATION_ROLL_270_YAW_90", 270, 0, 90},
+    {"ROTATION_ROLL_270_YAW_135", 270, 0, 135},
+    {"ROTATION_PITCH_90", 0, 90, 0},
+    {"ROTATION_PITCH_270", 0, 270, 0},
+    {"ROTATION_PITCH_180_YAW_90", 0, 180, 90},
+    {"ROTATION_PITCH_180_YAW_270", 0, 180, 270},
+    {"ROTATION_ROLL_90_PITCH_90", 90, 90, 0},
+    {"ROTATION_ROLL_180_PITCH_90", 180, 90, 0},
+    {"ROTATION_ROLL_270_PITCH_90", 270, 90, 0},
+    {"ROTATION_ROLL_90_PITCH_180", 90, 180, 0},
+    {"ROTATION_ROLL_270_PITCH_180", 270, 180, 0},
+    {"ROTATION_ROLL_90_PITCH_270", 90, 270, 0},
+    {"ROTATION_ROLL_180_PITCH_270", 180, 270, 0},
+    {"ROTATION_ROLL_270_PITCH_270", 270, 270, 0},
+    {"ROTATION_ROLL_90_PITCH_180_YAW_90", 90, 180, 90},
+    {"ROTATION_ROLL_90_YAW_270", 90, 0, 270},
+    {"ROTATION_ROLL_90_PITCH_68_YAW_293", 90, 68.8, 293.3},
+    {"ROTATION_PITCH_315", 0, 315, 0},
+    {"ROTATION_ROLL_90_PITCH_315", 90, 315, 0},
+    {"ROTATION_PITCH_7", 0, 7, 0},
+    {"ROTATION_ROLL_45", 45, 0, 0},
+    {"ROTATION_ROLL_315", 315, 0, 0},
+};
+
+// cos and sin of an angle in degrees, exact at multiples of 90.
+std::pair<double, double> cos_sin(double deg) {
+  if (deg == std::floor(deg / 90.0) * 90.0) {
+    switch (static_cast<int>(deg / 90.0) % 4) {
+      case 0:
+        return {1.0, 0.0};
+      case 1:
+        return {0.0, 1.0};
+      case 2:
+        return {-1.0, 0.0};
+      default:
+        return {0.0, -1.0};
+    }
+  }
+  const double rad = deg * std::numbers::pi / 180.0;
+  return {std::cos(rad), std::sin(rad)};
+}
+
+std::string orientation_text(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
+// The logged body-frame axes of `s` rotated back into the sensor frame: sensor = R^T body.
+void to_sensor_frame(imu::SensorStream& s, const BoardRotation& r) {
+  const auto& m = r.body_from_sensor;
+  for (std::size_t i = 0; i < s.axes[0].size(); ++i) {
+    const double b[3] = {s.axes[0][i], s.axes[1][i], s.axes[2][i]};
+    for (int a = 0; a < 3; ++a) s.axes[a][i] = m[0][a] * b[0] + m[1][a] * b[1] + m[2][a] * b[2];
+  }
+}
+
+// The board rotation of the log, when it has one other than none; DataError for a value that is
+// no fixed rotation.
+std::optional<BoardRotation> log_board_rotation(const Log& log, std::vector<std::string>* notes) {
+  const auto value = log.parameter("AHRS_ORIENTATION");
+  if (!value || *value == 0.0) return std::nullopt;
+  const auto rotation = board_rotation(*value);
+  if (!rotation)
+    fail(log, "AHRS_ORIENTATION",
+         "AHRS_ORIENTATION is " + orientation_text(*value) +
+             ": ArduPilot logs the IMU values in the body frame, rotated by it, and only its fixed rotations 0..43 "
+             "can be turned back into the sensor frame (100 and 101 are custom rotations set by CUST_ROTn_* "
+             "parameters, which this reader does not apply)");
+  if (notes) {
+    std::string text = "AHRS_ORIENTATION " + orientation_text(*value) + " (" + rotation->name +
+                       "): the IMU values are logged in the body frame; the record holds them rotated back into the "
+                       "sensor frame, as ArduPilot's tempcal_IMU.py does";
+    if (!changed(log, {"AHRS_ORIENTATION"}).empty())
+      text += "; AHRS_ORIENTATION changes within the log: the first value is used";
+    notes->push_back(text);
+  }
+  return rotation;
+}
+
 void set_device_id(const Log& log, imu::SensorStream& s, std::vector<std::string>* notes) {
   const auto id = device_id(log, s.sensor, s.instance);
   if (!id) return;
@@ -141,14 +252,6 @@ void remove_tcal(const Log& log, int instance, const std::string& label, imu::Se
     return note("the correction is not removed: parameter " + missing + " is not in the log; values as logged");
   if (gyro.temperature.empty())
     return note("the correction is not removed: the IMU messages carry no temperature; values as logged");
-  const double orientation = log.parameter("AHRS_ORIENTATION").value_or(0.0);
-  if (orientation != 0.0) {
-    char value[32];
-    std::snprintf(value, sizeof value, "%g", orientation);
-    return note(
-        std::string("the correction is not removed: AHRS_ORIENTATION is ") + value +
-        " and the correction lives in the sensor frame (board rotations are not implemented); values as logged");
-  }
   for (imu::SensorStream* s : {&gyro, &accel})
     for (int a = 0; a < 3; ++a)
       for (std::size_t i = 0; i < s->axes[a].size(); ++i) {
@@ -230,6 +333,22 @@ double firmware_correction(const TemperatureCalibration& tcal, imu::Sensor senso
          polynomial(c, axis, clamp(cal_temp) - kReferenceTemperature);
 }
 
+std::optional<BoardRotation> board_rotation(double ahrs_orientation) {
+  if (!(ahrs_orientation >= 0 && ahrs_orientation < static_cast<double>(std::size(kRotations))) ||
+      ahrs_orientation != std::floor(ahrs_orientation))
+    return std::nullopt;
+  const Euler& e = kRotations[static_cast<std::size_t>(ahrs_orientation)];
+  const auto [cr, sr] = cos_sin(e.roll);
+  const auto [cp, sp] = cos_sin(e.pitch);
+  const auto [cy, sy] = cos_sin(e.yaw);
+  BoardRotation r;
+  r.name = e.name;
+  r.body_from_sensor = {{{cp * cy, sr * sp * cy - cr * sy, cr * sp * cy + sr * sy},
+                         {cp * sy, sr * sp * sy + cr * cy, cr * sp * sy - sr * cy},
+                         {-sp, sr * cp, cr * cp}}};
+  return r;
+}
+
 TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector<std::string>* notes) {
   if (!selection.topic.empty() && selection.topic != "IMU")
     throw ConfigError({"", 0, "--topic"}, "'" + selection.topic +
@@ -241,6 +360,7 @@ TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector
          "no IMU messages in the log (" + std::to_string(log.messages) + " messages of " +
              std::to_string(log.types.size()) + " types read)" + no_imu_detail(log));
 
+  const auto rotation = log_board_rotation(log, notes);
   std::vector<imu::SensorStream> all;
   for (const auto& [id, in] : by_instance) {
     const MessageType& t = *in.type;
@@ -263,6 +383,10 @@ TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector
       accel.axes[a] = imu::pick(log.file, accel, field(log, t, acc), order, acc);
     }
     if (!t.has_column("T") && notes) notes->push_back(in.label + ": no temperature column T; no temperature channel");
+    if (rotation) {
+      to_sensor_frame(gyro, *rotation);
+      to_sensor_frame(accel, *rotation);
+    }
     remove_tcal(log, id, in.label, gyro, accel, notes);
     set_device_id(log, gyro, notes);
     set_device_id(log, accel, notes);

@@ -26,18 +26,31 @@
 // firmware). A log recorded with the correction on holds corrected values; the record holds the
 // raw ones, as ArduPilot's Tools/scripts/tempcal_IMU.py computes them before fitting:
 //     raw = logged + P(clamp(T) - 35) - P(clamp(T_cal) - 35),
-// with the parameters as first logged (ENABLE takes effect at boot; a later change of any of them
-// is noted, not applied), and a note per instance. Like tempcal_IMU.py this leaves the accelerometer
-// scale factors (INS_ACCSCAL*, within about 1e-3 of 1) and the firmware's low-pass filter out of
-// the inversion. The correction is defined in the sensor frame, before the board rotation
-// AHRS_ORIENTATION: it is removed only when AHRS_ORIENTATION is 0 (or not logged, its default);
-// otherwise the values stay as logged, corrected, and a note says so (the rotation table is not
-// implemented). Without a temperature column, or with a parameter missing, likewise.
+// in the sensor frame (below), with the parameters as first logged (ENABLE takes effect at boot; a
+// later change of any of them is noted, not applied), and a note per instance. Like tempcal_IMU.py
+// this leaves the accelerometer scale factors (INS_ACCSCAL*, within about 1e-3 of 1) and the
+// firmware's low-pass filter out of the inversion. Without a temperature column, or with a
+// parameter missing, the values stay as logged, corrected, and a note says so.
+//
+// Board orientation (AHRS_ORIENTATION). ArduPilot logs GyrX..Z / AccX..Z in the vehicle's body
+// frame: AP_InertialSensor_Backend::_rotate_and_correct_gyro / _accel apply the temperature
+// correction and the offsets in the sensor frame and rotate by AHRS_ORIENTATION last, and
+// Write_IMU_instance (AP_InertialSensor_Logging.cpp) logs that published value. The record holds
+// the sensor frame -- the frame a gyro's drift belongs to and INS_TCAL is defined in: for
+// AHRS_ORIENTATION 1..43 every sample is rotated back, sensor = R^T body, as tempcal_IMU.py does,
+// with a note. R (body = R sensor) is ArduPilot's enum Rotation (AP_Math/rotations.h) with the
+// roll, pitch, yaw of the firmware's own test (AP_Math/tests/test_rotations.cpp, TestEulers) and
+// R = Rz(yaw) Ry(pitch) Rx(roll) (Matrix3::from_euler); multiples of 90 deg are exact. Rotation 38
+// is (90, 68.8, 293.3) deg as in the firmware (pymavlink's table, which tempcal_IMU.py uses, has
+// (90, 68, 270) and ends at 41). Any other value -- 100 and 101 are custom rotations set by
+// CUST_ROTn_* parameters -- is a DataError naming AHRS_ORIENTATION: the values cannot be put back
+// into the sensor frame. The value first logged is used; a later change is noted.
 //
 // Repairs and errors shared with the other log readers (time base, sorting, duplicates,
 // non-finite values): framework/imu_streams.hpp. Errors of this adapter (DataError naming the file):
 // no IMU messages (the message names unknown types and truncation when the log had them), an IMU
-// message without the columns above, an instance value that is not an integer 0..255, INS_TCAL
+// message without the columns above, an AHRS_ORIENTATION that is no fixed rotation, an instance
+// value that is not an integer 0..255, INS_TCAL
 // parameters whose removal makes a value non-finite or beyond kMaxMagnitude (csv.hpp); --topic
 // other than "" or IMU is a ConfigError.
 #pragma once
@@ -79,6 +92,14 @@ std::optional<TemperatureCalibration> temperature_calibration(const Log& log, in
 // What the firmware subtracted from `axis` (0..2) of `sensor` at IMU temperature `temperature`:
 // P(clamp(T) - 35) - P(clamp(T_cal) - 35), in rad/s or m/s^2.
 double firmware_correction(const TemperatureCalibration& tcal, imu::Sensor sensor, int axis, double temperature);
+
+// The board rotation of an AHRS_ORIENTATION value (see above), or nullopt for a value that is not
+// one of ArduPilot's fixed rotations 0..43.
+struct BoardRotation {
+  std::string name;                                         // "ROTATION_ROLL_180"
+  std::array<std::array<double, 3>, 3> body_from_sensor{};  // R: body = R sensor
+};
+std::optional<BoardRotation> board_rotation(double ahrs_orientation);
 
 // The IMU record of a parsed log (its imu_types kept). `selection.topic` is "" or "IMU" (anything
 // else: ConfigError naming --topic); `selection.instance` and `selection.sensor` as for every log.

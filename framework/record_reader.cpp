@@ -8,6 +8,7 @@
 #include "framework/dataflash_imu.hpp"
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
+#include "framework/rawlog.hpp"
 #include "framework/regular_file.hpp"
 #include "framework/ros_imu.hpp"
 #include "framework/rosbag.hpp"
@@ -99,7 +100,8 @@ RecordFormat sniff_record_format(const std::filesystem::path& path) {
   // A file that cannot be read goes to the CSV reader, whose errors name it as before.
   if (ulog::has_magic(head)) return RecordFormat::Ulog;
   if (dataflash::has_magic(head)) return RecordFormat::DataFlash;
-  return rosbag::sniff(path) ? RecordFormat::RosBag : RecordFormat::Csv;
+  if (rosbag::sniff(path)) return RecordFormat::RosBag;
+  return rawlog::sniff(path) ? RecordFormat::Rawlog : RecordFormat::Csv;
 }
 
 TimeSeries read_record(const std::filesystem::path& path, const CsvReadOptions& options, const LogSelection& selection,
@@ -111,6 +113,8 @@ TimeSeries read_record(const std::filesystem::path& path, const CsvReadOptions& 
       return read_log_record(dataflash::read_imu, path, options, selection, notes);
     case RecordFormat::RosBag:
       return read_log_record(ros::read_imu, path, options, selection, notes);
+    case RecordFormat::Rawlog:
+      return read_log_record(rawlog::read_imu, path, options, selection, notes);
     case RecordFormat::Csv:
       break;
   }

@@ -5,6 +5,8 @@
 //   first bytes 0xA3 0x95 0x80          ArduPilot DataFlash (framework/dataflash.hpp, dataflash_imu.hpp)
 //   a ROS bag (rosbag::sniff)           ROS 1 bag, ROS 2 sqlite3 bag, MCAP, or a rosbag2 directory
 //                                       with metadata.yaml (framework/rosbag.hpp, ros_imu.hpp)
+//   an MRPT archive's first object      MRPT rawlog, gzip'ed or plain (framework/rawlog.hpp; read by a
+//   (rawlog::sniff)                     module that links MRPT, loaded only then)
 //   anything else                       CSV (framework/csv.hpp), exactly as read_csv reads it
 //
 // For a log, the record is the IMU record (framework/imu.hpp roles, SI units, time in s), with
@@ -34,13 +36,14 @@ namespace driftlab {
 // What to take from a log (ignored for CSV).
 struct LogSelection {
   std::string topic;   // "" = the reader's default (ULog: sensor_gyro/sensor_accel, else sensor_combined;
-                       // DataFlash: IMU; ROS: every Imu topic), ROS: a comma-separated list (ros_imu.hpp)
+                       // DataFlash: IMU; ROS: every Imu topic; rawlog: the only IMU sensor label),
+                       // ROS: a comma-separated list (ros_imu.hpp); rawlog: a sensor label
   int instance = -1;   // -1 = every instance; else only this one (ULog multi_id, DataFlash IMU's I,
                        // ROS: Imu topic number)
   std::string sensor;  // imu::parse_selection text ("gyro", "accel", "gyro1", "gyro_z"); "" = all
 };
 
-enum class RecordFormat { Csv, Ulog, DataFlash, RosBag };
+enum class RecordFormat { Csv, Ulog, DataFlash, RosBag, Rawlog };
 // The reader `path` gets: by its first bytes (DataError when the file cannot be opened).
 RecordFormat sniff_record_format(const std::filesystem::path& path);
 

@@ -9,12 +9,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <map>
+#include <numbers>
 #include <sstream>
 
 #include "framework/csv.hpp"
@@ -142,9 +144,20 @@ TEST_P(DataflashFixture, EveryMessageTypeCountAndTimeSpanIsDfReaders) {
   }
 }
 
+// DFReader's logged (body-frame) value of an axis in the sensor frame the record holds, for the
+// fixtures' board rotations: AHRS_ORIENTATION 0 (none) and 8 (ROTATION_ROLL_180: ArduPilot's
+// Vector3::rotate makes y and z -y and -z, its own inverse).
+double sensor_frame(double ahrs_orientation, char axis, double logged) {
+  if (ahrs_orientation == 0.0 || axis == 'X') return logged;
+  if (ahrs_orientation == 8.0) return -logged;
+  ADD_FAILURE() << "no hand-written inverse for AHRS_ORIENTATION " << ahrs_orientation;
+  return logged;
+}
+
 TEST_P(DataflashFixture, EachImuInstanceHasDfReadersCountFirstAndLastValuesAndDeviceIds) {
   const Reference ref = reference_of(path());
   ASSERT_FALSE(ref.imu_count.empty());
+  const double orientation = ref.params.at("AHRS_ORIENTATION");
   for (const auto& [instance, count] : ref.imu_count) {
     SCOPED_TRACE("instance " + std::to_string(instance));
     LogSelection one;
@@ -160,8 +173,10 @@ TEST_P(DataflashFixture, EachImuInstanceHasDfReadersCountFirstAndLastValuesAndDe
       const char* axes = "XYZ";
       for (int a = 0; a < 3; ++a) {
         const std::string axis(1, static_cast<char>(std::tolower(axes[a])));
-        EXPECT_EQ(record.channel("gyro" + suffix + "_" + axis).values[i], values.at(std::string("Gyr") + axes[a]));
-        EXPECT_EQ(record.channel("accel" + suffix + "_" + axis).values[i], values.at(std::string("Acc") + axes[a]));
+        EXPECT_EQ(record.channel("gyro" + suffix + "_" + axis).values[i],
+                  sensor_frame(orientation, axes[a], values.at(std::string("Gyr") + axes[a])));
+        EXPECT_EQ(record.channel("accel" + suffix + "_" + axis).values[i],
+                  sensor_frame(orientation, axes[a], values.at(std::string("Acc") + axes[a])));
       }
       EXPECT_EQ(record.channel("temperature" + suffix).values[i], values.at("T"));
     }
@@ -364,7 +379,11 @@ struct TcalLog {
   std::vector<double> temperature, raw_gyro_x, raw_accel_z;
 };
 
-TcalLog tcal_log(double enable, double orientation) {
+// body = R sensor for the board rotation the log is written with.
+using BodyFromSensor = std::function<std::array<double, 3>(std::array<double, 3>)>;
+std::array<double, 3> unrotated(std::array<double, 3> v) { return v; }
+
+TcalLog tcal_log(double enable, double orientation, const BodyFromSensor& to_body = unrotated) {
   const double tmin = 20, tmax = 60, gyro_cal = 30, accel_cal = -300;  // accel offsets never calibrated
   const double g1 = 1000, g2 = -20, g3 = 0.5;                          // INS_TCAL1_GYRk_X (x 1e6)
   const double a1 = 40000, a2 = 300, a3 = -2;                          // INS_TCAL1_ACCk_Z (x 1e6)
@@ -396,8 +415,10 @@ TcalLog tcal_log(double enable, double orientation) {
     const double raw_g = 0.002 + 1e-5 * i, raw_a = -9.81 + 1e-3 * i;
     const float logged_g = static_cast<float>(raw_g - p(g1, g2, g3, clamp(t)) + p(g1, g2, g3, clamp(gyro_cal)));
     const float logged_a = static_cast<float>(raw_a - p(a1, a2, a3, clamp(t)) + p(a1, a2, a3, clamp(accel_cal)));
-    df::imu(w, 1e6 + 1e4 * i, 0, enable == 1 ? logged_g : raw_g, 0.001, 0.002, 0.1, 0.2, enable == 1 ? logged_a : raw_a,
-            t);
+    // The firmware corrects in the sensor frame, then rotates into the body frame, then logs.
+    const auto g = to_body({enable == 1 ? logged_g : raw_g, 0.001, 0.002});
+    const auto a = to_body({0.1, 0.2, enable == 1 ? logged_a : raw_a});
+    df::imu(w, 1e6 + 1e4 * i, 0, g[0], g[1], g[2], a[0], a[1], a[2], t);
     out.temperature.push_back(static_cast<float>(t));
     out.raw_gyro_x.push_back(raw_g);
     out.raw_accel_z.push_back(raw_a);
@@ -436,20 +457,126 @@ TEST(DataflashTemperatureCalibration, TheCorrectionIsThePolynomialOfTheFirmware)
   EXPECT_DOUBLE_EQ(dataflash::firmware_correction(t, imu::Sensor::Gyro, 1, 35), 15.0);
 }
 
-TEST(DataflashTemperatureCalibration, NotRemovedWhenDisabledOrTheBoardIsRotated) {
+TEST(DataflashTemperatureCalibration, NotRemovedWhenDisabled) {
   const TcalLog off = tcal_log(0, 0);
   std::vector<std::string> notes;
   const auto raw =
       dataflash::imu_record(dataflash::parse(off.bytes, "off.bin", {false, dataflash::imu_types()}), {}, &notes);
   EXPECT_EQ(raw.channel("gyro_x").values[3], static_cast<float>(off.raw_gyro_x[3]));
   EXPECT_THAT(::testing::PrintToString(notes), ::testing::Not(HasSubstr("TCAL")));
+}
 
-  const TcalLog rotated = tcal_log(1, 8);
-  notes.clear();
-  const auto logged =
-      dataflash::imu_record(dataflash::parse(rotated.bytes, "rot.bin", {false, dataflash::imu_types()}), {}, &notes);
-  EXPECT_NE(logged.channel("gyro_x").values[3], static_cast<float>(rotated.raw_gyro_x[3]));
-  EXPECT_THAT(::testing::PrintToString(notes), AllOf(HasSubstr("not removed"), HasSubstr("AHRS_ORIENTATION is 8")));
+// --- board orientation (AHRS_ORIENTATION) -------------------------------------------------------
+
+// A rotated board: the log holds body-frame values; the record gives the sensor frame back and
+// removes the firmware's correction there. The rotations below are ArduPilot's Vector3::rotate
+// cases written out (AP_Math/vector3.cpp), not the reader's matrices.
+TEST(DataflashBoardOrientation, ARotatedBoardsBodyFrameValuesComeBackInTheSensorFrameWithTcalRemoved) {
+  constexpr double kHalfSqrt2 = 0.70710678118654757;
+  const std::pair<double, BodyFromSensor> boards[] = {
+      {8,
+       [](std::array<double, 3> v) {
+         return std::array<double, 3>{v[0], -v[1], -v[2]};
+       }},  // ROLL_180
+      {1,
+       [&](std::array<double, 3> v) {  // YAW_45
+         return std::array<double, 3>{kHalfSqrt2 * (v[0] - v[1]), kHalfSqrt2 * (v[0] + v[1]), v[2]};
+       }},
+      {42,
+       [&](std::array<double, 3> v) {  // ROLL_45
+         return std::array<double, 3>{v[0], kHalfSqrt2 * (v[1] - v[2]), kHalfSqrt2 * (v[1] + v[2])};
+       }},
+  };
+  for (const auto& [orientation, to_body] : boards) {
+    SCOPED_TRACE(orientation);
+    const TcalLog log = tcal_log(1, orientation, to_body);
+    std::vector<std::string> notes;
+    const auto record =
+        dataflash::imu_record(dataflash::parse(log.bytes, "rot.bin", {false, dataflash::imu_types()}), {}, &notes);
+    ASSERT_EQ(record.size(), 50);
+    for (Eigen::Index i = 0; i < record.size(); ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      EXPECT_NEAR(record.channel("gyro_x").values[i], log.raw_gyro_x[k], kFloatLogged) << i;
+      EXPECT_NEAR(record.channel("gyro_y").values[i], 0.001, kFloatLogged) << i;
+      EXPECT_NEAR(record.channel("gyro_z").values[i], 0.002, kFloatLogged) << i;
+      EXPECT_NEAR(record.channel("accel_x").values[i], 0.1, kFloatLogged) << i;
+      EXPECT_NEAR(record.channel("accel_y").values[i], 0.2, kFloatLogged) << i;
+      EXPECT_NEAR(record.channel("accel_z").values[i], log.raw_accel_z[k], kFloatLogged) << i;
+    }
+    EXPECT_THAT(::testing::PrintToString(notes),
+                AllOf(HasSubstr("body frame"), HasSubstr("sensor frame"), HasSubstr("removed (TMIN")));
+  }
+}
+
+// pymavlink's rotmat (Vector3.rotate_by_id / rotate_by_inverse_id, the table tempcal_IMU.py uses)
+// applied to (1, 2, 3): tests/data/logs/pymavlink-rotations/rotations_reference.txt.
+TEST(DataflashBoardOrientation, EveryFixedRotationIsPymavlinksExceptWherePymavlinkDiffersFromTheFirmware) {
+  std::ifstream in(logs_dir() / "pymavlink-rotations" / "rotations_reference.txt");
+  ASSERT_TRUE(in) << "no rotations_reference.txt";
+  constexpr double kRounding = 1e-12;  // pymavlink rounds through float64 trigonometry of 90-deg multiples
+  std::string line;
+  int rows = 0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream row(line);
+    int id = 0;
+    std::string name;
+    double body[3], sensor[3];
+    row >> id >> name >> body[0] >> body[1] >> body[2] >> sensor[0] >> sensor[1] >> sensor[2];
+    ASSERT_FALSE(row.fail()) << line;
+    ++rows;
+    const auto r = dataflash::board_rotation(id);
+    ASSERT_TRUE(r) << id;
+    EXPECT_EQ(r->name, name);
+    if (id == 38) continue;  // pymavlink has (90, 68, 270) deg; the firmware (90, 68.8, 293.3): checked below
+    const double v[3] = {1, 2, 3};
+    for (int a = 0; a < 3; ++a) {
+      const auto& m = r->body_from_sensor;
+      EXPECT_NEAR(m[a][0] * v[0] + m[a][1] * v[1] + m[a][2] * v[2], body[a], kRounding) << name << " axis " << a;
+      EXPECT_NEAR(m[0][a] * v[0] + m[1][a] * v[1] + m[2][a] * v[2], sensor[a], kRounding) << name << " axis " << a;
+    }
+  }
+  EXPECT_EQ(rows, 42);  // pymavlink's table ends at 41 (ROTATION_PITCH_7)
+}
+
+TEST(DataflashBoardOrientation, TheFirmwaresOwnRotationsBeyondPymavlinksTableAndExactQuarterTurns) {
+  // ROTATION_ROLL_90_PITCH_68_YAW_293: the firmware's test (AP_Math/tests/test_rotations.cpp)
+  // checks it against from_euler(90, 68.8, 293.3); rows of that matrix, computed here directly.
+  const double d = std::numbers::pi / 180, sp = std::sin(68.8 * d), cp = std::cos(68.8 * d), sy = std::sin(293.3 * d),
+               cy = std::cos(293.3 * d);
+  const std::array<std::array<double, 3>, 3> m38 = {{{cp * cy, sp * cy, sy}, {cp * sy, sp * sy, -cy}, {-sp, cp, 0}}};
+  const auto r38 = dataflash::board_rotation(38);
+  ASSERT_TRUE(r38);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) EXPECT_NEAR(r38->body_from_sensor[i][j], m38[i][j], 1e-15) << i << j;
+  // ROTATION_ROLL_315 (43): Vector3::rotate gives y' = s (y + z), z' = s (z - y), s = sqrt(2)/2.
+  const auto r43 = dataflash::board_rotation(43);
+  ASSERT_TRUE(r43);
+  EXPECT_EQ(r43->name, "ROTATION_ROLL_315");
+  EXPECT_NEAR(r43->body_from_sensor[1][1], std::sqrt(0.5), 1e-15);
+  EXPECT_NEAR(r43->body_from_sensor[1][2], std::sqrt(0.5), 1e-15);
+  EXPECT_NEAR(r43->body_from_sensor[2][1], -std::sqrt(0.5), 1e-15);
+  // Quarter turns are exact: the record of a ROLL_180 board is the logged value with its sign flipped.
+  const auto r8 = dataflash::board_rotation(8);
+  ASSERT_TRUE(r8);
+  const std::array<std::array<double, 3>, 3> roll_180 = {{{1, 0, 0}, {0, -1, 0}, {0, 0, -1}}};
+  EXPECT_EQ(r8->body_from_sensor, roll_180);
+  for (const double not_fixed : {44.0, 100.0, 101.0, 2.5, -1.0, 1e300})
+    EXPECT_FALSE(dataflash::board_rotation(not_fixed)) << not_fixed;
+}
+
+TEST(DataflashBoardOrientation, ACustomOrUnknownRotationIsADataErrorNamingTheParameter) {
+  for (const double orientation : {100.0, 101.0, 57.0}) {
+    SCOPED_TRACE(orientation);
+    const TcalLog log = tcal_log(0, orientation);
+    try {
+      dataflash::imu_record(dataflash::parse(log.bytes, "custom.bin", {false, dataflash::imu_types()}), {});
+      ADD_FAILURE() << "no error";
+    } catch (const DataError& e) {
+      EXPECT_THAT(e.what(), AllOf(HasSubstr("custom.bin"), HasSubstr("AHRS_ORIENTATION"), HasSubstr("body frame"),
+                                  HasSubstr("0..43")));
+    }
+  }
 }
 
 // --- bad input ---------------------------------------------------------------------------------

@@ -55,6 +55,54 @@ TEST(BagCli, InfoListsTopicsInstancesAndTemperatureOfEachFixture) {
                                 HasSubstr("IMU: no sensor_msgs/Imu topic")));
 }
 
+// rosbag2's own bags sit in a directory named after the bag: "cdr_test_0.db3" -> "cdr_test-sqlite3".
+std::string bag_directory(const std::string& file, const std::string& storage) {
+  std::string stem = fs::path(file).stem().string();
+  if (stem.ends_with("_0")) stem.resize(stem.size() - 2);
+  return stem + "-" + storage;
+}
+
+// Every ROS 2 bag fixture is listed, with the message total the independent readers counted
+// (@mcap/core for the MCAP files, the sqlite3 CLI for the db3 files: reference_*.json).
+TEST(BagCli, InfoListsEveryRos2FixtureWithTheIndependentReadersMessageTotal) {
+  int listed = 0;
+  for (const char* folder : {"ros2-robot-localization", "ros2-rosbag2"}) {
+    const auto mcap = nlohmann::json::parse(read_text(logs() / folder / "reference_mcap.json"));
+    for (const auto& [file, entry] : mcap.items()) {
+      std::size_t total = 0;
+      for (const auto& [topic, t] : entry["topics"].items()) total += t["count"].get<std::size_t>();
+      fs::path path = logs() / folder / file;
+      if (!fs::exists(path)) path = logs() / folder / bag_directory(file, "mcap") / file;
+      SCOPED_TRACE(path.string());
+      const auto r = run_driftlab("log info " + path.string());
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      EXPECT_THAT(r.out, AllOf(HasSubstr("MCAP"), HasSubstr("messages: " + std::to_string(total) + ",")));
+      ++listed;
+    }
+  }
+  const auto rl_db3 = nlohmann::json::parse(read_text(logs() / "ros2-robot-localization" / "reference_db3.json"));
+  std::size_t total = 0;
+  for (const auto& t : rl_db3) total += t["count"].get<std::size_t>();
+  const auto db3 = run_driftlab("log info " + fixture("ros2-robot-localization/imu_db3"));
+  ASSERT_EQ(db3.exit_code, 0) << db3.err;
+  EXPECT_THAT(db3.out, HasSubstr("messages: " + std::to_string(total) + ","));
+  const auto rosbag2_db3 = nlohmann::json::parse(read_text(logs() / "ros2-rosbag2" / "reference_db3.json"));
+  for (const auto& [file, topics] : rosbag2_db3.items()) {
+    std::size_t n = 0;
+    for (const auto& t : topics) n += t["count"].get<std::size_t>();
+    const std::string dir = bag_directory(file, "sqlite3");
+    SCOPED_TRACE(dir);
+    const auto r = run_driftlab("log info " + fixture("ros2-rosbag2/" + dir));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_THAT(r.out, AllOf(HasSubstr("sqlite3 storage"), HasSubstr("messages: " + std::to_string(n) + ",")));
+    ++listed;
+  }
+  const auto zstd_messages = run_driftlab("log info " + fixture("ros2-robot-localization/imu_db3_zstd_messages"));
+  ASSERT_EQ(zstd_messages.exit_code, 0) << zstd_messages.err;
+  EXPECT_THAT(zstd_messages.out, HasSubstr("messages zstd-compressed"));
+  EXPECT_EQ(listed, 10);  // 6 Jackal MCAP files, rosbag2's talker and cdr_test in MCAP and in sqlite3
+}
+
 TEST(BagCli, ExportWritesTheImuRecordTheCsvReaderReadsBack) {
   const auto dir = scratch_dir("bag_export");
   const auto r = run_driftlab("log export " + fixture("ros2-robot-localization/imu_zstd.mcap") + " --out " +

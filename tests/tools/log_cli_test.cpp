@@ -3,6 +3,7 @@
 // read back by the CSV reader; calibrate, compensate and allan reading a .bin directly.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "framework/csv.hpp"
 #include "tests/framework/dataflash_writer.hpp"
@@ -83,6 +84,58 @@ TEST_F(LogCli, RecordCommandsReadALogWithAColumnMapping) {
   EXPECT_FALSE(fs::exists(p("b.csv")));
 }
 
+// calibrate reads a ULog directly: the two gyros of a simulated imu3 oven run (16 200 samples at
+// 1 Hz, temperatures and device ids) written as sensor_gyro multi_id 0 and 1 fit the models that
+// calibrate fits on the log's CSV export (the same float32 values), with the device ids.
+TEST(LogCliUlog, CalibrateOnAUlogFitsWhatItFitsOnTheLogsExport) {
+  const auto dir = scratch_dir("log_cli_ulog_calibrate");
+  const auto sim = dir / "imu3.csv";
+  const auto s = run_driftlab("simulate --device " + std::string(DRIFTLAB_SOURCE_DIR) +
+                              "/devices/imu3.yaml --fs 1 --seed 1 --out " + sim.string());
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  CsvReadOptions options;
+  options.required_roles = {"gyro_x", "gyro1_x", "temperature", "temperature1"};
+  const TimeSeries record = read_csv(sim, options);
+  Writer w;
+  w.flag_bits().format(testing_ulog::kSensorGyroFormat).add(0, 1, "sensor_gyro").add(1, 2, "sensor_gyro");
+  for (Eigen::Index i = 0; i < record.size(); ++i) {
+    const auto t = static_cast<std::uint64_t>(std::llround(1e6 + record.time()[i] * 1e6));
+    for (int instance = 0; instance < 2; ++instance) {
+      const std::string n = instance == 0 ? "" : "1";
+      auto v = [&](const std::string& role) { return static_cast<float>(record.channel(role).values[i]); };
+      w.data(static_cast<std::uint16_t>(instance + 1),
+             testing_ulog::sensor_gyro(t + 3000 * static_cast<std::uint64_t>(instance),
+                                       instance == 0 ? 2424842u : 2490378u, v("gyro" + n + "_x"), v("gyro" + n + "_y"),
+                                       v("gyro" + n + "_z"), v("temperature" + n)));
+    }
+  }
+  const auto ulg = (dir / "oven.ulg").string();
+  write(ulg, w.bytes());
+
+  const auto from_ulg = run_driftlab("-q calibrate --data " + ulg + " --out " + (dir / "ulg.json").string());
+  ASSERT_EQ(from_ulg.exit_code, 0) << from_ulg.err;
+  EXPECT_THAT(from_ulg.out, HasSubstr("6 channels"));
+  const auto exported = run_driftlab("log export " + ulg + " --out " + (dir / "export.csv").string());
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  const auto from_csv =
+      run_driftlab("-q calibrate --data " + (dir / "export.csv").string() + " --out " + (dir / "csv.json").string());
+  ASSERT_EQ(from_csv.exit_code, 0) << from_csv.err;
+  auto a = nlohmann::json::parse(read_text(dir / "ulg.json")), b = nlohmann::json::parse(read_text(dir / "csv.json"));
+  ASSERT_EQ(a["channels"].size(), 6u);
+  ASSERT_EQ(b["channels"].size(), 6u);
+  for (std::size_t i = 0; i < 6; ++i) {
+    SCOPED_TRACE(a["channels"][i]["role"].get<std::string>());
+    EXPECT_EQ(a["channels"][i]["role"], b["channels"][i]["role"]);
+    EXPECT_EQ(a["channels"][i]["device_id"], a["channels"][i]["instance"] == 0 ? "2424842" : "2490378");
+    auto& ma = a["channels"][i]["model"];
+    auto& mb = b["channels"][i]["model"];
+    ma["fit"].erase("records");  // the file each was fitted on
+    mb["fit"].erase("records");
+    EXPECT_EQ(ma, mb);
+  }
+  fs::remove_all(dir);
+}
+
 TEST_F(LogCli, BadLogsExitWithThreeNamingFileAndOffset) {
   const std::string good = two_gyros(50);
   write(dir_ / "cut.ulg", good.substr(0, good.size() - 5));
@@ -140,6 +193,39 @@ TEST(LogCliDataflash, InfoOnEachFixture) {
       run_driftlab("log info " + (dataflash_logs() / "methodic-configurator" / "backend_log_80k.bin").string());
   EXPECT_THAT(newer.out, AllOf(HasSubstr("IMU messages by I"), HasSubstr("INS_TCAL1_ENABLE 0 (off"),
                                HasSubstr("INS_GYR1_CALTEMP = 30.7045"), HasSubstr("its last 2 bytes left out")));
+}
+
+// AHRS_ORIENTATION: ArduPilot logs IMU values in the body frame; the record is in the sensor frame.
+TEST(LogCliDataflash, ABoardRotationIsReportedAndUndoneAndACustomOneIsRefused) {
+  const auto dir = scratch_dir("log_cli_dataflash_orientation");
+  const auto test_bin = (dataflash_logs() / "pymavlink" / "test.BIN").string();  // AHRS_ORIENTATION 8 (ROLL_180)
+  const auto info = run_driftlab("log info " + test_bin);
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_THAT(info.out, HasSubstr("AHRS_ORIENTATION 8 (ROTATION_ROLL_180): IMU values are logged in the body frame"));
+  const auto exported = run_driftlab("log export " + test_bin + " --out " + (dir / "imu.csv").string());
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  EXPECT_THAT(exported.err, HasSubstr("rotated back into the sensor frame"));
+  CsvReadOptions options;
+  options.required_roles = {"gyro_y", "accel_z"};
+  options.max_gap_factor = 0.0;
+  const auto record = read_csv(dir / "imu.csv", options);
+  // pymavlink DFReader's first IMU message (test.BIN.reference.txt) has AccZ -9.780994415283203 in
+  // the body frame: the sensor's z axis points the other way on a board mounted upside down.
+  EXPECT_EQ(record.channel("accel_z").values[0], 9.780994415283203);
+
+  testing_dataflash::Writer w;
+  testing_dataflash::define_imu_log(w);
+  testing_dataflash::parm(w, 0, "AHRS_ORIENTATION", 100);  // ROTATION_CUSTOM
+  for (int i = 0; i < 5; ++i) testing_dataflash::imu(w, 1e6 + 1e4 * i, 0, 0.01, 0.02, 0.03, 0.1, 0.2, -9.8, 30);
+  write(dir / "custom.bin", w.bytes());
+  const auto custom =
+      run_driftlab("log export " + (dir / "custom.bin").string() + " --out " + (dir / "c.csv").string());
+  EXPECT_EQ(custom.exit_code, 3);
+  EXPECT_THAT(custom.err,
+              AllOf(HasSubstr("custom.bin"), HasSubstr("AHRS_ORIENTATION is 100"), HasSubstr("body frame")));
+  const auto custom_info = run_driftlab("log info " + (dir / "custom.bin").string());
+  EXPECT_EQ(custom_info.exit_code, 0) << custom_info.err;
+  EXPECT_THAT(custom_info.out, HasSubstr("AHRS_ORIENTATION 100: not one of ArduPilot's fixed rotations 0..43"));
 }
 
 TEST(LogCliDataflash, ExportWritesEveryInstanceTheCsvReaderReadsBack) {

@@ -71,11 +71,12 @@ CLI::Validator whole_number(double lo, double hi) {
 }
 
 void add_data_options(CLI::App* command, DataOptions& data, const std::string& column_help) {
-  command->add_option("--data", data.path,
-                      "input record: CSV (header row; default columns t_s, rate_dps, temp_c), a PX4 ULog (.ulg), an "
-                      "ArduPilot DataFlash log (.bin) or a ROS bag (ROS 1 .bag, ROS 2 .db3 / .mcap or its directory), "
-                      "recognised by content; for a log name the channel to analyse, e.g. --column rate=gyro_z for the "
-                      "z gyro in rad/s");
+  command->add_option(
+      "--data", data.path,
+      "input record: CSV (header row; default columns t_s, rate_dps, temp_c), a PX4 ULog (.ulg), an "
+      "ArduPilot DataFlash log (.bin), a ROS bag (ROS 1 .bag, ROS 2 .db3 / .mcap or its directory) or an "
+      "MRPT rawlog, recognised by content; for a log name the channel to analyse, e.g. --column rate=gyro_z for the "
+      "z gyro in rad/s");
   add_record_read_options(command, data, column_help);
 }
 
@@ -91,7 +92,7 @@ void add_log_selection_options(CLI::App* command, LogSelection& selection) {
                       "sensor_gyro + sensor_accel when the log has them, else sensor_combined). DataFlash: IMU. Bags: "
                       "comma-separated sensor_msgs/Imu topics (instances 0, 1, ... in this order) and temperature "
                       "topics paired with them (default: every Imu topic, by name, with the temperature topics of "
-                      "their namespaces)");
+                      "their namespaces). Rawlog: a CObservationIMU sensor label (default: the only one)");
   command
       ->add_option("--instance", selection.instance,
                    "log IMU instance (PX4 multi_id, ArduPilot IMU's I; bags: Imu topic number) to read; its gyro is "

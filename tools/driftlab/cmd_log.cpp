@@ -16,6 +16,7 @@
 
 #include "framework/dataflash.hpp"
 #include "framework/dataflash_imu.hpp"
+#include "framework/rawlog.hpp"
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
 #include "framework/output_set.hpp"
@@ -39,8 +40,8 @@ RecordFormat require_log(const std::string& path) {
   if (format == RecordFormat::Csv)
     throw DataError({path, 0, ""},
                     "not a log driftlab reads (a PX4 ULog, an ArduPilot DataFlash log, a ROS 1 bag, a "
-                    "ROS 2 bag (.db3, .mcap, or its directory)); CSV records are read by the other "
-                    "commands directly");
+                    "ROS 2 bag (.db3, .mcap, or its directory), an MRPT rawlog); CSV records are read by "
+                    "the other commands directly");
   return format;
 }
 
@@ -205,6 +206,22 @@ void dataflash_imu_lines(const dataflash::Log& log) {
   if (!any) std::cout << "IMU: no IMU messages\n";
 }
 
+// AHRS_ORIENTATION: the frame the IMU values are logged in and what the record makes of it.
+void dataflash_orientation_line(const dataflash::Log& log) {
+  const auto value = log.parameter("AHRS_ORIENTATION");
+  std::cout << "board orientation: ";
+  if (!value || *value == 0.0) {
+    std::cout << "AHRS_ORIENTATION " << (value ? "0" : "not logged (default 0)") << ": body frame = sensor frame\n";
+    return;
+  }
+  std::cout << "AHRS_ORIENTATION " << *value;
+  if (const auto rotation = dataflash::board_rotation(*value))
+    std::cout << " (" << rotation->name << "): IMU values are logged in the body frame; the record rotates them back "
+              << "into the sensor frame\n";
+  else
+    std::cout << ": not one of ArduPilot's fixed rotations 0..43; the IMU record is refused\n";
+}
+
 void dataflash_tcal_lines(const dataflash::Log& log) {
   std::vector<const dataflash::Parameter*> tcal;
   std::vector<std::string> seen;
@@ -304,8 +321,27 @@ void dataflash_info(const std::string& path) {
     std::cout << row;
   }
   dataflash_imu_lines(log);
+  dataflash_orientation_line(log);
   dataflash_tcal_lines(log);
   dataflash_tclr_lines(log);
+}
+
+void rawlog_info(const std::string& path) {
+  const auto info = rawlog::info(path);
+  std::cout << path << ": MRPT rawlog (" << info.format << ")\n"
+            << "objects: " << info.objects << " (" << info.imu_observations << " IMU observations, "
+            << info.sensory_frames << " sensory frames, " << info.odometry_actions << " odometry actions)\n";
+  std::cout << "IMU sensors (CObservationIMU by sensor label; --topic LABEL picks one):\n";
+  for (const auto& s : info.sensors) {
+    std::cout << "  '" << s.label << "': " << s.samples << " observations at "
+              << fixed(s.duration_s > 0 ? static_cast<double>(s.samples - 1) / s.duration_s : 0.0, 1) << " Hz over "
+              << fixed(s.duration_s, 3) << " s from Unix time " << fixed(s.start_unix_s, 3) << " s";
+    if (s.has_temperature)
+      std::cout << ", " << fixed(s.temperature_min_c, 2) << " to " << fixed(s.temperature_max_c, 2) << " degC";
+    std::cout << "\n    fields:";
+    for (const auto& f : s.fields) std::cout << " " << f;
+    std::cout << "\n";
+  }
 }
 
 void info_command(const std::string& path) {
@@ -316,6 +352,8 @@ void info_command(const std::string& path) {
       return dataflash_info(path);
     case RecordFormat::RosBag:
       return print_bag_info(path, std::cout);
+    case RecordFormat::Rawlog:
+      return rawlog_info(path);
     case RecordFormat::Csv:
       break;  // refused by require_log
   }
@@ -346,7 +384,7 @@ void export_command(const ExportOptions& o) {
 void add_log_command(CLI::App& app, CommandEnv&) {
   auto* log = app.add_subcommand("log",
                                  "read the logs IMUs are recorded in (PX4 ULog, ArduPilot DataFlash, ROS 1 and "
-                                 "ROS 2 bags): list what they hold, export the IMU as CSV");
+                                 "ROS 2 bags, MRPT rawlogs): list what they hold, export the IMU as CSV");
   log->require_subcommand(1);
 
   auto path = std::make_shared<std::string>();
@@ -354,10 +392,11 @@ void add_log_command(CLI::App& app, CommandEnv&) {
       "info",
       "list a log: topics or message types (messages, rate in Hz, time span in s), IMU instances (device id, "
       "temperature span in degC); ULog: system info, dropouts (ms), parameters; DataFlash: skipped bytes, "
-      "INS_TCAL* temperature calibration, TCLR; bags: topic types, the temperature topics of each Imu topic");
+      "INS_TCAL* temperature calibration, TCLR; bags: topic types, the temperature topics of each Imu topic; "
+      "rawlogs: objects, IMU sensor labels with their fields");
   info->add_option("file", *path,
                    "PX4 ULog, ArduPilot DataFlash (.bin), ROS 1 bag, ROS 2 bag (.db3, .mcap or its "
-                   "directory)")
+                   "directory), MRPT rawlog")
       ->required();
   info->callback([path] { info_command(*path); });
 
@@ -365,11 +404,12 @@ void add_log_command(CLI::App& app, CommandEnv&) {
   auto* exp = log->add_subcommand(
       "export",
       "write a log's IMU record as CSV: t_s (ULog, DataFlash: s since boot; bags: header stamps, s since the "
-      "epoch), gyro*_rad_s (rad/s), accel*_m_s2 (m/s^2), temp*_c (degC), device_id*; other streams "
+      "epoch; rawlogs: s since the first IMU observation), gyro*_rad_s (rad/s), accel*_m_s2 (m/s^2), temp*_c (degC), "
+      "device_id*; other streams "
       "interpolated onto the first gyro's time stamps");
   exp->add_option("file", o->path,
                   "PX4 ULog, ArduPilot DataFlash (.bin), ROS 1 bag, ROS 2 bag (.db3, .mcap or its "
-                  "directory)")
+                  "directory), MRPT rawlog")
       ->required();
   exp->add_option("--out", o->out, "output CSV (written atomically)")->required();
   add_log_selection_options(exp, o->log);
