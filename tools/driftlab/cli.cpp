@@ -177,11 +177,6 @@ std::string display_unit(const TimeSeries& record, const std::string& role, cons
   return unit == "rad/s" ? "deg/s" : unit;
 }
 
-void check_output(const std::string& output, const std::vector<std::string>& inputs) {
-  OutputSet check({inputs.begin(), inputs.end()});  // the same rules as a planned output
-  check.plan(output, "--out");
-}
-
 ReportFiles plan_report_files(OutputSet& outputs, const std::filesystem::path& dir, const std::string& option) {
   outputs.make_directory(dir, option);
   ReportFiles files{dir / "report.json", dir / "report.html"};

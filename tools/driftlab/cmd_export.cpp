@@ -4,8 +4,8 @@
 #include <iostream>
 #include <memory>
 
-#include "framework/atomic_file.hpp"
 #include "framework/error.hpp"
+#include "framework/output_set.hpp"
 #include "models/calibration/exports.hpp"
 #include "tools/driftlab/cli.hpp"
 
@@ -18,7 +18,8 @@ struct ExportOptions {
 };
 
 void export_command(const ExportOptions& o) {
-  check_output(o.out, {o.model});
+  OutputSet outputs({o.model});
+  outputs.plan(o.out, "--out");
   const auto model = calibration::read_calibration(o.model);
   calibration::ExportResult r;
   if (o.format == "c-header") {
@@ -32,7 +33,8 @@ void export_command(const ExportOptions& o) {
   } else {
     r.text = calibration::to_json_text(model);
   }
-  write_file_atomically(o.out, r.text);
+  outputs.write(o.out, r.text);
+  outputs.commit();
   for (const auto& n : r.notes) std::cerr << "note: " << n << "\n";
   std::cout << "wrote " << o.out << " (" << o.format << ", " << model.channels.size() << " channel"
             << (model.channels.size() == 1 ? "" : "s") << ")\n";
