@@ -48,7 +48,7 @@ CLI::Validator finite_number(double lo, double hi, bool lo_open) {
         const auto res = std::from_chars(text.data(), end, v);
         if (res.ec != std::errc() || res.ptr != end) return "expected a number, got " + quoted_excerpt(text);
         if (!std::isfinite(v)) return "expected a finite number, got " + quoted_excerpt(text);
-        if ((lo_open ? !(v > lo) : !(v >= lo)) || !(v <= hi)) return "value " + text + " is not in " + d;
+        if ((lo_open ? !(v > lo) : !(v >= lo)) || !(v <= hi)) return "value " + message_number(v) + " is not in " + d;
         return "";
       },
       "NUMBER in " + desc.str());
