@@ -217,6 +217,7 @@ TEST_F(Hostile, FirmwareExportsWriteOnlyRealThirtyTwoValues) {
     const auto r = run_driftlab(command);
     EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
     EXPECT_THAT(r.err, HasSubstr("is not a finite REAL32 number")) << command;
+    EXPECT_THAT(r.err, HasSubstr(p("big.json") + ": ")) << "the model's file named: " << command;
     EXPECT_FALSE(fs::exists(p("x.params"))) << command;
   }
 }

@@ -3,6 +3,7 @@
 // ardupilot, kalibr, json. Instances and axes come from the model.
 #include <iostream>
 #include <memory>
+#include <vector>
 
 #include "framework/error.hpp"
 #include "framework/output_set.hpp"
@@ -22,16 +23,23 @@ void export_command(const ExportOptions& o) {
   outputs.plan(o.out, "--out");
   const auto model = calibration::read_calibration(o.model);
   calibration::ExportResult r;
-  if (o.format == "c-header") {
-    r = calibration::export_c_header(model, o.e);
-  } else if (o.format == "px4") {
-    r = calibration::export_px4_params(model, o.e);
-  } else if (o.format == "ardupilot") {
-    r = calibration::export_ardupilot_params(model, o.e);
-  } else if (o.format == "kalibr") {
-    r = calibration::export_kalibr_imu_yaml(model, o.e);
-  } else {
-    r.text = calibration::to_json_text(model);
+  try {
+    if (o.format == "c-header") {
+      r = calibration::export_c_header(model, o.e);
+    } else if (o.format == "px4") {
+      r = calibration::export_px4_params(model, o.e);
+    } else if (o.format == "ardupilot") {
+      r = calibration::export_ardupilot_params(model, o.e);
+    } else if (o.format == "kalibr") {
+      r = calibration::export_kalibr_imu_yaml(model, o.e);
+    } else {
+      r.text = calibration::to_json_text(model);
+    }
+  } catch (const ConfigError& e) {  // what the model cannot be exported as names the model's file
+    std::vector<Diagnostic> named = e.problems();
+    for (auto& d : named)
+      if (d.where.file.empty() && d.where.field.rfind("--", 0) != 0) d.where.file = o.model;
+    throw ConfigError(std::move(named));
   }
   outputs.write(o.out, r.text);
   outputs.commit();
