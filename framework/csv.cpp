@@ -27,7 +27,7 @@ struct Suffix {
   std::string_view unit;
 };
 constexpr Suffix kSuffixes[] = {{"_dps", "deg/s"}, {"_rps", "rad/s"}, {"_dph", "deg/h"}, {"_c", "degC"},
-                                {"_k", "K"},       {"_hz", "Hz"},     {"_s", "s"},     {"_mps2", "m/s^2"}};
+                                {"_k", "K"},       {"_hz", "Hz"},     {"_s", "s"},       {"_mps2", "m/s^2"}};
 
 std::string role_of_stem(const std::string& stem) {
   if (stem == "temp") return role::kTemperature;
@@ -43,9 +43,8 @@ std::optional<ColumnMapping> time_mapping_of(const std::string& column) {
   std::string h(column);
   std::transform(h.begin(), h.end(), h.begin(), [](unsigned char c) { return std::tolower(c); });
   static const std::pair<std::string_view, std::string_view> known[] = {
-      {"t_s", "s"},        {"time_s", "s"},       {"time", "s"},  {"time_ms", "ms"},
-      {"time_us", "us"},   {"timeus", "us"},      {"timestamp", "us"}, {"timestamp_us", "us"},
-      {"time_ns", "ns"},   {"timestamp_ns", "ns"}};
+      {"t_s", "s"},     {"time_s", "s"},     {"time", "s"},          {"time_ms", "ms"}, {"time_us", "us"},
+      {"timeus", "us"}, {"timestamp", "us"}, {"timestamp_us", "us"}, {"time_ns", "ns"}, {"timestamp_ns", "ns"}};
   for (const auto& [name, unit] : known)
     if (h == name) return ColumnMapping{"time", column, std::string(unit)};
   return std::nullopt;
@@ -87,15 +86,20 @@ bool parse_number(std::string_view cell, double& value) {
   return res.ec == std::errc() && res.ptr == cell.data() + cell.size();
 }
 
-
 std::string quantity_text(Quantity q) {
   switch (q) {
-    case Quantity::AngularRate: return "an angular-rate unit (rad/s, deg/s, deg/h, mrad/s, mdps)";
-    case Quantity::Acceleration: return "an acceleration unit (m/s^2, g, mg)";
-    case Quantity::Temperature: return "a temperature unit (degC, K)";
-    case Quantity::Time: return "a time unit (s, ms, us, ns, h)";
-    case Quantity::Frequency: return "a frequency unit (Hz, kHz)";
-    case Quantity::Dimensionless: return "unit 1";
+    case Quantity::AngularRate:
+      return "an angular-rate unit (rad/s, deg/s, deg/h, mrad/s, mdps)";
+    case Quantity::Acceleration:
+      return "an acceleration unit (m/s^2, g, mg)";
+    case Quantity::Temperature:
+      return "a temperature unit (degC, K)";
+    case Quantity::Time:
+      return "a time unit (s, ms, us, ns, h)";
+    case Quantity::Frequency:
+      return "a frequency unit (Hz, kHz)";
+    case Quantity::Dimensionless:
+      return "unit 1";
   }
   return "a unit";
 }
@@ -124,7 +128,6 @@ std::string names_excerpt(const std::vector<std::string_view>& names) {
   return out;
 }
 
-
 DataError line_too_long(const std::string& file, int line, std::size_t max_line_bytes) {
   return DataError({file, line, ""}, "the line is longer than " + std::to_string(max_line_bytes) +
                                          " bytes (--max-line-bytes): --stream holds one line at a time, and a CSV "
@@ -139,7 +142,8 @@ std::optional<int> device_id_instance(std::string_view role) {
   if (role.empty()) return 0;
   int instance = 0;
   const auto res = std::from_chars(role.data(), role.data() + role.size(), instance);
-  if (res.ec != std::errc() || res.ptr != role.data() + role.size() || instance < 1 || instance > 99) return std::nullopt;
+  if (res.ec != std::errc() || res.ptr != role.data() + role.size() || instance < 1 || instance > 99)
+    return std::nullopt;
   return instance;
 }
 
@@ -177,9 +181,10 @@ ColumnMapping parse_column_mapping(const std::string& text) {
     m.unit = s->unit;
     if (m.role.empty()) m.role = s->role;
   } else {
-    throw ConfigError(where, "expected role=column:unit, column:lsb*FACTOR:unit, column:unit or a column name "
-                             "with a unit suffix (_dps, _rps, _dph, _c, _k, _hz, _s) or an IMU name (gyro_x, "
-                             "accel_z_mps2, temp, ...)");
+    throw ConfigError(where,
+                      "expected role=column:unit, column:lsb*FACTOR:unit, column:unit or a column name "
+                      "with a unit suffix (_dps, _rps, _dph, _c, _k, _hz, _s) or an IMU name (gyro_x, "
+                      "accel_z_mps2, temp, ...)");
   }
   if (m.role.empty()) m.role = m.column;
   if (m.column.empty()) throw ConfigError(where, "empty column name");
@@ -217,13 +222,15 @@ bool CsvLineCursor::next(std::string_view& line) {
 std::vector<std::string_view> split_csv_row(std::string_view line) { return split(line); }
 
 CsvLineStream::CsvLineStream(Read read, std::string file, std::size_t max_line_bytes, std::size_t read_bytes)
-    : read_(std::move(read)), file_(std::move(file)), max_line_bytes_(max_line_bytes), read_bytes_(std::max<std::size_t>(1, read_bytes)) {}
+    : read_(std::move(read)),
+      file_(std::move(file)),
+      max_line_bytes_(max_line_bytes),
+      read_bytes_(std::max<std::size_t>(1, read_bytes)) {}
 
 bool CsvLineStream::next(std::string_view& line) {
   for (;;) {
     if (cursor_ && cursor_->next(line)) {
-      if (line.size() > max_line_bytes_)
-        throw line_too_long(file_, line_number(), max_line_bytes_);
+      if (line.size() > max_line_bytes_) throw line_too_long(file_, line_number(), max_line_bytes_);
       return true;
     }
     if (cursor_) {
@@ -265,7 +272,6 @@ void CsvLineStream::refill() {
   }
 }
 
-
 std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& header, const CsvReadOptions& options,
                                         const std::string& file, int header_line) {
   const std::string available = names_excerpt(header);
@@ -274,14 +280,13 @@ std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& hea
   for (std::size_t i = 0; i < header.size(); ++i) {
     if (header[i].empty()) continue;
     if (!index_of.emplace(header[i], i).second)
-      throw DataError({file, header_line, ""}, "duplicated column name " + quoted_excerpt(header[i]) +
-                                                   " (columns " + std::to_string(index_of[header[i]] + 1) + " and " +
+      throw DataError({file, header_line, ""}, "duplicated column name " + quoted_excerpt(header[i]) + " (columns " +
+                                                   std::to_string(index_of[header[i]] + 1) + " and " +
                                                    std::to_string(i + 1) + ")");
   }
   const auto find_index = [&](const std::string& column, bool required) -> std::optional<std::size_t> {
     if (auto it = index_of.find(column); it != index_of.end()) return it->second;
-    if (required)
-      throw DataError({file, header_line, column}, "missing column (the header has: " + available + ")");
+    if (required) throw DataError({file, header_line, column}, "missing column (the header has: " + available + ")");
     return std::nullopt;
   };
 
@@ -302,12 +307,13 @@ std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& hea
     for (const auto& w : wanted) {
       if (w.mapping.role == m.role)
         throw ConfigError({file, header_line, m.column},
-                          "the '" + m.role + "' channel is claimed by two columns: " + quoted_excerpt(w.mapping.column) +
-                              " and " + quoted_excerpt(m.column) + " (map one of them with --column)");
+                          "the '" + m.role +
+                              "' channel is claimed by two columns: " + quoted_excerpt(w.mapping.column) + " and " +
+                              quoted_excerpt(m.column) + " (map one of them with --column)");
       if (w.mapping.column == m.column)
-        throw ConfigError({file, header_line, m.column},
-                          "column " + quoted_excerpt(m.column) + " is claimed by two channels: '" + w.mapping.role +
-                              "' and '" + m.role + "'");
+        throw ConfigError({file, header_line, m.column}, "column " + quoted_excerpt(m.column) +
+                                                             " is claimed by two channels: '" + w.mapping.role +
+                                                             "' and '" + m.role + "'");
     }
   };
   if (options.columns.empty()) {
@@ -334,15 +340,15 @@ std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& hea
     }
   }
   if (!time_mapping && options.sample_rate_hz <= 0.0)
-    throw DataError({file, header_line, "t_s"},
-                    "missing time column (the header has: " + available + "); give one with --column "
-                    "time=NAME:UNIT or a sample rate with --fs");
+    throw DataError({file, header_line, "t_s"}, "missing time column (the header has: " + available +
+                                                    "); give one with --column "
+                                                    "time=NAME:UNIT or a sample rate with --fs");
   for (const auto& r : options.required_roles) {
-    const bool found = std::any_of(wanted.begin(), wanted.end(), [&](const PlannedColumn& w) { return w.mapping.role == r; });
+    const bool found =
+        std::any_of(wanted.begin(), wanted.end(), [&](const PlannedColumn& w) { return w.mapping.role == r; });
     if (!found)
-      throw DataError({file, header_line, r},
-                      "no column for the '" + r + "' channel (the header has: " + available +
-                          "); name one with --column " + r + "=COLUMN:UNIT");
+      throw DataError({file, header_line, r}, "no column for the '" + r + "' channel (the header has: " + available +
+                                                  "); name one with --column " + r + "=COLUMN:UNIT");
   }
   if (time_mapping && options.sample_rate_hz > 0.0)
     throw ConfigError({file, header_line, time_mapping->column}, "the file has a time column; do not also give --fs");
@@ -369,7 +375,8 @@ TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& opt
   return parse_csv(read_text_file(path), path.string(), options);
 }
 
-CsvRowParser::CsvRowParser(std::string file, CsvReadOptions options) : file_(std::move(file)), options_(std::move(options)) {
+CsvRowParser::CsvRowParser(std::string file, CsvReadOptions options)
+    : file_(std::move(file)), options_(std::move(options)) {
   if (!std::isfinite(options_.sample_rate_hz) || options_.sample_rate_hz > 1.0 / kMinTimeStep)
     throw ConfigError({file_, 0, "--fs"}, "the sample rate must be finite and at most 1e9 Hz");
   if (!std::isfinite(options_.max_gap_factor)) throw ConfigError({file_, 0, "--max-gap"}, "must be a finite number");
@@ -417,17 +424,20 @@ void CsvRowParser::row(std::string_view line, int line_number) {
     if (!parse_number(cell, v))
       throw DataError({file_, line_number, c.mapping.column}, "expected a number, got " + quoted_excerpt(cell));
     if (!std::isfinite(v))
-      throw DataError({file_, line_number, c.mapping.column}, "value is " + quoted_excerpt(cell) + " (NaN/Inf not allowed)");
+      throw DataError({file_, line_number, c.mapping.column},
+                      "value is " + quoted_excerpt(cell) + " (NaN/Inf not allowed)");
     const double internal = to_internal(v, c.unit);
     if (!(std::abs(internal) <= kMaxMagnitude))
       throw DataError({file_, line_number, c.mapping.column},
                       "value " + quoted_excerpt(cell) + " is too large to compute with (at most 1e100 " +
-                          internal_unit_symbol(c.unit.quantity) + " in magnitude; its squares and sums would overflow)");
+                          internal_unit_symbol(c.unit.quantity) +
+                          " in magnitude; its squares and sums would overflow)");
     values_[k] = internal;
   }
   for (std::size_t k = 0; k < columns_.size(); ++k) {
     if (!device_id_instance(columns_[k].mapping.role)) continue;
-    if (rows_ == 0) first_device_ids_[k] = values_[k];
+    if (rows_ == 0)
+      first_device_ids_[k] = values_[k];
     else if (values_[k] != first_device_ids_[k])
       throw DataError({file_, line_number, columns_[k].mapping.column},
                       "the device id changes within the record (one file holds one device)");
@@ -444,7 +454,8 @@ void CsvRowParser::row(std::string_view line, int line_number) {
                                                           std::to_string(previous_line_) + ")");
       if (t - time_s_ < kMinTimeStep)
         throw DataError({file_, line_number, column},
-                        "time step of " + std::to_string(t - time_s_) + " s after line " + std::to_string(previous_line_) +
+                        "time step of " + std::to_string(t - time_s_) + " s after line " +
+                            std::to_string(previous_line_) +
                             " is below 1 ns (a sample rate above 1 GHz; its rates and deviations would overflow)");
     }
     time_s_ = t;
@@ -464,8 +475,10 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
   CsvRowParser parser(file, options);
   CsvLineCursor cursor(text);
   std::string_view line;
-  if (cursor.next(line)) parser.header(line, cursor.line_number());
-  else parser.finish();  // "file is empty"
+  if (cursor.next(line))
+    parser.header(line, cursor.line_number());
+  else
+    parser.finish();  // "file is empty"
   const auto& columns = parser.columns();
   std::vector<std::vector<double>> values(columns.size());
   std::vector<double> time;
@@ -484,14 +497,14 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
   const std::size_t rows = time.size();
   const PlannedColumn* time_column = parser.find("time");
   if (time_column && options.max_gap_factor > 0.0) {
-    const auto facts = sampling::facts_of(Eigen::Map<const Eigen::VectorXd>(time.data(), static_cast<Eigen::Index>(rows)),
-                                          options.max_gap_factor);
+    const auto facts = sampling::facts_of(
+        Eigen::Map<const Eigen::VectorXd>(time.data(), static_cast<Eigen::Index>(rows)), options.max_gap_factor);
     if (!facts.evenly_sampled()) {
       const auto i = static_cast<std::size_t>(facts.first_gap_index);
       throw DataError({file, line_of_row[i + 1], time_column->mapping.column},
-                      "gap of " + std::to_string(facts.first_gap_s) + " s after line " + std::to_string(line_of_row[i]) +
-                          " (median step " + std::to_string(facts.median_step_s) + " s; allowed up to " +
-                          std::to_string(options.max_gap_factor) + " x median, see --max-gap)");
+                      "gap of " + std::to_string(facts.first_gap_s) + " s after line " +
+                          std::to_string(line_of_row[i]) + " (median step " + std::to_string(facts.median_step_s) +
+                          " s; allowed up to " + std::to_string(options.max_gap_factor) + " x median, see --max-gap)");
     }
   }
 
@@ -517,8 +530,8 @@ std::string format_csv(const std::vector<CsvColumn>& columns, const std::string&
   Eigen::Index rows = columns.empty() ? 0 : columns.front().values.size();
   std::unordered_map<std::string_view, std::size_t> seen;
   for (const auto& c : columns) {
-    const auto bad = c.name.empty() || c.name.find_first_of(",\"\r\n") != std::string::npos ||
-                     c.name.front() == ' ' || c.name.back() == ' ' || c.name.front() == '#';
+    const auto bad = c.name.empty() || c.name.find_first_of(",\"\r\n") != std::string::npos || c.name.front() == ' ' ||
+                     c.name.back() == ' ' || c.name.front() == '#';
     if (bad)
       throw ConfigError({label, 0, ""}, "column name " + quoted_excerpt(c.name) +
                                             " is not a valid CSV header cell (empty, a comma, quote or line "
@@ -527,8 +540,7 @@ std::string format_csv(const std::vector<CsvColumn>& columns, const std::string&
       throw ConfigError({label, 0, c.name}, "two output columns have this name; column names must be unique");
     auto u = find_unit(c.unit);
     if (!u) throw ConfigError({label, 0, c.name}, "unknown output unit '" + c.unit + "'");
-    if (c.values.size() != rows)
-      throw DataError({label, 0, c.name}, "column length differs from the first column");
+    if (c.values.size() != rows) throw DataError({label, 0, c.name}, "column length differs from the first column");
     units.push_back(*u);
   }
   std::string out;

@@ -72,7 +72,7 @@ struct CsvReadOptions {
 class CsvLineCursor {
  public:
   explicit CsvLineCursor(const std::string& text, bool at_start = true);
-  bool next(std::string_view& line);  // the next line (without its end); false at the end
+  bool next(std::string_view& line);         // the next line (without its end); false at the end
   int line_number() const { return line_; }  // 1-based number of the last line returned
 
  private:
@@ -150,9 +150,9 @@ class CsvRowParser {
   int header_line() const { return header_line_; }
   const std::string& file() const { return file_; }
   const std::vector<std::string>& header_names() const { return names_; }  // every header cell, trimmed
-  const std::vector<PlannedColumn>& columns() const { return columns_; }  // plan_columns' order
-  const PlannedColumn* find(const std::string& role) const;  // the planned column of a role, or null
-  std::size_t rows() const { return rows_; }  // rows parsed so far
+  const std::vector<PlannedColumn>& columns() const { return columns_; }   // plan_columns' order
+  const PlannedColumn* find(const std::string& role) const;                // the planned column of a role, or null
+  std::size_t rows() const { return rows_; }                               // rows parsed so far
   // The last row: its time (s; row index / sample rate without a time column), the value of every
   // planned column in internal units (columns() order), and every cell untrimmed, as written (the
   // views point into the line given to row()).

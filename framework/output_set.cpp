@@ -52,15 +52,14 @@ void OutputSet::plan(const fs::path& path, const std::string& option) {
                                    "; every output needs its own path");
   for (const auto& in : inputs_)
     if (!in.empty() && same_file(path, in))
-      throw ConfigError(where, "would overwrite the input " + in.string() +
-                                   "; inputs are never overwritten, choose another path");
+      throw ConfigError(
+          where, "would overwrite the input " + in.string() + "; inputs are never overwritten, choose another path");
   refuse_non_regular(path, where);
   if (path.filename().empty() || path.filename() == "." || path.filename() == "..")
     throw ConfigError(where, "expected a file path");
   const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
   std::error_code ec;
-  if (!fs::is_directory(dir, ec))
-    throw ConfigError(where, "output directory " + dir.string() + " does not exist");
+  if (!fs::is_directory(dir, ec)) throw ConfigError(where, "output directory " + dir.string() + " does not exist");
   std::string temp = (dir / ("." + path.filename().string() + ".tmp-XXXXXX")).string();
   const int fd = ::mkstemp(temp.data());
   if (fd < 0) throw ConfigError(where, "cannot write to the output directory " + dir.string() + ": " + errno_text());
@@ -165,8 +164,10 @@ void OutputSet::commit() {
     return;
   }
   for (std::size_t i = 0; i < done; ++i) {  // undo: restore or remove what was renamed
-    if (!backups[i].empty()) std::rename(backups[i].c_str(), entries_[i].path.c_str());
-    else std::remove(entries_[i].path.c_str());
+    if (!backups[i].empty())
+      std::rename(backups[i].c_str(), entries_[i].path.c_str());
+    else
+      std::remove(entries_[i].path.c_str());
   }
   for (std::size_t i = done; i < entries_.size(); ++i)
     if (!backups[i].empty()) std::remove(backups[i].c_str());

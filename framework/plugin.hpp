@@ -46,9 +46,9 @@ using SignalMap = std::map<std::string, Signal>;
 
 // What a step sees besides its data. Library code reports through this, never by printing.
 struct RunContext {
-  std::uint64_t seed = 1;                       // used when a plugin has no seed parameter
-  unsigned threads = 1;                         // worker threads; results never depend on it
-  Eigen::VectorXd time_s;                       // the record's time stamps
+  std::uint64_t seed = 1;  // used when a plugin has no seed parameter
+  unsigned threads = 1;    // worker threads; results never depend on it
+  Eigen::VectorXd time_s;  // the record's time stamps
   std::function<void(double fraction)> progress = [](double) {};
   nlohmann::json diagnostics = nlohmann::json::object();  // per-step report entries
 };
@@ -90,8 +90,8 @@ enum class ImfGroup { Noise, Mixed, Drift };
 std::string to_string(ImfGroup group);
 
 struct Classification {
-  std::vector<ImfGroup> groups;  // one per IMF column
-  std::vector<double> scores;    // the statistic the rule used (e.g. sample entropy), per IMF
+  std::vector<ImfGroup> groups;      // one per IMF column
+  std::vector<double> scores;        // the statistic the rule used (e.g. sample entropy), per IMF
   std::vector<std::string> reasons;  // one logged decision per IMF
 };
 
@@ -138,8 +138,7 @@ using VectorObjective = std::function<Eigen::VectorXd(const Eigen::VectorXd&)>;
 
 class Optimizer : public Plugin {
  public:
-  virtual OptimizationResult minimize(const Objective& f, const std::vector<Bound>& bounds,
-                                      RunContext& ctx) = 0;
+  virtual OptimizationResult minimize(const Objective& f, const std::vector<Bound>& bounds, RunContext& ctx) = 0;
   // Largest number of objectives minimize_objectives() accepts (1 unless overridden).
   virtual std::size_t max_objectives() const { return 1; }
   // The objective evaluations one minimize() makes at most (optimizer/ga: population x
@@ -172,8 +171,8 @@ class Filter : public Plugin {
 // and may move the temperature that the model's bias(T) and scale factor follow (a thermal lag:
 // the model is then evaluated at model_temperature_c instead of the sensor's temperature).
 struct EffectParameter {
-  std::string name;  // e.g. "tau_s"
-  std::string unit;  // e.g. "s"
+  std::string name;                 // e.g. "tau_s"
+  std::string unit;                 // e.g. "s"
   double lower = 0.0, upper = 0.0;  // search interval, 0 < lower < upper
   // Log: grid uniform in log(value). Period: grid uniform in 1/value, clamped by the workflow to
   // the periods the (block-averaged) record resolves.

@@ -72,8 +72,7 @@ std::string function_symbol(void* handle, const char* name, void*& address) {
   if (dladdr1(address, &info, &entry, RTLD_DL_SYMENT) == 0 || entry == nullptr)
     return std::string("cannot inspect the symbol ") + name;
   const auto* sym = static_cast<const ElfW(Sym)*>(entry);
-  if (sym == nullptr)
-    return std::string("cannot inspect the symbol ") + name;
+  if (sym == nullptr) return std::string("cannot inspect the symbol ") + name;
   const auto type = ELF64_ST_TYPE(sym->st_info);
   if (type != STT_FUNC && type != STT_GNU_IFUNC)
     return std::string(name) + " is not a function (a data symbol of that name)";
@@ -97,8 +96,8 @@ void Registry::add(PluginInfo info) {
   if (std::find(kinds.begin(), kinds.end(), info.kind()) == kinds.end())
     throw ConfigError(where, "unknown plugin kind '" + info.kind() + "'");
   if (impl_->plugins.count(info.name))
-    throw ConfigError(where, "a plugin with this name is already registered (from " +
-                                 impl_->plugins.at(info.name).origin + ")");
+    throw ConfigError(
+        where, "a plugin with this name is already registered (from " + impl_->plugins.at(info.name).origin + ")");
   if (!info.make) throw ConfigError(where, "plugin has no factory");
   if (!impl_->loading_origin.empty()) info.origin = impl_->loading_origin;
   impl_->plugins.emplace(info.name, std::move(info));
@@ -114,7 +113,8 @@ const PluginInfo& Registry::info(const std::string& name) const {
   for (const auto* p : list(kind)) known += (known.empty() ? "" : ", ") + p->name;
   if (known.empty())
     for (const auto* p : list()) known += (known.empty() ? "" : ", ") + p->name;
-  throw UnknownPluginError({"", 0, name}, "unknown plugin " + quoted_excerpt(name) + " (known: " + (known.empty() ? "none" : known) + ")");
+  throw UnknownPluginError(
+      {"", 0, name}, "unknown plugin " + quoted_excerpt(name) + " (known: " + (known.empty() ? "none" : known) + ")");
 }
 
 std::vector<const PluginInfo*> Registry::list(const std::string& kind) const {
@@ -175,8 +175,9 @@ void Registry::load_library(const std::filesystem::path& path) {
   } catch (const std::exception& e) {
     throw UnknownPluginError(where, std::string("registering the library's plugins failed: ") + e.what());
   } catch (...) {
-    throw UnknownPluginError(where, "registering the library's plugins failed with an exception that is not a "
-                                    "std::exception");
+    throw UnknownPluginError(where,
+                             "registering the library's plugins failed with an exception that is not a "
+                             "std::exception");
   }
 }
 

@@ -24,8 +24,7 @@ class GaPlugin final : public Optimizer {
     return static_cast<double>(config_.population) * (static_cast<double>(config_.generations) + 1.0);
   }
 
-  OptimizationResult minimize(const Objective& f, const std::vector<Bound>& bounds,
-                              RunContext& ctx) override {
+  OptimizationResult minimize(const Objective& f, const std::vector<Bound>& bounds, RunContext& ctx) override {
     std::vector<ga::Bound> genes;
     for (const auto& b : bounds) genes.push_back({b.lower, b.upper, b.integer});
     ga::Config config = config_;
@@ -57,7 +56,8 @@ void register_ga_plugins(Registry& registry) {
   registry.add(
       {.name = "optimizer/ga",
        .summary = "real-coded genetic algorithm (tournament, SBX, polynomial mutation, elitism)",
-       .reference = "Li et al. 2023 (GA tuning of the RBF network); Deb & Agrawal 1995 (SBX); Deb & Goyal 1996 (mutation)",
+       .reference =
+           "Li et al. 2023 (GA tuning of the RBF network); Deb & Agrawal 1995 (SBX); Deb & Goyal 1996 (mutation)",
        .params =
            ParamTable{
                {param::integer("population", 40, "1", "individuals per generation").at_least(2).at_most(1e6),
@@ -68,12 +68,14 @@ void register_ga_plugins(Registry& registry) {
                 param::real("crossover_probability", 0.9, "1", "probability that a parent pair is crossed by SBX")
                     .at_least(0)
                     .at_most(1),
-                param::real("crossover_eta", 15.0, "1", "SBX distribution index; larger keeps children nearer their parents")
+                param::real("crossover_eta", 15.0, "1",
+                            "SBX distribution index; larger keeps children nearer their parents")
                     .greater_than(0),
                 param::real("mutation_probability", 0.25, "1", "per-gene probability of polynomial mutation")
                     .at_least(0)
                     .at_most(1),
-                param::real("mutation_eta", 20.0, "1", "polynomial-mutation distribution index; larger means smaller steps")
+                param::real("mutation_eta", 20.0, "1",
+                            "polynomial-mutation distribution index; larger means smaller steps")
                     .greater_than(0),
                 param::integer("elites", 2, "1", "best individuals copied unchanged into the next generation")
                     .at_least(0),

@@ -14,30 +14,32 @@ namespace driftlab::tuning {
 
 ParamSpec search_range(std::string key, std::vector<double> def, std::string unit, std::string doc) {
   return param::reals(std::move(key), std::move(def), std::move(unit), std::move(doc))
-      .must("two values [low, high] with low <= high",
-            [](const ParamValue& v) -> std::string {
-              const auto& r = std::get<std::vector<double>>(v);
-              if (r.size() != 2) return "needs exactly two values [low, high]";
-              if (!(r[0] <= r[1])) return "low must not exceed high";
-              return "";
-            },
-            std::vector<double>{2.0, 1.0});
+      .must(
+          "two values [low, high] with low <= high",
+          [](const ParamValue& v) -> std::string {
+            const auto& r = std::get<std::vector<double>>(v);
+            if (r.size() != 2) return "needs exactly two values [low, high]";
+            if (!(r[0] <= r[1])) return "low must not exceed high";
+            return "";
+          },
+          std::vector<double>{2.0, 1.0});
 }
 
 std::vector<ParamSpec> params(const std::string& complexity_key, const std::string& complexity_doc) {
-  return {param::boolean("tune", false,
-                         "tune the hyperparameters with the nested optimizer on a blocked holdout, then fit all samples"),
-          param::nested("optimizer", "optimizer", "optimizer/ga", "optimizer used when tune is true"),
-          param::choice("tune_objectives", "auto", {"auto", "rmse", "rmse_and_" + complexity_key},
-                        "rmse: held-out RMSE alone; rmse_and_" + complexity_key + ": also " + complexity_doc +
-                            " (needs a multi-objective optimizer, e.g. optimizer/pagmo with nsga2); auto: both "
-                            "when the optimizer takes two objectives"),
-          param::real("holdout_fraction", 0.2, "1", "share of samples held out when tuning").greater_than(0).less_than(1),
-          param::integer("holdout_blocks", 10, "1", "evenly spread contiguous held-out runs when tuning").at_least(1),
-          param::integer("tune_max_samples", 20000, "1",
-                         "tuning uses an evenly spaced subsample of at most this many rows (0: all); the final fit "
-                         "uses all")
-              .at_least(0)};
+  return {
+      param::boolean("tune", false,
+                     "tune the hyperparameters with the nested optimizer on a blocked holdout, then fit all samples"),
+      param::nested("optimizer", "optimizer", "optimizer/ga", "optimizer used when tune is true"),
+      param::choice("tune_objectives", "auto", {"auto", "rmse", "rmse_and_" + complexity_key},
+                    "rmse: held-out RMSE alone; rmse_and_" + complexity_key + ": also " + complexity_doc +
+                        " (needs a multi-objective optimizer, e.g. optimizer/pagmo with nsga2); auto: both "
+                        "when the optimizer takes two objectives"),
+      param::real("holdout_fraction", 0.2, "1", "share of samples held out when tuning").greater_than(0).less_than(1),
+      param::integer("holdout_blocks", 10, "1", "evenly spread contiguous held-out runs when tuning").at_least(1),
+      param::integer("tune_max_samples", 20000, "1",
+                     "tuning uses an evenly spaced subsample of at most this many rows (0: all); the final fit "
+                     "uses all")
+          .at_least(0)};
 }
 
 Settings settings(const ParamValues& p, const Optimizer& optimizer, std::string plugin, std::string complexity_name) {
@@ -48,9 +50,10 @@ Settings settings(const ParamValues& p, const Optimizer& optimizer, std::string 
   const bool multi = optimizer.max_objectives() >= 2;
   s.objectives = wanted == "rmse" ? 1 : wanted == "auto" ? (multi ? 2 : 1) : 2;
   if (s.objectives == 2 && !multi) {
-    throw ConfigError({"", 0, "tune_objectives"},
-                      s.plugin + ": tune_objectives " + wanted + " needs a multi-objective optimizer (e.g. "
-                      "optimizer/pagmo with algorithm nsga2); " + p.plugin("optimizer").name + " takes one");
+    throw ConfigError({"", 0, "tune_objectives"}, s.plugin + ": tune_objectives " + wanted +
+                                                      " needs a multi-objective optimizer (e.g. "
+                                                      "optimizer/pagmo with algorithm nsga2); " +
+                                                      p.plugin("optimizer").name + " takes one");
   }
   s.holdout_fraction = p.real("holdout_fraction");
   s.holdout_blocks = static_cast<std::size_t>(p.integer("holdout_blocks"));
@@ -111,8 +114,7 @@ Search search(Optimizer& optimizer, const std::vector<Bound>& bounds, const Sett
     char what[200];
     std::snprintf(what, sizeof what, "%.3g objective evaluations x %.3g rows at %.2g s per row and evaluation",
                   evaluations, rows, kSecondsPerRowEvaluation);
-    check_time_estimate(evaluations * rows * kSecondsPerRowEvaluation, {"", 0, "optimizer"},
-                        s.plugin + ": " + what);
+    check_time_estimate(evaluations * rows * kSecondsPerRowEvaluation, {"", 0, "optimizer"}, s.plugin + ": " + what);
   }
   RunContext inner;
   inner.seed = ctx.seed;
@@ -128,9 +130,8 @@ Search search(Optimizer& optimizer, const std::vector<Bound>& bounds, const Sett
   return {std::move(r), std::move(inner.diagnostics)};
 }
 
-Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s,
-                    const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const FitAndScore& fit_and_score,
-                    RunContext& ctx) {
+Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s, const Eigen::MatrixXd& X,
+                    const Eigen::VectorXd& y, const FitAndScore& fit_and_score, RunContext& ctx) {
   const Split data = split(X, y, s);
   const Search found = search(optimizer, bounds, s, data, fit_and_score, ctx);
   const OptimizationResult& r = found.result;
@@ -144,14 +145,16 @@ Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, cons
   nlohmann::json best = named(r.best);
   const Eigen::VectorXd values = r.best_values.size() > 0 ? r.best_values : Eigen::VectorXd::Constant(1, r.best_value);
   for (std::size_t k = 0; k < objectives.size(); ++k) best[objectives[k]] = values[static_cast<Eigen::Index>(k)];
-  ctx.diagnostics["tuning"] = {
-      {"objectives", objectives},
-      {"holdout", {{"fraction", s.holdout_fraction}, {"blocks", s.holdout_blocks},
-                   {"train_samples", data.X_train.rows()}, {"holdout_samples", data.X_holdout.rows()}}},
-      {"best", best},
-      {"history", r.history},
-      {"evaluations", r.evaluations},
-      {"optimizer", found.optimizer_diagnostics}};
+  ctx.diagnostics["tuning"] = {{"objectives", objectives},
+                               {"holdout",
+                                {{"fraction", s.holdout_fraction},
+                                 {"blocks", s.holdout_blocks},
+                                 {"train_samples", data.X_train.rows()},
+                                 {"holdout_samples", data.X_holdout.rows()}}},
+                               {"best", best},
+                               {"history", r.history},
+                               {"evaluations", r.evaluations},
+                               {"optimizer", found.optimizer_diagnostics}};
   return r.best;
 }
 

@@ -27,12 +27,12 @@ ParamSpec search_range(std::string key, std::vector<double> def, std::string uni
 enum class Rows { EvenSubsample, RunMeans };
 
 struct Settings {
-  std::string plugin;            // e.g. "regressor/elm", for messages
-  std::string complexity_name;   // e.g. "output_weight_norm"
-  std::size_t objectives = 1;    // 1 or 2, resolved from tune_objectives and the optimizer
+  std::string plugin;           // e.g. "regressor/elm", for messages
+  std::string complexity_name;  // e.g. "output_weight_norm"
+  std::size_t objectives = 1;   // 1 or 2, resolved from tune_objectives and the optimizer
   double holdout_fraction = 0.2;
   std::size_t holdout_blocks = 10;
-  std::size_t max_samples = 0;   // rows the tuning sees at most; 0: all rows
+  std::size_t max_samples = 0;  // rows the tuning sees at most; 0: all rows
   Rows rows = Rows::EvenSubsample;
   std::uint64_t seed = 1;
 };
@@ -86,8 +86,7 @@ Search search(Optimizer& optimizer, const std::vector<Bound>& bounds, const Sett
 
 // split(), then search(); returns the chosen decision vector. Writes ctx.diagnostics["tuning"]
 // (objectives, holdout sizes, best, history, optimizer diagnostics).
-Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s,
-                    const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const FitAndScore& fit_and_score,
-                    RunContext& ctx);
+Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s, const Eigen::MatrixXd& X,
+                    const Eigen::VectorXd& y, const FitAndScore& fit_and_score, RunContext& ctx);
 
 }  // namespace driftlab::tuning

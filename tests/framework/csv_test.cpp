@@ -91,8 +91,7 @@ TEST_P(CsvReaderRejects, NamingFileLineAndColumn) {
 
 INSTANTIATE_TEST_SUITE_P(
     Fixtures, CsvReaderRejects,
-    testing::Values(BadCsv{"empty.csv", 0, "", "file is empty"},
-                    BadCsv{"no_header.csv", 1, "", "missing header row"},
+    testing::Values(BadCsv{"empty.csv", 0, "", "file is empty"}, BadCsv{"no_header.csv", 1, "", "missing header row"},
                     BadCsv{"missing_rate_column.csv", 1, "rate", "no column for the 'rate' channel"},
                     BadCsv{"non_numeric.csv", 8, "rate_dps", "expected a number, got 'abc'"},
                     BadCsv{"nan_line_1234.csv", 1234, "rate_dps", "NaN/Inf not allowed"},
@@ -208,12 +207,16 @@ TEST(CsvMapping, EachRoleAcceptsOnlyUnitsOfItsDimension) {
 // the whole text, however the text is cut into reads: a CR LF split between two reads stays one
 // line end, and a byte-order mark is skipped only at the very start.
 TEST(CsvLineStream, GivesTheCursorsLinesHoweverTheReadsAreCut) {
-  const std::string text = "\xEF\xBB\xBFt_s,rate_dps\r\n# note\r\n\r\n0,1\r1,2\n\n2,3\r\n\xEF\xBB\xBF" "3,4\r";
+  const std::string text =
+      "\xEF\xBB\xBFt_s,rate_dps\r\n# note\r\n\r\n0,1\r1,2\n\n2,3\r\n\xEF\xBB\xBF"
+      "3,4\r";
   std::vector<std::pair<int, std::string>> expected;
   CsvLineCursor cursor(text);
   for (std::string_view line; cursor.next(line);) expected.emplace_back(cursor.line_number(), std::string(line));
   ASSERT_EQ(expected.size(), 5u);
-  EXPECT_EQ(expected.back().second, "\xEF\xBB\xBF" "3,4");  // a mark inside the text is data
+  EXPECT_EQ(expected.back().second,
+            "\xEF\xBB\xBF"
+            "3,4");  // a mark inside the text is data
   for (std::size_t piece = 1; piece <= text.size(); ++piece) {
     std::size_t offset = 0;
     CsvLineStream lines(

@@ -31,12 +31,12 @@ TEST(BuiltinPlugins, AreExactlyTheDocumentedSet) {
   register_builtin_plugins(registry);
   EXPECT_THAT(names(registry),
               ::testing::ElementsAre("classifier/sample_entropy", "decomposition/ceemdan", "decomposition/eemd",
-                                     "decomposition/emd", "decomposition/vmd", "effect/hysteresis", "effect/mode_split_drift",
-                                     "effect/periodic_disturbance", "effect/scale_factor_temperature",
-                                     "effect/temperature_rate", "effect/thermal_lag", "effect/warmup_transient",
-                                     "filter/kalman", "filter/rate_of_change", "filter/tfpf", "filter/wavelet",
-                                     "optimizer/ga", "optimizer/pagmo", "regressor/elm", "regressor/polynomial",
-                                     "regressor/rbf", "regressor/svr"));
+                                     "decomposition/emd", "decomposition/vmd", "effect/hysteresis",
+                                     "effect/mode_split_drift", "effect/periodic_disturbance",
+                                     "effect/scale_factor_temperature", "effect/temperature_rate", "effect/thermal_lag",
+                                     "effect/warmup_transient", "filter/kalman", "filter/rate_of_change", "filter/tfpf",
+                                     "filter/wavelet", "optimizer/ga", "optimizer/pagmo", "regressor/elm",
+                                     "regressor/polynomial", "regressor/rbf", "regressor/svr"));
 }
 
 TEST(Registry, RejectsMalformedNamesUnknownKindsAndDuplicates) {
@@ -64,10 +64,11 @@ TEST(Registry, NamesTheKnownPluginsOfAKindWhenOneIsUnknown) {
 TEST(Registry, CreatesNestedPluginsThroughTheirKindInterface) {
   Registry registry;
   testing_plugins::register_test_plugins(registry);
-  auto optimizer = registry.create_as<Optimizer>({"optimizer/test_midpoint", params_from_assignments(registry, "optimizer/test_midpoint", {})});
+  auto optimizer = registry.create_as<Optimizer>(
+      {"optimizer/test_midpoint", params_from_assignments(registry, "optimizer/test_midpoint", {})});
   RunContext ctx;
-  const auto r = optimizer->minimize([](const Eigen::VectorXd& x) { return x.squaredNorm(); },
-                                     {{"a", 1.0, 3.0, false}}, ctx);
+  const auto r =
+      optimizer->minimize([](const Eigen::VectorXd& x) { return x.squaredNorm(); }, {{"a", 1.0, 3.0, false}}, ctx);
   EXPECT_DOUBLE_EQ(r.best[0], 2.0);
   EXPECT_THROW(registry.create_as<Filter>({"optimizer/test_midpoint", {}}), ConfigError);
 }

@@ -43,8 +43,10 @@ std::string oven_rows(bool zero_rate = false, bool truth = false) {
     const double temp = 20.0 + 0.05 * i;
     const double true_rate = truth ? 10.0 * std::sin(0.05 * i) : 0.0;
     const double rate = zero_rate ? 0.0 : true_rate + 0.01 + 2e-4 * (temp - 20.0) + 1e-4 * std::sin(7.3 * i * i);
-    if (truth) std::snprintf(line, sizeof line, "%d,%.9f,%.6f,%.9f\n", i, rate, temp, true_rate);
-    else std::snprintf(line, sizeof line, "%d,%.9f,%.6f\n", i, rate, temp);
+    if (truth)
+      std::snprintf(line, sizeof line, "%d,%.9f,%.6f,%.9f\n", i, rate, temp, true_rate);
+    else
+      std::snprintf(line, sizeof line, "%d,%.9f,%.6f\n", i, rate, temp);
     text += line;
   }
   return text;
@@ -145,9 +147,11 @@ TEST_F(Hostile, InputsThatAreNotRegularFilesAreRefusedBeforeTheyAreRead) {
        "cannot read the pipeline file: it is a FIFO"},
       {"compare --data " + p("oven.csv") + " --pipeline " + fifo + " --out " + p("cmp"), 2,
        "cannot read the pipeline file: it is a FIFO"},
-      {"simulate --device " + fifo + " --duration 10 --out " + p("s.csv"), 2, "cannot read the device file: it is a FIFO"},
+      {"simulate --device " + fifo + " --duration 10 --out " + p("s.csv"), 2,
+       "cannot read the device file: it is a FIFO"},
       {"allan --data " + fifo + " --out " + p("a.csv"), 3, "is a FIFO (named pipe); expected a regular file"},
-      {"calibrate --data " + fifo + " --bin 10 --out " + p("m.json"), 3, "is a FIFO (named pipe); expected a regular file"},
+      {"calibrate --data " + fifo + " --bin 10 --out " + p("m.json"), 3,
+       "is a FIFO (named pipe); expected a regular file"},
       {"log info " + fifo, 3, "is a FIFO (named pipe); expected a regular file"},
   };
   const auto before = entries();
@@ -196,8 +200,9 @@ TEST_F(Hostile, AnUnphysicalModelIsRefusedByEveryReaderWithFileAndKey) {
   text.replace(at, text.find(',', at) - at, "\"reference_temp_c\": 1e300");
   write(dir_ / "hot.json", text);
   const std::string expected = p("hot.json") + ": channels[0].model.reference_temp_c: expected a temperature within";
-  for (const auto& command : {"compensate --data " + p("oven.csv") + " --model " + p("hot.json") + " --out " + p("c.csv"),
-                              "export --model " + p("hot.json") + " --format ardupilot --out " + p("x.parm")}) {
+  for (const auto& command :
+       {"compensate --data " + p("oven.csv") + " --model " + p("hot.json") + " --out " + p("c.csv"),
+        "export --model " + p("hot.json") + " --format ardupilot --out " + p("x.parm")}) {
     const auto r = run_driftlab(command);
     EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
     EXPECT_THAT(r.err, HasSubstr(expected)) << command;
@@ -208,8 +213,8 @@ TEST_F(Hostile, AnUnphysicalModelIsRefusedByEveryReaderWithFileAndKey) {
 TEST_F(Hostile, FirmwareExportsWriteOnlyRealThirtyTwoValues) {
   make_model();
   // A finite bias of 1e300 rad/s (a valid model: finite everywhere) is no REAL32 parameter.
-  const std::string text = std::regex_replace(read_text(p("model.json")),
-                                              std::regex("(\"polynomial_rad_s_per_k_i\": \\[\\s*)[^,\\]\\s]+"), "$011e300");
+  const std::string text = std::regex_replace(
+      read_text(p("model.json")), std::regex("(\"polynomial_rad_s_per_k_i\": \\[\\s*)[^,\\]\\s]+"), "$011e300");
   ASSERT_NE(text.find("1e300"), std::string::npos);
   write(dir_ / "big.json", text);
   for (const auto& format : {"px4", "ardupilot"}) {
@@ -224,8 +229,9 @@ TEST_F(Hostile, FirmwareExportsWriteOnlyRealThirtyTwoValues) {
 
 TEST_F(Hostile, AChamberTemperatureOutsideThePhysicalRangeIsRefused) {
   write(dir_ / "hot.yaml", "format: driftlab-profile/1\nchamber: {start_c: 1e6}\n");
-  const auto r = run_driftlab("simulate --device fmvmg --profile " + p("hot.yaml") + " --duration 10 --out " + p("s.csv"),
-                              "DRIFTLAB_DEVICES_DIR=" + std::string(DRIFTLAB_SOURCE_DIR) + "/devices");
+  const auto r =
+      run_driftlab("simulate --device fmvmg --profile " + p("hot.yaml") + " --duration 10 --out " + p("s.csv"),
+                   "DRIFTLAB_DEVICES_DIR=" + std::string(DRIFTLAB_SOURCE_DIR) + "/devices");
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_THAT(r.err, HasSubstr(p("hot.yaml") + ":2: chamber.start_c: must be in [-273.15, 1000], got '1e6'"));
   EXPECT_FALSE(fs::exists(p("s.csv")));
@@ -286,7 +292,8 @@ TEST_F(Hostile, KalmanOptionsWithoutKalmanAreAnError) {
                                 p("c.csv") + " " + option);
     EXPECT_EQ(r.exit_code, 2) << option << "\n" << r.err;
     EXPECT_THAT(r.err, HasSubstr(option.substr(0, option.find(' ')) + ": " + option.substr(0, option.find(' ')) +
-                                 " needs --kalman")) << option;
+                                 " needs --kalman"))
+        << option;
     EXPECT_FALSE(fs::exists(p("c.csv"))) << option;
   }
 }
@@ -295,23 +302,28 @@ TEST_F(Hostile, KalmanOptionsWithoutKalmanAreAnError) {
 // input per command, bounded like a file.
 TEST_F(Hostile, ADashReadsStandardInputOnceAndBounded) {
   make_model();
-  const auto file = run_driftlab("compensate --data " + p("oven.csv") + " --model " + p("model.json") + " --out " + p("f.csv"));
+  const auto file =
+      run_driftlab("compensate --data " + p("oven.csv") + " --model " + p("model.json") + " --out " + p("f.csv"));
   ASSERT_EQ(file.exit_code, 0) << file.err;
-  const auto data = run_driftlab("compensate --data - --model " + p("model.json") + " --out " + p("d.csv"), "", p("oven.csv"));
+  const auto data =
+      run_driftlab("compensate --data - --model " + p("model.json") + " --out " + p("d.csv"), "", p("oven.csv"));
   EXPECT_EQ(data.exit_code, 0) << data.err;
   EXPECT_EQ(read_text(p("d.csv")), read_text(p("f.csv")));
-  const auto model = run_driftlab("compensate --data " + p("oven.csv") + " --model - --out " + p("m.csv"), "", p("model.json"));
+  const auto model =
+      run_driftlab("compensate --data " + p("oven.csv") + " --model - --out " + p("m.csv"), "", p("model.json"));
   EXPECT_EQ(model.exit_code, 0) << model.err;
   EXPECT_EQ(read_text(p("m.csv")), read_text(p("f.csv")));
   // A bad row on standard input is named as <stdin> with its line.
   write(dir_ / "bad.csv", "t_s,rate_dps,temp_c\n0,0.1,20\n1,x,20\n");
-  const auto bad = run_driftlab("compensate --data - --model " + p("model.json") + " --out " + p("b.csv"), "", p("bad.csv"));
+  const auto bad =
+      run_driftlab("compensate --data - --model " + p("model.json") + " --out " + p("b.csv"), "", p("bad.csv"));
   EXPECT_EQ(bad.exit_code, 3) << bad.err;
   EXPECT_THAT(bad.err, HasSubstr("<stdin>:3: rate_dps:"));
   // The model is read first, the data would be read from what is left: refused.
   const std::vector<std::pair<std::string, std::string>> refused{
       {"compensate --data - --model - --out " + p("x.csv"),
-       "<stdin>: standard input is already read as the calibration model file; only one input can be -, not the data too"},
+       "<stdin>: standard input is already read as the calibration model file; only one input can be -, not the data "
+       "too"},
       {"compensate --stream --model -", "--stream reads the rows from standard input; the model cannot be - too"},
   };
   for (const auto& [command, message] : refused) {
@@ -321,9 +333,11 @@ TEST_F(Hostile, ADashReadsStandardInputOnceAndBounded) {
   }
   std::ofstream(p("huge.json")) << "{";
   fs::resize_file(p("huge.json"), (std::uintmax_t{64} << 20) + 1);  // sparse
-  const auto huge = run_driftlab("compensate --data " + p("oven.csv") + " --model - --out " + p("h.csv"), "", p("huge.json"));
+  const auto huge =
+      run_driftlab("compensate --data " + p("oven.csv") + " --model - --out " + p("h.csv"), "", p("huge.json"));
   EXPECT_EQ(huge.exit_code, 2) << huge.err;
-  EXPECT_THAT(huge.err, HasSubstr("<stdin>: the calibration model file on standard input has more than 67108864 bytes"));
+  EXPECT_THAT(huge.err,
+              HasSubstr("<stdin>: the calibration model file on standard input has more than 67108864 bytes"));
   EXPECT_FALSE(fs::exists(p("x.csv")) || fs::exists(p("h.csv")) || fs::exists(p("b.csv")));
 }
 
@@ -340,12 +354,14 @@ TEST_F(Hostile, StreamRefusesALineLongerThanItsCap) {
   EXPECT_THAT(r.err, HasSubstr("<stdin>:4: the line is longer than 1048576 bytes (--max-line-bytes)"));
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 3) << "the header and the two rows before it";
   // The cap is an option: a lower one refuses a shorter line, the same record passes under a higher one.
-  const auto low = run_driftlab("compensate --stream --max-line-bytes 16 --model " + p("model.json"), "", p("oven.csv"));
+  const auto low =
+      run_driftlab("compensate --stream --max-line-bytes 16 --model " + p("model.json"), "", p("oven.csv"));
   EXPECT_EQ(low.exit_code, 3) << low.err;
   EXPECT_THAT(low.err, HasSubstr("<stdin>:1: the line is longer than 16 bytes")) << "the header has 19";
   // 20 degC written with 2 MiB of leading zeros: a valid row, read whole under a 4-MiB cap.
   write(dir_ / "rows.csv", "t_s,rate_dps,temp_c\n0,0.1,20\n1,0.1," + std::string(2 << 20, '0') + "20\n");
-  const auto high = run_driftlab("compensate --stream --max-line-bytes 4194304 --model " + p("model.json"), "", p("rows.csv"));
+  const auto high =
+      run_driftlab("compensate --stream --max-line-bytes 4194304 --model " + p("model.json"), "", p("rows.csv"));
   EXPECT_EQ(high.exit_code, 0) << high.err;
   EXPECT_EQ(std::count(high.out.begin(), high.out.end(), '\n'), 3);
 }
@@ -361,15 +377,18 @@ TEST_F(Hostile, AbsurdParametersAreRefusedOnTheirCostEstimate) {
   EXPECT_THAT(memory.err, HasSubstr("--fs, --duration: 1e+10 samples (--fs x --duration) at 250 bytes each: about"));
   const auto time = run_driftlab(simulate, devices + " DRIFTLAB_MEMORY_LIMIT_MB=1e12");
   EXPECT_EQ(time.exit_code, 2) << time.err;
-  EXPECT_THAT(time.err, HasSubstr("--fs, --duration: 1e+10 samples (--fs x --duration) at 4e-06 s each: about 4e+04 s (11.1 h)"));
+  EXPECT_THAT(time.err,
+              HasSubstr("--fs, --duration: 1e+10 samples (--fs x --duration) at 4e-06 s each: about 4e+04 s (11.1 h)"));
   EXPECT_THAT(time.err, HasSubstr("above the budget of 4 h (the default; DRIFTLAB_TIME_LIMIT_S raises it)"));
   // The budget is an environment variable; a malformed one is a usage error naming it.
   const auto lowered = run_driftlab("simulate --device fmvmg --fs 100 --duration 100 --out " + p("s.csv"),
                                     devices + " DRIFTLAB_TIME_LIMIT_S=0.01");
   EXPECT_EQ(lowered.exit_code, 2) << lowered.err;
   EXPECT_THAT(lowered.err, HasSubstr("above the budget of 2.78e-06 h (DRIFTLAB_TIME_LIMIT_S)"));
-  for (const std::string env : {"DRIFTLAB_MEMORY_LIMIT_MB=abc", "DRIFTLAB_TIME_LIMIT_S=-1", "DRIFTLAB_TIME_LIMIT_S=inf"}) {
-    const auto r = run_driftlab("simulate --device fmvmg --fs 100 --duration 10 --out " + p("s.csv"), devices + " " + env);
+  for (const std::string env :
+       {"DRIFTLAB_MEMORY_LIMIT_MB=abc", "DRIFTLAB_TIME_LIMIT_S=-1", "DRIFTLAB_TIME_LIMIT_S=inf"}) {
+    const auto r =
+        run_driftlab("simulate --device fmvmg --fs 100 --duration 10 --out " + p("s.csv"), devices + " " + env);
     EXPECT_EQ(r.exit_code, 2) << env << "\n" << r.err;
     EXPECT_THAT(r.err, HasSubstr(env.substr(0, env.find('=')) + ": expected a finite number > 0, got '" +
                                  env.substr(env.find('=') + 1) + "'"));
@@ -379,18 +398,22 @@ TEST_F(Hostile, AbsurdParametersAreRefusedOnTheirCostEstimate) {
   std::string rows = "t_s,rate_dps,temp_c\n";
   for (int i = 0; i <= 36000; i += 2) rows += std::to_string(i) + ",0.01," + std::to_string(20.0 + i / 1200.0) + "\n";
   write(dir_ / "long.csv", rows);
-  const auto ga = run_driftlab("calibrate --data " + p("long.csv") + " --model rbf --bin 1 --ga-population 1000 "
-                               "--ga-generations 1000 --out " + p("m.json"));
+  const auto ga = run_driftlab("calibrate --data " + p("long.csv") +
+                               " --model rbf --bin 1 --ga-population 1000 "
+                               "--ga-generations 1000 --out " +
+                               p("m.json"));
   EXPECT_EQ(ga.exit_code, 2) << ga.err;
-  EXPECT_THAT(ga.err, HasSubstr("--ga-population, --ga-generations: 1e+06 GA evaluations per channel over 1.8e+04 bins"));
+  EXPECT_THAT(ga.err,
+              HasSubstr("--ga-population, --ga-generations: 1e+06 GA evaluations per channel over 1.8e+04 bins"));
   EXPECT_FALSE(fs::exists(p("m.json")));
   // A GA inside a pipeline (a tuned RBF step): 1e6 x (1e9 + 1) evaluations over the tuning rows,
   // refused before the first fit with the step's plugin and the estimate named; 2 x 3 runs.
   const auto ga_pipeline = [&](const std::string& name, const std::string& population, const std::string& generations) {
-    write(dir_ / name, "format: driftlab-pipeline/1\ninputs: {rate: rate, temperature: temperature}\nsteps:\n"
-                       "  - name: s\n    plugin: regressor/rbf\n    inputs: {target: rate, features: temperature}\n"
-                       "    params: {tune: true, optimizer: {plugin: optimizer/ga, params: {population: " + population +
-                       ", generations: " + generations + ", elites: 1}}}\noutputs: {o: s.fitted}\n");
+    write(dir_ / name,
+          "format: driftlab-pipeline/1\ninputs: {rate: rate, temperature: temperature}\nsteps:\n"
+          "  - name: s\n    plugin: regressor/rbf\n    inputs: {target: rate, features: temperature}\n"
+          "    params: {tune: true, optimizer: {plugin: optimizer/ga, params: {population: " +
+              population + ", generations: " + generations + ", elites: 1}}}\noutputs: {o: s.fitted}\n");
     return run_driftlab("run --pipeline " + p(name) + " --data " + p("oven.csv") + " --out " + p("run"));
   };
   const auto absurd = ga_pipeline("absurd_ga.yaml", "1000000", "1000000000");
@@ -411,7 +434,8 @@ TEST_F(Hostile, AbsurdParametersAreRefusedOnTheirCostEstimate) {
                                 " --set ensemble_size=100000 --out " + p("imfs.csv"));
     EXPECT_EQ(r.exit_code, 2) << plugin << "\n" << r.err;
     EXPECT_THAT(r.err, HasSubstr("ensemble_size: 100000 members x 100000 samples at 2e-06 s per sample and member: "
-                                 "about 2e+04 s (5.56 h) of computing, above the budget of 4 h")) << plugin;
+                                 "about 2e+04 s (5.56 h) of computing, above the budget of 4 h"))
+        << plugin;
     EXPECT_FALSE(fs::exists(p("imfs.csv"))) << plugin;
   }
 }
@@ -419,13 +443,17 @@ TEST_F(Hostile, AbsurdParametersAreRefusedOnTheirCostEstimate) {
 // Messages name what was given, in a readable form: the unknown plugin's own name beside the known
 // ones, a 309-digit number as a number.
 TEST_F(Hostile, MessagesNameTheGivenPluginAndWriteHugeNumbersShort) {
-  write(dir_ / "unknown.yaml", "format: driftlab-pipeline/1\ninputs: {rate: rate}\nsteps:\n  - name: d\n"
-                               "    plugin: decomposition/does_not_exist\n    inputs: {signal: rate}\noutputs: {o: d.signal}\n");
-  const auto unknown = run_driftlab("run --pipeline " + p("unknown.yaml") + " --data " + p("oven.csv") + " --out " + p("run"));
+  write(dir_ / "unknown.yaml",
+        "format: driftlab-pipeline/1\ninputs: {rate: rate}\nsteps:\n  - name: d\n"
+        "    plugin: decomposition/does_not_exist\n    inputs: {signal: rate}\noutputs: {o: d.signal}\n");
+  const auto unknown =
+      run_driftlab("run --pipeline " + p("unknown.yaml") + " --data " + p("oven.csv") + " --out " + p("run"));
   EXPECT_EQ(unknown.exit_code, 2) << unknown.err;
-  EXPECT_THAT(unknown.err, HasSubstr(p("unknown.yaml") + ":5: d.plugin: unknown plugin 'decomposition/does_not_exist' (known: "));
-  const auto huge = run_driftlab("simulate --device fmvmg --duration 1 --out " + p("s.csv") + " --fs 1" + std::string(308, '0'),
-                                 "DRIFTLAB_DEVICES_DIR=" + std::string(DRIFTLAB_SOURCE_DIR) + "/devices");
+  EXPECT_THAT(unknown.err,
+              HasSubstr(p("unknown.yaml") + ":5: d.plugin: unknown plugin 'decomposition/does_not_exist' (known: "));
+  const auto huge =
+      run_driftlab("simulate --device fmvmg --duration 1 --out " + p("s.csv") + " --fs 1" + std::string(308, '0'),
+                   "DRIFTLAB_DEVICES_DIR=" + std::string(DRIFTLAB_SOURCE_DIR) + "/devices");
   EXPECT_EQ(huge.exit_code, 2) << huge.err;
   EXPECT_THAT(huge.err, HasSubstr("--fs: value 1e+308 is not in (0, 1e+09]"));
   EXPECT_FALSE(fs::exists(p("run")) || fs::exists(p("s.csv")));
@@ -463,12 +491,13 @@ TEST_F(Hostile, StreamAndBatchAgreeOnHostileCsv) {
     EXPECT_EQ(stream.exit_code, code) << name << "\n" << stream.err;
     if (code == 0) {
       EXPECT_EQ(stream.out, read_text(p(name + ".out"))) << name;
-      EXPECT_EQ(std::count(stream.out.begin(), stream.out.end(), '\n'), 1 + std::count(rows.begin(), rows.end(), '\n') -
-                                                                          (name == "crlf" || name == "plus" ? 1 : 0))
+      EXPECT_EQ(std::count(stream.out.begin(), stream.out.end(), '\n'),
+                1 + std::count(rows.begin(), rows.end(), '\n') - (name == "crlf" || name == "plus" ? 1 : 0))
           << name;
     } else {
       std::string expected = batch.err;
-      for (std::size_t at; (at = expected.find(file)) != std::string::npos;) expected.replace(at, file.size(), "<stdin>");
+      for (std::size_t at; (at = expected.find(file)) != std::string::npos;)
+        expected.replace(at, file.size(), "<stdin>");
       EXPECT_EQ(stream.err, expected) << name;
     }
   }
@@ -483,11 +512,13 @@ TEST_F(Hostile, SigkillLeavesNoVisibleTemporaryAndNoPartialOutput) {
   std::string rows = "t_s,rate_dps,temp_c\n";
   char line[96];
   for (int i = 0; i < 300000; ++i) {
-    std::snprintf(line, sizeof line, "%.2f,%.9f,%.6f\n", 0.01 * i, 0.01 + 1e-4 * std::sin(0.37 * i), 20.0 + 30.0 * i / 300000.0);
+    std::snprintf(line, sizeof line, "%.2f,%.9f,%.6f\n", 0.01 * i, 0.01 + 1e-4 * std::sin(0.37 * i),
+                  20.0 + 30.0 * i / 300000.0);
     rows += line;
   }
   write(dir_ / "big.csv", rows);
-  const auto full = run_driftlab("compensate --data " + p("big.csv") + " --model " + p("model.json") + " --out " + p("ref.csv"));
+  const auto full =
+      run_driftlab("compensate --data " + p("big.csv") + " --model " + p("model.json") + " --out " + p("ref.csv"));
   ASSERT_EQ(full.exit_code, 0) << full.err;
   const std::string reference = read_text(p("ref.csv"));
   fs::remove(p("ref.csv"));
@@ -510,7 +541,8 @@ TEST_F(Hostile, SigkillLeavesNoVisibleTemporaryAndNoPartialOutput) {
     for (const auto& e : fs::directory_iterator(dir_)) {
       const std::string name = e.path().filename().string();
       if (name == "c.csv") {
-        EXPECT_EQ(read_text(e.path()), reference) << "a partial output under the final name, kill after " << delay_us << " us";
+        EXPECT_EQ(read_text(e.path()), reference)
+            << "a partial output under the final name, kill after " << delay_us << " us";
         continue;
       }
       if (name.rfind(".c.csv.tmp-", 0) == 0) continue;  // the documented hidden temporary
@@ -518,7 +550,8 @@ TEST_F(Hostile, SigkillLeavesNoVisibleTemporaryAndNoPartialOutput) {
           << name << " left visible, kill after " << delay_us << " us";
     }
     for (const auto& e : fs::directory_iterator(dir_))
-      if (e.path().filename().string().rfind(".c.csv.tmp-", 0) == 0 || e.path().filename() == "c.csv") fs::remove(e.path());
+      if (e.path().filename().string().rfind(".c.csv.tmp-", 0) == 0 || e.path().filename() == "c.csv")
+        fs::remove(e.path());
   }
   EXPECT_GT(killed, 0) << "no kill landed while the command ran";
 }

@@ -54,8 +54,8 @@ using driftlab::testing_cli::scratch_dir;
 // A CSV whose times have at most 7 decimals (MRPT's 100 ns ticks), irregular steps included.
 [[maybe_unused]] void write_test_csv(const fs::path& path, int n, bool odometry) {
   std::ofstream out(path);
-  out << "t_s,rate_rps,temp_c,wx_rps,acc_z_mps2" << (odometry ? ",odom_dx_m,odom_dy_m,odom_dphi_rad,odom_speed_mps" : "")
-      << "\n";
+  out << "t_s,rate_rps,temp_c,wx_rps,acc_z_mps2"
+      << (odometry ? ",odom_dx_m,odom_dy_m,odom_dphi_rad,odom_speed_mps" : "") << "\n";
   std::mt19937_64 random(42);
   std::normal_distribution<double> normal;
   char line[512];
@@ -168,7 +168,8 @@ TEST(MrptBridge, CsvToRawlogToCsvRoundTripIsExactInBothFormats) {
     // and through the command line: the CSV text itself survives
     const auto r1 = run_driftlab("mrpt export " + csv.string() + " --out " + (dir / "cli.rawlog").string());
     ASSERT_EQ(r1.exit_code, 0) << r1.err;
-    const auto r2 = run_driftlab("mrpt import " + (dir / "cli.rawlog").string() + " --out " + (dir / "back.csv").string());
+    const auto r2 =
+        run_driftlab("mrpt import " + (dir / "cli.rawlog").string() + " --out " + (dir / "back.csv").string());
     ASSERT_EQ(r2.exit_code, 0) << r2.err;
     expect_tables_equal(original, read_imu_csv(dir / "back.csv"));
   }
@@ -206,19 +207,21 @@ TEST(MrptBridge, RawlogEditReadsTheExportAndCountsTheImuObservations) {
   const auto dir = scratch_dir("mrpt_rawlog_edit");
   for (const bool odometry : {false, true}) {
     export_test_rawlog(dir, 321, odometry);
-    const std::string command = "rawlog-edit --info -i " + (dir / "in.rawlog").string() + " >" +
-                                (dir / "info.txt").string() + " 2>&1";
+    const std::string command =
+        "rawlog-edit --info -i " + (dir / "in.rawlog").string() + " >" + (dir / "info.txt").string() + " 2>&1";
     ASSERT_EQ(std::system(command.c_str()), 0);
     const std::string info = driftlab::testing_cli::read_text(dir / "info.txt");
     std::smatch m;
-    ASSERT_TRUE(std::regex_search(info, m, std::regex(R"(Sensor \(Label/Occurs/Rate/Durat\.\)\s*:\s*GYRO\s*/\s*(\d+))")))
+    ASSERT_TRUE(
+        std::regex_search(info, m, std::regex(R"(Sensor \(Label/Occurs/Rate/Durat\.\)\s*:\s*GYRO\s*/\s*(\d+))")))
         << info;
     EXPECT_EQ(m[1].str(), "321") << info;
-    EXPECT_NE(info.find(odometry ? "Actions/SensoryFrame format       : Yes" : "Observations format               : Yes"),
-              std::string::npos)
+    EXPECT_NE(
+        info.find(odometry ? "Actions/SensoryFrame format       : Yes" : "Observations format               : Yes"),
+        std::string::npos)
         << info;
-    const std::string list = "rawlog-edit --list-timestamps -i " + (dir / "in.rawlog").string() + " --text-file-output " +
-                             (dir / "ts.txt").string() + " >/dev/null 2>&1";
+    const std::string list = "rawlog-edit --list-timestamps -i " + (dir / "in.rawlog").string() +
+                             " --text-file-output " + (dir / "ts.txt").string() + " >/dev/null 2>&1";
     ASSERT_EQ(std::system(list.c_str()), 0);
     std::istringstream lines(driftlab::testing_cli::read_text(dir / "ts.txt"));
     std::string line;
@@ -249,7 +252,8 @@ TEST(MrptBridge, CompensationChangesOnlyTheImuRateByExactlyTheCorrection) {
   ASSERT_EQ(stats.fields.size(), 1u);
   EXPECT_EQ(stats.fields[0].max_abs_correction, *std::max_element(corrections.begin(), corrections.end()));
   // the fields written by write_test_csv other than IMU_WZ are passed through
-  EXPECT_EQ(stats.passed_through, (std::vector<int>{mrpt::obs::IMU_TEMPERATURE, mrpt::obs::IMU_WX, mrpt::obs::IMU_Z_ACC}));
+  EXPECT_EQ(stats.passed_through,
+            (std::vector<int>{mrpt::obs::IMU_TEMPERATURE, mrpt::obs::IMU_WX, mrpt::obs::IMU_Z_ACC}));
   std::size_t objects_in = 0, objects_out = 0;
   const auto before = read_imu(dir / "in.rawlog", &objects_in);
   const auto after = read_imu(dir / "out.rawlog", &objects_out);
@@ -291,19 +295,24 @@ TEST(MrptBridge, CompensateCommandAppliesTheCalibrationModelsCorrectionExactly) 
   model.valid_max_c = 85.0;
   model.bias_rad_s = {1e-3, 2e-5, -3e-7};  // rad/s, rad/s/K, rad/s/K^2
   model.bias_sigma_rad_s = {0.0, 0.0, 0.0};
-  std::ofstream(dir / "model.json") << driftlab::calibration::to_json_text(driftlab::calibration::single_axis(model, 'z', "test"));
+  std::ofstream(dir / "model.json") << driftlab::calibration::to_json_text(
+      driftlab::calibration::single_axis(model, 'z', "test"));
   const auto r = run_driftlab("mrpt compensate --model " + (dir / "model.json").string() + " " +
                               (dir / "in.rawlog").string() + " --out " + (dir / "out.rawlog").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto before = read_imu(dir / "in.rawlog"), after = read_imu(dir / "out.rawlog");
   ASSERT_EQ(before.size(), after.size());
-  driftlab::calibration::CausalCompensator reference(driftlab::calibration::read_calibration(dir / "model.json").channels.front().model);
+  driftlab::calibration::CausalCompensator reference(
+      driftlab::calibration::read_calibration(dir / "model.json").channels.front().model);
   for (std::size_t i = 0; i < before.size(); ++i) {
     const double t = static_cast<double>((before[i]->timestamp - before[0]->timestamp).count()) / 1e7;
-    const double expected = reference.step(t, before[i]->get(mrpt::obs::IMU_WZ), before[i]->get(mrpt::obs::IMU_TEMPERATURE));
+    const double expected =
+        reference.step(t, before[i]->get(mrpt::obs::IMU_WZ), before[i]->get(mrpt::obs::IMU_TEMPERATURE));
     ASSERT_EQ(after[i]->get(mrpt::obs::IMU_WZ), expected) << i;
     // the change is the model's bias (to rounding of the subtraction: 1e-18 rad/s on 1e-3 rad/s)
-    ASSERT_NEAR(before[i]->get(mrpt::obs::IMU_WZ) - after[i]->get(mrpt::obs::IMU_WZ), reference.last_bias_rad_s(), 1e-17) << i;
+    ASSERT_NEAR(before[i]->get(mrpt::obs::IMU_WZ) - after[i]->get(mrpt::obs::IMU_WZ), reference.last_bias_rad_s(),
+                1e-17)
+        << i;
     after[i]->set(mrpt::obs::IMU_WZ, before[i]->get(mrpt::obs::IMU_WZ));
     ASSERT_EQ(after[i]->rawMeasurements, before[i]->rawMeasurements) << i;
     ASSERT_EQ(after[i]->dataIsPresent, before[i]->dataIsPresent) << i;
@@ -343,10 +352,10 @@ void export_six_axis_rawlog(const fs::path& dir, int n, const std::string& skip 
     std::snprintf(cell, sizeof cell, "%.7f", 0.01 * i);
     out << cell;
     for (const auto& c : columns) {
-      const double v = c == "temp_c" ? -20.0 + 0.05 * i
+      const double v = c == "temp_c"             ? -20.0 + 0.05 * i
                        : c.rfind("acc_", 0) == 0 ? (c == "acc_z_mps2" ? 9.80665 : 0.0) + 0.01 * normal(random)
-                       : c == "mag_x_gauss" ? 0.3
-                                            : 1e-3 * normal(random);
+                       : c == "mag_x_gauss"      ? 0.3
+                                                 : 1e-3 * normal(random);
       std::snprintf(cell, sizeof cell, ",%.17g", v);
       if (c != skip) out << cell;
     }
@@ -397,9 +406,9 @@ TEST(MrptBridge, CompensateCorrectsAllSixFieldsOfAThreeAxisImuExactlyAsTheCausal
   std::ofstream(dir / "model.json") << driftlab::calibration::to_json_text(imu_model);
   for (const int instance : {0, 1}) {
     const auto out = dir / ("out" + std::to_string(instance) + ".rawlog");
-    const auto r = run_driftlab("mrpt compensate --model " + (dir / "model.json").string() + " " +
-                                (dir / "six.rawlog").string() + " --out " + out.string() +
-                                (instance ? " --instance 1" : ""));
+    const auto r =
+        run_driftlab("mrpt compensate --model " + (dir / "model.json").string() + " " + (dir / "six.rawlog").string() +
+                     " --out " + out.string() + (instance ? " --instance 1" : ""));
     ASSERT_EQ(r.exit_code, 0) << r.err;
     // the summary names each corrected field in its unit and what passed through
     for (const auto* field : {"IMU_WX by gyro", "IMU_WY by gyro", "IMU_WZ by gyro", "IMU_X_ACC by accel",
@@ -433,9 +442,9 @@ TEST(MrptBridge, CompensateCorrectsAllSixFieldsOfAThreeAxisImuExactlyAsTheCausal
     }
   }
   // an instance the model does not have: a configuration error naming the option
-  const auto none = run_driftlab("mrpt compensate --model " + (dir / "model.json").string() + " " +
-                                 (dir / "six.rawlog").string() + " --out " + (dir / "x.rawlog").string() +
-                                 " --instance 2");
+  const auto none =
+      run_driftlab("mrpt compensate --model " + (dir / "model.json").string() + " " + (dir / "six.rawlog").string() +
+                   " --out " + (dir / "x.rawlog").string() + " --instance 2");
   EXPECT_EQ(none.exit_code, 2) << none.err;
   EXPECT_NE(none.err.find("instance 2"), std::string::npos) << none.err;
   fs::remove_all(dir);
@@ -485,8 +494,8 @@ TEST(MrptBridge, TruncatedAndMalformedRawlogsNameTheFileAndTheObjectIndex) {
     std::ofstream out(dir / "malformed.rawlog", std::ios::binary);
     out << bad;
   }
-  const auto r = run_driftlab("mrpt import " + (dir / "malformed.rawlog").string() + " --out " +
-                              (dir / "m.csv").string());
+  const auto r =
+      run_driftlab("mrpt import " + (dir / "malformed.rawlog").string() + " --out " + (dir / "m.csv").string());
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_NE(r.err.find((dir / "malformed.rawlog").string()), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("object 7"), std::string::npos) << r.err;
@@ -496,8 +505,8 @@ TEST(MrptBridge, TruncatedAndMalformedRawlogsNameTheFileAndTheObjectIndex) {
     std::ofstream out(dir / "truncated_gz.rawlog", std::ios::binary);
     out.write(gz.data(), static_cast<std::streamsize>(gz.size() / 2));
   }
-  const auto g = run_driftlab("mrpt import " + (dir / "truncated_gz.rawlog").string() + " --out " +
-                              (dir / "g.csv").string());
+  const auto g =
+      run_driftlab("mrpt import " + (dir / "truncated_gz.rawlog").string() + " --out " + (dir / "g.csv").string());
   EXPECT_EQ(g.exit_code, 3) << g.err;
   EXPECT_NE(g.err.find("truncated_gz.rawlog"), std::string::npos) << g.err;
   EXPECT_NE(g.err.find("object "), std::string::npos) << g.err;
@@ -544,11 +553,12 @@ TEST(MrptBridge, HostileRawlogsInputsAndOutputsAreRefusedWithTheFileNamed) {
         << r.err;
   }
   EXPECT_TRUE(fs::is_fifo(fs::symlink_status(fifo)));
-  for (const auto& command : {"mrpt export " + fifo.string() + " --out " + (dir / "x.rawlog").string(),
-                              "mrpt info " + fifo.string()}) {
+  for (const auto& command :
+       {"mrpt export " + fifo.string() + " --out " + (dir / "x.rawlog").string(), "mrpt info " + fifo.string()}) {
     const auto r = run_driftlab(command, "timeout 20");
     EXPECT_EQ(r.exit_code, 3) << command << "\n" << r.err;
-    EXPECT_NE(r.err.find(fifo.string() + ": is a FIFO (named pipe); expected a regular file"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(fifo.string() + ": is a FIFO (named pipe); expected a regular file"), std::string::npos)
+        << r.err;
   }
   // A presence flag stored as a byte other than 0/1: found as the one byte that differs when a flag is set.
   mrpt::obs::CObservationIMU obs;
@@ -571,9 +581,10 @@ TEST(MrptBridge, HostileRawlogsInputsAndOutputsAreRefusedWithTheFileNamed) {
     import_rawlog(dir / "flag.rawlog");
     ADD_FAILURE() << "a presence flag of 2 was accepted";
   } catch (const driftlab::DataError& e) {
-    EXPECT_NE(std::string(e.what()).find((dir / "flag.rawlog").string() + ": object 1: the presence flag of IMU field " +
-                                         std::to_string(mrpt::obs::IMU_YAW) + " is byte 2; expected 0 or 1"),
-              std::string::npos)
+    EXPECT_NE(
+        std::string(e.what()).find((dir / "flag.rawlog").string() + ": object 1: the presence flag of IMU field " +
+                                   std::to_string(mrpt::obs::IMU_YAW) + " is byte 2; expected 0 or 1"),
+        std::string::npos)
         << e.what();
   }
   // A time stamp before MRPT's epoch: tick differences would overflow (t_s decreased, exit 0).
@@ -593,10 +604,11 @@ TEST(MrptBridge, HostileRawlogsInputsAndOutputsAreRefusedWithTheFileNamed) {
     nan_obs.set(mrpt::obs::IMU_WZ, std::numeric_limits<double>::quiet_NaN());
     std::ofstream(dir / "nan.rawlog", std::ios::binary) << early << serialized(nan_obs);
   }
-  const auto nan_field = run_driftlab("mrpt import " + (dir / "nan.rawlog").string() + " --out " + (dir / "n.csv").string());
+  const auto nan_field =
+      run_driftlab("mrpt import " + (dir / "nan.rawlog").string() + " --out " + (dir / "n.csv").string());
   EXPECT_EQ(nan_field.exit_code, 3) << nan_field.err;
   EXPECT_NE(nan_field.err.find((dir / "nan.rawlog").string() + ": object 1: IMU observation 'GYRO': rate_rps is NaN; "
-                                                              "expected a finite number"),
+                                                               "expected a finite number"),
             std::string::npos)
       << nan_field.err;
   EXPECT_FALSE(fs::exists(dir / "n.csv"));
@@ -615,7 +627,7 @@ TEST(MrptBridge, HostileRawlogsInputsAndOutputsAreRefusedWithTheFileNamed) {
   const auto count = run_driftlab("mrpt info " + (dir / "count.rawlog").string(), "timeout 20");
   EXPECT_EQ(count.exit_code, 3) << count.err;
   EXPECT_NE(count.err.find((dir / "count.rawlog").string() + ": object 1: not a valid MRPT object (malformed rawlog): "
-                                                              "std::bad_alloc"),
+                                                             "std::bad_alloc"),
             std::string::npos)
       << count.err;
   // A start time that is not a time.
@@ -627,9 +639,8 @@ TEST(MrptBridge, HostileRawlogsInputsAndOutputsAreRefusedWithTheFileNamed) {
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
   std::sort(left.begin(), left.end());
-  EXPECT_EQ(left,
-            (std::vector<std::string>{"count.rawlog", "fifo", "flag.rawlog", "in.csv", "in.rawlog", "nan.rawlog",
-                                      "ticks.rawlog"}));
+  EXPECT_EQ(left, (std::vector<std::string>{"count.rawlog", "fifo", "flag.rawlog", "in.csv", "in.rawlog", "nan.rawlog",
+                                            "ticks.rawlog"}));
   fs::remove_all(dir);
 #endif
 }
@@ -651,7 +662,8 @@ TEST(MrptBridge, SigkillOfExportOrCompensateLeavesNoVisibleTemporaryAndNoPartial
   model.valid_max_c = 1000.0;
   model.bias_rad_s = {1e-3, 2e-5, 0.0};
   model.bias_sigma_rad_s = {0.0, 0.0, 0.0};
-  std::ofstream(dir / "model.json") << driftlab::calibration::to_json_text(driftlab::calibration::single_axis(model, 'z', "test"));
+  std::ofstream(dir / "model.json") << driftlab::calibration::to_json_text(
+      driftlab::calibration::single_axis(model, 'z', "test"));
   const std::string csv = (dir / "big.csv").string(), input = (dir / "in.rawlog").string(),
                     json = (dir / "model.json").string(), out = (dir / "out.rawlog").string();
   const auto made = run_driftlab("mrpt export " + csv + " --out " + input);
@@ -683,7 +695,8 @@ TEST(MrptBridge, SigkillOfExportOrCompensateLeavesNoVisibleTemporaryAndNoPartial
     for (const auto& e : fs::directory_iterator(dir)) before.push_back(e.path().filename().string());
     int killed = 0;
     std::vector<useconds_t> delays{0, 2000, 10000};
-    for (const double f : {0.1, 0.25, 0.4, 0.55, 0.7, 0.85, 0.95}) delays.push_back(static_cast<useconds_t>(f * run_us));
+    for (const double f : {0.1, 0.25, 0.4, 0.55, 0.7, 0.85, 0.95})
+      delays.push_back(static_cast<useconds_t>(f * run_us));
     for (const useconds_t delay : delays) {
       const pid_t pid = start();
       ASSERT_GT(pid, 0);
@@ -694,8 +707,8 @@ TEST(MrptBridge, SigkillOfExportOrCompensateLeavesNoVisibleTemporaryAndNoPartial
       for (const auto& e : fs::directory_iterator(dir)) {
         const std::string name = e.path().filename().string();
         if (name == "out.rawlog") {
-          EXPECT_EQ(read_bytes(e.path()), reference) << args[1] << ": a partial output under the final name, kill after "
-                                                     << delay << " us";
+          EXPECT_EQ(read_bytes(e.path()), reference)
+              << args[1] << ": a partial output under the final name, kill after " << delay << " us";
         } else if (name.rfind(".out.rawlog.tmp-", 0) != 0) {  // the documented hidden temporary
           EXPECT_NE(std::find(before.begin(), before.end(), name), before.end())
               << args[1] << ": " << name << " left visible, kill after " << delay << " us";
@@ -877,14 +890,16 @@ TEST(MrptNavScenario, SeedsAreWholeNumbersAndTheCabinTemperatureIsPhysical) {
   SKIP_WITHOUT_MRPT();
   using driftlab::mrpt_bridge::parse_nav_scenario;
   const std::string tail =
-      "cabin: {start_c: 20}\nspeed: {start_mps: 1, segments: [{hold_s: 10}]}\nyaw_rate: {start_dps: 0}\nformat: driftlab-nav-scenario/1\n";
+      "cabin: {start_c: 20}\nspeed: {start_mps: 1, segments: [{hold_s: 10}]}\nyaw_rate: {start_dps: 0}\nformat: "
+      "driftlab-nav-scenario/1\n";
   const auto ok = parse_nav_scenario("seed: 18446744073709551615\ncalibration_seed: 0\n" + tail, "s.yaml");
   EXPECT_EQ(ok.seed, 18446744073709551615ull);
   EXPECT_EQ(ok.calibration_seed, 0u);
   const std::vector<std::pair<std::string, std::string>> bad{
       {"seed: 1e30\n", "s.yaml:1: seed: expected a whole number from 0 to 18446744073709551615, got '1e30'"},
       {"seed: 1.5\n", "s.yaml:1: seed: expected a whole number from 0 to 18446744073709551615, got '1.5'"},
-      {"calibration_seed: -1\n", "s.yaml:1: calibration_seed: expected a whole number from 0 to 18446744073709551615, got '-1'"},
+      {"calibration_seed: -1\n",
+       "s.yaml:1: calibration_seed: expected a whole number from 0 to 18446744073709551615, got '-1'"},
       {"seed: 18446744073709551616\n", "s.yaml:1: seed: expected a whole number"},
       {"seed: [1]\n", "s.yaml:1: seed: expected a whole number"},
   };
@@ -896,9 +911,13 @@ TEST(MrptNavScenario, SeedsAreWholeNumbersAndTheCabinTemperatureIsPhysical) {
       EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << head << "\n" << e.what();
     }
   }
-  for (const std::string cabin : {"cabin: {start_c: 1e6}\n", "cabin: {start_c: 20, segments: [{to_c: -300, duration_s: 5}]}\n"}) {
+  for (const std::string cabin :
+       {"cabin: {start_c: 1e6}\n", "cabin: {start_c: 20, segments: [{to_c: -300, duration_s: 5}]}\n"}) {
     try {
-      parse_nav_scenario(cabin + "speed: {start_mps: 1, segments: [{hold_s: 10}]}\nyaw_rate: {start_dps: 0}\nformat: driftlab-nav-scenario/1\n", "s.yaml");
+      parse_nav_scenario(cabin +
+                             "speed: {start_mps: 1, segments: [{hold_s: 10}]}\nyaw_rate: {start_dps: 0}\nformat: "
+                             "driftlab-nav-scenario/1\n",
+                         "s.yaml");
       ADD_FAILURE() << cabin << " accepted";
     } catch (const driftlab::ConfigError& e) {
       EXPECT_NE(std::string(e.what()).find("s.yaml:1: cabin."), std::string::npos) << e.what();
@@ -913,17 +932,21 @@ TEST(MrptNav, AnAbsurdScenarioIsRefusedOnItsCostEstimate) {
   SKIP_WITHOUT_MRPT();
   const auto dir = driftlab::testing_cli::scratch_dir("nav_cost");
   const std::string tail = "format: driftlab-nav-scenario/1\nyaw_rate: {start_dps: 0}\ncabin: {start_c: 20}\n";
-  std::ofstream(dir / "fast.yaml") << tail << "sample_rate_hz: 1e6\nspeed: {start_mps: 1, segments: [{hold_s: 3600}]}\n";
+  std::ofstream(dir / "fast.yaml") << tail
+                                   << "sample_rate_hz: 1e6\nspeed: {start_mps: 1, segments: [{hold_s: 3600}]}\n";
   std::ofstream(dir / "long.yaml") << tail << "sample_rate_hz: 50\nspeed: {start_mps: 1, segments: [{hold_s: 1e7}]}\n";
   const std::vector<std::pair<std::string, std::string>> cases{
-      {"fast.yaml", "fast.yaml: sample_rate_hz, duration: 3.6e+09 samples (scenario sample_rate_hz x duration 3.6e+03 s) "
-                    "at 600 bytes each: about"},
-      {"long.yaml", "long.yaml: sample_rate_hz, duration: 5e+08 samples (scenario sample_rate_hz x duration 1e+07 s) "
-                    "at 5e-05 s each: about 2.5e+04 s (6.94 h) of computing, above the budget of 4 h"},
+      {"fast.yaml",
+       "fast.yaml: sample_rate_hz, duration: 3.6e+09 samples (scenario sample_rate_hz x duration 3.6e+03 s) "
+       "at 600 bytes each: about"},
+      {"long.yaml",
+       "long.yaml: sample_rate_hz, duration: 5e+08 samples (scenario sample_rate_hz x duration 1e+07 s) "
+       "at 5e-05 s each: about 2.5e+04 s (6.94 h) of computing, above the budget of 4 h"},
   };
   for (const auto& [file, message] : cases) {
-    const auto r = run_driftlab("nav --device fmvmg --scenario " + (dir / file).string() + " --out " + (dir / "out").string(),
-                                file == "long.yaml" ? "DRIFTLAB_MEMORY_LIMIT_MB=1e12" : "");
+    const auto r =
+        run_driftlab("nav --device fmvmg --scenario " + (dir / file).string() + " --out " + (dir / "out").string(),
+                     file == "long.yaml" ? "DRIFTLAB_MEMORY_LIMIT_MB=1e12" : "");
     EXPECT_EQ(r.exit_code, 2) << file << "\n" << r.err;
     EXPECT_NE(r.err.find(message), std::string::npos) << file << "\n" << r.err;
     EXPECT_FALSE(fs::exists(dir / "out")) << file;
@@ -957,11 +980,14 @@ TEST(MrptNav, NavigatesAUserRawlogWithOdometryAndReproducesTheSimulatedDrive) {
   const auto recorded = read_json(dir / "rec" / "summary.json");
   for (const auto* run : {"raw", "compensated"}) {
     EXPECT_NEAR(recorded["heading_error_final_deg"][run].get<double>(),
-                simulated["heading_error_final_deg"][run].get<double>(), kHeadingTolerance) << run;
+                simulated["heading_error_final_deg"][run].get<double>(), kHeadingTolerance)
+        << run;
     EXPECT_NEAR(recorded["heading_error_rms_deg"][run].get<double>(),
-                simulated["heading_error_rms_deg"][run].get<double>(), kHeadingTolerance) << run;
+                simulated["heading_error_rms_deg"][run].get<double>(), kHeadingTolerance)
+        << run;
     EXPECT_NEAR(recorded["position_error_final_m"][run].get<double>(),
-                simulated["position_error_final_m"][run].get<double>(), kPositionTolerance) << run;
+                simulated["position_error_final_m"][run].get<double>(), kPositionTolerance)
+        << run;
   }
   EXPECT_FALSE(recorded["heading_error_final_deg"].contains("perfect")) << "a record has no true rate";
   EXPECT_GT(recorded["heading_error_rms_deg"]["raw"].get<double>(),
@@ -970,12 +996,13 @@ TEST(MrptNav, NavigatesAUserRawlogWithOdometryAndReproducesTheSimulatedDrive) {
   EXPECT_NE(info["reference"].get<std::string>().find("odometry pose"), std::string::npos);
   EXPECT_EQ(info["odometry_speed"], "odom_speed_mps");
   const std::string trajectory = driftlab::testing_cli::read_text(dir / "rec" / "trajectory.csv");
-  EXPECT_EQ(trajectory.rfind("t_s,odometry_x_m,odometry_y_m,odometry_heading_deg,raw_x_m", 0), 0u) << trajectory.substr(0, 200);
+  EXPECT_EQ(trajectory.rfind("t_s,odometry_x_m,odometry_y_m,odometry_heading_deg,raw_x_m", 0), 0u)
+      << trajectory.substr(0, 200);
   EXPECT_TRUE(fs::exists(dir / "rec" / "nav.svg") || rec.err.find("nav.svg not written") != std::string::npos);
 
   // the same record as the bridge's CSV (mrpt import) through --data: the same report
-  const auto imp = run_driftlab("mrpt import " + (dir / "sim" / "drive.rawlog").string() + " --out " +
-                                (dir / "drive.csv").string());
+  const auto imp =
+      run_driftlab("mrpt import " + (dir / "sim" / "drive.rawlog").string() + " --out " + (dir / "drive.csv").string());
   ASSERT_EQ(imp.exit_code, 0) << imp.err;
   const auto csv = run_driftlab("nav --data " + (dir / "drive.csv").string() + " --model " +
                                 (dir / "sim" / "model.json").string() + " --out " + (dir / "csv").string());
@@ -1000,7 +1027,8 @@ TEST(MrptNav, ARecordNeedsOdometryATemperatureAndAModel) {
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_NE(r.err.find("nav needs odometry"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "out")) << "the output directory made for the failed run is removed";
-  const auto no_model = run_driftlab("nav --rawlog " + (dir / "in.rawlog").string() + " --out " + (dir / "out").string());
+  const auto no_model =
+      run_driftlab("nav --rawlog " + (dir / "in.rawlog").string() + " --out " + (dir / "out").string());
   EXPECT_EQ(no_model.exit_code, 2) << no_model.err;
   EXPECT_NE(no_model.err.find("--model"), std::string::npos) << no_model.err;
   const auto mixed = run_driftlab("nav --rawlog " + (dir / "in.rawlog").string() + " --device fmvmg --model " +

@@ -88,9 +88,10 @@ void add_log_selection_options(CLI::App* command, LogSelection& selection) {
                       "comma-separated sensor_msgs/Imu topics (instances 0, 1, ... in this order) and temperature "
                       "topics paired with them (default: every Imu topic, by name, with the temperature topics of "
                       "their namespaces)");
-  command->add_option("--instance", selection.instance,
-                      "log IMU instance (PX4 multi_id, ArduPilot IMU's I; bags: Imu topic number) to read; its gyro is "
-                      "the time base (default: every instance, on the time base of the first gyro)")
+  command
+      ->add_option("--instance", selection.instance,
+                   "log IMU instance (PX4 multi_id, ArduPilot IMU's I; bags: Imu topic number) to read; its gyro is "
+                   "the time base (default: every instance, on the time base of the first gyro)")
       ->check(CLI::Range(0, 255));
   command->add_option("--sensor", selection.sensor,
                       "log channels to read: gyro, accel, gyro1, gyro_z, ... comma-separated (default: all)");
@@ -111,7 +112,6 @@ CsvColumn export_column(const Channel& c) {
 }  // namespace
 
 std::vector<CsvColumn> imu_record_columns(const TimeSeries& record) {
-
   std::vector<CsvColumn> columns{{"t_s", record.time(), "s"}};
   for (const auto& c : record.channels()) columns.push_back(export_column(c));
   for (int instance = 0; instance <= imu::kMaxInstance; ++instance) {
@@ -123,8 +123,8 @@ std::vector<CsvColumn> imu_record_columns(const TimeSeries& record) {
   return columns;
 }
 
-void add_sampling_options(CLI::App* command, double& sample_rate_hz, double& max_gap_factor,
-                          const std::string& fs_help, const std::string& gap_help) {
+void add_sampling_options(CLI::App* command, double& sample_rate_hz, double& max_gap_factor, const std::string& fs_help,
+                          const std::string& gap_help) {
   command->add_option("--fs", sample_rate_hz, fs_help)->check(finite_number(0.0, 1e9, true));
   command->add_option("--max-gap", max_gap_factor, gap_help)->check(finite_number(0.0, 1e12))->capture_default_str();
 }
@@ -162,9 +162,10 @@ TimeSeries load_evenly_sampled_record(const DataOptions& data, std::vector<std::
   auto [record, facts] = load_sampled_record(data, std::move(required_roles));
   if (!facts.evenly_sampled())
     throw sampling::uneven_sampling_error(facts, record.time(), data.path, analysis,
-                                          facts.regular_bursts() ? "for these regular bursts, `driftlab allan` gives the "
-                                                                   "noise per burst"
-                                                                 : "");
+                                          facts.regular_bursts()
+                                              ? "for these regular bursts, `driftlab allan` gives the "
+                                                "noise per burst"
+                                              : "");
   return std::move(record);
 }
 

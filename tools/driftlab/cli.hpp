@@ -63,9 +63,10 @@ inline constexpr double kMaxSeed = 9007199254740992.0;  // 2^53: every seed surv
 // the one definition of the two sampling options every record-reading command shares.
 void add_sampling_options(CLI::App* command, double& sample_rate_hz, double& max_gap_factor,
                           const std::string& fs_help = "sample rate in Hz, for files without a time column",
-                          const std::string& gap_help = "a time step longer than this multiple of the median step "
-                                                        "is a gap, an error (0 reads gaps; allan, run, compare, "
-                                                        "decompose and entropy still find them at 3x)");
+                          const std::string& gap_help =
+                              "a time step longer than this multiple of the median step "
+                              "is a gap, an error (0 reads gaps; allan, run, compare, "
+                              "decompose and entropy still find them at 3x)");
 // Adds --data, --column, --fs and --max-gap, and the log options --topic, --instance and --sensor,
 // to a subcommand.
 void add_data_options(CLI::App* command, DataOptions& data, const std::string& column_help);

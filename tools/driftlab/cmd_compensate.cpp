@@ -49,8 +49,8 @@ struct CompensateOptions {
   std::string out;
   bool stream = false;
   bool kalman = false;
-  double kalman_q = 0.0, kalman_r = 0.0;  // (rad/s)^2 per sample; 0: from the model's noise terms
-  double kalman_fs = 0.0;                 // Hz, for the noise-term conversion; 0: the model's
+  double kalman_q = 0.0, kalman_r = 0.0;              // (rad/s)^2 per sample; 0: from the model's noise terms
+  double kalman_fs = 0.0;                             // Hz, for the noise-term conversion; 0: the model's
   std::size_t max_line_bytes = std::size_t{1} << 20;  // --stream: the one line it holds at most
 };
 
@@ -111,7 +111,8 @@ class Engine {
       if (!value) {
         std::string have;
         for (const auto& p : parser_.columns())
-          if (p.mapping.role != "time") have += (have.empty() ? "" : ", ") + p.mapping.role + " (" + p.mapping.column + ")";
+          if (p.mapping.role != "time")
+            have += (have.empty() ? "" : ", ") + p.mapping.role + " (" + p.mapping.column + ")";
         throw ConfigError({file, line_number, c.role},
                           "the model's channel " + c.role + " (fitted on column '" + c.column +
                               "') is not in this record, which has: " + (have.empty() ? "no channel" : have) +
@@ -122,8 +123,10 @@ class Engine {
       if (!temp)
         throw DataError({file, line_number, imu::temperature_role(c.id.instance)},
                         "no temperature column for " + c.role + " (the model's is '" + c.temperature_column + "')");
-      const auto device = column(c.id.instance ? "device_id" + std::to_string(c.id.instance) : std::string("device_id"));
-      Corrected k{&c, *value, *temp, device, calibration::CausalCompensator(c.model), kalman_model(c, options_), std::nullopt};
+      const auto device =
+          column(c.id.instance ? "device_id" + std::to_string(c.id.instance) : std::string("device_id"));
+      Corrected k{
+          &c, *value, *temp, device, calibration::CausalCompensator(c.model), kalman_model(c, options_), std::nullopt};
       appended.push_back("bias_" + names[parser_.columns()[*value].index]);
       if (k.kalman) appended.push_back("compensated_" + names[parser_.columns()[*value].index]);
       corrected_.push_back(std::move(k));
@@ -155,9 +158,9 @@ class Engine {
         std::string id;
         append_number(values[*k.device], id);
         if (id != k.channel->device_id)
-          throw ConfigError({parser_.file(), line_number, "device_id"}, "this record is device " + id + ", the model's " +
-                                                                            k.channel->role + " was fitted on device " +
-                                                                            k.channel->device_id);
+          throw ConfigError({parser_.file(), line_number, "device_id"},
+                            "this record is device " + id + ", the model's " + k.channel->role +
+                                " was fitted on device " + k.channel->device_id);
       }
       double w;
       try {
@@ -289,11 +292,14 @@ void add_compensate_command(CLI::App& app, CommandEnv&) {
       "compensate", "apply a calibration model sample by sample (causal), to a file or as a stdin -> stdout pipe");
   cmd->add_option("--model", o->model, "calibration model JSON (from driftlab calibrate); - reads standard input")
       ->required();
-  cmd->add_option("--data", o->data.paths, "input CSV (the columns the model was fitted on; every other column is "
-                                           "passed through), or a PX4 ULog / ArduPilot DataFlash log, read as "
-                                           "`driftlab log export` writes it; - reads CSV from standard input")->expected(1);
-  cmd->add_option("--column", o->data.columns,
-                  "column mapping role=column:unit, as for driftlab calibrate (gyro_x=gx:deg/s, temperature=T:degC, ...)");
+  cmd->add_option("--data", o->data.paths,
+                  "input CSV (the columns the model was fitted on; every other column is "
+                  "passed through), or a PX4 ULog / ArduPilot DataFlash log, read as "
+                  "`driftlab log export` writes it; - reads CSV from standard input")
+      ->expected(1);
+  cmd->add_option(
+      "--column", o->data.columns,
+      "column mapping role=column:unit, as for driftlab calibrate (gyro_x=gx:deg/s, temperature=T:degC, ...)");
   add_log_selection_options(cmd, o->data.log);
   add_sampling_options(cmd, o->data.sample_rate_hz, o->data.max_gap_factor,
                        "sample rate in Hz, for input without a time column",
@@ -308,24 +314,29 @@ void add_compensate_command(CLI::App& app, CommandEnv&) {
   cmd->add_flag("--kalman", o->kalman,
                 "add a causal Kalman stage to each gyro channel (random walk + white noise, plugins/kalman)");
   const std::vector<CLI::Option*> kalman_options{
-      cmd->add_option("--kalman-q", o->kalman_q, "Kalman random-walk variance per sample, (rad/s)^2 (default: K^2/fs "
-                                                 "from the model's noise terms)")
+      cmd->add_option("--kalman-q", o->kalman_q,
+                      "Kalman random-walk variance per sample, (rad/s)^2 (default: K^2/fs "
+                      "from the model's noise terms)")
           ->check(finite_number(0.0, 1e12)),
       cmd->add_option("--kalman-r", o->kalman_r, "Kalman measurement variance, (rad/s)^2 (default: N^2 fs)")
           ->check(finite_number(0.0, 1e12)),
-      cmd->add_option("--kalman-fs", o->kalman_fs, "sample rate for the noise-term conversion, Hz (default: the model's)")
+      cmd->add_option("--kalman-fs", o->kalman_fs,
+                      "sample rate for the noise-term conversion, Hz (default: the model's)")
           ->check(finite_number(0.0, 1e12))};
   cmd->callback([o, kalman_options] {
     if (o->stream == !o->data.paths.empty()) {
       throw ConfigError({"", 0, "--data"}, "give either --data (with --out) or --stream");
     }
-    if (o->stream && !o->out.empty()) throw ConfigError({"", 0, "--out"}, "--stream writes to standard output; drop --out");
+    if (o->stream && !o->out.empty())
+      throw ConfigError({"", 0, "--out"}, "--stream writes to standard output; drop --out");
     if (o->stream && is_stdin(o->model))
-      throw ConfigError({"<stdin>", 0, "--model"}, "--stream reads the rows from standard input; the model cannot be - too");
+      throw ConfigError({"<stdin>", 0, "--model"},
+                        "--stream reads the rows from standard input; the model cannot be - too");
     for (const CLI::Option* option : kalman_options)  // given at all, even as 0, it would be ignored
       if (!o->kalman && option->count() > 0)
-        throw ConfigError({"", 0, option->get_name()}, option->get_name() + " needs --kalman (without it no Kalman "
-                                                                            "stage runs and the value would be ignored)");
+        throw ConfigError({"", 0, option->get_name()}, option->get_name() +
+                                                           " needs --kalman (without it no Kalman "
+                                                           "stage runs and the value would be ignored)");
     const auto model = calibration::read_calibration(o->model);
     if (o->stream) {
       stream(model, *o);

@@ -53,7 +53,8 @@ void export_command(const ExportOptions& o) {
 void add_export_command(CLI::App& app, CommandEnv&) {
   auto o = std::make_shared<ExportOptions>();
   auto* cmd = app.add_subcommand(
-      "export", "export a calibration model, every channel: C99 header, PX4 TC_G*/TC_A* .params, ArduPilot INS_TCAL*, Kalibr "
+      "export",
+      "export a calibration model, every channel: C99 header, PX4 TC_G*/TC_A* .params, ArduPilot INS_TCAL*, Kalibr "
       "imu.yaml, JSON");
   cmd->add_option("--model", o->model, "driftlab-calibration/2 model JSON (or /1)")->required();
   cmd->add_option("--format", o->format,

@@ -115,7 +115,8 @@ void compensate_command(const MrptOptions& o, CommandEnv& env) {
   std::cout << "  corrected (largest correction):";
   for (std::size_t i = 0; i < stats.fields.size(); ++i)
     std::cout << (i ? "," : "") << " " << mrpt_bridge::imu_field_name(stats.fields[i].field) << " by "
-              << applied[i]->id.role() << " " << correction_text(applied[i]->id.sensor, stats.fields[i].max_abs_correction);
+              << applied[i]->id.role() << " "
+              << correction_text(applied[i]->id.sensor, stats.fields[i].max_abs_correction);
   std::cout << "\n";
   if (!stats.passed_through.empty()) {
     std::cout << "  unchanged (not in the model):";
@@ -149,11 +150,13 @@ void add_mrpt_command(CLI::App& app, CommandEnv& env) {
   auto* mrpt = app.add_subcommand("mrpt", "MRPT rawlog bridge: import, export, compensate, info");
   mrpt->require_subcommand(1);
 
-  auto* imp = mrpt->add_subcommand("import", "IMU observations of a rawlog (either format) -> CSV (t_s, rate_rps, temp_c, ...)");
+  auto* imp = mrpt->add_subcommand("import",
+                                   "IMU observations of a rawlog (either format) -> CSV (t_s, rate_rps, temp_c, ...)");
   imp->add_option("rawlog", o->input, "input rawlog (actions/sensory-frame or observations-only; gzip'ed or plain)")
       ->required()
       ->check(CLI::ExistingFile);
-  imp->add_option("--out", o->out, "output CSV (written atomically); t_s is s since the first IMU observation")->required();
+  imp->add_option("--out", o->out, "output CSV (written atomically); t_s is s since the first IMU observation")
+      ->required();
   imp->add_option("--sensor-label", o->sensor_label, "IMU sensor label to import (needed when there are several)");
   imp->callback([o, &env] { import_command(*o, env); });
 

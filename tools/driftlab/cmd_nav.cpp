@@ -216,8 +216,8 @@ void simulated_nav(const NavOptions& o, CommandEnv& env) {
                   samples, scenario.duration_s(), kNavBytesPerSample);
     const Location where{input_name(scenario_path), 0, "sample_rate_hz, duration"};
     check_memory_estimate(samples * kNavBytesPerSample, where, what);
-    std::snprintf(what, sizeof what, "%.3g samples (scenario sample_rate_hz x duration %.3g s) at %.2g s each",
-                  samples, scenario.duration_s(), kNavSecondsPerSample);
+    std::snprintf(what, sizeof what, "%.3g samples (scenario sample_rate_hz x duration %.3g s) at %.2g s each", samples,
+                  scenario.duration_s(), kNavSecondsPerSample);
     check_time_estimate(samples * kNavSecondsPerSample, where, what);
   }
   const fs::path out(o.out);
@@ -249,8 +249,8 @@ void simulated_nav(const NavOptions& o, CommandEnv& env) {
     model_source = o.model;
   } else {
     mrpt_bridge::OvenCalibration oven;
-    oven.kind = o.calibration_kind == "physical" ? calibration::ModelKind::Physical
-                                                 : calibration::ModelKind::Polynomial;
+    oven.kind =
+        o.calibration_kind == "physical" ? calibration::ModelKind::Physical : calibration::ModelKind::Polynomial;
     oven.seed = scenario.calibration_seed;
     oven.progress = [&env](const std::string& label, double f) { env.progress("nav: calibrate: " + label, f); };
     std::cerr << "driftlab nav: no --model given: calibrating a " << o.calibration_kind
@@ -275,10 +275,11 @@ void simulated_nav(const NavOptions& o, CommandEnv& env) {
   report.title = "Heading error, " + device.name + " on " + scenario_path.filename().string();
   // The intrinsic floor (DESIGN.md §1): the true rate plus only the gyro's noise (measured minus
   // the simulator's systematic rate), i.e. what a perfect temperature model would leave.
-  report.runs = {{"raw", drive.gyro.rate_rad_s, {}},
-                 {"compensated", compensated, {}},
-                 {"perfect", drive.gyro.true_rate_rad_s, {}},
-                 {"noise_only", drive.gyro.true_rate_rad_s + (drive.gyro.rate_rad_s - drive.gyro.systematic_rate_rad_s), {}}};
+  report.runs = {
+      {"raw", drive.gyro.rate_rad_s, {}},
+      {"compensated", compensated, {}},
+      {"perfect", drive.gyro.true_rate_rad_s, {}},
+      {"noise_only", drive.gyro.true_rate_rad_s + (drive.gyro.rate_rad_s - drive.gyro.systematic_rate_rad_s), {}}};
   const auto noise = mrpt_bridge::nav_noise(device, scenario);
   run_filters(report, noise, o, env);
 
@@ -418,7 +419,8 @@ void record_nav(const NavOptions& o, CommandEnv& env) {
             << (o.rawlog.empty() ? "" : " (sensor '" + table.sensor_label + "')") << ", model " << o.model << " ("
             << yaw_id.role() << "); errors against the odometry pose, speed from " << record.speed_source << "\n";
   print_runs(report);
-  std::cout << "  written to " << out.string() << ": summary.json, nav_info.json, trajectory.csv, errors.csv, nav.svg\n";
+  std::cout << "  written to " << out.string()
+            << ": summary.json, nav_info.json, trajectory.csv, errors.csv, nav.svg\n";
 }
 
 void nav_command(const NavOptions& o, CommandEnv& env) {
@@ -458,12 +460,14 @@ void add_nav_command(CLI::App& app, CommandEnv& env) {
       ->capture_default_str();
   cmd->add_option("--sensor-label", o->sensor_label, "--rawlog: IMU sensor label (needed when there are several)")
       ->needs(rawlog);
-  auto* scenario = cmd->add_option(
-      "--scenario", o->scenario,
-      "simulated drive: driftlab-nav-scenario/1 YAML (default: the bundled one-hour cold-start drive, cabin -10 -> "
-      "+35 degC)")->check(CLI::ExistingFile);
+  auto* scenario = cmd->add_option("--scenario", o->scenario,
+                                   "simulated drive: driftlab-nav-scenario/1 YAML (default: the bundled one-hour "
+                                   "cold-start drive, cabin -10 -> "
+                                   "+35 degC)")
+                       ->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "output directory (created; files written atomically)")->required();
-  auto* fixes = cmd->add_flag("--fixes", o->fixes, "simulated drive: use the scenario's position fixes as EKF observations");
+  auto* fixes =
+      cmd->add_flag("--fixes", o->fixes, "simulated drive: use the scenario's position fixes as EKF observations");
   cmd->add_option("--every", o->every_s, "spacing of trajectory.csv / errors.csv rows, s")
       ->check(finite_number(0.0, 1e12, true))
       ->capture_default_str();
@@ -477,7 +481,8 @@ void add_nav_command(CLI::App& app, CommandEnv& env) {
   auto* no_rawlog = cmd->add_flag("--no-rawlog", o->no_rawlog, "simulated drive: do not write DIR/drive.rawlog");
   auto* devices_dir = cmd->add_option("--devices-dir", o->devices_dir, "directory of device files");
   for (auto* record : {rawlog, data})
-    for (auto* simulated_only : {device, scenario, fixes, kind, no_rawlog, devices_dir}) record->excludes(simulated_only);
+    for (auto* simulated_only : {device, scenario, fixes, kind, no_rawlog, devices_dir})
+      record->excludes(simulated_only);
   cmd->callback([o, &env] { nav_command(*o, env); });
 }
 

@@ -34,7 +34,7 @@ namespace {
 namespace fs = std::filesystem;
 using mrpt::obs::CObservationIMU;
 
-constexpr double kTicksPerSecond = 1e7;                 // mrpt::Clock: 100 ns ticks
+constexpr double kTicksPerSecond = 1e7;                         // mrpt::Clock: 100 ns ticks
 constexpr std::int64_t kUnixEpochTicks = 116444736000000000LL;  // 1970-01-01 in FILETIME ticks
 
 DataError data_error(const fs::path& file, const std::string& message) {
@@ -230,7 +230,8 @@ void read_in_child_first(const fs::path& path) {
       continue;
     }
     char buffer[4096];
-    for (ssize_t n; (n = ::read(pipe_fds[0], buffer, sizeof buffer)) > 0;) message.append(buffer, static_cast<std::size_t>(n));
+    for (ssize_t n; (n = ::read(pipe_fds[0], buffer, sizeof buffer)) > 0;)
+      message.append(buffer, static_cast<std::size_t>(n));
     break;
   }
   ::close(pipe_fds[0]);
@@ -254,7 +255,8 @@ class RawlogWriter {
  public:
   RawlogWriter(OutputSet& outputs, const fs::path& path) {
     const fs::path temp = outputs.stage_path(path);
-    if (!out_.open(temp.string())) throw data_error(path, "cannot write the rawlog (temporary file " + temp.string() + ")");
+    if (!out_.open(temp.string()))
+      throw data_error(path, "cannot write the rawlog (temporary file " + temp.string() + ")");
   }
   void write(const mrpt::serialization::CSerializable& object) {
     auto archive = mrpt::serialization::archiveFrom(out_);
@@ -293,8 +295,8 @@ std::string field_name(int field) {
 double finite_field(const CObservationIMU& imu, int field, const fs::path& path, std::size_t k, int j) {
   const double v = imu.get(static_cast<mrpt::obs::TIMUDataIndex>(field));
   if (!std::isfinite(v))
-    throw data_error(path, index_text(k, j) + "IMU observation '" + imu.sensorLabel + "': " + field_name(field) + " is " +
-                               (std::isnan(v) ? "NaN" : "infinite") + "; expected a finite number");
+    throw data_error(path, index_text(k, j) + "IMU observation '" + imu.sensorLabel + "': " + field_name(field) +
+                               " is " + (std::isnan(v) ? "NaN" : "infinite") + "; expected a finite number");
   return v;
 }
 
@@ -333,7 +335,9 @@ struct Walker {
       on_object(object, k);
     }
     stats.objects = reader.count();
-    stats.format = saw_frames && saw_observations ? "mixed" : saw_frames ? "actions/sensory-frame" : "observations-only";
+    stats.format = saw_frames && saw_observations ? "mixed"
+                   : saw_frames                   ? "actions/sensory-frame"
+                                                  : "observations-only";
     stats.imu_labels.assign(labels.begin(), labels.end());
   }
   void count(const mrpt::obs::CObservation::Ptr& obs) {
@@ -349,9 +353,9 @@ std::string choose_label(const fs::path& path, const std::vector<std::string>& l
     if (std::find(labels.begin(), labels.end(), wanted) == labels.end()) {
       std::string all;
       for (const auto& l : labels) all += (all.empty() ? "" : ", ") + ("'" + l + "'");
-      throw ConfigError(Location{path.string(), 0, "--sensor-label"},
-                        "no IMU observation labelled '" + wanted + "'; IMU labels in the file: " +
-                            (all.empty() ? "none" : all));
+      throw ConfigError(
+          Location{path.string(), 0, "--sensor-label"},
+          "no IMU observation labelled '" + wanted + "'; IMU labels in the file: " + (all.empty() ? "none" : all));
     }
     return wanted;
   }
@@ -359,8 +363,9 @@ std::string choose_label(const fs::path& path, const std::vector<std::string>& l
   if (labels.size() > 1) {
     std::string all;
     for (const auto& l : labels) all += (all.empty() ? "" : ", ") + ("'" + l + "'");
-    throw ConfigError(Location{path.string(), 0, "--sensor-label"},
-                      "the rawlog has IMU observations of several sensors (" + all + "); choose one with --sensor-label");
+    throw ConfigError(
+        Location{path.string(), 0, "--sensor-label"},
+        "the rawlog has IMU observations of several sensors (" + all + "); choose one with --sensor-label");
   }
   return labels.front();
 }
@@ -395,12 +400,18 @@ const std::vector<ImuColumn>& imu_columns() {
       {IMU_ORI_QUAT_Y, "IMU_ORI_QUAT_Y", "quat_y", "1", "orientation quaternion y (IMU_ORI_QUAT_Y)"},
       {IMU_ORI_QUAT_Z, "IMU_ORI_QUAT_Z", "quat_z", "1", "orientation quaternion z (IMU_ORI_QUAT_Z)"},
       {IMU_ORI_QUAT_W, "IMU_ORI_QUAT_W", "quat_w", "1", "orientation quaternion w (IMU_ORI_QUAT_W)"},
-      {IMU_YAW_VEL_GLOBAL, "IMU_YAW_VEL_GLOBAL", "wz_global_rps", "rad/s", "global yaw rate (IMU_YAW_VEL_GLOBAL), rad/s"},
-      {IMU_PITCH_VEL_GLOBAL, "IMU_PITCH_VEL_GLOBAL", "wy_global_rps", "rad/s", "global pitch rate (IMU_PITCH_VEL_GLOBAL), rad/s"},
-      {IMU_ROLL_VEL_GLOBAL, "IMU_ROLL_VEL_GLOBAL", "wx_global_rps", "rad/s", "global roll rate (IMU_ROLL_VEL_GLOBAL), rad/s"},
-      {IMU_X_ACC_GLOBAL, "IMU_X_ACC_GLOBAL", "acc_x_global_mps2", "1", "global acceleration x (IMU_X_ACC_GLOBAL), m/s^2"},
-      {IMU_Y_ACC_GLOBAL, "IMU_Y_ACC_GLOBAL", "acc_y_global_mps2", "1", "global acceleration y (IMU_Y_ACC_GLOBAL), m/s^2"},
-      {IMU_Z_ACC_GLOBAL, "IMU_Z_ACC_GLOBAL", "acc_z_global_mps2", "1", "global acceleration z (IMU_Z_ACC_GLOBAL), m/s^2"},
+      {IMU_YAW_VEL_GLOBAL, "IMU_YAW_VEL_GLOBAL", "wz_global_rps", "rad/s",
+       "global yaw rate (IMU_YAW_VEL_GLOBAL), rad/s"},
+      {IMU_PITCH_VEL_GLOBAL, "IMU_PITCH_VEL_GLOBAL", "wy_global_rps", "rad/s",
+       "global pitch rate (IMU_PITCH_VEL_GLOBAL), rad/s"},
+      {IMU_ROLL_VEL_GLOBAL, "IMU_ROLL_VEL_GLOBAL", "wx_global_rps", "rad/s",
+       "global roll rate (IMU_ROLL_VEL_GLOBAL), rad/s"},
+      {IMU_X_ACC_GLOBAL, "IMU_X_ACC_GLOBAL", "acc_x_global_mps2", "1",
+       "global acceleration x (IMU_X_ACC_GLOBAL), m/s^2"},
+      {IMU_Y_ACC_GLOBAL, "IMU_Y_ACC_GLOBAL", "acc_y_global_mps2", "1",
+       "global acceleration y (IMU_Y_ACC_GLOBAL), m/s^2"},
+      {IMU_Z_ACC_GLOBAL, "IMU_Z_ACC_GLOBAL", "acc_z_global_mps2", "1",
+       "global acceleration z (IMU_Z_ACC_GLOBAL), m/s^2"},
   };
   return columns;
 }
@@ -448,7 +459,8 @@ ImuTable read_imu_csv(const fs::path& path) {
       continue;
     }
     if (name == "rate_dps" || name == "rate_rps") {
-      if (have_rate) throw DataError(Location{path.string(), line, name}, "two yaw-rate columns (rate_dps and rate_rps)");
+      if (have_rate)
+        throw DataError(Location{path.string(), line, name}, "two yaw-rate columns (rate_dps and rate_rps)");
       options.columns.push_back({"rate", name, name == "rate_dps" ? "deg/s" : "rad/s"});
       wanted.emplace_back("rate", "rate_rps");
       have_rate = true;
@@ -467,7 +479,8 @@ ImuTable read_imu_csv(const fs::path& path) {
     wanted.emplace_back(role, known->column);
   }
   if (!have_time) throw DataError(Location{path.string(), line, "t_s"}, "missing time column t_s");
-  if (!have_rate) throw DataError(Location{path.string(), line, "rate_rps"}, "missing yaw-rate column rate_rps or rate_dps");
+  if (!have_rate)
+    throw DataError(Location{path.string(), line, "rate_rps"}, "missing yaw-rate column rate_rps or rate_dps");
   const TimeSeries series = parse_csv(text, path.string(), options);
 
   ImuTable table;
@@ -506,8 +519,8 @@ ImuTable import_rawlog(const fs::path& path, const std::string& sensor_label, Ra
         if (!imu || (!sensor_label.empty() && imu->sensorLabel != sensor_label)) return;
         auto& c = by_label[imu->sensorLabel];
         if (!imu->has(mrpt::obs::IMU_WZ))
-          throw data_error(path, index_text(k, j) + "IMU observation '" + imu->sensorLabel +
-                                     "' has no yaw rate (IMU_WZ)");
+          throw data_error(path,
+                           index_text(k, j) + "IMU observation '" + imu->sensorLabel + "' has no yaw rate (IMU_WZ)");
         const auto ticks = ticks_of(imu->timestamp);
         if (!c.ticks.empty() && ticks <= c.ticks.back())
           throw data_error(path, index_text(k, j) + "IMU observation '" + imu->sensorLabel +
@@ -541,8 +554,9 @@ ImuTable import_rawlog(const fs::path& path, const std::string& sensor_label, Ra
         const auto& inc = odo.rawOdometryIncrementReading;
         if (!std::isfinite(inc.x()) || !std::isfinite(inc.y()) || !std::isfinite(inc.phi()) ||
             (odo.hasVelocities && !std::isfinite(odo.velocityLocal.vx)))
-          throw data_error(path, index_text(k, -1) + "an odometry increment or speed is not finite (NaN or infinite); "
-                                                     "expected finite numbers");
+          throw data_error(path, index_text(k, -1) +
+                                     "an odometry increment or speed is not finite (NaN or infinite); "
+                                     "expected finite numbers");
         for (auto& [label, c] : by_label) c.pending = c.pending ? *c.pending + inc : inc;
         unseen_pending = unseen_pending ? *unseen_pending + inc : inc;
         if (odo.hasVelocities) {
@@ -563,7 +577,9 @@ ImuTable import_rawlog(const fs::path& path, const std::string& sensor_label, Ra
   const std::int64_t t0 = c.ticks.front();
   for (Eigen::Index i = 0; i < n; ++i) table.time_s[i] = static_cast<double>(c.ticks[i] - t0) / kTicksPerSecond;
   table.start_unix_s = static_cast<double>(t0 - kUnixEpochTicks) / kTicksPerSecond;
-  auto vec = [](const std::vector<double>& v) { return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(v.data(), v.size())); };
+  auto vec = [](const std::vector<double>& v) {
+    return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(v.data(), v.size()));
+  };
   for (std::size_t i = 0; i < c.fields.size(); ++i)
     table.columns.push_back({field_name(c.fields[i]), vec(c.values[i]), "1"});
   if (any_odometry) {
@@ -594,7 +610,8 @@ void export_rawlog(const ImuTable& table, OutputSet& outputs, const fs::path& pa
                         "times from 1601 to about year 14000");
   std::vector<std::pair<mrpt::obs::TIMUDataIndex, const Eigen::VectorXd*>> fields;
   for (const auto& col : imu_columns())
-    if (table.has(col.column)) fields.emplace_back(static_cast<mrpt::obs::TIMUDataIndex>(col.field), &table.values(col.column));
+    if (table.has(col.column))
+      fields.emplace_back(static_cast<mrpt::obs::TIMUDataIndex>(col.field), &table.values(col.column));
   const bool odometry = table.has_odometry();
   const bool speed = table.has("odom_speed_mps");
 
@@ -630,7 +647,8 @@ void export_rawlog(const ImuTable& table, OutputSet& outputs, const fs::path& pa
 
 RawlogStats rawlog_stats(const fs::path& path) {
   Walker walker;
-  walker.walk(path, [](const auto&, std::size_t, int) {}, [](const auto&, std::size_t) {}, [](const auto&, std::size_t) {});
+  walker.walk(
+      path, [](const auto&, std::size_t, int) {}, [](const auto&, std::size_t) {}, [](const auto&, std::size_t) {});
   return walker.stats;
 }
 
@@ -638,10 +656,14 @@ int imu_field(imu::Sensor sensor, char axis) {
   using namespace mrpt::obs;
   const bool gyro = sensor == imu::Sensor::Gyro;
   switch (axis) {
-    case 'x': return gyro ? IMU_WX : IMU_X_ACC;
-    case 'y': return gyro ? IMU_WY : IMU_Y_ACC;
-    case 'z': return gyro ? IMU_WZ : IMU_Z_ACC;
-    default: throw ConfigError(Location{"", 0, "axis"}, std::string("no CObservationIMU field for axis '") + axis + "'");
+    case 'x':
+      return gyro ? IMU_WX : IMU_X_ACC;
+    case 'y':
+      return gyro ? IMU_WY : IMU_Y_ACC;
+    case 'z':
+      return gyro ? IMU_WZ : IMU_Z_ACC;
+    default:
+      throw ConfigError(Location{"", 0, "axis"}, std::string("no CObservationIMU field for axis '") + axis + "'");
   }
 }
 
@@ -663,7 +685,8 @@ CompensateStats compensate_rawlog(const fs::path& in, const fs::path& out,
 CompensateStats compensate_rawlog(const fs::path& in, OutputSet& outputs, const fs::path& out,
                                   const std::vector<FieldCorrection>& corrections, const std::string& sensor_label) {
   RawlogWriter writer(outputs, out);
-  if (corrections.empty()) throw ConfigError(Location{in.string(), 0, ""}, "nothing to compensate: no field correction given");
+  if (corrections.empty())
+    throw ConfigError(Location{in.string(), 0, ""}, "nothing to compensate: no field correction given");
   std::set<int> corrected;
   for (const auto& c : corrections)
     if (!corrected.insert(c.field).second)

@@ -1,5 +1,6 @@
 // MRPT rawlog I/O for the MRPT bridge (issue 14): IMU observations <-> the CSV contract, and the
-// compensation of the IMU rates and accelerations of an existing rawlog (issue 20). MRPT is used only here (tools/mrpt).
+// compensation of the IMU rates and accelerations of an existing rawlog (issue 20). MRPT is used only here
+// (tools/mrpt).
 //
 // Rawlog formats (both read; https://docs.mrpt.org/reference/latest/rawlog_format.html):
 //   - actions/sensory-frame: CActionCollection, CSensoryFrame, CActionCollection, ...
@@ -41,8 +42,8 @@ namespace driftlab::mrpt_bridge {
 struct ImuColumn {
   int field;
   std::string field_name;  // MRPT's name of the field ("IMU_WX")
-  std::string column;  // CSV name, unit suffix included
-  std::string unit;    // unit the CSV value is in ("rad/s", "degC", or "1" for SI values)
+  std::string column;      // CSV name, unit suffix included
+  std::string unit;        // unit the CSV value is in ("rad/s", "degC", or "1" for SI values)
   std::string doc;
 };
 // The IMU fields in CSV order: rate_rps, temp_c, then the others.
@@ -55,10 +56,10 @@ inline constexpr double kDefaultStartUnixS = 1767225600.0;
 
 // An IMU record: time plus named columns (names from imu_columns()/odometry_columns()), SI values.
 struct ImuTable {
-  Eigen::VectorXd time_s;         // s since start_unix_s
+  Eigen::VectorXd time_s;  // s since start_unix_s
   double start_unix_s = kDefaultStartUnixS;
   std::string sensor_label = "GYRO";
-  std::vector<CsvColumn> columns;  // each values.size() == time_s.size(), unit "1" (already SI)
+  std::vector<CsvColumn> columns;            // each values.size() == time_s.size(), unit "1" (already SI)
   std::vector<std::string> ignored_columns;  // read_imu_csv: CSV columns the bridge does not know
 
   bool has(const std::string& column) const;
@@ -71,7 +72,7 @@ struct RawlogStats {
   std::size_t imu_observations = 0;  // all IMU observations (any label)
   std::size_t odometry_actions = 0;  // CActionRobotMovement2D
   std::size_t sensory_frames = 0;
-  std::string format;                // "actions/sensory-frame", "observations-only" or "mixed"
+  std::string format;  // "actions/sensory-frame", "observations-only" or "mixed"
   std::vector<std::string> imu_labels;
 };
 
@@ -85,7 +86,8 @@ void write_imu_csv(const ImuTable& table, OutputSet& outputs, const std::filesys
 // label without a choice is a ConfigError listing them). Throws DataError naming file and object
 // index on a malformed or truncated file (also: a presence or odometry flag byte other than 0/1, an
 // IMU time stamp before MRPT's 1601 epoch), an IMU observation without IMU_WZ, or one lacking a
-// field the first one has; a path that is not a regular file is refused before it is opened. `stats` (optional) receives counts of the whole file.
+// field the first one has; a path that is not a regular file is refused before it is opened. `stats` (optional)
+// receives counts of the whole file.
 ImuTable import_rawlog(const std::filesystem::path& path, const std::string& sensor_label = "",
                        RawlogStats* stats = nullptr);
 
@@ -127,10 +129,10 @@ struct FieldStats {
 };
 struct CompensateStats {
   std::size_t objects = 0, imu_observations = 0, compensated = 0;
-  std::string sensor_label;          // of the compensated observations
-  std::vector<FieldStats> fields;    // one per correction, in the order given
-  std::vector<int> passed_through;   // fields the compensated observations carry that no correction
-                                     // touches (copied unchanged), imu_columns() order
+  std::string sensor_label;         // of the compensated observations
+  std::vector<FieldStats> fields;   // one per correction, in the order given
+  std::vector<int> passed_through;  // fields the compensated observations carry that no correction
+                                    // touches (copied unchanged), imu_columns() order
 };
 // Copies `in` to `out` object by object, in order, replacing in every IMU observation of
 // `sensor_label` (or of the only IMU label) each corrected field by its correction; nothing else
