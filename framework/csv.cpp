@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <optional>
 #include <string_view>
 #include <unordered_map>
@@ -49,18 +50,6 @@ std::optional<ColumnMapping> time_mapping_of(const std::string& column) {
   return std::nullopt;
 }
 
-// "device_id", "device_id1", ...: the numeric identity of IMU instance 0, 1, ... (PX4 device_id).
-std::optional<int> device_id_instance(std::string_view role) {
-  if (!role.starts_with("device_id")) return std::nullopt;
-  role.remove_prefix(9);
-  if (role.empty()) return 0;
-  int instance = 0;
-  const auto res = std::from_chars(role.data(), role.data() + role.size(), instance);
-  if (res.ec != std::errc() || res.ptr != role.data() + role.size() || instance < 1 || instance > 99)
-    return std::nullopt;
-  return instance;
-}
-
 std::optional<ColumnMapping> mapping_from_suffix(const std::string& column) {
   if (device_id_instance(column)) return ColumnMapping{column, column, "1"};
   if (auto m = imu::recognize_imu_column(column)) return ColumnMapping{m->role, column, m->unit};
@@ -96,11 +85,6 @@ bool parse_number(std::string_view cell, double& value) {
   const auto res = std::from_chars(cell.data(), cell.data() + cell.size(), value);
   return res.ec == std::errc() && res.ptr == cell.data() + cell.size();
 }
-
-// A column that is read, and its values.
-struct Wanted : PlannedColumn {
-  std::vector<double> values;
-};
 
 std::string quantity_text(Quantity q) {
   switch (q) {
@@ -144,7 +128,24 @@ std::string names_excerpt(const std::vector<std::string_view>& names) {
   return out;
 }
 
+DataError line_too_long(const std::string& file, int line, std::size_t max_line_bytes) {
+  return DataError({file, line, ""}, "the line is longer than " + std::to_string(max_line_bytes) +
+                                         " bytes (--max-line-bytes): --stream holds one line at a time, and a CSV "
+                                         "row is far shorter");
+}
+
 }  // namespace
+
+std::optional<int> device_id_instance(std::string_view role) {
+  if (!role.starts_with("device_id")) return std::nullopt;
+  role.remove_prefix(9);
+  if (role.empty()) return 0;
+  int instance = 0;
+  const auto res = std::from_chars(role.data(), role.data() + role.size(), instance);
+  if (res.ec != std::errc() || res.ptr != role.data() + role.size() || instance < 1 || instance > 99)
+    return std::nullopt;
+  return instance;
+}
 
 std::optional<Quantity> quantity_of_role(const std::string& role) {
   if (role == "time") return Quantity::Time;
@@ -195,8 +196,8 @@ ColumnMapping parse_column_mapping(const std::string& text) {
   return m;
 }
 
-CsvLineCursor::CsvLineCursor(const std::string& text) : text_(text) {
-  if (text_.size() >= 3 && text_.compare(0, 3, "\xEF\xBB\xBF") == 0) pos_ = 3;
+CsvLineCursor::CsvLineCursor(const std::string& text, bool at_start) : text_(text) {
+  if (at_start && text_.size() >= 3 && text_.compare(0, 3, "\xEF\xBB\xBF") == 0) pos_ = 3;
 }
 
 bool CsvLineCursor::next(std::string_view& line) {
@@ -220,7 +221,56 @@ bool CsvLineCursor::next(std::string_view& line) {
 
 std::vector<std::string_view> split_csv_row(std::string_view line) { return split(line); }
 
-bool parse_csv_number(std::string_view cell, double& value) { return parse_number(cell, value); }
+CsvLineStream::CsvLineStream(Read read, std::string file, std::size_t max_line_bytes, std::size_t read_bytes)
+    : read_(std::move(read)),
+      file_(std::move(file)),
+      max_line_bytes_(max_line_bytes),
+      read_bytes_(std::max<std::size_t>(1, read_bytes)) {}
+
+bool CsvLineStream::next(std::string_view& line) {
+  for (;;) {
+    if (cursor_ && cursor_->next(line)) {
+      if (line.size() > max_line_bytes_) throw line_too_long(file_, line_number(), max_line_bytes_);
+      return true;
+    }
+    if (cursor_) {
+      before_ += cursor_->line_number();
+      cursor_.reset();
+    }
+    if (ended_) return false;
+    refill();
+  }
+}
+
+// Reads until pending_ holds a complete line (or the end), then moves the complete lines to block_.
+// A CR at the very end of what has arrived may be the first half of a CR LF: it waits for the next read.
+void CsvLineStream::refill() {
+  for (;;) {
+    std::size_t complete = 0;
+    if (const auto last = pending_.find_last_of("\r\n"); last != std::string::npos) {
+      complete = last + 1;
+      if (pending_[last] == '\r' && last + 1 == pending_.size()) {
+        const auto before = last == 0 ? std::string::npos : pending_.find_last_of("\r\n", last - 1);
+        complete = before == std::string::npos ? 0 : before + 1;
+      }
+    }
+    if (complete > 0 || ended_) {
+      if (ended_) complete = pending_.size();
+      block_.assign(pending_, 0, complete);
+      pending_.erase(0, complete);
+      cursor_.emplace(block_, !started_);
+      started_ = true;
+      return;
+    }
+    if (pending_.size() > max_line_bytes_)  // one incomplete line, already too long
+      throw line_too_long(file_, before_ + 1, max_line_bytes_);
+    const std::size_t size = pending_.size();
+    pending_.resize(size + read_bytes_);
+    const std::size_t got = read_(pending_.data() + size, read_bytes_);
+    pending_.resize(size + std::min(got, read_bytes_));
+    ended_ = got == 0;
+  }
+}
 
 std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& header, const CsvReadOptions& options,
                                         const std::string& file, int header_line) {
@@ -325,126 +375,152 @@ TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& opt
   return parse_csv(read_text_file(path), path.string(), options);
 }
 
-TimeSeries parse_csv(const std::string& text, const std::string& file, const CsvReadOptions& options) {
-  if (!std::isfinite(options.sample_rate_hz) || options.sample_rate_hz > 1.0 / kMinTimeStep)
-    throw ConfigError({file, 0, "--fs"}, "the sample rate must be finite and at most 1e9 Hz");
-  if (!std::isfinite(options.max_gap_factor)) throw ConfigError({file, 0, "--max-gap"}, "must be a finite number");
-  CsvLineCursor cursor(text);
-  std::string_view line;
-  if (!cursor.next(line)) throw DataError({file, 0, ""}, "file is empty (expected a header row and data rows)");
+CsvRowParser::CsvRowParser(std::string file, CsvReadOptions options)
+    : file_(std::move(file)), options_(std::move(options)) {
+  if (!std::isfinite(options_.sample_rate_hz) || options_.sample_rate_hz > 1.0 / kMinTimeStep)
+    throw ConfigError({file_, 0, "--fs"}, "the sample rate must be finite and at most 1e9 Hz");
+  if (!std::isfinite(options_.max_gap_factor)) throw ConfigError({file_, 0, "--max-gap"}, "must be a finite number");
+}
 
-  const int header_line = cursor.line_number();
-  const auto header = split(line);
-  {
-    double dummy;
-    if (std::all_of(header.begin(), header.end(), [&](std::string_view c) { return parse_number(c, dummy); }))
-      throw DataError({file, header_line, ""}, "missing header row (the first row holds only numbers)");
+void CsvRowParser::header(std::string_view line, int line_number) {
+  const auto header = split_csv_row(line);
+  double dummy;
+  if (std::all_of(header.begin(), header.end(), [&](std::string_view c) { return parse_number(c, dummy); }))
+    throw DataError({file_, line_number, ""}, "missing header row (the first row holds only numbers)");
+  columns_ = plan_columns(header, options_, file_, line_number);
+  names_.assign(header.begin(), header.end());
+  for (std::size_t k = 0; k < columns_.size(); ++k) {
+    by_index_.emplace_back(columns_[k].index, k);
+    if (columns_[k].mapping.role == "time") time_column_ = k;
   }
-  std::vector<Wanted> wanted;
-  for (auto& p : plan_columns(header, options, file, header_line)) wanted.push_back({std::move(p), {}});
-  const auto time_it =
-      std::find_if(wanted.begin(), wanted.end(), [](const Wanted& w) { return w.mapping.role == "time"; });
-  const std::optional<ColumnMapping> time_mapping =
-      time_it == wanted.end() ? std::nullopt : std::optional<ColumnMapping>(time_it->mapping);
+  std::sort(by_index_.begin(), by_index_.end());
+  values_.assign(columns_.size(), 0.0);
+  first_device_ids_.assign(columns_.size(), std::numeric_limits<double>::quiet_NaN());
+  header_line_ = line_number;
+}
 
-  std::vector<int> line_of_row;
-  const std::size_t estimated_rows = text.size() / std::max<std::size_t>(1, line.size() + 1);
-  for (auto& w : wanted) w.values.reserve(estimated_rows);
-  line_of_row.reserve(estimated_rows);
-  std::vector<std::pair<std::size_t, Wanted*>> by_index;
-  for (auto& w : wanted) by_index.emplace_back(w.index, &w);
-  std::sort(by_index.begin(), by_index.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+const PlannedColumn* CsvRowParser::find(const std::string& role) const {
+  for (const auto& c : columns_)
+    if (c.mapping.role == role) return &c;
+  return nullptr;
+}
 
-  while (cursor.next(line)) {
-    const int lineno = cursor.line_number();
-    std::size_t field = 0, pos = 0, next_wanted = 0;
-    while (true) {
-      const auto comma = line.find(',', pos);
-      const auto end = comma == std::string_view::npos ? line.size() : comma;
-      if (next_wanted < by_index.size() && by_index[next_wanted].first == field) {
-        const auto cell = trim(line.substr(pos, end - pos));
-        Wanted& w = *by_index[next_wanted].second;
-        double v;
-        if (cell.empty()) throw DataError({file, lineno, w.mapping.column}, "empty cell (expected a number)");
-        if (!parse_number(cell, v))
-          throw DataError({file, lineno, w.mapping.column}, "expected a number, got " + quoted_excerpt(cell));
-        if (!std::isfinite(v))
-          throw DataError({file, lineno, w.mapping.column},
-                          "value is " + quoted_excerpt(cell) + " (NaN/Inf not allowed)");
-        const double internal = to_internal(v, w.unit);
-        if (!(std::abs(internal) <= kMaxMagnitude))
-          throw DataError({file, lineno, w.mapping.column}, "value " + quoted_excerpt(cell) +
-                                                                " is too large to compute with (at most 1e100 " +
-                                                                internal_unit_symbol(w.unit.quantity) +
-                                                                " in magnitude; its squares and sums would overflow)");
-        w.values.push_back(internal);
-        ++next_wanted;
-      }
-      if (comma == std::string_view::npos) break;
-      pos = comma + 1;
-      ++field;
-    }
-    if (field + 1 != header.size())
-      throw DataError({file, lineno, ""}, "row has " + std::to_string(field + 1) + " cells, the header has " +
-                                              std::to_string(header.size()));
-    line_of_row.push_back(lineno);
+void CsvRowParser::row(std::string_view line, int line_number) {
+  cells_.clear();
+  for (std::size_t pos = 0;;) {
+    const auto comma = line.find(',', pos);
+    cells_.push_back(line.substr(pos, comma == std::string_view::npos ? std::string_view::npos : comma - pos));
+    if (comma == std::string_view::npos) break;
+    pos = comma + 1;
   }
-  const std::size_t rows = line_of_row.size();
-  if (rows == 0) throw DataError({file, header_line, ""}, "no data rows after the header");
-
-  Eigen::VectorXd time(static_cast<Eigen::Index>(rows));
-  if (time_mapping) {
-    const auto& tv =
-        std::find_if(wanted.begin(), wanted.end(), [](const Wanted& w) { return w.mapping.role == "time"; })->values;
-    std::copy(tv.begin(), tv.end(), time.data());
-    for (std::size_t i = 1; i < rows; ++i) {
-      if (tv[i] == tv[i - 1])
-        throw DataError({file, line_of_row[i], time_mapping->column},
-                        "duplicated time stamp (same as line " + std::to_string(line_of_row[i - 1]) + ")");
-      if (tv[i] < tv[i - 1])
-        throw DataError(
-            {file, line_of_row[i], time_mapping->column},
-            "time stamps must increase (this one is earlier than line " + std::to_string(line_of_row[i - 1]) + ")");
-      if (tv[i] - tv[i - 1] < kMinTimeStep)
-        throw DataError({file, line_of_row[i], time_mapping->column},
-                        "time step of " + std::to_string(tv[i] - tv[i - 1]) + " s after line " +
-                            std::to_string(line_of_row[i - 1]) +
+  if (cells_.size() != names_.size())
+    throw DataError({file_, line_number, ""}, "row has " + std::to_string(cells_.size()) + " cells, the header has " +
+                                                  std::to_string(names_.size()));
+  for (const auto& [index, k] : by_index_) {
+    const PlannedColumn& c = columns_[k];
+    const auto cell = trim(cells_[index]);
+    double v;
+    if (cell.empty()) throw DataError({file_, line_number, c.mapping.column}, "empty cell (expected a number)");
+    if (!parse_number(cell, v))
+      throw DataError({file_, line_number, c.mapping.column}, "expected a number, got " + quoted_excerpt(cell));
+    if (!std::isfinite(v))
+      throw DataError({file_, line_number, c.mapping.column},
+                      "value is " + quoted_excerpt(cell) + " (NaN/Inf not allowed)");
+    const double internal = to_internal(v, c.unit);
+    if (!(std::abs(internal) <= kMaxMagnitude))
+      throw DataError({file_, line_number, c.mapping.column},
+                      "value " + quoted_excerpt(cell) + " is too large to compute with (at most 1e100 " +
+                          internal_unit_symbol(c.unit.quantity) +
+                          " in magnitude; its squares and sums would overflow)");
+    values_[k] = internal;
+  }
+  for (std::size_t k = 0; k < columns_.size(); ++k) {
+    if (!device_id_instance(columns_[k].mapping.role)) continue;
+    if (rows_ == 0)
+      first_device_ids_[k] = values_[k];
+    else if (values_[k] != first_device_ids_[k])
+      throw DataError({file_, line_number, columns_[k].mapping.column},
+                      "the device id changes within the record (one file holds one device)");
+  }
+  if (time_column_) {
+    const double t = values_[*time_column_];
+    const std::string& column = columns_[*time_column_].mapping.column;
+    if (rows_ > 0) {
+      if (t == time_s_)
+        throw DataError({file_, line_number, column},
+                        "duplicated time stamp (same as line " + std::to_string(previous_line_) + ")");
+      if (t < time_s_)
+        throw DataError({file_, line_number, column}, "time stamps must increase (this one is earlier than line " +
+                                                          std::to_string(previous_line_) + ")");
+      if (t - time_s_ < kMinTimeStep)
+        throw DataError({file_, line_number, column},
+                        "time step of " + std::to_string(t - time_s_) + " s after line " +
+                            std::to_string(previous_line_) +
                             " is below 1 ns (a sample rate above 1 GHz; its rates and deviations would overflow)");
     }
-    if (options.max_gap_factor > 0.0) {
-      const auto facts = sampling::facts_of(
-          Eigen::Map<const Eigen::VectorXd>(tv.data(), static_cast<Eigen::Index>(rows)), options.max_gap_factor);
-      if (!facts.evenly_sampled()) {
-        const auto i = static_cast<std::size_t>(facts.first_gap_index);
-        throw DataError({file, line_of_row[i + 1], time_mapping->column},
-                        "gap of " + std::to_string(facts.first_gap_s) + " s after line " +
-                            std::to_string(line_of_row[i]) + " (median step " + std::to_string(facts.median_step_s) +
-                            " s; allowed up to " + std::to_string(options.max_gap_factor) +
-                            " x median, see --max-gap)");
-      }
-    }
+    time_s_ = t;
   } else {
-    for (std::size_t i = 0; i < rows; ++i)
-      time[static_cast<Eigen::Index>(i)] = static_cast<double>(i) / options.sample_rate_hz;
+    time_s_ = static_cast<double>(rows_) / options_.sample_rate_hz;
+  }
+  previous_line_ = line_number;
+  ++rows_;
+}
+
+void CsvRowParser::finish() const {
+  if (!has_header()) throw DataError({file_, 0, ""}, "file is empty (expected a header row and data rows)");
+  if (rows_ == 0) throw DataError({file_, header_line_, ""}, "no data rows after the header");
+}
+
+TimeSeries parse_csv(const std::string& text, const std::string& file, const CsvReadOptions& options) {
+  CsvRowParser parser(file, options);
+  CsvLineCursor cursor(text);
+  std::string_view line;
+  if (cursor.next(line))
+    parser.header(line, cursor.line_number());
+  else
+    parser.finish();  // "file is empty"
+  const auto& columns = parser.columns();
+  std::vector<std::vector<double>> values(columns.size());
+  std::vector<double> time;
+  std::vector<int> line_of_row;
+  const std::size_t estimated_rows = text.size() / std::max<std::size_t>(1, line.size() + 1);
+  for (auto& v : values) v.reserve(estimated_rows);
+  time.reserve(estimated_rows);
+  line_of_row.reserve(estimated_rows);
+  while (cursor.next(line)) {
+    parser.row(line, cursor.line_number());
+    for (std::size_t k = 0; k < columns.size(); ++k) values[k].push_back(parser.values()[k]);
+    time.push_back(parser.time_s());
+    line_of_row.push_back(cursor.line_number());
+  }
+  parser.finish();
+  const std::size_t rows = time.size();
+  const PlannedColumn* time_column = parser.find("time");
+  if (time_column && options.max_gap_factor > 0.0) {
+    const auto facts = sampling::facts_of(
+        Eigen::Map<const Eigen::VectorXd>(time.data(), static_cast<Eigen::Index>(rows)), options.max_gap_factor);
+    if (!facts.evenly_sampled()) {
+      const auto i = static_cast<std::size_t>(facts.first_gap_index);
+      throw DataError({file, line_of_row[i + 1], time_column->mapping.column},
+                      "gap of " + std::to_string(facts.first_gap_s) + " s after line " +
+                          std::to_string(line_of_row[i]) + " (median step " + std::to_string(facts.median_step_s) +
+                          " s; allowed up to " + std::to_string(options.max_gap_factor) + " x median, see --max-gap)");
+    }
   }
 
-  TimeSeries series(std::move(time));
-  for (auto& w : wanted) {
-    if (w.mapping.role == "time") continue;
-    if (const auto instance = device_id_instance(w.mapping.role)) {
-      for (std::size_t i = 1; i < rows; ++i)
-        if (w.values[i] != w.values[0])
-          throw DataError({file, line_of_row[i], w.mapping.column},
-                          "the device id changes within the record (one file holds one device)");
+  TimeSeries series(Eigen::Map<const Eigen::VectorXd>(time.data(), static_cast<Eigen::Index>(rows)));
+  for (std::size_t k = 0; k < columns.size(); ++k) {
+    const PlannedColumn& c = columns[k];
+    if (c.mapping.role == "time") continue;
+    if (const auto instance = device_id_instance(c.mapping.role)) {
       char id[32];
-      const auto res = std::to_chars(id, id + sizeof id, w.values[0]);
+      const auto res = std::to_chars(id, id + sizeof id, values[k][0]);
       series.set_device_id(*instance, std::string(id, res.ptr));
       continue;
     }
-    Channel c{w.mapping.role, internal_unit_symbol(w.unit.quantity), w.mapping.column,
-              Eigen::Map<const Eigen::VectorXd>(w.values.data(), static_cast<Eigen::Index>(w.values.size())),
-              w.unit.symbol};
-    series.set_channel(std::move(c));
+    series.set_channel(Channel{c.mapping.role, internal_unit_symbol(c.unit.quantity), c.mapping.column,
+                               Eigen::Map<const Eigen::VectorXd>(values[k].data(), static_cast<Eigen::Index>(rows)),
+                               c.unit.symbol});
   }
   return series;
 }

@@ -27,6 +27,7 @@
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -65,13 +66,12 @@ struct CsvReadOptions {
   std::vector<std::string> required_roles{"rate"};
 };
 
-// The same rules, exposed for readers that keep the text of every row (driftlab compensate passes
-// the columns it does not correct through byte for byte):
-// the lines of a CSV text as the reader walks them: a UTF-8 byte-order mark skipped; LF, CR LF or
-// CR line ends; blank and '#' lines skipped. `text` must outlive the cursor.
+// The lines of a CSV text as the reader walks them: a UTF-8 byte-order mark skipped at the start of
+// the text (`at_start` false: the text continues a file, no mark is looked for); LF, CR LF or CR
+// line ends; blank and '#' lines skipped. `text` must outlive the cursor.
 class CsvLineCursor {
  public:
-  explicit CsvLineCursor(const std::string& text);
+  explicit CsvLineCursor(const std::string& text, bool at_start = true);
   bool next(std::string_view& line);         // the next line (without its end); false at the end
   int line_number() const { return line_; }  // 1-based number of the last line returned
 
@@ -80,10 +80,36 @@ class CsvLineCursor {
   std::size_t pos_ = 0;
   int line_ = 0;
 };
-// The cells of one row, surrounding blanks and quotes trimmed.
+
+// The same lines from a source that arrives in pieces (standard input for `compensate --stream`):
+// `read` fills up to `size` bytes and returns how many (0 at the end); it is called only when no
+// complete line is left, so a caller may flush its output there. At most one incomplete line is
+// held: a line longer than `max_line_bytes` (a CSV row is far shorter) is a DataError naming `file`
+// and its line, raised once that many bytes of it have arrived. Memory: the longest line plus one
+// read. The lines, their numbers and the byte-order mark are exactly CsvLineCursor's on the whole
+// text, however the pieces are cut (a CR LF split between two reads stays one line end).
+class CsvLineStream {
+ public:
+  using Read = std::function<std::size_t(char* buffer, std::size_t size)>;
+  CsvLineStream(Read read, std::string file, std::size_t max_line_bytes, std::size_t read_bytes = std::size_t{1} << 20);
+  bool next(std::string_view& line);  // valid until the next call
+  int line_number() const { return before_ + (cursor_ ? cursor_->line_number() : 0); }
+
+ private:
+  void refill();
+
+  Read read_;
+  std::string file_;
+  std::size_t max_line_bytes_, read_bytes_;
+  std::string pending_;  // bytes after the last complete line
+  std::string block_;    // complete lines, walked by cursor_
+  std::optional<CsvLineCursor> cursor_;
+  int before_ = 0;  // lines of earlier blocks
+  bool started_ = false, ended_ = false;
+};
+
+// The cells of one row, surrounding blanks and quotes trimmed (as the header is read).
 std::vector<std::string_view> split_csv_row(std::string_view line);
-// A number cell as the reader parses it (C locale, an optional leading '+'; the whole cell).
-bool parse_csv_number(std::string_view cell, double& value);
 // A column a read takes: its mapping, unit and position in the row.
 struct PlannedColumn {
   ColumnMapping mapping;
@@ -96,6 +122,59 @@ struct PlannedColumn {
 // "device_id[N]" columns (constant per file) become the record's device ids, not channels.
 std::vector<PlannedColumn> plan_columns(const std::vector<std::string_view>& header, const CsvReadOptions& options,
                                         const std::string& file, int header_line);
+// "device_id" -> 0, "device_id3" -> 3: the IMU instance whose numeric identity a column carries.
+std::optional<int> device_id_instance(std::string_view role);
+
+// The one row parser of CSV time series (issue 28: batch and stream, one acceptance, one set of
+// messages, one set of values): parse_csv runs it over a whole text, `driftlab compensate --stream`
+// over the lines of a CsvLineStream. Feed it the lines of a CsvLineCursor or CsvLineStream: the
+// first is the header, every later one a row. Errors name `file`, the line and the column:
+//   header(): a first row of numbers only ("missing header row"), and plan_columns' errors;
+//   row():    a cell count other than the header's; in every planned column an empty cell, a cell
+//             that is not a number (C locale, optional leading '+', the whole cell), NaN/Inf, a
+//             value beyond kMaxMagnitude in internal units; a time stamp equal to, earlier than or
+//             less than kMinTimeStep after the previous row's; a device id other than the first row's;
+//   finish(): no header ("file is empty") or no row after it.
+// What needs the whole record (the gap test, max_gap_factor, against the median step) is
+// parse_csv's, after the last row. Cost: one pass over the line, O(cells).
+class CsvRowParser {
+ public:
+  // ConfigError for a sample rate that is not finite or above 1e9 Hz, a gap factor that is not finite.
+  CsvRowParser(std::string file, CsvReadOptions options);
+
+  void header(std::string_view line, int line_number);
+  void row(std::string_view line, int line_number);
+  void finish() const;
+
+  bool has_header() const { return header_line_ > 0; }
+  int header_line() const { return header_line_; }
+  const std::string& file() const { return file_; }
+  const std::vector<std::string>& header_names() const { return names_; }  // every header cell, trimmed
+  const std::vector<PlannedColumn>& columns() const { return columns_; }   // plan_columns' order
+  const PlannedColumn* find(const std::string& role) const;                // the planned column of a role, or null
+  std::size_t rows() const { return rows_; }                               // rows parsed so far
+  // The last row: its time (s; row index / sample rate without a time column), the value of every
+  // planned column in internal units (columns() order), and every cell untrimmed, as written (the
+  // views point into the line given to row()).
+  double time_s() const { return time_s_; }
+  const std::vector<double>& values() const { return values_; }
+  const std::vector<std::string_view>& cells() const { return cells_; }
+
+ private:
+  std::string file_;
+  CsvReadOptions options_;
+  int header_line_ = 0;
+  std::vector<std::string> names_;
+  std::vector<PlannedColumn> columns_;
+  std::vector<std::pair<std::size_t, std::size_t>> by_index_;  // (cell index, column) sorted by cell
+  std::optional<std::size_t> time_column_;
+  std::vector<double> first_device_ids_;  // per column; NaN for columns that are not device ids
+  std::size_t rows_ = 0;
+  double time_s_ = 0.0;
+  int previous_line_ = 0;
+  std::vector<double> values_;
+  std::vector<std::string_view> cells_;
+};
 
 TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& options = {});
 // The whole text of an input file, with read_csv's checks (a regular file, check_data_input in

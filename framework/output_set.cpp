@@ -117,7 +117,6 @@ void OutputSet::write(const fs::path& path, std::string_view content) {
     fail(err);
   }
   if (::close(fd) != 0) fail(errno_text());
-  ::chmod(e.temp.c_str(), 0644);
   e.written = true;
 }
 
@@ -141,6 +140,7 @@ void OutputSet::commit() {
   for (const auto& e : entries_)
     if (!e.written) throw std::logic_error("OutputSet: output " + e.path.string() + " was planned but not written");
   for (const auto& e : entries_) refuse_non_regular(e.path, {e.path.string(), 0, e.option});  // made since plan()
+  for (const auto& e : entries_) ::chmod(e.temp.c_str(), 0644);  // mkstemp made it 0600; staged files too
   // Keep a hard link to every file that will be replaced, so a failed rename can be undone.
   std::vector<std::string> backups(entries_.size());
   std::error_code ec;

@@ -141,6 +141,10 @@ class Optimizer : public Plugin {
   virtual OptimizationResult minimize(const Objective& f, const std::vector<Bound>& bounds, RunContext& ctx) = 0;
   // Largest number of objectives minimize_objectives() accepts (1 unless overridden).
   virtual std::size_t max_objectives() const { return 1; }
+  // The objective evaluations one minimize() makes at most (optimizer/ga: population x
+  // (generations + 1)), for the cost estimate before a tuning run (plugins/tuning, issue 28);
+  // 0 (the default) when the optimizer does not state it.
+  virtual double evaluation_budget() const { return 0.0; }
   // Minimizes `objectives` criteria at once. The default handles objectives == 1 through
   // minimize() and throws ConfigError for more; multi-objective optimizers override it.
   virtual OptimizationResult minimize_objectives(const VectorObjective& f, std::size_t objectives,

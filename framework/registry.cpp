@@ -113,7 +113,8 @@ const PluginInfo& Registry::info(const std::string& name) const {
   for (const auto* p : list(kind)) known += (known.empty() ? "" : ", ") + p->name;
   if (known.empty())
     for (const auto* p : list()) known += (known.empty() ? "" : ", ") + p->name;
-  throw UnknownPluginError({"", 0, name}, "unknown plugin (known: " + (known.empty() ? "none" : known) + ")");
+  throw UnknownPluginError(
+      {"", 0, name}, "unknown plugin " + quoted_excerpt(name) + " (known: " + (known.empty() ? "none" : known) + ")");
 }
 
 std::vector<const PluginInfo*> Registry::list(const std::string& kind) const {

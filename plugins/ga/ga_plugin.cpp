@@ -20,6 +20,10 @@ class GaPlugin final : public Optimizer {
                 .elites = static_cast<std::size_t>(p.integer("elites")),
                 .seed = static_cast<std::uint64_t>(p.integer("seed"))} {}
 
+  double evaluation_budget() const override {
+    return static_cast<double>(config_.population) * (static_cast<double>(config_.generations) + 1.0);
+  }
+
   OptimizationResult minimize(const Objective& f, const std::vector<Bound>& bounds, RunContext& ctx) override {
     std::vector<ga::Bound> genes;
     for (const auto& b : bounds) genes.push_back({b.lower, b.upper, b.integer});

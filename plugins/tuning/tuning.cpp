@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
 #include "framework/error.hpp"
+#include "framework/resources.hpp"
 #include "plugins/common/holdout.hpp"
 
 namespace driftlab::tuning {
@@ -107,6 +109,13 @@ Search search(Optimizer& optimizer, const std::vector<Bound>& bounds, const Sett
       return Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
     }
   };
+  if (const double evaluations = optimizer.evaluation_budget(); evaluations > 0.0) {  // before the work
+    const double rows = static_cast<double>(data.X_train.rows() + data.X_holdout.rows());
+    char what[200];
+    std::snprintf(what, sizeof what, "%.3g objective evaluations x %.3g rows at %.2g s per row and evaluation",
+                  evaluations, rows, kSecondsPerRowEvaluation);
+    check_time_estimate(evaluations * rows * kSecondsPerRowEvaluation, {"", 0, "optimizer"}, s.plugin + ": " + what);
+  }
   RunContext inner;
   inner.seed = ctx.seed;
   inner.threads = ctx.threads;

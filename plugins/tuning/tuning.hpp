@@ -69,11 +69,18 @@ struct Search {
   nlohmann::json optimizer_diagnostics;
 };
 
+// The cost of one candidate's fit per row it sees, s: a lower bound (10x below the 1e-6 s per bin
+// measured for the RBF network in `driftlab calibrate`), so the estimate refuses only searches
+// that surely exceed the time budget.
+inline constexpr double kSecondsPerRowEvaluation = 1e-7;
+
 // The tuning loop: minimizes the held-out RMSE of fit_and_score on `data` (and, with two
 // objectives, its complexity) over `bounds` with the optimizer, on a context with ctx's seed and
 // threads (the optimizer's diagnostics are returned, ctx's are left alone). A candidate
 // fit_and_score refuses (std::invalid_argument) scores +infinity. Throws DataError when no point
-// gave a finite RMSE.
+// gave a finite RMSE. Before the first fit, the optimizer's evaluation budget x the rows x
+// kSecondsPerRowEvaluation is checked against the time budget (framework/resources.hpp): a
+// ConfigError at "optimizer" when above it.
 Search search(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s, const Split& data,
               const FitAndScore& fit_and_score, RunContext& ctx);
 

@@ -3,9 +3,12 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include "framework/error.hpp"
 #include "framework/units.hpp"
@@ -200,6 +203,93 @@ TEST(CsvMapping, EachRoleAcceptsOnlyUnitsOfItsDimension) {
   EXPECT_THROW(parse_column_mapping("time=t:Hz"), ConfigError);
   EXPECT_NO_THROW(parse_column_mapping("temperature=t:K"));
   EXPECT_NO_THROW(parse_column_mapping("accel=a:1")) << "other roles take any unit";
+}
+
+// The stream reader (compensate --stream) gives exactly CsvLineCursor's lines and line numbers on
+// the whole text, however the text is cut into reads: a CR LF split between two reads stays one
+// line end, and a byte-order mark is skipped only at the very start.
+TEST(CsvLineStream, GivesTheCursorsLinesHoweverTheReadsAreCut) {
+  const std::string text =
+      "\xEF\xBB\xBFt_s,rate_dps\r\n# note\r\n\r\n0,1\r1,2\n\n2,3\r\n\xEF\xBB\xBF"
+      "3,4\r";
+  std::vector<std::pair<int, std::string>> expected;
+  CsvLineCursor cursor(text);
+  for (std::string_view line; cursor.next(line);) expected.emplace_back(cursor.line_number(), std::string(line));
+  ASSERT_EQ(expected.size(), 5u);
+  EXPECT_EQ(expected.back().second,
+            "\xEF\xBB\xBF"
+            "3,4");  // a mark inside the text is data
+  for (std::size_t piece = 1; piece <= text.size(); ++piece) {
+    std::size_t offset = 0;
+    CsvLineStream lines(
+        [&](char* buffer, std::size_t size) {
+          const std::size_t n = std::min({size, piece, text.size() - offset});
+          std::copy_n(text.data() + offset, n, buffer);
+          offset += n;
+          return n;
+        },
+        "<stdin>", 64, piece);
+    std::vector<std::pair<int, std::string>> got;
+    for (std::string_view line; lines.next(line);) got.emplace_back(lines.line_number(), std::string(line));
+    EXPECT_EQ(got, expected) << "reads of " << piece << " bytes";
+  }
+}
+
+TEST(CsvLineStream, RefusesALineLongerThanItsCapNamingTheLine) {
+  const std::string text = "t_s,rate_dps\n0,1\n1," + std::string(100, '2') + "\n2,3\n";
+  std::size_t offset = 0;
+  CsvLineStream lines(
+      [&](char* buffer, std::size_t size) {
+        const std::size_t n = std::min(size, text.size() - offset);
+        std::copy_n(text.data() + offset, n, buffer);
+        offset += n;
+        return n;
+      },
+      "<stdin>", 32, 8);
+  std::string_view line;
+  ASSERT_TRUE(lines.next(line));
+  ASSERT_TRUE(lines.next(line));
+  EXPECT_EQ(line, "0,1");
+  try {
+    lines.next(line);
+    FAIL() << "a 102-byte line passed a 32-byte cap";
+  } catch (const DataError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("<stdin>:3: the line is longer than 32 bytes (--max-line-bytes)"));
+  }
+  EXPECT_LT(offset, 64u) << "reading stopped once the line passed the cap";
+}
+
+// The one row parser: parse_csv's acceptance and messages row by row, with the raw cells kept.
+TEST(CsvRowParser, ChecksEveryPlannedCellAndTheTimeOrderRowByRow) {
+  CsvReadOptions options;
+  CsvRowParser parser("f.csv", options);
+  parser.header("t_s,rate_dps,note,temp_c", 1);
+  parser.row("0, +0.5 ,a b,20", 2);
+  EXPECT_EQ(parser.time_s(), 0.0);
+  ASSERT_EQ(parser.cells().size(), 4u);
+  EXPECT_EQ(parser.cells()[1], " +0.5 ");
+  EXPECT_EQ(parser.cells()[2], "a b");
+  const PlannedColumn* rate = parser.find("rate");
+  ASSERT_NE(rate, nullptr);
+  EXPECT_DOUBLE_EQ(parser.values()[static_cast<std::size_t>(rate - parser.columns().data())], 0.5 * kRadPerDeg);
+  const auto message = [&](const std::string& line) {
+    try {
+      parser.row(line, 3);
+    } catch (const DataError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(message("1,x,a,20"), "f.csv:3: rate_dps: expected a number, got 'x'");
+  EXPECT_EQ(message("1,0.1,a"), "f.csv:3: row has 3 cells, the header has 4");
+  EXPECT_EQ(message("1,0.1,a,inf"), "f.csv:3: temp_c: value is 'inf' (NaN/Inf not allowed)");
+  EXPECT_EQ(message("0,0.1,a,20"), "f.csv:3: t_s: duplicated time stamp (same as line 2)");
+  EXPECT_EQ(message("1,0.1,,20"), "accepted") << "a column that is not read may be empty";
+  EXPECT_EQ(message("0.5,0.1,a,20"), "f.csv:3: t_s: time stamps must increase (this one is earlier than line 3)");
+  EXPECT_EQ(parser.rows(), 2u);
+  CsvRowParser empty("g.csv", options);
+  EXPECT_THROW(empty.finish(), DataError);
+  EXPECT_THROW(empty.header("1,2,3", 1), DataError);
 }
 
 }  // namespace

@@ -57,7 +57,7 @@ TEST(Registry, NamesTheKnownPluginsOfAKindWhenOneIsUnknown) {
     registry.info("filter/nope");
     FAIL();
   } catch (const UnknownPluginError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("filter/nope: unknown plugin (known: filter/test_gain)"));
+    EXPECT_THAT(e.what(), HasSubstr("filter/nope: unknown plugin 'filter/nope' (known: filter/test_gain)"));
   }
 }
 

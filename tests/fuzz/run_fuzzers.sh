@@ -2,8 +2,9 @@
 # Builds and runs the libFuzzer harnesses of tests/fuzz (clang, ASan + UBSan).
 #   tests/fuzz/run_fuzzers.sh build FUZZ_BUILD_DIR            configure + build (clang++-14 or clang++)
 #   tests/fuzz/run_fuzzers.sh run FUZZ_BUILD_DIR NAME SECONDS   a random campaign of fuzz_NAME
-#                                                                (csv, pipeline, device, calibration, ulog,
-#                                                                dataflash, mcap, ros_messages)
+#                                                                (csv, stream, pipeline, device, calibration,
+#                                                                ulog, dataflash, mcap, ros_messages; with
+#                                                                MRPT also nav_scenario)
 #   tests/fuzz/run_fuzzers.sh check FUZZ_BUILD_DIR NAME RUNS     a reproducible run: seed 1, RUNS
 #                                                                inputs, from the seed corpus only
 # ctest runs `build` once and `check` for each harness with DRIFTLAB_FUZZ_RUNS inputs: the same
@@ -27,16 +28,17 @@ build)
   launcher=()
   command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
   # Build type "Fuzz" (no preset flags): -O1 and line tables only, the quickest build that still
-  # fuzzes fast and gives symbolized stack traces. MRPT is left out (no harness needs it).
+  # fuzzes fast and gives symbolized stack traces. MRPT as in the main build (AUTO): the nav
+  # scenario harness links the MRPT bridge (MRPT's own libraries run uninstrumented).
   cmake -S "$source_dir" -B "$build_dir" -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_BUILD_TYPE=Fuzz \
-    -DDRIFTLAB_BUILD_TESTS=OFF -DDRIFTLAB_BUILD_BENCH=OFF -DDRIFTLAB_BUILD_FUZZERS=ON -DDRIFTLAB_WITH_MRPT=OFF \
+    -DDRIFTLAB_BUILD_TESTS=OFF -DDRIFTLAB_BUILD_BENCH=OFF -DDRIFTLAB_BUILD_FUZZERS=ON -DDRIFTLAB_WITH_MRPT=AUTO \
     "${launcher[@]}" \
     -DCMAKE_CXX_FLAGS="-O1 -gline-tables-only -fsanitize=address,undefined,fuzzer-no-link -fno-sanitize-recover=undefined -fno-omit-frame-pointer" \
     >/dev/null
   cmake --build "$build_dir" -j "${JOBS:-2}" --target fuzzers
   ;;
 run|check)
-  name=${3:?harness name: csv, pipeline, device, calibration, ulog, dataflash, mcap or ros_messages}
+  name=${3:?harness name: csv, stream, pipeline, device, calibration, ulog, dataflash, mcap, ros_messages or nav_scenario}
   budget=${4:-60}
   exe="$build_dir/tests/fuzz/fuzz_$name"
   [[ -x "$exe" ]] || { echo "run_fuzzers.sh: $exe not built (run: run_fuzzers.sh build $build_dir)" >&2; exit 1; }

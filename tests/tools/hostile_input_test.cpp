@@ -105,7 +105,9 @@ TEST_F(Hostile, AnOutputThatIsAFifoOrADeviceNodeIsRefusedAndLeftAsItWas) {
   }
   EXPECT_TRUE(fs::is_fifo(fs::symlink_status(p("fifo"))));
   EXPECT_TRUE(fs::is_symlink(fs::symlink_status(p("link"))));
-  if (device) EXPECT_TRUE(fs::is_character_file(fs::symlink_status(p("null"))));
+  if (device) {
+    EXPECT_TRUE(fs::is_character_file(fs::symlink_status(p("null"))));
+  }
 }
 
 TEST_F(Hostile, DirectoriesMadeForAFailedRunAreRemoved) {
@@ -220,6 +222,7 @@ TEST_F(Hostile, FirmwareExportsWriteOnlyRealThirtyTwoValues) {
     const auto r = run_driftlab(command);
     EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
     EXPECT_THAT(r.err, HasSubstr("is not a finite REAL32 number")) << command;
+    EXPECT_THAT(r.err, HasSubstr(p("big.json") + ": ")) << "the model's file named: " << command;
     EXPECT_FALSE(fs::exists(p("x.params"))) << command;
   }
 }
@@ -403,6 +406,25 @@ TEST_F(Hostile, AbsurdParametersAreRefusedOnTheirCostEstimate) {
   EXPECT_THAT(ga.err,
               HasSubstr("--ga-population, --ga-generations: 1e+06 GA evaluations per channel over 1.8e+04 bins"));
   EXPECT_FALSE(fs::exists(p("m.json")));
+  // A GA inside a pipeline (a tuned RBF step): 1e6 x (1e9 + 1) evaluations over the tuning rows,
+  // refused before the first fit with the step's plugin and the estimate named; 2 x 3 runs.
+  const auto ga_pipeline = [&](const std::string& name, const std::string& population, const std::string& generations) {
+    write(dir_ / name,
+          "format: driftlab-pipeline/1\ninputs: {rate: rate, temperature: temperature}\nsteps:\n"
+          "  - name: s\n    plugin: regressor/rbf\n    inputs: {target: rate, features: temperature}\n"
+          "    params: {tune: true, optimizer: {plugin: optimizer/ga, params: {population: " +
+              population + ", generations: " + generations + ", elites: 1}}}\noutputs: {o: s.fitted}\n");
+    return run_driftlab("run --pipeline " + p(name) + " --data " + p("oven.csv") + " --out " + p("run"));
+  };
+  const auto absurd = ga_pipeline("absurd_ga.yaml", "1000000", "1000000000");
+  EXPECT_EQ(absurd.exit_code, 2) << absurd.err;
+  EXPECT_THAT(absurd.err, HasSubstr("optimizer: regressor/rbf: 1e+15 objective evaluations x 600 rows at 1e-07 s per "
+                                    "row and evaluation: about 6e+10 s"));
+  EXPECT_THAT(absurd.err, HasSubstr("above the budget of 4 h"));
+  // `run` records a failed step in its report (README: the one documented exception).
+  EXPECT_THAT(read_text(p("run") + "/report.json"), HasSubstr("\"status\": \"failed\""));
+  const auto small = ga_pipeline("small_ga.yaml", "2", "2");
+  EXPECT_EQ(small.exit_code, 0) << small.err;
   // An ensemble decomposition: 1e5 members over 1e5 samples, refused before the first member.
   std::string signal = "t_s,rate_dps\n";
   for (int i = 0; i < 100000; ++i) signal += std::to_string(i) + "," + std::to_string(std::sin(0.01 * i)) + "\n";
@@ -416,6 +438,25 @@ TEST_F(Hostile, AbsurdParametersAreRefusedOnTheirCostEstimate) {
         << plugin;
     EXPECT_FALSE(fs::exists(p("imfs.csv"))) << plugin;
   }
+}
+
+// Messages name what was given, in a readable form: the unknown plugin's own name beside the known
+// ones, a 309-digit number as a number.
+TEST_F(Hostile, MessagesNameTheGivenPluginAndWriteHugeNumbersShort) {
+  write(dir_ / "unknown.yaml",
+        "format: driftlab-pipeline/1\ninputs: {rate: rate}\nsteps:\n  - name: d\n"
+        "    plugin: decomposition/does_not_exist\n    inputs: {signal: rate}\noutputs: {o: d.signal}\n");
+  const auto unknown =
+      run_driftlab("run --pipeline " + p("unknown.yaml") + " --data " + p("oven.csv") + " --out " + p("run"));
+  EXPECT_EQ(unknown.exit_code, 2) << unknown.err;
+  EXPECT_THAT(unknown.err,
+              HasSubstr(p("unknown.yaml") + ":5: d.plugin: unknown plugin 'decomposition/does_not_exist' (known: "));
+  const auto huge =
+      run_driftlab("simulate --device fmvmg --duration 1 --out " + p("s.csv") + " --fs 1" + std::string(308, '0'),
+                   "DRIFTLAB_DEVICES_DIR=" + std::string(DRIFTLAB_SOURCE_DIR) + "/devices");
+  EXPECT_EQ(huge.exit_code, 2) << huge.err;
+  EXPECT_THAT(huge.err, HasSubstr("--fs: value 1e+308 is not in (0, 1e+09]"));
+  EXPECT_FALSE(fs::exists(p("run")) || fs::exists(p("s.csv")));
 }
 
 // Stream and batch read CSV by one rule (CsvLineCursor, plan_columns, the cell messages): the same

@@ -2,9 +2,13 @@
 // rawlog, the navigation EKF and bad rawlogs. Built always; without MRPT every test is skipped.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <chrono>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -594,6 +598,21 @@ TEST(MrptBridge, HostileRawlogsInputsAndOutputsAreRefusedWithTheFileNamed) {
   EXPECT_NE(r.err.find("object 1: IMU time stamp"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("before the MRPT clock's epoch"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "t.csv"));
+  // A NaN IMU field: a DataError naming the object and the field (exit 3), not a failed CSV write (exit 1).
+  {
+    mrpt::obs::CObservationIMU nan_obs = obs;
+    nan_obs.timestamp = mrpt::Clock::time_point(mrpt::Clock::duration(133000000010000000LL));
+    nan_obs.set(mrpt::obs::IMU_WZ, std::numeric_limits<double>::quiet_NaN());
+    std::ofstream(dir / "nan.rawlog", std::ios::binary) << early << serialized(nan_obs);
+  }
+  const auto nan_field =
+      run_driftlab("mrpt import " + (dir / "nan.rawlog").string() + " --out " + (dir / "n.csv").string());
+  EXPECT_EQ(nan_field.exit_code, 3) << nan_field.err;
+  EXPECT_NE(nan_field.err.find((dir / "nan.rawlog").string() + ": object 1: IMU observation 'GYRO': rate_rps is NaN; "
+                                                               "expected a finite number"),
+            std::string::npos)
+      << nan_field.err;
+  EXPECT_FALSE(fs::exists(dir / "n.csv"));
   // A sensory frame claiming 2^31 - 1 observations: MRPT allocated them (gigabytes) before failing.
   {
     mrpt::obs::CSensoryFrame frame;
@@ -621,8 +640,87 @@ TEST(MrptBridge, HostileRawlogsInputsAndOutputsAreRefusedWithTheFileNamed) {
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
   std::sort(left.begin(), left.end());
-  EXPECT_EQ(left,
-            (std::vector<std::string>{"count.rawlog", "fifo", "flag.rawlog", "in.csv", "in.rawlog", "ticks.rawlog"}));
+  EXPECT_EQ(left, (std::vector<std::string>{"count.rawlog", "fifo", "flag.rawlog", "in.csv", "in.rawlog", "nan.rawlog",
+                                            "ticks.rawlog"}));
+  fs::remove_all(dir);
+#endif
+}
+
+// SIGKILL at any point of `mrpt export` and `mrpt compensate` (issue 28) leaves no visible
+// temporary file and no partial output under the final name: either nothing, the documented hidden
+// temporary ".out.rawlog.tmp-XXXXXX" (framework/output_set.hpp), or the whole output, byte for
+// byte. The kill points are spread over a measured run of each command (fractions of its length,
+// plus fixed early points), so they land in every phase whatever the machine's speed; the
+// property is checked wherever each lands.
+TEST(MrptBridge, SigkillOfExportOrCompensateLeavesNoVisibleTemporaryAndNoPartialOutput) {
+  SKIP_WITHOUT_MRPT();
+#if DRIFTLAB_HAVE_MRPT
+  const auto dir = scratch_dir("mrpt_sigkill");
+  write_test_csv(dir / "big.csv", 30000, true);
+  driftlab::calibration::CalibrationModel model;
+  model.reference_temp_c = 25.0;
+  model.valid_min_c = -40.0;
+  model.valid_max_c = 1000.0;
+  model.bias_rad_s = {1e-3, 2e-5, 0.0};
+  model.bias_sigma_rad_s = {0.0, 0.0, 0.0};
+  std::ofstream(dir / "model.json") << driftlab::calibration::to_json_text(
+      driftlab::calibration::single_axis(model, 'z', "test"));
+  const std::string csv = (dir / "big.csv").string(), input = (dir / "in.rawlog").string(),
+                    json = (dir / "model.json").string(), out = (dir / "out.rawlog").string();
+  const auto made = run_driftlab("mrpt export " + csv + " --out " + input);
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  const std::vector<std::vector<std::string>> commands{{"mrpt", "export", csv, "--out", out},
+                                                       {"mrpt", "compensate", "--model", json, input, "--out", out}};
+  for (const auto& args : commands) {
+    std::vector<char*> argv{const_cast<char*>(DRIFTLAB_EXE)};
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    const auto start = [&] {
+      const pid_t pid = ::fork();
+      if (pid == 0) {
+        ::execv(DRIFTLAB_EXE, argv.data());
+        ::_exit(127);
+      }
+      return pid;
+    };
+    const auto begun = std::chrono::steady_clock::now();
+    const pid_t whole = start();
+    ASSERT_GT(whole, 0);
+    int status = 0;
+    ASSERT_EQ(::waitpid(whole, &status, 0), whole);
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << args[1];
+    const double run_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - begun).count();
+    const std::string reference = read_bytes(out);
+    fs::remove(out);
+    std::vector<std::string> before;
+    for (const auto& e : fs::directory_iterator(dir)) before.push_back(e.path().filename().string());
+    int killed = 0;
+    std::vector<useconds_t> delays{0, 2000, 10000};
+    for (const double f : {0.1, 0.25, 0.4, 0.55, 0.7, 0.85, 0.95})
+      delays.push_back(static_cast<useconds_t>(f * run_us));
+    for (const useconds_t delay : delays) {
+      const pid_t pid = start();
+      ASSERT_GT(pid, 0);
+      ::usleep(delay);
+      ::kill(pid, SIGKILL);
+      ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+      killed += WIFSIGNALED(status) ? 1 : 0;
+      for (const auto& e : fs::directory_iterator(dir)) {
+        const std::string name = e.path().filename().string();
+        if (name == "out.rawlog") {
+          EXPECT_EQ(read_bytes(e.path()), reference)
+              << args[1] << ": a partial output under the final name, kill after " << delay << " us";
+        } else if (name.rfind(".out.rawlog.tmp-", 0) != 0) {  // the documented hidden temporary
+          EXPECT_NE(std::find(before.begin(), before.end(), name), before.end())
+              << args[1] << ": " << name << " left visible, kill after " << delay << " us";
+        }
+      }
+      for (const auto& e : fs::directory_iterator(dir))
+        if (e.path().filename().string().rfind(".out.rawlog.tmp-", 0) == 0 || e.path().filename() == "out.rawlog")
+          fs::remove(e.path());
+    }
+    EXPECT_GT(killed, 0) << args[1] << ": no kill landed while the command ran";
+  }
   fs::remove_all(dir);
 #endif
 }

@@ -48,7 +48,7 @@ CLI::Validator finite_number(double lo, double hi, bool lo_open) {
         const auto res = std::from_chars(text.data(), end, v);
         if (res.ec != std::errc() || res.ptr != end) return "expected a number, got " + quoted_excerpt(text);
         if (!std::isfinite(v)) return "expected a finite number, got " + quoted_excerpt(text);
-        if ((lo_open ? !(v > lo) : !(v >= lo)) || !(v <= hi)) return "value " + text + " is not in " + d;
+        if ((lo_open ? !(v > lo) : !(v >= lo)) || !(v <= hi)) return "value " + message_number(v) + " is not in " + d;
         return "";
       },
       "NUMBER in " + desc.str());
@@ -187,11 +187,6 @@ std::string display_unit(const TimeSeries& record, const std::string& role, cons
   }
   const auto& unit = record.channel(role).unit;
   return unit == "rad/s" ? "deg/s" : unit;
-}
-
-void check_output(const std::string& output, const std::vector<std::string>& inputs) {
-  OutputSet check({inputs.begin(), inputs.end()});  // the same rules as a planned output
-  check.plan(output, "--out");
 }
 
 ReportFiles plan_report_files(OutputSet& outputs, const std::filesystem::path& dir, const std::string& option) {

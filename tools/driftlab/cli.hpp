@@ -115,12 +115,6 @@ std::string primary_role(const DataOptions& data);
 // Unit a channel is written back in: the unit it was read in when known ("deg/s" for rates).
 std::string display_unit(const TimeSeries& record, const std::string& role, const DataOptions& data);
 
-// Throws ConfigError when `output` could not be planned as an output (an input, an existing path
-// that is not a regular file, a missing or unwritable directory; see OutputSet::plan). For a command with one output
-// written by a library that writes atomically itself; commands with several outputs use an OutputSet
-// (framework/output_set.hpp), which also commits them together.
-void check_output(const std::string& output, const std::vector<std::string>& inputs);
-
 // The report pair of a command that writes into a directory (run and compare --out, calibrate
 // --report): DIR/report.json and DIR/report.html.
 struct ReportFiles {

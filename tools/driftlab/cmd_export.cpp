@@ -3,9 +3,10 @@
 // ardupilot, kalibr, json. Instances and axes come from the model.
 #include <iostream>
 #include <memory>
+#include <vector>
 
-#include "framework/atomic_file.hpp"
 #include "framework/error.hpp"
+#include "framework/output_set.hpp"
 #include "models/calibration/exports.hpp"
 #include "tools/driftlab/cli.hpp"
 
@@ -18,21 +19,30 @@ struct ExportOptions {
 };
 
 void export_command(const ExportOptions& o) {
-  check_output(o.out, {o.model});
+  OutputSet outputs({o.model});
+  outputs.plan(o.out, "--out");
   const auto model = calibration::read_calibration(o.model);
   calibration::ExportResult r;
-  if (o.format == "c-header") {
-    r = calibration::export_c_header(model, o.e);
-  } else if (o.format == "px4") {
-    r = calibration::export_px4_params(model, o.e);
-  } else if (o.format == "ardupilot") {
-    r = calibration::export_ardupilot_params(model, o.e);
-  } else if (o.format == "kalibr") {
-    r = calibration::export_kalibr_imu_yaml(model, o.e);
-  } else {
-    r.text = calibration::to_json_text(model);
+  try {
+    if (o.format == "c-header") {
+      r = calibration::export_c_header(model, o.e);
+    } else if (o.format == "px4") {
+      r = calibration::export_px4_params(model, o.e);
+    } else if (o.format == "ardupilot") {
+      r = calibration::export_ardupilot_params(model, o.e);
+    } else if (o.format == "kalibr") {
+      r = calibration::export_kalibr_imu_yaml(model, o.e);
+    } else {
+      r.text = calibration::to_json_text(model);
+    }
+  } catch (const ConfigError& e) {  // what the model cannot be exported as names the model's file
+    std::vector<Diagnostic> named = e.problems();
+    for (auto& d : named)
+      if (d.where.file.empty() && d.where.field.rfind("--", 0) != 0) d.where.file = o.model;
+    throw ConfigError(std::move(named));
   }
-  write_file_atomically(o.out, r.text);
+  outputs.write(o.out, r.text);
+  outputs.commit();
   for (const auto& n : r.notes) std::cerr << "note: " << n << "\n";
   std::cout << "wrote " << o.out << " (" << o.format << ", " << model.channels.size() << " channel"
             << (model.channels.size() == 1 ? "" : "s") << ")\n";

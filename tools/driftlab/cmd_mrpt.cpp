@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "framework/error.hpp"
+#include "framework/output_set.hpp"
 #include "framework/units.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "tools/driftlab/cli.hpp"
@@ -21,12 +22,16 @@ struct MrptOptions {
   double start_unix_s = mrpt_bridge::kDefaultStartUnixS;
 };
 
+// Each command plans its output before reading (framework/output_set.hpp: refused when it is an
+// input or not a regular file; a hidden temporary file next to it) and commits it at the end.
 void import_command(const MrptOptions& o, CommandEnv& env) {
-  check_output(o.out, {o.input});
+  OutputSet outputs({o.input});
+  outputs.plan(o.out, "--out");
   env.progress("mrpt import", 0.0);
   mrpt_bridge::RawlogStats stats;
   const auto table = mrpt_bridge::import_rawlog(o.input, o.sensor_label, &stats);
-  mrpt_bridge::write_imu_csv(table, o.out);
+  mrpt_bridge::write_imu_csv(table, outputs, o.out);
+  outputs.commit();
   env.progress("mrpt import", 1.0);
   std::cout << o.out << ": " << table.time_s.size() << " IMU samples of sensor '" << table.sensor_label << "' from "
             << o.input << " (" << stats.format << ", " << stats.objects << " objects, " << stats.odometry_actions
@@ -36,12 +41,14 @@ void import_command(const MrptOptions& o, CommandEnv& env) {
 }
 
 void export_command(const MrptOptions& o, CommandEnv& env) {
-  check_output(o.out, {o.input});
+  OutputSet outputs({o.input});
+  outputs.plan(o.out, "--out");
   env.progress("mrpt export", 0.0);
   auto table = mrpt_bridge::read_imu_csv(o.input);
   table.sensor_label = o.label;
   table.start_unix_s = o.start_unix_s;
-  mrpt_bridge::export_rawlog(table, o.out);
+  mrpt_bridge::export_rawlog(table, outputs, o.out);
+  outputs.commit();
   env.progress("mrpt export", 1.0);
   std::cout << o.out << ": " << table.time_s.size() << " CObservationIMU '" << table.sensor_label << "' ("
             << (table.has_odometry() ? "action/observation pairs with CActionRobotMovement2D odometry"
@@ -69,7 +76,8 @@ std::string correction_text(imu::Sensor sensor, double si) {
 // Every channel of the model's instance `o.instance` corrects its CObservationIMU field, each with
 // its own causal compensator, on IMU_TEMPERATURE.
 void compensate_command(const MrptOptions& o, CommandEnv& env) {
-  check_output(o.out, {o.input, o.model});
+  OutputSet outputs({o.input, o.model});
+  outputs.plan(o.out, "--out");
   const auto imu_model = calibration::read_calibration(o.model);
   std::vector<const calibration::ChannelCalibration*> applied;
   std::vector<std::string> other_instances;
@@ -98,7 +106,8 @@ void compensate_command(const MrptOptions& o, CommandEnv& env) {
                              return out;
                            }});
   env.progress("mrpt compensate", 0.0);
-  const auto stats = mrpt_bridge::compensate_rawlog(o.input, o.out, corrections, o.sensor_label);
+  const auto stats = mrpt_bridge::compensate_rawlog(o.input, outputs, o.out, corrections, o.sensor_label);
+  outputs.commit();
   env.progress("mrpt compensate", 1.0);
   std::cout << o.out << ": " << stats.compensated << " of " << stats.imu_observations << " IMU observations ('"
             << stats.sensor_label << "') compensated with instance " << o.instance << " of " << o.model << "; "

@@ -329,7 +329,7 @@ void simulated_nav(const NavOptions& o, CommandEnv& env) {
                      {"odom_dy_m", dy, "1"},
                      {"odom_dphi_rad", dphi, "1"},
                      {"odom_speed_mps", drive.odometry_speed_mps, "1"}};
-    mrpt_bridge::export_rawlog(table, outputs.stage_path(out / "drive.rawlog"));
+    mrpt_bridge::export_rawlog(table, outputs, out / "drive.rawlog");
   }
   outputs.commit();
   env.progress("nav", 1.0);

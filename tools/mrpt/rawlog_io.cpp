@@ -14,7 +14,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <map>
 #include <optional>
 #include <set>
@@ -249,13 +248,13 @@ void read_in_child_first(const fs::path& path) {
   }
 }
 
-// Writes a gzip'ed rawlog through an OutputSet of one file (framework/output_set.hpp): the checks
-// of every output, its hidden temporary file, nothing left behind unless committed.
+// Writes a gzip'ed rawlog into the staged temporary file of an output planned in an OutputSet
+// (framework/output_set.hpp: the checks of every output, its hidden temporary file, nothing left
+// behind unless the set is committed). close() before the set commits.
 class RawlogWriter {
  public:
-  RawlogWriter(const fs::path& path, std::vector<fs::path> inputs) : output_(std::move(inputs)) {
-    output_.plan(path, "");
-    const fs::path temp = output_.stage_path(path);
+  RawlogWriter(OutputSet& outputs, const fs::path& path) {
+    const fs::path temp = outputs.stage_path(path);
     if (!out_.open(temp.string()))
       throw data_error(path, "cannot write the rawlog (temporary file " + temp.string() + ")");
   }
@@ -263,13 +262,9 @@ class RawlogWriter {
     auto archive = mrpt::serialization::archiveFrom(out_);
     archive << object;
   }
-  void commit() {
-    out_.close();
-    output_.commit();
-  }
+  void close() { out_.close(); }
 
  private:
-  OutputSet output_;  // declared first: destroyed after the stream is closed
   mrpt::io::CFileGZOutputStream out_;
 };
 
@@ -293,6 +288,16 @@ std::string field_name(int field) {
   for (const auto& c : imu_columns())
     if (c.field == field) return c.column;
   return std::to_string(field);
+}
+
+// A present IMU field's value; DataError naming the object and the field when it is NaN or infinite
+// (a CSV or a correction could not use it).
+double finite_field(const CObservationIMU& imu, int field, const fs::path& path, std::size_t k, int j) {
+  const double v = imu.get(static_cast<mrpt::obs::TIMUDataIndex>(field));
+  if (!std::isfinite(v))
+    throw data_error(path, index_text(k, j) + "IMU observation '" + imu.sensorLabel + "': " + field_name(field) +
+                               " is " + (std::isnan(v) ? "NaN" : "infinite") + "; expected a finite number");
+  return v;
 }
 
 // Walks a rawlog: on_observation(obs, object index, index in frame or -1), on_action(action, index).
@@ -432,24 +437,15 @@ const Eigen::VectorXd& ImuTable::values(const std::string& column) const {
 }
 
 ImuTable read_imu_csv(const fs::path& path) {
-  // The header decides the mapping: every column must be one the bridge knows.
-  check_data_input(path);
-  std::ifstream in(path);
-  if (!in) throw DataError(Location{path.string(), 0, ""}, "cannot open the CSV file");
-  std::string header;
-  int line = 0;
-  while (std::getline(in, header)) {
-    ++line;
-    if (!header.empty() && header.back() == '\r') header.pop_back();
-    if (!header.empty() && header[0] != '#') break;
-  }
-  if (header.empty()) throw DataError(Location{path.string(), line, ""}, "empty file: no header row");
+  // The header decides the mapping: every column must be one the bridge knows. One read of the
+  // text (read_text_file: a regular file, its memory estimated first), the CSV reader's line rule.
+  const std::string text = read_text_file(path);
+  CsvLineCursor cursor(text);
+  std::string_view header;
+  if (!cursor.next(header)) throw DataError(Location{path.string(), 0, ""}, "empty file: no header row");
+  const int line = cursor.line_number();
   std::vector<std::string> names;
-  {
-    std::stringstream s(header);
-    std::string cell;
-    while (std::getline(s, cell, ',')) names.push_back(cell);
-  }
+  for (const auto cell : split_csv_row(header)) names.emplace_back(cell);
   CsvReadOptions options;
   options.max_gap_factor = 0.0;
   options.required_roles = {"rate"};
@@ -485,7 +481,7 @@ ImuTable read_imu_csv(const fs::path& path) {
   if (!have_time) throw DataError(Location{path.string(), line, "t_s"}, "missing time column t_s");
   if (!have_rate)
     throw DataError(Location{path.string(), line, "rate_rps"}, "missing yaw-rate column rate_rps or rate_dps");
-  const TimeSeries series = read_csv(path, options);
+  const TimeSeries series = parse_csv(text, path.string(), options);
 
   ImuTable table;
   table.ignored_columns = ignored;
@@ -504,10 +500,10 @@ ImuTable read_imu_csv(const fs::path& path) {
   return table;
 }
 
-void write_imu_csv(const ImuTable& table, const fs::path& path) {
+void write_imu_csv(const ImuTable& table, OutputSet& outputs, const fs::path& path) {
   std::vector<CsvColumn> columns{{"t_s", table.time_s, "s"}};
   for (const auto& c : table.columns) columns.push_back(c);
-  write_csv(path, columns);
+  outputs.write_csv(path, columns);
 }
 
 ImuTable import_rawlog(const fs::path& path, const std::string& sensor_label, RawlogStats* stats_out) {
@@ -544,7 +540,7 @@ ImuTable import_rawlog(const fs::path& path, const std::string& sensor_label, Ra
                                        field_name(col.field) + ", which the first one has");
         }
         for (std::size_t i = 0; i < c.fields.size(); ++i)
-          c.values[i].push_back(imu->get(static_cast<mrpt::obs::TIMUDataIndex>(c.fields[i])));
+          c.values[i].push_back(finite_field(*imu, c.fields[i], path, k, j));
         c.ticks.push_back(ticks);
         const mrpt::poses::CPose2D inc = c.pending.value_or(mrpt::poses::CPose2D());
         c.dx.push_back(inc.x());
@@ -553,9 +549,14 @@ ImuTable import_rawlog(const fs::path& path, const std::string& sensor_label, Ra
         c.v.push_back(c.pending_speed);
         c.pending.reset();
       },
-      [&](const mrpt::obs::CActionRobotMovement2D& odo, std::size_t) {
+      [&](const mrpt::obs::CActionRobotMovement2D& odo, std::size_t k) {
         any_odometry = true;
         const auto& inc = odo.rawOdometryIncrementReading;
+        if (!std::isfinite(inc.x()) || !std::isfinite(inc.y()) || !std::isfinite(inc.phi()) ||
+            (odo.hasVelocities && !std::isfinite(odo.velocityLocal.vx)))
+          throw data_error(path, index_text(k, -1) +
+                                     "an odometry increment or speed is not finite (NaN or infinite); "
+                                     "expected finite numbers");
         for (auto& [label, c] : by_label) c.pending = c.pending ? *c.pending + inc : inc;
         unseen_pending = unseen_pending ? *unseen_pending + inc : inc;
         if (odo.hasVelocities) {
@@ -591,6 +592,13 @@ ImuTable import_rawlog(const fs::path& path, const std::string& sensor_label, Ra
 }
 
 void export_rawlog(const ImuTable& table, const fs::path& path) {
+  OutputSet outputs;
+  outputs.plan(path, "");
+  export_rawlog(table, outputs, path);
+  outputs.commit();
+}
+
+void export_rawlog(const ImuTable& table, OutputSet& outputs, const fs::path& path) {
   const Eigen::Index n = table.time_s.size();
   if (n == 0) throw data_error(path, "nothing to export: the IMU record is empty");
   constexpr double kMaxTicks = 4e18;  // 100-ns ticks since 1601: about year 14 000, well inside int64
@@ -607,7 +615,7 @@ void export_rawlog(const ImuTable& table, const fs::path& path) {
   const bool odometry = table.has_odometry();
   const bool speed = table.has("odom_speed_mps");
 
-  RawlogWriter writer(path, {});
+  RawlogWriter writer(outputs, path);
   mrpt::obs::CActionRobotMovement2D::TMotionModelOptions motion;  // MRPT's default Gaussian model
   for (Eigen::Index i = 0; i < n; ++i) {
     auto obs = CObservationIMU::Create();
@@ -634,7 +642,7 @@ void export_rawlog(const ImuTable& table, const fs::path& path) {
       writer.write(*obs);
     }
   }
-  writer.commit();
+  writer.close();
 }
 
 RawlogStats rawlog_stats(const fs::path& path) {
@@ -667,7 +675,16 @@ std::string imu_field_name(int field) {
 
 CompensateStats compensate_rawlog(const fs::path& in, const fs::path& out,
                                   const std::vector<FieldCorrection>& corrections, const std::string& sensor_label) {
-  RawlogWriter writer(out, {in});  // checked (and its temporary file made) before the input is read
+  OutputSet outputs({in});
+  outputs.plan(out, "");  // checked (and its temporary file made) before the input is read
+  const CompensateStats stats = compensate_rawlog(in, outputs, out, corrections, sensor_label);
+  outputs.commit();
+  return stats;
+}
+
+CompensateStats compensate_rawlog(const fs::path& in, OutputSet& outputs, const fs::path& out,
+                                  const std::vector<FieldCorrection>& corrections, const std::string& sensor_label) {
+  RawlogWriter writer(outputs, out);
   if (corrections.empty())
     throw ConfigError(Location{in.string(), 0, ""}, "nothing to compensate: no field correction given");
   std::set<int> corrected;
@@ -697,10 +714,10 @@ CompensateStats compensate_rawlog(const fs::path& in, const fs::path& out,
     const auto ticks = ticks_of(imu->timestamp);
     if (!t0) t0 = ticks;
     const double t = static_cast<double>(ticks - *t0) / kTicksPerSecond;
-    const double temp = imu->get(mrpt::obs::IMU_TEMPERATURE);
+    const double temp = finite_field(*imu, mrpt::obs::IMU_TEMPERATURE, in, k, j);
     for (std::size_t i = 0; i < corrections.size(); ++i) {
       const auto field = static_cast<mrpt::obs::TIMUDataIndex>(corrections[i].field);
-      const double measured = imu->get(field);
+      const double measured = finite_field(*imu, field, in, k, j);
       const double value = corrections[i].correct(t, measured, temp);
       imu->set(field, value);
       auto& worst = result.fields[i].max_abs_correction;
@@ -726,7 +743,7 @@ CompensateStats compensate_rawlog(const fs::path& in, const fs::path& out,
   result.objects = reader.count();
   for (const auto& col : imu_columns())
     if (passed.count(col.field)) result.passed_through.push_back(col.field);
-  writer.commit();
+  writer.close();
   return result;
 }
 

@@ -33,6 +33,7 @@
 
 #include "framework/csv.hpp"
 #include "framework/imu.hpp"
+#include "framework/output_set.hpp"
 
 namespace driftlab::mrpt_bridge {
 
@@ -78,8 +79,8 @@ struct RawlogStats {
 // Reads a CSV with t_s, rate_rps|rate_dps, temp_c and any of the other known columns; columns
 // it does not know are listed in ignored_columns. Gaps are allowed. Throws DataError/ConfigError with file, line.
 ImuTable read_imu_csv(const std::filesystem::path& path);
-// Writes t_s and every column, atomically.
-void write_imu_csv(const ImuTable& table, const std::filesystem::path& path);
+// Stages t_s and every column as the planned output `path` of `outputs` (committed by the caller).
+void write_imu_csv(const ImuTable& table, OutputSet& outputs, const std::filesystem::path& path);
 
 // IMU observations of a rawlog (of `sensor_label`, or of the only IMU label present; more than one
 // label without a choice is a ConfigError listing them). Throws DataError naming file and object
@@ -93,8 +94,11 @@ ImuTable import_rawlog(const std::filesystem::path& path, const std::string& sen
 // Writes CObservationIMU objects (IMU_WZ rad/s, IMU_TEMPERATURE degC, the other columns present,
 // sensor label, time stamps); with odometry columns, as action/observation pairs (a
 // CActionCollection holding a CActionRobotMovement2D, then a CSensoryFrame with the IMU
-// observation), else observations-only. Written through an OutputSet (output_set.hpp). ConfigError
-// when the time stamps (start_unix_s + t_s) fall outside MRPT's clock (before 1601 or not finite).
+// observation), else observations-only, gzip'ed, into the staged temporary file of `path`, an
+// output planned in `outputs` (framework/output_set.hpp, the one atomic output path; the caller
+// commits). ConfigError when the time stamps (start_unix_s + t_s) fall outside MRPT's clock (before
+// 1601 or not finite). The form without an OutputSet writes `path` alone, committed.
+void export_rawlog(const ImuTable& table, OutputSet& outputs, const std::filesystem::path& path);
 void export_rawlog(const ImuTable& table, const std::filesystem::path& path);
 
 // Counts of a rawlog (reads the whole file; DataError as import_rawlog).
@@ -134,8 +138,12 @@ struct CompensateStats {
 // `sensor_label` (or of the only IMU label) each corrected field by its correction; nothing else
 // changes. Errors (nothing is written): ConfigError for no correction, a field corrected twice, or
 // `out` naming `in`; DataError naming the file, the object index and the field for an observation
-// lacking a corrected field or IMU_TEMPERATURE (has() is checked before every get()). `out` is
-// written atomically.
+// lacking a corrected field or IMU_TEMPERATURE (has() is checked before every get()). `out` is an
+// output planned in `outputs` (the caller commits), or, in the form without an OutputSet, written
+// alone and committed.
+CompensateStats compensate_rawlog(const std::filesystem::path& in, OutputSet& outputs, const std::filesystem::path& out,
+                                  const std::vector<FieldCorrection>& corrections,
+                                  const std::string& sensor_label = "");
 CompensateStats compensate_rawlog(const std::filesystem::path& in, const std::filesystem::path& out,
                                   const std::vector<FieldCorrection>& corrections,
                                   const std::string& sensor_label = "");
