@@ -53,6 +53,9 @@ class Profile {
   double value_at(double t_s) const;
   // Values at increasing time stamps, O(n + segments).
   Eigen::VectorXd sample(const Eigen::VectorXd& time_s) const;
+  // The breakpoints: times (s, from 0, non-decreasing) and the values there.
+  const std::vector<double>& breakpoint_times() const { return times_; }
+  const std::vector<double>& breakpoint_values() const { return values_; }
 
  private:
   std::vector<double> times_{0.0};
