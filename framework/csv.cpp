@@ -262,8 +262,9 @@ void CsvLineStream::refill() {
       started_ = true;
       return;
     }
-    if (pending_.size() > max_line_bytes_)  // one incomplete line, already too long
-      throw line_too_long(file_, before_ + 1, max_line_bytes_);
+    // One incomplete line (its CR, when it ends the bytes so far, may be its line end), already too long.
+    const std::size_t held = pending_.size() - (!pending_.empty() && pending_.back() == '\r' ? 1 : 0);
+    if (held > max_line_bytes_) throw line_too_long(file_, before_ + 1, max_line_bytes_);
     const std::size_t size = pending_.size();
     pending_.resize(size + read_bytes_);
     const std::size_t got = read_(pending_.data() + size, read_bytes_);

@@ -235,6 +235,27 @@ TEST(CsvLineStream, GivesTheCursorsLinesHoweverTheReadsAreCut) {
   }
 }
 
+// fuzz_stream's finding (tests/fuzz/corpus/stream/cr_after_a_line_at_the_cap.bin): a line of exactly
+// the cap whose CR has arrived, but not yet what follows it, is no longer than the cap.
+TEST(CsvLineStream, ALineOfExactlyTheCapEndedByACrPasses) {
+  const std::string text = std::string(8, 'x') + "\r";
+  for (std::size_t piece = 1; piece <= text.size(); ++piece) {
+    std::size_t offset = 0;
+    CsvLineStream lines(
+        [&](char* buffer, std::size_t size) {
+          const std::size_t n = std::min({size, piece, text.size() - offset});
+          std::copy_n(text.data() + offset, n, buffer);
+          offset += n;
+          return n;
+        },
+        "<stdin>", 8, piece);
+    std::string_view line;
+    ASSERT_TRUE(lines.next(line)) << "reads of " << piece << " bytes";
+    EXPECT_EQ(line, std::string(8, 'x'));
+    EXPECT_FALSE(lines.next(line));
+  }
+}
+
 TEST(CsvLineStream, RefusesALineLongerThanItsCapNamingTheLine) {
   const std::string text = "t_s,rate_dps\n0,1\n1," + std::string(100, '2') + "\n2,3\n";
   std::size_t offset = 0;
