@@ -205,6 +205,17 @@ TEST(CsvMapping, EachRoleAcceptsOnlyUnitsOfItsDimension) {
   EXPECT_NO_THROW(parse_column_mapping("accel=a:1")) << "other roles take any unit";
 }
 
+// A CsvLineStream source handing out `text` in reads of at most `piece` bytes; `offset` counts the
+// bytes handed out.
+CsvLineStream::Read reads_of(const std::string& text, std::size_t piece, std::size_t& offset) {
+  return [&text, piece, &offset](char* buffer, std::size_t size) {
+    const std::size_t n = std::min({size, piece, text.size() - offset});
+    std::copy_n(text.data() + offset, n, buffer);
+    offset += n;
+    return n;
+  };
+}
+
 // The stream reader (compensate --stream) gives exactly CsvLineCursor's lines and line numbers on
 // the whole text, however the text is cut into reads: a CR LF split between two reads stays one
 // line end, and a byte-order mark is skipped only at the very start.
@@ -221,14 +232,7 @@ TEST(CsvLineStream, GivesTheCursorsLinesHoweverTheReadsAreCut) {
             "3,4");  // a mark inside the text is data
   for (std::size_t piece = 1; piece <= text.size(); ++piece) {
     std::size_t offset = 0;
-    CsvLineStream lines(
-        [&](char* buffer, std::size_t size) {
-          const std::size_t n = std::min({size, piece, text.size() - offset});
-          std::copy_n(text.data() + offset, n, buffer);
-          offset += n;
-          return n;
-        },
-        "<stdin>", 64, piece);
+    CsvLineStream lines(reads_of(text, piece, offset), "<stdin>", 64, piece);
     std::vector<std::pair<int, std::string>> got;
     for (std::string_view line; lines.next(line);) got.emplace_back(lines.line_number(), std::string(line));
     EXPECT_EQ(got, expected) << "reads of " << piece << " bytes";
@@ -241,14 +245,7 @@ TEST(CsvLineStream, ALineOfExactlyTheCapEndedByACrPasses) {
   const std::string text = std::string(8, 'x') + "\r";
   for (std::size_t piece = 1; piece <= text.size(); ++piece) {
     std::size_t offset = 0;
-    CsvLineStream lines(
-        [&](char* buffer, std::size_t size) {
-          const std::size_t n = std::min({size, piece, text.size() - offset});
-          std::copy_n(text.data() + offset, n, buffer);
-          offset += n;
-          return n;
-        },
-        "<stdin>", 8, piece);
+    CsvLineStream lines(reads_of(text, piece, offset), "<stdin>", 8, piece);
     std::string_view line;
     ASSERT_TRUE(lines.next(line)) << "reads of " << piece << " bytes";
     EXPECT_EQ(line, std::string(8, 'x'));
@@ -259,14 +256,7 @@ TEST(CsvLineStream, ALineOfExactlyTheCapEndedByACrPasses) {
 TEST(CsvLineStream, RefusesALineLongerThanItsCapNamingTheLine) {
   const std::string text = "t_s,rate_dps\n0,1\n1," + std::string(100, '2') + "\n2,3\n";
   std::size_t offset = 0;
-  CsvLineStream lines(
-      [&](char* buffer, std::size_t size) {
-        const std::size_t n = std::min(size, text.size() - offset);
-        std::copy_n(text.data() + offset, n, buffer);
-        offset += n;
-        return n;
-      },
-      "<stdin>", 32, 8);
+  CsvLineStream lines(reads_of(text, text.size(), offset), "<stdin>", 32, 8);
   std::string_view line;
   ASSERT_TRUE(lines.next(line));
   ASSERT_TRUE(lines.next(line));
