@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -175,9 +176,11 @@ class ObjectReader {
 // MRPT's deserializer trusts the file: a malformed object can crash it (a null dereference) and a
 // length field can make it allocate gigabytes before anything fails. So a rawlog is first read
 // whole in a child process, with its address space limited to what it holds now plus
-// kDeserializeBytes, reporting the index of each object it starts and, when the read fails, the
-// message. A crash there, or a failed read (running out of that memory: std::bad_alloc), becomes a
-// DataError naming the object; only a file that passed is read here.
+// kDeserializeBytes and the fatal signals at their default action (whatever handlers this process
+// installed), reporting the index of each object it starts, then either the message of a failed
+// read or that it read every object. A crash there, a failed read (running out of that memory:
+// std::bad_alloc), or any other end of the child becomes a DataError naming the object; only a file
+// that the child read to its end is read here.
 constexpr double kDeserializeBytes = 1024.0 * 1024.0 * 1024.0;  // for one object at a time
 
 void read_in_child_first(const fs::path& path) {
@@ -190,8 +193,10 @@ void read_in_child_first(const fs::path& path) {
     return;
   }
   constexpr std::uint64_t kMessage = ~std::uint64_t{0};  // then the text of the child's DataError
+  constexpr std::uint64_t kReadAll = kMessage - 1;       // the child read every object
   if (pid == 0) {  // the child: no destructors, no atexit handlers, no stdio flush (_exit)
     ::close(pipe_fds[0]);
+    for (const int fatal : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT}) std::signal(fatal, SIG_DFL);
     long pages = 0;
     if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
       if (std::fscanf(f, "%ld", &pages) != 1) pages = 0;
@@ -208,6 +213,8 @@ void read_in_child_first(const fs::path& path) {
         if (::write(pipe_fds[1], &index, sizeof index) != sizeof index) ::_exit(0);
         if (!reader.next()) break;
       }
+      const std::uint64_t done = kReadAll;
+      if (::write(pipe_fds[1], &done, sizeof done) != sizeof done) ::_exit(0);
     } catch (const DataError& e) {  // ObjectReader's, for every failure (std::bad_alloc included): sent after kMessage
       const std::uint64_t marker = kMessage;
       const std::string text = e.what();
@@ -217,16 +224,18 @@ void read_in_child_first(const fs::path& path) {
           if (n <= 0) break;
           done += static_cast<std::size_t>(n);
         }
-    } catch (...) {  // anything else: the read here reports it
+    } catch (...) {  // anything else: without kReadAll the parent reports an unfinished read
     }
     ::_exit(0);
   }
   ::close(pipe_fds[1]);
   std::uint64_t index = 0, last = 0;
   std::string message;
+  bool read_all = false;
   while (::read(pipe_fds[0], &index, sizeof index) == sizeof index) {
+    if (index == kReadAll) read_all = true;
     if (index != kMessage) {
-      last = index;
+      if (!read_all) last = index;
       continue;
     }
     char buffer[4096];
@@ -246,6 +255,11 @@ void read_in_child_first(const fs::path& path) {
     const std::string prefix = path.string() + ": ";
     throw data_error(path, message.rfind(prefix, 0) == 0 ? message.substr(prefix.size()) : message);
   }
+  if (!read_all || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw data_error(path, object + "the guarded read of the rawlog in a child process ended without reading it (" +
+                               (WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
+                                                  : std::string("no exit status")) +
+                               "): not a valid MRPT object (malformed rawlog)");
 }
 
 // Writes a gzip'ed rawlog into the staged temporary file of an output planned in an OutputSet
@@ -506,7 +520,11 @@ void write_imu_csv(const ImuTable& table, OutputSet& outputs, const fs::path& pa
   outputs.write_csv(path, columns);
 }
 
-ImuTable import_rawlog(const fs::path& path, const std::string& sensor_label, RawlogStats* stats_out) {
+namespace {
+
+// One walk of the rawlog: the table of every IMU label (of `sensor_label` only, when given).
+std::map<std::string, ImuTable> import_tables(const fs::path& path, const std::string& sensor_label,
+                                              RawlogStats* stats_out) {
   std::map<std::string, Collected> by_label;
   bool any_odometry = false, any_speed = false;
   std::optional<mrpt::poses::CPose2D> unseen_pending;  // odometry before a label's first observation
@@ -567,28 +585,45 @@ ImuTable import_rawlog(const fs::path& path, const std::string& sensor_label, Ra
       },
       [](const auto&, std::size_t) {});
   if (stats_out) *stats_out = walker.stats;
-  const std::string label = choose_label(path, walker.stats.imu_labels, sensor_label);
-  const auto& c = by_label.at(label);
-
-  ImuTable table;
-  table.sensor_label = label;
-  const auto n = static_cast<Eigen::Index>(c.ticks.size());
-  table.time_s.resize(n);
-  const std::int64_t t0 = c.ticks.front();
-  for (Eigen::Index i = 0; i < n; ++i) table.time_s[i] = static_cast<double>(c.ticks[i] - t0) / kTicksPerSecond;
-  table.start_unix_s = static_cast<double>(t0 - kUnixEpochTicks) / kTicksPerSecond;
-  auto vec = [](const std::vector<double>& v) {
-    return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(v.data(), v.size()));
-  };
-  for (std::size_t i = 0; i < c.fields.size(); ++i)
-    table.columns.push_back({field_name(c.fields[i]), vec(c.values[i]), "1"});
-  if (any_odometry) {
-    table.columns.push_back({"odom_dx_m", vec(c.dx), "1"});
-    table.columns.push_back({"odom_dy_m", vec(c.dy), "1"});
-    table.columns.push_back({"odom_dphi_rad", vec(c.dphi), "1"});
-    if (any_speed) table.columns.push_back({"odom_speed_mps", vec(c.v), "1"});
+  std::map<std::string, ImuTable> tables;
+  for (auto& [label, c] : by_label) {
+    ImuTable& table = tables[label];
+    table.sensor_label = label;
+    const auto n = static_cast<Eigen::Index>(c.ticks.size());
+    table.time_s.resize(n);
+    const std::int64_t t0 = c.ticks.front();
+    for (Eigen::Index i = 0; i < n; ++i) table.time_s[i] = static_cast<double>(c.ticks[i] - t0) / kTicksPerSecond;
+    table.start_unix_s = static_cast<double>(t0 - kUnixEpochTicks) / kTicksPerSecond;
+    auto vec = [](const std::vector<double>& v) {
+      return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(v.data(), v.size()));
+    };
+    for (std::size_t i = 0; i < c.fields.size(); ++i)
+      table.columns.push_back({field_name(c.fields[i]), vec(c.values[i]), "1"});
+    if (any_odometry) {
+      table.columns.push_back({"odom_dx_m", vec(c.dx), "1"});
+      table.columns.push_back({"odom_dy_m", vec(c.dy), "1"});
+      table.columns.push_back({"odom_dphi_rad", vec(c.dphi), "1"});
+      if (any_speed) table.columns.push_back({"odom_speed_mps", vec(c.v), "1"});
+    }
+    c = Collected{};
   }
-  return table;
+  return tables;
+}
+
+}  // namespace
+
+ImuTable import_rawlog(const fs::path& path, const std::string& sensor_label, RawlogStats* stats_out) {
+  RawlogStats stats;
+  auto tables = import_tables(path, sensor_label, &stats);
+  if (stats_out) *stats_out = stats;
+  return std::move(tables.at(choose_label(path, stats.imu_labels, sensor_label)));
+}
+
+std::vector<ImuTable> import_rawlog_sensors(const fs::path& path, RawlogStats* stats) {
+  auto tables = import_tables(path, "", stats);
+  std::vector<ImuTable> out;
+  for (auto& [label, table] : tables) out.push_back(std::move(table));
+  return out;
 }
 
 void export_rawlog(const ImuTable& table, const fs::path& path) {

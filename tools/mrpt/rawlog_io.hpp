@@ -10,7 +10,8 @@
 // deserializer trusts the file, so every reader below first reads the rawlog in a child process
 // whose address space is limited (1 GiB beyond what it holds): a crash inside MRPT or a length
 // field that would allocate gigabytes is a DataError naming the object, not a crash or a
-// runaway allocation of this process (the file is read twice).
+// runaway allocation of this process (so each function below reads the file twice: once there,
+// once here).
 // Files are read through CFileGZInputStream (gzip'ed or plain) and written gzip'ed.
 //
 // CSV columns (SI, unit in the name; DESIGN.md §5): t_s (s since the first IMU observation),
@@ -90,6 +91,9 @@ void write_imu_csv(const ImuTable& table, OutputSet& outputs, const std::filesys
 // receives counts of the whole file.
 ImuTable import_rawlog(const std::filesystem::path& path, const std::string& sensor_label = "",
                        RawlogStats* stats = nullptr);
+// The IMU observations of every sensor label, in label order (the rawlog's stats.imu_labels), from
+// one read of the file (errors as import_rawlog; no label is no table).
+std::vector<ImuTable> import_rawlog_sensors(const std::filesystem::path& path, RawlogStats* stats = nullptr);
 
 // Writes CObservationIMU objects (IMU_WZ rad/s, IMU_TEMPERATURE degC, the other columns present,
 // sensor label, time stamps); with odometry columns, as action/observation pairs (a

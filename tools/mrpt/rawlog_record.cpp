@@ -60,9 +60,11 @@ extern "C" void driftlab_rawlog_read_imu(const std::filesystem::path& path, cons
   using namespace driftlab;
   using namespace driftlab::rawlog;
   const std::string file = path.string();
-  const auto stats = mrpt_bridge::rawlog_stats(path);
+  mrpt_bridge::RawlogStats stats;
+  const auto tables = mrpt_bridge::import_rawlog_sensors(path, &stats);
   const std::string label = chosen_label(path, stats.imu_labels, selection);
-  const auto table = mrpt_bridge::import_rawlog(path, label);
+  const auto& table = *std::find_if(tables.begin(), tables.end(),
+                                    [&](const mrpt_bridge::ImuTable& t) { return t.sensor_label == label; });
   const imu::Selection sel =
       selection.sensor.empty() ? imu::Selection{} : imu::parse_selection(selection.sensor, "--sensor");
 
@@ -104,17 +106,17 @@ extern "C" void driftlab_rawlog_read_imu(const std::filesystem::path& path, cons
 
 extern "C" void driftlab_rawlog_info(const std::filesystem::path& path, driftlab::rawlog::Info* out) {
   using namespace driftlab;
-  const auto stats = mrpt_bridge::rawlog_stats(path);
+  mrpt_bridge::RawlogStats stats;
+  const auto tables = mrpt_bridge::import_rawlog_sensors(path, &stats);
   rawlog::Info info;
   info.format = stats.format;
   info.objects = stats.objects;
   info.imu_observations = stats.imu_observations;
   info.odometry_actions = stats.odometry_actions;
   info.sensory_frames = stats.sensory_frames;
-  for (const auto& label : stats.imu_labels) {
-    const auto table = mrpt_bridge::import_rawlog(path, label);
+  for (const auto& table : tables) {
     rawlog::Info::Sensor s;
-    s.label = label;
+    s.label = table.sensor_label;
     s.samples = static_cast<std::size_t>(table.time_s.size());
     s.start_unix_s = table.start_unix_s;
     s.duration_s = table.time_s.size() > 0 ? table.time_s[table.time_s.size() - 1] : 0.0;
