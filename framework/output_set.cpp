@@ -43,9 +43,7 @@ OutputSet::~OutputSet() {
 
 void OutputSet::add_input(const fs::path& input) { inputs_.push_back(input); }
 
-void OutputSet::plan(const fs::path& path, const std::string& option) {
-  if (path.empty()) return;
-  const Location where{path.string(), 0, option};
+void OutputSet::check_output(const fs::path& path, const Location& where) const {
   for (const auto& e : entries_)
     if (same_file(e.path, path))
       throw ConfigError(where, "the same file is also given as " + (e.option.empty() ? e.path.string() : e.option) +
@@ -55,6 +53,14 @@ void OutputSet::plan(const fs::path& path, const std::string& option) {
       throw ConfigError(
           where, "would overwrite the input " + in.string() + "; inputs are never overwritten, choose another path");
   refuse_non_regular(path, where);
+}
+
+void OutputSet::plan(const fs::path& path, const std::string& option) {
+  if (path.empty()) return;
+  const Location where{path.string(), 0, option};
+  check_output(path, where);
+  for (const auto& r : retired_)
+    if (same_file(r, path)) throw ConfigError(where, "is both written and retired by this command");
   if (path.filename().empty() || path.filename() == "." || path.filename() == "..")
     throw ConfigError(where, "expected a file path");
   const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
@@ -130,6 +136,25 @@ void OutputSet::drop(const fs::path& path) {
   entries_.erase(entries_.begin() + (&e - entries_.data()));
 }
 
+void OutputSet::retire(const fs::path& path, const std::string& option) {
+  const Location where{path.string(), 0, option};
+  check_output(path, where);
+  retired_.push_back(path);
+}
+
+void OutputSet::remove_stale_temporaries(const fs::path& path) {
+  const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  const std::string prefix = "." + path.filename().string() + ".tmp-";
+  constexpr std::size_t kSuffix = 6;  // mkstemp's XXXXXX
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    const bool stale = name.rfind(prefix, 0) == 0 && (name.size() == prefix.size() + kSuffix ||
+                                                      name == name.substr(0, prefix.size() + kSuffix) + ".old");
+    if (stale && e.is_regular_file(ec) && !e.is_symlink(ec)) fs::remove(e.path(), ec);
+  }
+}
+
 fs::path OutputSet::stage_path(const fs::path& path) {
   Entry& e = entry(path);
   e.written = true;
@@ -161,6 +186,8 @@ void OutputSet::commit() {
     committed_ = true;
     for (const auto& b : backups)
       if (!b.empty()) std::remove(b.c_str());
+    for (const auto& r : retired_)
+      if (non_regular_kind(r).empty()) std::remove(r.c_str());
     return;
   }
   for (std::size_t i = 0; i < done; ++i) {  // undo: restore or remove what was renamed

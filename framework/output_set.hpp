@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "framework/csv.hpp"
+#include "framework/error.hpp"
 
 namespace driftlab {
 
@@ -61,6 +62,16 @@ class OutputSet {
   // not be drawn); its temporary file is removed.
   void drop(const std::filesystem::path& path);
 
+  // An output of an earlier run that this run replaces with nothing (a file a failed run does not
+  // write): removed by commit(), after every rename, so a committed set leaves exactly its files.
+  // Checked like plan() (never an input, never a node that is not a regular file).
+  void retire(const std::filesystem::path& path, const std::string& option);
+
+  // Removes the hidden temporary files of `path` (".NAME.tmp-XXXXXX" and commit()'s ".old" links)
+  // that a killed run left next to it. Only for outputs one command owns exclusively (a fleet
+  // unit's directory): another run's live temporaries look the same.
+  static void remove_stale_temporaries(const std::filesystem::path& path);
+
   // Renames every staged file into place, all or nothing.
   void commit();
 
@@ -72,10 +83,14 @@ class OutputSet {
     bool written = false;
   };
   Entry& entry(const std::filesystem::path& path);
+  // ConfigError when `path` is already an output of this set, an input, or exists as something other
+  // than a regular file.
+  void check_output(const std::filesystem::path& path, const Location& where) const;
   void discard() noexcept;
 
   std::vector<std::filesystem::path> inputs_;
   std::vector<Entry> entries_;
+  std::vector<std::filesystem::path> retired_;
   std::vector<std::filesystem::path> created_dirs_;  // by make_directory(), outermost first
   bool committed_ = false;
 };

@@ -9,9 +9,12 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "framework/error.hpp"
 
@@ -210,6 +213,49 @@ TEST(OutputSet, AFailedRenameRestoresTheOutputsAlreadyCommitted) {
   EXPECT_EQ(text_of(dir / "a.txt"), "earlier a\n");
   EXPECT_TRUE(fs::is_directory(dir / "b.txt"));
   EXPECT_EQ(files_in(dir), 1u);
+}
+
+TEST(OutputSet, ARetiredOutputIsRemovedByTheCommitAndOnlyThen) {
+  const auto dir = fresh_dir("retire");
+  std::ofstream(dir / "model.json") << "earlier model\n";
+  std::ofstream(dir / "status.json") << "earlier status\n";
+  {
+    OutputSet outputs;
+    outputs.retire(dir / "model.json", "model.json");
+    outputs.retire(dir / "never_written.json", "never_written.json");  // nothing there: nothing to do
+    outputs.plan(dir / "status.json", "status.json");
+    outputs.write(dir / "status.json", "failed\n");
+  }  // not committed: the earlier files stay as they were
+  EXPECT_EQ(text_of(dir / "model.json"), "earlier model\n");
+  EXPECT_EQ(text_of(dir / "status.json"), "earlier status\n");
+  OutputSet outputs({dir / "input.csv"});
+  outputs.retire(dir / "model.json", "model.json");
+  outputs.plan(dir / "status.json", "status.json");
+  outputs.write(dir / "status.json", "failed\n");
+  outputs.commit();
+  EXPECT_FALSE(fs::exists(dir / "model.json"));
+  EXPECT_EQ(text_of(dir / "status.json"), "failed\n");
+  EXPECT_EQ(files_in(dir), 1u);
+  // Checked as an output is: never an input, never a node, never also written.
+  OutputSet checks({dir / "input.csv"});
+  EXPECT_THROW(checks.retire(dir / "input.csv", "model.json"), ConfigError);
+  fs::create_directories(dir / "folder");
+  EXPECT_THROW(checks.retire(dir / "folder", "model.json"), ConfigError);
+  checks.retire(dir / "status.json", "status.json");
+  EXPECT_THROW(checks.plan(dir / "status.json", "status.json"), ConfigError);
+}
+
+TEST(OutputSet, StaleTemporariesOfAKilledRunAreRemovedAndNothingElse) {
+  const auto dir = fresh_dir("stale");
+  for (const char* name : {".model.json.tmp-a1B2c3", ".model.json.tmp-a1B2c3.old", "model.json", ".model.json.tmp-",
+                           ".model.json.tmp-toolong1", ".status.json.tmp-a1B2c3", "notes.txt"})
+    std::ofstream(dir / name) << "x";
+  OutputSet::remove_stale_temporaries(dir / "model.json");
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
+  std::sort(left.begin(), left.end());
+  EXPECT_EQ(left, (std::vector<std::string>{".model.json.tmp-", ".model.json.tmp-toolong1", ".status.json.tmp-a1B2c3",
+                                            "model.json", "notes.txt"}));
 }
 
 }  // namespace

@@ -115,6 +115,30 @@ TEST_F(FleetCli, TheTruncatedLogIsARecordedFailureAndTheBatchCompletes) {
   EXPECT_TRUE(fs::exists(kDir / "w1" / "report.html"));
 }
 
+TEST_F(FleetCli, AUnitThatPassedAndThenFailsKeepsNoModelAndNoStaleTemporary) {
+  const fs::path work = kDir / "refail", out = work / "out";
+  fs::create_directories(work);
+  std::string normal;
+  const auto key = read_json(kSim / "key.json");
+  for (const auto& u : key["units"])
+    if (normal.empty() && u["fault"].is_null()) normal = u["data"];
+  fs::copy_file(kSim / normal, work / "unit.csv", fs::copy_options::overwrite_existing);
+  std::ofstream(work / "manifest.csv") << "unit,data\nu1,unit.csv\n";
+  ASSERT_EQ(run_fleet(out, 1, work / "manifest.csv").exit_code, 0);
+  const fs::path unit = out / "units" / "u1";
+  ASSERT_TRUE(fs::exists(unit / "model.json"));
+  // A killed run's hidden temporary, and a log that no longer reads (other inputs: the unit reruns).
+  std::ofstream(unit / ".model.json.tmp-Ab12Cd") << "half a model";
+  const std::string text = read_text(work / "unit.csv");
+  std::ofstream(work / "unit.csv", std::ios::trunc) << text.substr(0, text.find('\n') + 1) << "1,2\n";
+  const auto r = run_fleet(out, 1, work / "manifest.csv");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(read_json(unit / "status.json")["status"], "failed");
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(unit)) left.push_back(e.path().filename().string());
+  EXPECT_EQ(left, std::vector<std::string>{"status.json"});
+}
+
 TEST_F(FleetCli, OneAndTwoWorkersWriteIdenticalUnitFoldersAndReports) {
   EXPECT_EQ(two_->exit_code, one_->exit_code) << two_->err;
   std::size_t files = 0;

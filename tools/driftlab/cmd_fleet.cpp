@@ -22,6 +22,7 @@
 #include "framework/error.hpp"
 #include "framework/output_set.hpp"
 #include "framework/parallel.hpp"
+#include "framework/regular_file.hpp"
 #include "models/calibration/exports.hpp"
 #include "framework/time_series.hpp"
 #include "framework/units.hpp"
@@ -348,8 +349,10 @@ nlohmann::json discrepancy_check(const ChannelRecords& ch, const Registry& regis
 std::string run_unit(const ManifestUnit& u, const FleetOptions& o, const fs::path& dir) {
   const std::string hash = input_hash(u, o);
   if (recorded_hash(dir / "status.json") == hash) return u.id + ": skipped (finished with the same inputs and options)";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  // The unit is unfinished while it runs: an earlier status (other inputs or options) goes now, so
+  // neither a rerun nor the report can take it for this run's.
+  std::error_code stale;
+  if (non_regular_kind(dir / "status.json").empty()) fs::remove(dir / "status.json", stale);
   nlohmann::json status = {{"format", "driftlab-fleet-unit/2"}, {"unit", u.id}, {"input_hash", hash}, {"data", u.data}};
   calibration::ImuCalibration model;
   std::vector<calibration::ExportResult> exports;
@@ -428,16 +431,26 @@ std::string run_unit(const ManifestUnit& u, const FleetOptions& o, const fs::pat
     for (const auto& n : e.notes) notes.push_back(n);
   status["export_notes"] = notes;
 
+  // The unit's folder holds exactly these files of its last run (a failed run retires an earlier
+  // model and exports); a killed run's hidden temporaries are cleared first (the folder is the
+  // unit's alone).
   OutputSet files({u.data.begin(), u.data.end()});
+  files.make_directory(dir, "--out");
   const bool passed = status["status"] == "passed";
-  if (passed) {
-    files.plan(dir / "model.json", "model.json");
-    files.plan(dir / "px4.params", "px4.params");
-    files.plan(dir / "ardupilot.params", "ardupilot.params");
-    files.write(dir / "model.json", calibration::to_json_text(model));
-    files.write(dir / "px4.params", exports[0].text);
-    files.write(dir / "ardupilot.params", exports[1].text);
+  const std::pair<const char*, std::string> products[] = {
+      {"model.json", passed ? calibration::to_json_text(model) : ""},
+      {"px4.params", passed ? exports[0].text : ""},
+      {"ardupilot.params", passed ? exports[1].text : ""}};
+  for (const auto& [name, text] : products) {
+    OutputSet::remove_stale_temporaries(dir / name);
+    if (!passed) {
+      files.retire(dir / name, name);
+      continue;
+    }
+    files.plan(dir / name, name);
+    files.write(dir / name, text);
   }
+  OutputSet::remove_stale_temporaries(dir / "status.json");
   files.plan(dir / "status.json", "status.json");  // last: a unit is finished once it is in place
   files.write(dir / "status.json", status.dump(2) + "\n");
   files.commit();
