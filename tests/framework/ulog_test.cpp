@@ -468,7 +468,9 @@ struct FifoLog {
 // 10 ms before the first FIFO sample to after the last, carrying their temperatures.
 FifoLog fifo_log(bool with_sensor_gyro) {
   Writer w;
-  w.flag_bits().format(testing_ulog::kSensorGyroFifoFormat).add(0, 1, "sensor_gyro_fifo").add(1, 2, "sensor_gyro_fifo");
+  w.flag_bits().format(testing_ulog::kSensorGyroFifoFormat).format(testing_ulog::kSensorGyroFormat);
+  w.add(0, 1, "sensor_gyro_fifo").add(1, 2, "sensor_gyro_fifo");
+  if (with_sensor_gyro) w.add(0, 3, "sensor_gyro").add(1, 4, "sensor_gyro");
   FifoLog out;
   const int sizes[] = {1, 4, 7, 32, 13, 2, 9};
   std::uint64_t end_us = 0;
@@ -500,7 +502,6 @@ FifoLog fifo_log(bool with_sensor_gyro) {
     end_us = std::max(end_us, static_cast<std::uint64_t>(last));
   }
   if (with_sensor_gyro) {
-    w.format(testing_ulog::kSensorGyroFormat).add(0, 3, "sensor_gyro").add(1, 4, "sensor_gyro");
     for (std::uint64_t t = 1000000 - 3875 - 10000; t < end_us + 8000; t += 8000)
       for (int k = 0; k < 2; ++k)  // multi_id 0 is FIFO instance 1's device, multi_id 1 instance 0's
         w.data(static_cast<std::uint16_t>(4 - k),

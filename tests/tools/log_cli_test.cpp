@@ -164,7 +164,8 @@ TEST_F(LogCli, BadLogsExitWithThreeNamingFileAndOffset) {
 constexpr float kFifoScale = 1.0f / 1024.0f;  // rad/s per count, exact in float and in decimal CSV
 std::string gyro_fifos() {
   Writer w;
-  w.flag_bits().format(testing_ulog::kSensorGyroFifoFormat).add(0, 1, "sensor_gyro_fifo").add(1, 2, "sensor_gyro_fifo");
+  w.flag_bits().format(testing_ulog::kSensorGyroFifoFormat).format(testing_ulog::kSensorGyroFormat);
+  w.add(0, 1, "sensor_gyro_fifo").add(1, 2, "sensor_gyro_fifo").add(0, 3, "sensor_gyro").add(1, 4, "sensor_gyro");
   for (int m = 0; m < 50; ++m)
     for (int k = 0; k < 2; ++k) {
       testing_ulog::FifoMessage msg;
@@ -175,7 +176,6 @@ std::string gyro_fifos() {
       for (int i = 0; i < 8; ++i) msg.counts.push_back({static_cast<std::int16_t>((8 * m + i) % 11 - 5), 0, 100});
       w.data(static_cast<std::uint16_t>(1 + k), testing_ulog::sensor_fifo(msg));
     }
-  w.format(testing_ulog::kSensorGyroFormat).add(0, 3, "sensor_gyro").add(1, 4, "sensor_gyro");
   for (int j = 0; j <= 6; ++j)
     for (int k = 0; k < 2; ++k) {
       const auto t = static_cast<std::uint64_t>(990000 + 10000 * j);
