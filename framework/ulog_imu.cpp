@@ -133,10 +133,11 @@ void fifo_streams(const Log& log, const std::string& topic, imu::Sensor sensor, 
              at() + ": rotation " + message_number((*rotation)[m]) +
                  ": the samples are in the sensor's own frame (PX4 rotates them by this enum); only rotation 0 "
                  "(none) is read");
-      const auto n = static_cast<std::size_t>(samples[m]);
-      if (n > capacity)
+      if (!(samples[m] >= 0.0 && samples[m] <= static_cast<double>(capacity) && samples[m] == std::floor(samples[m])))
         fail(log, s.source + ".samples",
-             at() + ": " + std::to_string(n) + " samples; the format's arrays hold " + std::to_string(capacity));
+             at() + ": samples " + message_number(samples[m]) + "; expected a whole number up to " +
+                 std::to_string(capacity) + ", the format's array length");
+      const auto n = static_cast<std::size_t>(samples[m]);
       if (n == 0) continue;
       if (!(std::isfinite(dt_us[m]) && dt_us[m] > 0.0))
         fail(log, s.source + ".dt", at() + ": dt " + message_number(dt_us[m]) + " us; expected a finite interval > 0");

@@ -658,6 +658,9 @@ TEST(UlogFifo, BadMessagesAreDataErrorsNamingFileTopicInstanceAndMessage) {
   const std::string rotation_format =  // samples in the sensor's frame, and its rotation
       "sensor_gyro_fifo:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float dt;float scale;"
       "int16_t[32] x;int16_t[32] y;int16_t[32] z;uint8_t samples;uint8_t rotation;";
+  const std::string signed_samples_format =  // a count that can be negative
+      "sensor_gyro_fifo:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float dt;float scale;"
+      "int16_t[32] x;int16_t[32] y;int16_t[32] z;int8_t samples;";
   struct Case {
     std::string name, format;
     std::function<void(testing_ulog::FifoMessage&)> spoil;
@@ -672,9 +675,13 @@ TEST(UlogFifo, BadMessagesAreDataErrorsNamingFileTopicInstanceAndMessage) {
        "sensor_gyro_fifo[1].scale: sensor_gyro_fifo multi_id 1 message 1: scale 0; expected a finite value > 0"},
       {"scale inf", testing_ulog::kSensorGyroFifoFormat, [](auto& m) { m.scale = INFINITY; }, "message 1: scale inf"},
       {"33 samples", testing_ulog::kSensorGyroFifoFormat, [](auto& m) { m.samples = 33; },
-       "sensor_gyro_fifo[1].samples: sensor_gyro_fifo multi_id 1 message 1: 33 samples; the format's arrays hold 32"},
+       "sensor_gyro_fifo[1].samples: sensor_gyro_fifo multi_id 1 message 1: samples 33; expected a whole number up "
+       "to 32, the format's array length"},
       {"21 of 20", old_format_20, [](auto& m) { m.samples = 21; },
-       "message 1: 21 samples; the format's arrays hold 20"},
+       "message 1: samples 21; expected a whole number up to 20"},
+      {"samples -1", signed_samples_format, [](auto& m) { m.samples = 255; },
+       "sensor_gyro_fifo[1].samples: sensor_gyro_fifo multi_id 1 message 1: samples -1; expected a whole number up "
+       "to 32"},
       {"dt under 1 us", testing_ulog::kSensorGyroFifoFormat, [](auto& m) { m.dt_us = 0.4f; },
        "sensor_gyro_fifo[1].dt: sensor_gyro_fifo multi_id 1 message 1: sample 1 at 1000999 us is not after sample 0 "
        "(dt 0.4 us"},
