@@ -43,11 +43,12 @@
 //                 the time base (the record spans only the time it covers, imu_streams.hpp);
 //                 without one, no temperature channel for the instance and a note says so (the
 //                 `temperature` field of early sensor_accel_fifo formats is not read). Device ids
-//                 from device_id. Errors (DataError naming the file, topic, multi_id and the
-//                 message index, 0-based in log order): dt not finite or <= 0, scale not finite or
-//                 <= 0, a sample count that is not a whole number up to the arrays' length, sample
-//                 times of one message not increasing after rounding (dt below 1 us); messages with
-//                 0 samples add none.
+//                 from device_id. A format without dt, scale or samples (one revision of
+//                 SensorAccelFifo.msg has no scale) is a DataError naming the field. Errors
+//                 (DataError naming the file, topic, multi_id and the message index, 0-based in log
+//                 order): dt not finite or <= 0, scale not finite or <= 0, a sample count that is
+//                 not a whole number up to the arrays' length, sample times of one message not
+//                 increasing after rounding (dt below 1 us); messages with 0 samples add none.
 //
 // Time base, interpolation, the temperature and device id of an instance, and the repairs of time
 // order: framework/imu_streams.hpp (shared by every log reader); the time stamps are

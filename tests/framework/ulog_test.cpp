@@ -714,6 +714,30 @@ TEST(UlogFifo, BadMessagesAreDataErrorsNamingFileTopicInstanceAndMessage) {
   }
 }
 
+// A revision of msg/SensorAccelFifo.msg has no scale: without it the counts cannot be read.
+TEST(UlogFifo, AFormatWithoutScaleIsADataErrorNamingTheField) {
+  Writer w;
+  w.flag_bits()
+      .format(
+          "sensor_accel_fifo:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float dt;"
+          "int16_t[32] x;int16_t[32] y;int16_t[32] z;uint8_t samples;")
+      .add(0, 1, "sensor_accel_fifo");
+  for (int m = 0; m < 2; ++m) {
+    testing_ulog::FifoMessage msg;
+    msg.timestamp_sample = 1000000 + 1000 * static_cast<std::uint64_t>(m);
+    msg.dt_us = 250.f;
+    msg.counts.assign(4, {1, 2, 3});
+    msg.before_samples = "";
+    w.data(1, testing_ulog::sensor_fifo(msg).erase(24, 4));  // the 4 bytes of scale, after dt
+  }
+  ulog::ReadOptions keep;
+  keep.keep_topics = ulog::imu_topics();
+  const auto log = ulog::parse(w.bytes(), "no_scale.ulg", keep);
+  EXPECT_THAT(error_of([&] { ulog::imu_record(log, {}); }),
+              HasSubstr("DataError: no_scale.ulg: sensor_accel_fifo.scale: topic 'sensor_accel_fifo' multi_id 0 has "
+                        "no field 'scale'"));
+}
+
 // --- bad input ------------------------------------------------------------------------------
 
 // Cut at a message boundary, a log is a shorter valid log; cut anywhere else, it is truncated.
