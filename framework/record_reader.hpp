@@ -35,7 +35,7 @@ namespace driftlab {
 
 // What to take from a log (ignored for CSV).
 struct LogSelection {
-  std::string topic;   // "" = the reader's default (ULog: sensor_gyro/sensor_accel, else sensor_combined;
+  std::string topic;   // "" = the reader's default (ULog: ulog_imu.hpp's order, sensor_gyro/sensor_accel first;
                        // DataFlash: IMU; ROS: every Imu topic; rawlog: the only IMU sensor label),
                        // ROS: a comma-separated list (ros_imu.hpp); rawlog: a sensor label
   int instance = -1;   // -1 = every instance; else only this one (ULog multi_id, DataFlash IMU's I,

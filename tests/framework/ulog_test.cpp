@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <regex>
 #include <sstream>
@@ -425,6 +426,316 @@ TEST(UlogStructure, OutOfOrderAndRepeatedTimeStampsAreSortedAndDroppedWithNotes)
   EXPECT_NEAR(record.channel("gyro_x").values[3], 0.003, kFloatTolerance);  // the first of the two at 4000 us
   EXPECT_THAT(notes, ::testing::Contains(HasSubstr("1 samples earlier than the one before; sorted")));
   EXPECT_THAT(notes, ::testing::Contains(HasSubstr("1 repeated time stamps")));
+}
+
+// --- sensor_gyro_fifo / sensor_accel_fifo: simulated, written, recovered ----------------------
+
+constexpr float kGyroScale = static_cast<float>(2000.0 / 32768.0 * M_PI / 180.0);  // rad/s per count, +-2000 deg/s
+// Recovered rate vs the simulated one: counts are rate / scale rounded to the nearest integer, so
+// count * scale is within scale / 2; 1e-12 rad/s covers the double rounding of rate / scale and
+// count * scale (rates below 2 rad/s: relative error 1e-16 each).
+constexpr double kQuantization = kGyroScale / 2.0 + 1e-12;
+// Temperatures (about 30 degC) stored as float32: spacing 2^-19 = 1.9e-6 degC there, so each
+// stored value is within 9.6e-7 of the simulated line, and so is a linear interpolation of two.
+constexpr double kFloatTemperature = 1e-6;
+
+constexpr std::uint32_t kFifoDevice[2] = {2490378, 2424842};
+constexpr float kFifoDt[2] = {312.5f, 125.f};  // us: 3.2 kHz (sample times on half microseconds), 8 kHz
+constexpr int kFifoMessages = 60;
+
+// The simulated rate of a FIFO instance's axis (rad/s) at t_us: a sinusoid plus a slope.
+double fifo_rate(int instance, int axis, double t_us) {
+  const double t = t_us * 1e-6;
+  return (0.4 + 0.1 * axis) * std::sin(2.0 * M_PI * (3.0 + instance) * t + axis) + 0.05 * (axis - 1) * t +
+         0.01 * instance;
+}
+// The simulated die temperature of a FIFO instance's device (degC): 0.5 degC/s from 30 (31).
+double fifo_temperature(int instance, double t_us) { return 30.0 + instance + 0.5 * (t_us - 1e6) * 1e-6; }
+
+struct FifoTruth {
+  std::vector<std::int64_t> time_us;          // the sample times as the reader must round them
+  std::vector<double> exact_us;               // unrounded: timestamp_sample - (N - 1 - i) dt
+  std::vector<std::array<double, 3>> counts;  // the logged counts
+};
+struct FifoLog {
+  std::string bytes;
+  std::array<FifoTruth, 2> truth;
+};
+
+// sensor_gyro_fifo multi_id 0 and 1, 60 messages each of 1 to 32 samples (sampled without gaps:
+// each message's timestamp_sample is the last sample's, rounded to 1 us as a driver stamps it);
+// with `with_sensor_gyro`, sensor_gyro of the same devices under swapped multi_ids, every 8 ms from
+// 10 ms before the first FIFO sample to after the last, carrying their temperatures.
+FifoLog fifo_log(bool with_sensor_gyro) {
+  Writer w;
+  w.flag_bits().format(testing_ulog::kSensorGyroFifoFormat).format(testing_ulog::kSensorGyroFormat);
+  w.add(0, 1, "sensor_gyro_fifo").add(1, 2, "sensor_gyro_fifo");
+  if (with_sensor_gyro) w.add(0, 3, "sensor_gyro").add(1, 4, "sensor_gyro");
+  FifoLog out;
+  const int sizes[] = {1, 4, 7, 32, 13, 2, 9};
+  std::uint64_t end_us = 0;
+  for (int k = 0; k < 2; ++k) {
+    double last = 1000000.0 + 37.0 * k;
+    for (int m = 0; m < kFifoMessages; ++m) {
+      const int n = sizes[(m + 3 * k) % 7];
+      if (m > 0) last = std::round(last + n * static_cast<double>(kFifoDt[k]));
+      testing_ulog::FifoMessage msg;
+      msg.timestamp_sample = static_cast<std::uint64_t>(last);
+      msg.device_id = kFifoDevice[k];
+      msg.dt_us = kFifoDt[k];
+      msg.scale = kGyroScale;
+      for (int i = 0; i < n; ++i) {
+        const double t = last - (n - 1 - i) * static_cast<double>(kFifoDt[k]);
+        std::array<std::int16_t, 3> c{};
+        std::array<double, 3> counts{};
+        for (int a = 0; a < 3; ++a) {
+          c[a] = static_cast<std::int16_t>(std::lround(fifo_rate(k, a, t) / static_cast<double>(kGyroScale)));
+          counts[a] = c[a];
+        }
+        msg.counts.push_back(c);
+        out.truth[k].exact_us.push_back(t);
+        out.truth[k].time_us.push_back(std::llround(t));
+        out.truth[k].counts.push_back(counts);
+      }
+      w.data(static_cast<std::uint16_t>(1 + k), testing_ulog::sensor_fifo(msg));
+    }
+    end_us = std::max(end_us, static_cast<std::uint64_t>(last));
+  }
+  if (with_sensor_gyro) {
+    for (std::uint64_t t = 1000000 - 3875 - 10000; t < end_us + 8000; t += 8000)
+      for (int k = 0; k < 2; ++k)  // multi_id 0 is FIFO instance 1's device, multi_id 1 instance 0's
+        w.data(static_cast<std::uint16_t>(4 - k),
+               testing_ulog::sensor_gyro(t, kFifoDevice[k], 0, 0, 0, static_cast<float>(fifo_temperature(k, t))));
+  }
+  out.bytes = w.bytes();
+  return out;
+}
+
+TEST(UlogFifo, EverySampleIsRecoveredAtItsTimeWithItsValueAndItsDevicesTemperature) {
+  const FifoLog log = fifo_log(true);
+  const auto path = write_temp("fifo.ulg", log.bytes);
+  for (int k = 0; k < 2; ++k) {
+    SCOPED_TRACE(k);
+    const auto& truth = log.truth[k];
+    LogSelection selection;
+    selection.topic = "sensor_gyro_fifo";
+    selection.instance = k;
+    std::vector<std::string> notes;
+    const auto record = ulog::read_imu(path, selection, &notes);
+    const std::string n = k ? "1" : "";
+    ASSERT_EQ(record.size(), static_cast<Eigen::Index>(truth.time_us.size()));
+    EXPECT_EQ(record.channel("gyro" + n + "_x").source, "sensor_gyro_fifo[" + std::to_string(k) + "]");
+    EXPECT_EQ(record.channel("temperature" + n).source, "sensor_gyro[" + std::to_string(1 - k) + "]");
+    EXPECT_EQ(record.device_id(k), std::to_string(kFifoDevice[k]));
+    for (Eigen::Index i = 0; i < record.size(); ++i) {
+      const auto j = static_cast<std::size_t>(i);
+      ASSERT_EQ(record.time()[i], static_cast<double>(truth.time_us[j]) / 1e6) << i;
+      for (int a = 0; a < 3; ++a) {
+        const double value = record.channel("gyro" + n + "_" + "xyz"[a]).values[i];
+        EXPECT_EQ(value, truth.counts[j][a] * static_cast<double>(kGyroScale)) << i << " " << a;
+        EXPECT_NEAR(value, fifo_rate(k, a, truth.exact_us[j]), kQuantization) << i << " " << a;
+      }
+      EXPECT_NEAR(record.channel("temperature" + n).values[i],
+                  fifo_temperature(k, static_cast<double>(truth.time_us[j])), kFloatTemperature)
+          << i;
+    }
+    EXPECT_THAT(notes, ::testing::Not(::testing::Contains(HasSubstr("no temperature"))));
+  }
+}
+
+TEST(UlogFifo, SensorGyroStaysTheDefaultAndTopicPicksTheFifo) {
+  const auto path = write_temp("fifo_default.ulg", fifo_log(true).bytes);
+  const auto plain = ulog::read_imu(path, {});
+  EXPECT_EQ(plain.channel("gyro_x").source, "sensor_gyro[0]");
+  EXPECT_EQ(plain.device_id(0), std::to_string(kFifoDevice[1]));  // sensor_gyro's own multi_id 0
+
+  LogSelection fifo;
+  fifo.topic = "sensor_gyro_fifo";
+  std::vector<std::string> notes;
+  const auto record = ulog::read_imu(path, fifo, &notes);
+  EXPECT_EQ(record.channel("gyro_x").source, "sensor_gyro_fifo[0]");
+  EXPECT_EQ(record.channel("gyro1_z").source, "sensor_gyro_fifo[1]");
+  EXPECT_EQ(record.channel("temperature").source, "sensor_gyro[1]");
+  EXPECT_EQ(record.channel("temperature1").source, "sensor_gyro[0]");
+  EXPECT_EQ(record.device_id(1), std::to_string(kFifoDevice[1]));
+  EXPECT_THAT(notes, ::testing::Contains(HasSubstr("time base: sensor_gyro_fifo multi_id 0; 3 other streams")));
+
+  fifo.topic = "sensor_mag";
+  EXPECT_THAT(error_of([&] { ulog::read_imu(path, fifo); }),
+              AllOf(HasSubstr("ConfigError"), HasSubstr("--topic"), HasSubstr("sensor_gyro_fifo, sensor_accel_fifo")));
+  fifo.topic = "sensor_accel_fifo";
+  EXPECT_THAT(error_of([&] { ulog::read_imu(path, fifo); }),
+              AllOf(HasSubstr("DataError"), HasSubstr("'sensor_accel_fifo' is not in the log"),
+                    HasSubstr("sensor_gyro_fifo[1]")));
+}
+
+TEST(UlogFifo, WithoutSensorGyroTheFifoIsTheDefaultWithoutTemperatureAndANote) {
+  const FifoLog log = fifo_log(false);
+  std::vector<std::string> notes;
+  const auto record = ulog::read_imu(write_temp("fifo_only.ulg", log.bytes), {}, &notes);
+  EXPECT_EQ(record.channel("gyro_x").source, "sensor_gyro_fifo[0]");
+  EXPECT_TRUE(record.has("gyro1_y"));
+  EXPECT_FALSE(record.has("temperature") || record.has("temperature1"));
+  for (int k = 0; k < 2; ++k)
+    EXPECT_THAT(notes,
+                ::testing::Contains(AllOf(HasSubstr("sensor_gyro_fifo multi_id " + std::to_string(k)),
+                                          HasSubstr("device id (" + std::to_string(kFifoDevice[k]) + ")"),
+                                          HasSubstr("no temperature channel for instance " + std::to_string(k)))));
+  // Instance 0 is the time base: its samples as logged, from instance 1's first sample on.
+  const auto& truth = log.truth[0];
+  ASSERT_GT(record.size(), 2);
+  const auto first = static_cast<std::size_t>(
+      std::find(truth.time_us.begin(), truth.time_us.end(), std::llround(record.time()[0] * 1e6)) -
+      truth.time_us.begin());
+  ASSERT_LE(first + static_cast<std::size_t>(record.size()), truth.time_us.size());
+  for (Eigen::Index i = 0; i < record.size(); ++i)
+    EXPECT_EQ(record.time()[i], static_cast<double>(truth.time_us[first + static_cast<std::size_t>(i)]) / 1e6);
+}
+
+// sensor_accel_fifo as msg/SensorAccelFifo.msg defines it (no is_external): read by --topic, and by
+// default from a log with no other IMU topic; count * scale in m/s^2.
+TEST(UlogFifo, SensorAccelFifoWithoutIsExternalIsRead) {
+  constexpr float kAccelScale = static_cast<float>(9.80665 / 2048.0);  // m/s^2 per count, +-16 g
+  Writer w;
+  w.flag_bits().format(testing_ulog::kSensorAccelFifoFormat).add(2, 1, "sensor_accel_fifo");
+  for (int m = 0; m < 3; ++m) {
+    testing_ulog::FifoMessage msg;
+    msg.timestamp_sample = 2000000 + 1000 * static_cast<std::uint64_t>(m);
+    msg.device_id = 7;
+    msg.dt_us = 250.f;
+    msg.scale = kAccelScale;
+    msg.before_samples = "";
+    for (int i = 0; i < 4; ++i)
+      msg.counts.push_back({static_cast<std::int16_t>(m), static_cast<std::int16_t>(-i), 2048});
+    w.data(1, testing_ulog::sensor_fifo(msg));
+  }
+  const auto path = write_temp("accel_fifo.ulg", w.bytes());
+  for (const char* topic : {"", "sensor_accel_fifo"}) {
+    SCOPED_TRACE(topic);
+    LogSelection selection;
+    selection.topic = topic;
+    std::vector<std::string> notes;
+    const auto record = ulog::read_imu(path, selection, &notes);
+    ASSERT_EQ(record.size(), 12);
+    EXPECT_EQ(record.time()[0], 1.99925);  // 2000000 - 3 * 250 us
+    EXPECT_EQ(record.time()[11], 2.002);
+    EXPECT_EQ(record.channel("accel2_x").values[4], 1.0 * static_cast<double>(kAccelScale));
+    EXPECT_EQ(record.channel("accel2_y").values[7], -3.0 * static_cast<double>(kAccelScale));
+    EXPECT_EQ(record.channel("accel2_z").values[0], 2048.0 * static_cast<double>(kAccelScale));
+    EXPECT_EQ(record.device_id(2), "7");
+    EXPECT_THAT(notes, ::testing::Contains(HasSubstr("no temperature channel for instance 2")));
+  }
+}
+
+TEST(UlogFifo, OutOfOrderAndRepeatedMessagesAreSortedAndDroppedWithNotes) {
+  Writer w;
+  w.flag_bits().format(testing_ulog::kSensorGyroFifoFormat).add(0, 1, "sensor_gyro_fifo");
+  for (const std::uint64_t last : {1000000, 1001000, 1000500, 1001000}) {
+    testing_ulog::FifoMessage msg;
+    msg.timestamp_sample = last;
+    msg.device_id = 1;
+    msg.dt_us = 125.f;
+    msg.scale = kGyroScale;
+    for (int i = 0; i < 4; ++i) msg.counts.push_back({static_cast<std::int16_t>(last / 100 + i), 0, 0});
+    w.data(1, testing_ulog::sensor_fifo(msg));
+  }
+  std::vector<std::string> notes;
+  const auto record = ulog::read_imu(write_temp("fifo_unordered.ulg", w.bytes()), {}, &notes);
+  ASSERT_EQ(record.size(), 12);
+  for (Eigen::Index i = 0; i < record.size(); ++i)
+    EXPECT_EQ(record.time()[i], (999625.0 + 125.0 * static_cast<double>(i)) / 1e6) << i;
+  EXPECT_EQ(record.channel("gyro_x").values[4], 10005 * static_cast<double>(kGyroScale));  // logged third
+  EXPECT_THAT(notes,
+              ::testing::Contains(HasSubstr("sensor_gyro_fifo multi_id 0: 1 samples earlier than the one before")));
+  EXPECT_THAT(notes, ::testing::Contains(HasSubstr("sensor_gyro_fifo multi_id 0: 4 repeated time stamps")));
+}
+
+// Message 1 of sensor_gyro_fifo multi_id 1 spoiled one way at a time.
+TEST(UlogFifo, BadMessagesAreDataErrorsNamingFileTopicInstanceAndMessage) {
+  const std::string old_format_20 =  // early PX4: arrays of 20
+      "sensor_gyro_fifo:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float dt;float scale;"
+      "int16_t[20] x;int16_t[20] y;int16_t[20] z;uint8_t samples;";
+  const std::string rotation_format =  // samples in the sensor's frame, and its rotation
+      "sensor_gyro_fifo:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float dt;float scale;"
+      "int16_t[32] x;int16_t[32] y;int16_t[32] z;uint8_t samples;uint8_t rotation;";
+  const std::string signed_samples_format =  // a count that can be negative
+      "sensor_gyro_fifo:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float dt;float scale;"
+      "int16_t[32] x;int16_t[32] y;int16_t[32] z;int8_t samples;";
+  struct Case {
+    std::string name, format;
+    std::function<void(testing_ulog::FifoMessage&)> spoil;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {"dt 0", testing_ulog::kSensorGyroFifoFormat, [](auto& m) { m.dt_us = 0.f; },
+       "sensor_gyro_fifo[1].dt: sensor_gyro_fifo multi_id 1 message 1: dt 0 us; expected a finite interval > 0"},
+      {"dt negative", testing_ulog::kSensorGyroFifoFormat, [](auto& m) { m.dt_us = -125.f; }, "message 1: dt -125 us"},
+      {"dt nan", testing_ulog::kSensorGyroFifoFormat, [](auto& m) { m.dt_us = std::nanf(""); }, "message 1: dt nan us"},
+      {"scale 0", testing_ulog::kSensorGyroFifoFormat, [](auto& m) { m.scale = 0.f; },
+       "sensor_gyro_fifo[1].scale: sensor_gyro_fifo multi_id 1 message 1: scale 0; expected a finite value > 0"},
+      {"scale inf", testing_ulog::kSensorGyroFifoFormat, [](auto& m) { m.scale = INFINITY; }, "message 1: scale inf"},
+      {"33 samples", testing_ulog::kSensorGyroFifoFormat, [](auto& m) { m.samples = 33; },
+       "sensor_gyro_fifo[1].samples: sensor_gyro_fifo multi_id 1 message 1: samples 33; expected a whole number up "
+       "to 32, the format's array length"},
+      {"21 of 20", old_format_20, [](auto& m) { m.samples = 21; },
+       "message 1: samples 21; expected a whole number up to 20"},
+      {"samples -1", signed_samples_format, [](auto& m) { m.samples = 255; },
+       "sensor_gyro_fifo[1].samples: sensor_gyro_fifo multi_id 1 message 1: samples -1; expected a whole number up "
+       "to 32"},
+      {"dt under 1 us", testing_ulog::kSensorGyroFifoFormat, [](auto& m) { m.dt_us = 0.4f; },
+       "sensor_gyro_fifo[1].dt: sensor_gyro_fifo multi_id 1 message 1: sample 1 at 1000999 us is not after sample 0 "
+       "(dt 0.4 us"},
+      {"rotation", rotation_format, [](auto& m) { m.after_samples = "\x04"; },
+       "sensor_gyro_fifo[1].rotation: sensor_gyro_fifo multi_id 1 message 1: rotation 4: the samples are in the "
+       "sensor's own frame"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    Writer w;
+    w.flag_bits().format(c.format).add(1, 1, "sensor_gyro_fifo");
+    for (int m = 0; m < 3; ++m) {
+      testing_ulog::FifoMessage msg;
+      msg.timestamp_sample = 1000000 + 1000 * static_cast<std::uint64_t>(m);
+      msg.device_id = 1;
+      msg.dt_us = 125.f;
+      msg.scale = kGyroScale;
+      msg.counts.assign(4, {1, 2, 3});
+      msg.capacity = c.format == old_format_20 ? 20 : 32;
+      msg.before_samples = c.format == testing_ulog::kSensorGyroFifoFormat ? std::string(1, '\0') : "";
+      msg.after_samples = c.format == rotation_format ? std::string(1, '\0') : "";
+      if (m == 1) c.spoil(msg);
+      w.data(1, testing_ulog::sensor_fifo(msg));
+    }
+    ulog::ReadOptions keep;
+    keep.keep_topics = ulog::imu_topics();
+    const auto log = ulog::parse(w.bytes(), "fifo_bad.ulg", keep);
+    EXPECT_THAT(error_of([&] { ulog::imu_record(log, {}); }),
+                AllOf(HasSubstr("DataError: fifo_bad.ulg: "), HasSubstr(c.expected)));
+  }
+}
+
+// A revision of msg/SensorAccelFifo.msg has no scale: without it the counts cannot be read.
+TEST(UlogFifo, AFormatWithoutScaleIsADataErrorNamingTheField) {
+  Writer w;
+  w.flag_bits()
+      .format(
+          "sensor_accel_fifo:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float dt;"
+          "int16_t[32] x;int16_t[32] y;int16_t[32] z;uint8_t samples;")
+      .add(0, 1, "sensor_accel_fifo");
+  for (int m = 0; m < 2; ++m) {
+    testing_ulog::FifoMessage msg;
+    msg.timestamp_sample = 1000000 + 1000 * static_cast<std::uint64_t>(m);
+    msg.dt_us = 250.f;
+    msg.counts.assign(4, {1, 2, 3});
+    msg.before_samples = "";
+    w.data(1, testing_ulog::sensor_fifo(msg).erase(24, 4));  // the 4 bytes of scale, after dt
+  }
+  ulog::ReadOptions keep;
+  keep.keep_topics = ulog::imu_topics();
+  const auto log = ulog::parse(w.bytes(), "no_scale.ulg", keep);
+  EXPECT_THAT(error_of([&] { ulog::imu_record(log, {}); }),
+              HasSubstr("DataError: no_scale.ulg: sensor_accel_fifo.scale: topic 'sensor_accel_fifo' multi_id 0 has "
+                        "no field 'scale'"));
 }
 
 // --- bad input ------------------------------------------------------------------------------

@@ -4,6 +4,7 @@
 // real logs (ulog_test.cpp); these files only exercise structure.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -79,6 +80,37 @@ inline const char* kSensorGyroFormat =
 inline std::string sensor_gyro(std::uint64_t t_us, std::uint32_t device, float x, float y, float z, float temp) {
   return Writer::le(t_us, 8) + Writer::le(t_us, 8) + Writer::le(device, 4) + Writer::f32(x) + Writer::f32(y) +
          Writer::f32(z) + Writer::f32(temp) + Writer::le(0, 4);
+}
+
+// FIFO formats with the fields of PX4's msg/SensorGyroFifo.msg (is_external included) and
+// msg/SensorAccelFifo.msg (without it), ordered by element size as PX4's generated formats are (the
+// reader goes by name, not order), and one message of either.
+inline const char* kSensorGyroFifoFormat =
+    "sensor_gyro_fifo:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float dt;float scale;"
+    "int16_t[32] x;int16_t[32] y;int16_t[32] z;bool is_external;uint8_t samples;uint8_t[2] _padding0;";
+inline const char* kSensorAccelFifoFormat =
+    "sensor_accel_fifo:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float dt;float scale;"
+    "int16_t[32] x;int16_t[32] y;int16_t[32] z;uint8_t samples;uint8_t[3] _padding0;";
+struct FifoMessage {
+  std::uint64_t timestamp_sample = 0;  // us, of the last sample; `timestamp` is 50 us later
+  std::uint32_t device_id = 0;
+  float dt_us = 0.f, scale = 0.f;
+  std::vector<std::array<std::int16_t, 3>> counts;    // x, y, z of each sample, at most `capacity`
+  int samples = -1;                                   // the samples field; -1: counts.size()
+  std::size_t capacity = 32;                          // the format's array length
+  std::string before_samples = std::string(1, '\0');  // the fields between z and samples (is_external)
+  std::string after_samples;                          // and after samples
+};
+// The payload without trailing padding, as PX4 writes it.
+inline std::string sensor_fifo(const FifoMessage& m) {
+  std::string out = Writer::le(m.timestamp_sample + 50, 8) + Writer::le(m.timestamp_sample, 8) +
+                    Writer::le(m.device_id, 4) + Writer::f32(m.dt_us) + Writer::f32(m.scale);
+  for (int a = 0; a < 3; ++a)
+    for (std::size_t i = 0; i < m.capacity; ++i)
+      out += Writer::le(static_cast<std::uint16_t>(i < m.counts.size() ? m.counts[i][a] : 0), 2);
+  out += m.before_samples;
+  out += static_cast<char>(m.samples < 0 ? m.counts.size() : static_cast<std::size_t>(m.samples));
+  return out + m.after_samples;
 }
 
 }  // namespace driftlab::testing_ulog

@@ -1,6 +1,7 @@
 // libFuzzer harness: the PX4 ULog parser (framework/ulog.hpp) and its IMU adapter
 // (framework/ulog_imu.hpp). The first byte picks the options (bit 0: keep every topic's values, else
-// only the IMU topics; bit 1: read instance 0 only; bit 2: gyros only); the rest is the file.
+// only the IMU topics; bit 1: read instance 0 only; bit 2: gyros only; bit 3: --topic
+// sensor_gyro_fifo); the rest is the file.
 // Property oracle on every accepted log: each kept topic has one time stamp and one value per column
 // per message, its columns lie inside its format, and the counts are consistent; on every IMU record:
 // at least 2 samples, time finite and strictly increasing, channels as long as time and finite.
@@ -9,7 +10,10 @@
 // Seed corpus (tests/fuzz/corpus/ulog): pyulog's sample logs cut down to a few kilobytes (header,
 // flag bits, the formats and subscriptions of the IMU topics, their first data messages, an info,
 // parameter, dropout and logged string; one with an appended-data boundary after a cut-off message),
-// each with mode bytes 0 and 1.
+// each with mode bytes 0 and 1; two FIFO logs written for it (a short script, in the layout of
+// tests/framework/ulog_writer.hpp): sensor_gyro_fifo multi_id 0 and 1 with 3, 5 and 8 samples per
+// message, sensor_accel_fifo without is_external; one alone (mode 0), one with sensor_gyro of the
+// same device ids carrying temperatures (mode 8, so the FIFO is read and matched to it).
 #include <cmath>
 #include <cstdint>
 #include <string_view>
@@ -31,6 +35,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   LogSelection selection;
   if (mode & 2) selection.instance = 0;
   if (mode & 4) selection.sensor = "gyro";
+  if (mode & 8) selection.topic = "sensor_gyro_fifo";
   try {
     const ulog::Log log = ulog::parse(bytes, "fuzz.ulg", options);
     for (const auto& t : log.topics) {

@@ -158,6 +158,62 @@ TEST_F(LogCli, BadLogsExitWithThreeNamingFileAndOffset) {
   EXPECT_THAT(csv.err, HasSubstr("not a log driftlab reads"));
 }
 
+// sensor_gyro_fifo multi_id 0 and 1 (devices 11 and 22): 50 messages of 8 samples 125 us apart,
+// one message per ms from 1 s (instance 1 300 us later); x counts (j % 11) - 5 of sample j, y and z
+// 0 and 100. sensor_gyro of the same devices every 10 ms carries 30 (31) degC + 0.5 degC/s.
+constexpr float kFifoScale = 1.0f / 1024.0f;  // rad/s per count, exact in float and in decimal CSV
+std::string gyro_fifos() {
+  Writer w;
+  w.flag_bits().format(testing_ulog::kSensorGyroFifoFormat).format(testing_ulog::kSensorGyroFormat);
+  w.add(0, 1, "sensor_gyro_fifo").add(1, 2, "sensor_gyro_fifo").add(0, 3, "sensor_gyro").add(1, 4, "sensor_gyro");
+  for (int m = 0; m < 50; ++m)
+    for (int k = 0; k < 2; ++k) {
+      testing_ulog::FifoMessage msg;
+      msg.timestamp_sample = static_cast<std::uint64_t>(1000000 + 1000 * m + 300 * k);
+      msg.device_id = k == 0 ? 11 : 22;
+      msg.dt_us = 125.f;
+      msg.scale = kFifoScale;
+      for (int i = 0; i < 8; ++i) msg.counts.push_back({static_cast<std::int16_t>((8 * m + i) % 11 - 5), 0, 100});
+      w.data(static_cast<std::uint16_t>(1 + k), testing_ulog::sensor_fifo(msg));
+    }
+  for (int j = 0; j <= 6; ++j)
+    for (int k = 0; k < 2; ++k) {
+      const auto t = static_cast<std::uint64_t>(990000 + 10000 * j);
+      w.data(static_cast<std::uint16_t>(3 + k),
+             testing_ulog::sensor_gyro(t, k == 0 ? 11 : 22, 0, 0, 0, 30.f + k + 0.005f * static_cast<float>(j)));
+    }
+  return w.bytes();
+}
+
+TEST_F(LogCli, InfoAndExportOfTheFifoTopics) {
+  write(dir_ / "fifo.ulg", gyro_fifos());
+  const auto info = run_driftlab("log info " + p("fifo.ulg"));
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_THAT(info.out, AllOf(HasSubstr("sensor_gyro_fifo"), HasSubstr("instance 1:"),
+                              HasSubstr("gyro FIFO:  device_id 22 (0x16), 50 messages at 1000.0 Hz, 400 samples"),
+                              HasSubstr("gyro:  device_id 22 (0x16), 7 messages at 100.0 Hz, 31.00 to 31.03 degC")));
+
+  const auto r = run_driftlab("log export " + p("fifo.ulg") + " --topic sensor_gyro_fifo --out " + p("fifo.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("time base: sensor_gyro_fifo multi_id 0"));
+  CsvReadOptions options;
+  options.required_roles = {"gyro_x", "gyro1_x", "temperature", "temperature1"};
+  const auto record = read_csv(p("fifo.csv"), options);
+  // Instance 0's 400 samples from 0.999125 s; the 3 before instance 1's first (0.999425 s) dropped.
+  ASSERT_EQ(record.size(), 400 - 3);
+  for (Eigen::Index i = 0; i < record.size(); ++i) {
+    const int j = static_cast<int>(i) + 3;  // sample j of instance 0: message j / 8, at its stamp - (7 - j % 8) dt
+    EXPECT_EQ(record.time()[i], (1000000.0 + 1000.0 * (j / 8) - 125.0 * (7 - j % 8)) / 1e6) << i;
+    EXPECT_EQ(record.channel("gyro_x").values[i], (j % 11 - 5) * static_cast<double>(kFifoScale)) << i;
+    EXPECT_EQ(record.channel("gyro_z").values[i], 100.0 * static_cast<double>(kFifoScale)) << i;
+  }
+  EXPECT_EQ(record.device_id(0), "11");
+  EXPECT_EQ(record.device_id(1), "22");
+  // 30 degC + 0.5 degC/s, stored as float32 (spacing 1.9e-6 degC near 30: each stored value within
+  // 9.6e-7 of the line, and so their linear interpolation); the CSV's numbers round-trip exactly.
+  EXPECT_NEAR(record.channel("temperature").values[0], 30.0 + 0.5 * (record.time()[0] - 0.99), 1e-6);
+}
+
 TEST(LogCliPyulog, InfoOnEachFixture) {
   if (!fs::exists(pyulog_dir() / "sample.ulg")) GTEST_SKIP() << "no shared data: " << pyulog_dir();
   for (const char* name : {"sample.ulg", "sample_log_small.ulg", "sample_appended_multiple.ulg"}) {

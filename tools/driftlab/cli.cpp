@@ -87,12 +87,14 @@ void add_record_read_options(CLI::App* command, RecordReadOptions& read, const s
 }
 
 void add_log_selection_options(CLI::App* command, LogSelection& selection) {
-  command->add_option("--topic", selection.topic,
-                      "log topic to read the IMU from. ULog: sensor_gyro, sensor_accel or sensor_combined (default: "
-                      "sensor_gyro + sensor_accel when the log has them, else sensor_combined). DataFlash: IMU. Bags: "
-                      "comma-separated sensor_msgs/Imu topics (instances 0, 1, ... in this order) and temperature "
-                      "topics paired with them (default: every Imu topic, by name, with the temperature topics of "
-                      "their namespaces). Rawlog: a CObservationIMU sensor label (default: the only one)");
+  command->add_option(
+      "--topic", selection.topic,
+      "log topic to read the IMU from. ULog: sensor_gyro, sensor_accel, sensor_gyro_fifo, sensor_accel_fifo, "
+      "vehicle_imu or sensor_combined (default: sensor_gyro + sensor_accel when the log has them, else the two FIFO "
+      "topics, else vehicle_imu, else sensor_combined). DataFlash: IMU. Bags: comma-separated sensor_msgs/Imu topics "
+      "(instances 0, 1, ... in this order) and temperature topics paired with them (default: every Imu topic, by "
+      "name, with the temperature topics of their namespaces). Rawlog: a CObservationIMU sensor label (default: the "
+      "only one)");
   command
       ->add_option("--instance", selection.instance,
                    "log IMU instance (PX4 multi_id, ArduPilot IMU's I; bags: Imu topic number) to read; its gyro is "

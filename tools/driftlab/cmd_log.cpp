@@ -13,6 +13,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <numeric>
 
 #include "framework/dataflash.hpp"
 #include "framework/dataflash_imu.hpp"
@@ -72,12 +73,17 @@ std::string span(const std::vector<double>& values, int digits, const char* unit
   return fixed(*lo, digits) + " to " + fixed(*hi, digits) + " " + unit;
 }
 
-// "device_id 2424842 (0x25000a), 6 messages at 1.0 Hz, 40.03 to 40.36 degC"
+// "device_id 2424842 (0x25000a), 6 messages at 1.0 Hz, 40.03 to 40.36 degC"; a FIFO topic's
+// samples after its messages: "50 messages at 125.0 Hz, 400 samples".
 std::string imu_line(const ulog::Topic& t) {
   std::string out;
   if (t.has_column("device_id") && !t.column("device_id").empty())
     out += "device_id " + device_text(t.column("device_id").front()) + ", ";
   out += std::to_string(t.count) + " messages at " + fixed(rate_hz(t), 1) + " Hz";
+  if (t.name.ends_with("_fifo") && t.has_column("samples")) {
+    const auto& samples = t.column("samples");
+    out += ", " + fixed(std::accumulate(samples.begin(), samples.end(), 0.0), 0) + " samples";
+  }
   if (t.has_column("temperature") && !t.column("temperature").empty())
     out += ", " + span(t.column("temperature"), 2, "degC");
   return out;
@@ -141,22 +147,24 @@ void ulog_info(const std::string& path) {
     std::cout << row;
   }
 
-  const auto gyros = log.instances("sensor_gyro"), accels = log.instances("sensor_accel");
-  if (!gyros.empty() || !accels.empty()) {
-    std::cout << "IMU instances (sensor_gyro / sensor_accel, temperature in degC):\n";
+  const char* imu_topics[] = {"sensor_gyro", "sensor_accel", "sensor_gyro_fifo", "sensor_accel_fifo"};
+  const char* imu_labels[] = {"gyro:  ", "accel: ", "gyro FIFO:  ", "accel FIFO: "};
+  if (std::any_of(std::begin(imu_topics), std::end(imu_topics),
+                  [&](const char* t) { return !log.instances(t).empty(); })) {
+    std::cout << "IMU instances (sensor_gyro / sensor_accel and their FIFO topics, temperature in degC):\n";
     for (int instance = 0; instance <= imu::kMaxInstance; ++instance) {
-      const auto* g = log.find("sensor_gyro", instance);
-      const auto* a = log.find("sensor_accel", instance);
-      if (!g && !a) continue;
+      const ulog::Topic* topics[4];
+      for (int k = 0; k < 4; ++k) topics[k] = log.find(imu_topics[k], instance);
+      if (std::none_of(std::begin(topics), std::end(topics), [](const auto* t) { return t != nullptr; })) continue;
       std::cout << "  instance " << instance << ":\n";
-      if (g) std::cout << "    gyro:  " << imu_line(*g) << "\n";
-      if (a) std::cout << "    accel: " << imu_line(*a) << "\n";
+      for (int k = 0; k < 4; ++k)
+        if (topics[k]) std::cout << "    " << imu_labels[k] << imu_line(*topics[k]) << "\n";
     }
   } else if (const auto* c = log.find("sensor_combined", 0)) {
     std::cout << "IMU: sensor_combined only (gyro and accelerometer of instance 0, no temperature): " << c->count
               << " messages at " << fixed(rate_hz(*c), 1) << " Hz\n";
   } else {
-    std::cout << "IMU: none of sensor_gyro, sensor_accel, sensor_combined\n";
+    std::cout << "IMU: none of sensor_gyro, sensor_accel, sensor_gyro_fifo, sensor_accel_fifo, sensor_combined\n";
   }
 }
 
