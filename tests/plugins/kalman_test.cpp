@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -10,6 +11,7 @@
 #include "plugins/builtins.hpp"
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
+#include "framework/pipeline.hpp"
 #include "framework/registry.hpp"
 
 namespace driftlab {
@@ -333,6 +335,33 @@ TEST_F(KalmanPlugin, NeedsASampleRateForAllanTerms) {
   auto plugin = make({"noise=from_allan"});
   RunContext ctx;  // no time stamps
   EXPECT_THROW(plugin->filter(Eigen::VectorXd::Zero(10), ctx), DataError);
+}
+
+// The Kalman stage of models/pipelines/li2023.yaml states its noise in physical units (issue 26), so
+// its steady-state bandwidth does not depend on the sample rate: a step given after the filter has
+// settled reaches 1 - 1/e of its height after the same time at 10 Hz and at 100 Hz.
+TEST_F(KalmanPlugin, TheLi2023StageHasTheSameBandwidthAtTenAndAHundredHertz) {
+  const Pipeline li2023 = load_pipeline(std::string(DRIFTLAB_SOURCE_DIR) + "/models/pipelines/li2023.yaml", registry_);
+  const auto stage = std::find_if(li2023.steps.begin(), li2023.steps.end(),
+                                  [](const PipelineStep& s) { return s.plugin == "filter/kalman"; });
+  ASSERT_NE(stage, li2023.steps.end());
+  const auto rise_time_s = [&](double fs) {
+    const double settle_s = 300.0, after_s = 100.0;  // 30 and 10 time constants of the 0.016-Hz filter
+    const auto n = static_cast<Eigen::Index>((settle_s + after_s) * fs);
+    Eigen::VectorXd step = Eigen::VectorXd::Zero(n);
+    const auto at = static_cast<Eigen::Index>(settle_s * fs);
+    step.tail(n - at).setOnes();
+    RunContext ctx;
+    ctx.time_s = Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1) / fs);
+    const Eigen::VectorXd out =
+        registry_.create_as<Filter>(PluginSpec{stage->plugin, stage->params})->filter(step, ctx);
+    Eigen::Index k = at;
+    while (k < n && out[k] < 1.0 - std::exp(-1.0)) ++k;
+    return static_cast<double>(k - at) / fs;
+  };
+  const double at_10_hz = rise_time_s(10.0), at_100_hz = rise_time_s(100.0);
+  EXPECT_NEAR(at_10_hz, 10.0, 0.5);              // 1 / (2 pi 0.016 Hz): the time constant the pipeline states
+  EXPECT_NEAR(at_100_hz / at_10_hz, 1.0, 0.05);  // issue 26: the bandwidths agree within 5 %
 }
 
 }  // namespace

@@ -21,6 +21,8 @@
 namespace driftlab {
 namespace {
 
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
 using testing_cli::read_text;
 using testing_cli::run_driftlab;
 using testing_cli::scratch_dir;
@@ -152,6 +154,27 @@ TEST_F(CalibrateCli, TheKalmanStageSmoothsAndStreamsLikeTheBatch) {
   const auto missing = run_driftlab("compensate --model " + dir_ + "/poly.json --data " + dir_ + "/oven.csv --out " +
                                     dir_ + "/kf2.csv --kalman --kalman-r 1e-6");
   EXPECT_EQ(missing.exit_code, 2) << "no q and no rate-random-walk term in the model: refused";
+}
+
+// The Kalman stage models a static gyro: on a record that moves (a 50-deg/s rate-table step) it would
+// read 0.05 deg/s at the step, so it refuses, naming the line and column; without --kalman the same
+// record compensates.
+TEST_F(CalibrateCli, TheKalmanStageRefusesARecordThatMoves) {
+  {
+    std::ofstream out(dir_ + "/step.csv");
+    out << "t_s,rate_dps,temp_c\n";
+    for (int i = 0; i < 600; ++i) out << 0.1 * i << "," << (i < 300 ? 0.0 : 50.0) + 0.01 * (i % 3) << ",25\n";
+  }
+  const std::string k = " --kalman --kalman-q 1e-14 --kalman-r 1e-6";
+  const auto moving = run_driftlab("compensate --model " + dir_ + "/poly.json --data " + dir_ + "/step.csv --out " +
+                                   dir_ + "/m.csv" + k);
+  EXPECT_EQ(moving.exit_code, 3) << moving.err;
+  EXPECT_THAT(moving.err, HasSubstr(dir_ + "/step.csv:302: rate_dps: the compensated rate jumps by 49.99 deg/s"));
+  EXPECT_THAT(moving.err, HasSubstr("the gyro moves"));
+  EXPECT_FALSE(fs::exists(dir_ + "/m.csv"));
+  const auto plain =
+      run_driftlab("compensate --model " + dir_ + "/poly.json --data " + dir_ + "/step.csv --out " + dir_ + "/m.csv");
+  EXPECT_EQ(plain.exit_code, 0) << plain.err;
 }
 
 TEST_F(CalibrateCli, TheReportScoresEveryModelOnAHeldOutRunOfAnotherProfile) {

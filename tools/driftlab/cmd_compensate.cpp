@@ -2,7 +2,8 @@
 // sample (CausalCompensator per channel), to a file (--data in.csv --out out.csv) or as a pipe
 // (--stream: CSV rows on standard input, compensated rows on standard output, one by one, constant
 // memory: at most one line of --max-line-bytes, 1 MiB by default, is held). Optional causal Kalman
-// stage on the gyro channels (plugins/kalman scalar random-walk filter). Both modes run one row
+// stage on the gyro channels (plugins/kalman scalar random-walk filter) for a static gyro: a
+// compensated rate that jumps away from its estimate (motion) is a DataError. Both modes run one row
 // engine on the one CSV row parser and line rule (framework/csv.hpp: CsvRowParser, CsvLineCursor,
 // CsvLineStream), so they accept the same rows with the same messages and streaming output equals
 // batch output byte for byte; only the gap test (--max-gap), which needs the whole record, is batch's.
@@ -19,6 +20,7 @@
 
 #include <cerrno>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <iostream>
@@ -171,6 +173,7 @@ class Engine {
       double y = w;
       if (k.kalman) {
         if (!k.filter) k.filter.emplace(*k.kalman, w, k.kalman->r);
+        check_static(*k.filter, *k.kalman, w, columns[k.value], line_number);
         y = k.filter->step(w);
       }
       extrapolated = extrapolated || k.compensator.last_extrapolated();
@@ -194,6 +197,28 @@ class Engine {
   }
 
  private:
+  // The Kalman stage models a static gyro (a random walk plus white noise): a compensated rate
+  // further than kMotionSigmas standard deviations of its innovation (prior variance + q + r) from
+  // the filter's estimate is motion, which the filter would smear over its time constant (a 50-deg/s
+  // step read as 0.05 deg/s at the step): a DataError naming the line and column. For Gaussian
+  // noise such a jump has probability ~1e-15 per sample.
+  static constexpr double kMotionSigmas = 8.0;
+  void check_static(const kalman::ScalarFilter& filter, const kalman::ScalarModel& model, double w,
+                    const PlannedColumn& column, int line_number) const {
+    const double innovation = w - filter.state();
+    const double sigma = std::sqrt(filter.variance() + model.q + model.r);
+    if (std::abs(innovation) <= kMotionSigmas * sigma) return;
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "the compensated rate jumps by %.4g %s against the Kalman stage's %.3g %s (1 sigma) ",
+                  difference_from_internal(innovation, column.unit), column.unit.symbol.c_str(),
+                  difference_from_internal(sigma, column.unit), column.unit.symbol.c_str());
+    throw DataError({parser_.file(), line_number, column.mapping.column},
+                    std::string(text) +
+                        "of a static gyro: the gyro moves. --kalman assumes a static gyro and would "
+                        "smear the motion over its time constant; compensate without --kalman");
+  }
+
   // Positions in parser_.columns().
   struct Corrected {
     const calibration::ChannelCalibration* channel;
