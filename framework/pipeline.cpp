@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <regex>
 #include <set>
 
@@ -51,8 +52,9 @@ class Parser {
     }
     for (const auto& kv : root) {
       const auto key = scalar_text(kv.first).value_or("?");
-      if (key != "format" && key != "seed" && key != "inputs" && key != "steps" && key != "outputs" && key != "stages")
-        problem(kv.first, key, "unknown key (expected format, seed, inputs, steps, outputs, stages)");
+      if (key != "format" && key != "seed" && key != "inputs" && key != "steps" && key != "outputs" &&
+          key != "stages" && key != "reference")
+        problem(kv.first, key, "unknown key (expected format, seed, inputs, steps, outputs, stages, reference)");
     }
     const auto format = root["format"];
     if (!format)
@@ -73,6 +75,7 @@ class Parser {
     auto raw = read_steps(root["steps"], p);
     read_outputs(root["outputs"], p);
     read_stages(root["stages"], p);
+    read_reference(root["reference"], p);
     check_references(raw, p);
     order_steps(raw, p);
     finish();
@@ -268,6 +271,60 @@ class Parser {
     }
   }
 
+  void read_reference(const YAML::Node& node, Pipeline& p) {
+    if (!node) return;
+    if (!node.IsMap())
+      return problem(node, "reference", "expected a map with source and rows, got " + yaml_shape(node));
+    PipelineReference ref;
+    for (const auto& kv : node) {
+      const auto key = scalar_text(kv.first).value_or("?");
+      if (key != "source" && key != "rows")
+        problem(kv.first, "reference." + key, "unknown key (expected source, rows)");
+    }
+    const auto source = scalar_text(node["source"]);
+    if (!source || source->empty())
+      problem(node["source"] ? node["source"] : node, "reference.source", "expected the publication and table (text)");
+    else
+      ref.source = *source;
+    const auto rows = node["rows"];
+    if (!rows || !rows.IsMap() || rows.size() == 0)
+      return problem(rows ? rows : node, "reference.rows",
+                     "expected a map of row (original or an output) to {B_deg_h, N_deg_h_rtHz}");
+    for (const auto& kv : rows) {
+      const auto name = scalar_text(kv.first);
+      if (!name || (*name != "original" && !p.outputs.count(*name))) {
+        problem(kv.first, "reference.rows", "row " + yaml_shape(kv.first) + " is neither original nor an output");
+        continue;
+      }
+      const std::string where = "reference.rows." + *name;
+      if (!kv.second.IsMap()) {
+        problem(kv.second, where, "expected {B_deg_h: x, N_deg_h_rtHz: y}, got " + yaml_shape(kv.second));
+        continue;
+      }
+      for (const auto& field : kv.second) {
+        const auto key = scalar_text(field.first).value_or("?");
+        if (key != "B_deg_h" && key != "N_deg_h_rtHz")
+          problem(field.first, where + "." + key, "unknown key (expected B_deg_h, N_deg_h_rtHz)");
+      }
+      PipelineReference::Row row;
+      for (const auto& [field, value] : {std::pair{"B_deg_h", &row.b_deg_h}, {"N_deg_h_rtHz", &row.n_deg_h_rthz}}) {
+        const auto v = kv.second[field];
+        if (!v) {
+          problem(kv.second, where + "." + field, "missing (expected a finite number > 0)");
+          continue;
+        }
+        try {
+          *value = v.as<double>();
+          if (!(std::isfinite(*value) && *value > 0.0)) throw YAML::Exception(YAML::Mark(), "not positive");
+        } catch (const YAML::Exception&) {
+          problem(v, where + "." + field, "expected a finite number > 0");
+        }
+      }
+      ref.rows.emplace(*name, row);
+    }
+    p.reference = std::move(ref);
+  }
+
   // Output names of a step, or empty when the step is unknown.
   std::vector<std::string> outputs_of(const std::vector<RawStep>& raw, const std::string& step) const {
     for (const auto& r : raw)
@@ -420,6 +477,15 @@ std::string effective_pipeline_yaml(const Pipeline& pipeline, const Registry& re
     out << YAML::Key << "stages" << YAML::Value << YAML::BeginMap;
     for (const auto& stage : pipeline.stages) out << YAML::Key << stage.output << YAML::Value << stage.label;
     out << YAML::EndMap;
+  }
+  if (pipeline.reference) {
+    out << YAML::Key << "reference" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "source" << YAML::Value << pipeline.reference->source;
+    out << YAML::Key << "rows" << YAML::Value << YAML::BeginMap;
+    for (const auto& [name, row] : pipeline.reference->rows)
+      out << YAML::Key << name << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "B_deg_h" << YAML::Value
+          << row.b_deg_h << YAML::Key << "N_deg_h_rtHz" << YAML::Value << row.n_deg_h_rthz << YAML::EndMap;
+    out << YAML::EndMap << YAML::EndMap;
   }
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";

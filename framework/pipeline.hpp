@@ -12,6 +12,9 @@
 //       sum: [denoise.signal, compensate.residual]   # built-in: adds signals; output `signal`
 //   outputs: {compensated: reconstruct.signal}
 //   stages: {compensated: "EMD + Kalman"}   # optional: outputs scored as stages, with their labels
+//   reference:                               # optional: published figures shown beside Table 2
+//     source: "Li et al., Micromachines 2023, 14, 971, Table 2"
+//     rows: {original: {B_deg_h: 34.66, N_deg_h_rtHz: 99.608}, compensated: {...}}
 //
 // Ports per plugin kind are listed by ports_of_kind() (plugin.hpp); a port marked `many` takes a
 // list of references whose columns are put side by side. load_pipeline() validates everything
@@ -20,7 +23,9 @@
 // required port, dangling reference, cycle, duplicate step name, steps of a kind that cannot run
 // as a step, a stage that is not an output. Steps run in dependency order (file order among
 // independent steps). Reports (`driftlab run`, Pipeline.run) score the declared stages in file
-// order; without `stages`, every output of one rad/s column is a stage labelled by its name.
+// order; without `stages`, every output of one rad/s column is a stage labelled by its name. A
+// `reference` names the publication whose figures the pipeline reproduces and its B and N per row
+// ("original": the record; otherwise an output); reports show them only for such a pipeline.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -30,6 +35,7 @@
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -57,6 +63,16 @@ struct PipelineStage {
   std::string label;
 };
 
+// Published Allan figures a pipeline reproduces, per Table 2 row.
+struct PipelineReference {
+  struct Row {
+    double b_deg_h = 0.0;       // bias instability B, deg/h
+    double n_deg_h_rthz = 0.0;  // angle random walk N, deg/h/sqrt(Hz)
+  };
+  std::string source;               // the publication and its table
+  std::map<std::string, Row> rows;  // "original" (the record) or an output name
+};
+
 struct Pipeline {
   std::string file;
   std::int64_t seed = 1;
@@ -65,6 +81,7 @@ struct Pipeline {
   std::map<std::string, std::string> outputs;  // output name -> reference
   std::vector<std::string> output_order;       // output names in file order
   std::vector<PipelineStage> stages;           // declared stages in file order; empty: not declared
+  std::optional<PipelineReference> reference;  // published figures, when the pipeline reproduces some
 };
 
 // Parses and validates. Throws ConfigError with every problem found.

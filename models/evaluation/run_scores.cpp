@@ -12,10 +12,6 @@
 namespace driftlab::evaluation {
 namespace {
 
-// Li et al. 2023, Table 2.
-constexpr PaperRow kPaperTable2[] = {
-    {"original", 34.66, 99.608}, {"rbf", 28.42, 99.6037}, {"rbf_ga", 23.65, 99.6011}, {"rbf_ga_kf", 3.589, 0.967814}};
-
 nlohmann::json curve_json(const allan::Analysis& a) {
   nlohmann::json c = nlohmann::json::array();
   for (const auto& e : a.curve)
@@ -55,10 +51,10 @@ std::string number_text(double v, const char* format) {
 
 }  // namespace
 
-const PaperRow* paper_row(const std::string& stage) {
-  for (const auto& r : kPaperTable2)
-    if (stage == r.stage) return &r;
-  return nullptr;
+const PipelineReference::Row* reference_row(const RunScores& s, const std::string& stage) {
+  if (!s.reference) return nullptr;
+  const auto it = s.reference->rows.find(stage);
+  return it == s.reference->rows.end() ? nullptr : &it->second;
 }
 
 std::vector<PipelineStage> rate_stages(const Pipeline& pipeline, const std::map<std::string, Signal>& outputs) {
@@ -81,6 +77,7 @@ std::vector<PipelineStage> rate_stages(const Pipeline& pipeline, const std::map<
 
 RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const std::map<std::string, Signal>& outputs) {
   RunScores s;
+  s.reference = pipeline.reference;
   const double fs = record.sample_rate_hz();
   const Eigen::VectorXd& rate = record.channel(role::kRate).values;
   std::optional<Truth> truth;
@@ -158,7 +155,8 @@ nlohmann::json stage_json(const RunScores& s, const StageScore& st) {
                              {"tau_of_max_s", it->second.tau_of_max_s},
                              {"within_1_5x", it->second.within}};
   }
-  if (const auto* p = paper_row(st.stage)) row["paper"] = {{"B_deg_h", p->b_deg_h}, {"N_deg_h_rtHz", p->n_deg_h_rthz}};
+  if (const auto* p = reference_row(s, st.stage))
+    row["reference"] = {{"B_deg_h", p->b_deg_h}, {"N_deg_h_rtHz", p->n_deg_h_rthz}};
   return row;
 }
 
@@ -173,6 +171,7 @@ nlohmann::json scores_json(const RunScores& s) {
   nlohmann::json j;
   auto& rows = j["table2"] = nlohmann::json::array();
   auto& curves = j["allan"] = nlohmann::json::object();
+  if (s.reference) j["reference"] = {{"source", s.reference->source}};
   for (const auto& st : s.stages) {
     rows.push_back(stage_json(s, st));
     curves[st.stage] = curve_json(st.analysis);
@@ -216,9 +215,20 @@ std::string table2_text(const RunScores& s) {
   out +=
       "Table 2 (B in deg/h, N in deg/h/sqrt(Hz), noise bandwidth in Hz, residual drift in deg/h; B is a value "
       "[68% CI] only where the Allan deviation has a floor, otherwise a bound '< x' within the taus read)\n";
-  std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", "stage", "paper B", "paper N", "B", "N",
-                "bandwidth", "resid. drift");
-  out += line;
+  // The reference's two columns only for a pipeline that has one.
+  const bool ref = s.reference.has_value();
+  const auto row_text = [&](const std::string& stage, const std::string& ref_b, const std::string& ref_n,
+                            const std::string& b, const std::string& n, const std::string& bandwidth,
+                            const std::string& drift) {
+    if (ref)
+      std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", stage.c_str(), ref_b.c_str(),
+                    ref_n.c_str(), b.c_str(), n.c_str(), bandwidth.c_str(), drift.c_str());
+    else
+      std::snprintf(line, sizeof line, "%-16s %20s %12s %10s %14s\n", stage.c_str(), b.c_str(), n.c_str(),
+                    bandwidth.c_str(), drift.c_str());
+    out += line;
+  };
+  row_text("stage", "paper B", "paper N", "B", "N", "bandwidth", "resid. drift");
   const auto cell = [](std::optional<double> v, const char* fmt) {
     char b[32];
     if (!v) return std::string("-");
@@ -226,23 +236,19 @@ std::string table2_text(const RunScores& s) {
     return std::string(b);
   };
   for (const auto& st : s.stages) {
-    const auto* p = paper_row(st.stage);
+    const auto* p = reference_row(s, st.stage);
     const auto& a = st.analysis;
-    const std::string b = b_text(a.bias_instability);
-    std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", st.stage.c_str(),
-                  p ? cell(p->b_deg_h, "%.4g").c_str() : "-", p ? cell(p->n_deg_h_rthz, "%.4g").c_str() : "-",
-                  b.c_str(), cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g").c_str(),
-                  cell(st.bandwidth_hz, "%.3g").c_str(),
-                  st.residual_drift_rad_s ? cell(*st.residual_drift_rad_s * kDphPerRadPerSec, "%.3g").c_str() : "-");
-    out += line;
+    row_text(st.stage, p ? cell(p->b_deg_h, "%.4g") : "-", p ? cell(p->n_deg_h_rthz, "%.4g") : "-",
+             b_text(a.bias_instability), cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g"),
+             cell(st.bandwidth_hz, "%.3g"),
+             st.residual_drift_rad_s ? cell(*st.residual_drift_rad_s * kDphPerRadPerSec, "%.3g") : "-");
   }
   if (s.intrinsic) {
     const auto& a = *s.intrinsic;
-    std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", "intrinsic floor", "-", "-",
-                  b_text(a.bias_instability).c_str(), cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g").c_str(), "-",
-                  "-");
-    out += line;
+    row_text("intrinsic floor", "-", "-", b_text(a.bias_instability), cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g"),
+             "-", "-");
   }
+  if (ref) out += "paper: " + s.reference->source + "\n";
   return out;
 }
 

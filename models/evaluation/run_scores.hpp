@@ -37,8 +37,9 @@ inline constexpr const char* kBaselineStage = "px4_polynomial";
 inline bool is_pipeline_stage(const StageScore& stage) { return stage.source == StageScore::Source::Pipeline; }
 
 struct RunScores {
-  std::vector<StageScore> stages;            // kOriginalStage, the pipeline's stages, kBaselineStage
-  std::optional<allan::Analysis> intrinsic;  // measured - systematic
+  std::vector<StageScore> stages;              // kOriginalStage, the pipeline's stages, kBaselineStage
+  std::optional<PipelineReference> reference;  // the pipeline's published figures, when it has some
+  std::optional<allan::Analysis> intrinsic;    // measured - systematic
   std::optional<Px4Baseline> baseline;
   std::map<std::string, FloorComparison> against_floor;  // per stage, factor 1.5
 };
@@ -63,14 +64,11 @@ nlohmann::json scores_json(const RunScores& scores);
 nlohmann::json stage_json(const RunScores& scores, const StageScore& stage);
 nlohmann::json intrinsic_floor_json(const allan::Analysis& intrinsic);
 
-// Table 2 as text for the terminal, with the paper's rows beside ours.
+// Table 2 as text for the terminal; with the pipeline's reference, its rows beside ours and its
+// source below.
 std::string table2_text(const RunScores& scores);
 
-// Li et al. 2023, Table 2's row for a stage ("original", "rbf", "rbf_ga", "rbf_ga_kf"), or null.
-struct PaperRow {
-  const char* stage;
-  double b_deg_h, n_deg_h_rthz;
-};
-const PaperRow* paper_row(const std::string& stage);
+// The reference's row for a stage, or null (no reference, or none for that stage).
+const PipelineReference::Row* reference_row(const RunScores& scores, const std::string& stage);
 
 }  // namespace driftlab::evaluation

@@ -136,6 +136,45 @@ outputs: {a: s.signal, b: s.signal}
   }
 }
 
+TEST_F(PipelineTest, AReferenceIsReadWithItsRowsWrittenBackAndCheckedAsData) {
+  const std::string head = R"(format: driftlab-pipeline/1
+steps:
+  - {name: s, plugin: filter/test_gain, inputs: {signal: rate}}
+outputs: {a: s.signal}
+)";
+  const auto p = parse_pipeline(head + R"(reference:
+  source: A paper, Table 2
+  rows: {original: {B_deg_h: 34.66, N_deg_h_rtHz: 99.608}, a: {B_deg_h: 3.589, N_deg_h_rtHz: 0.967814}}
+)",
+                                "reference.yaml", registry_);
+  ASSERT_TRUE(p.reference.has_value());
+  EXPECT_EQ(p.reference->source, "A paper, Table 2");
+  ASSERT_EQ(p.reference->rows.size(), 2u);
+  EXPECT_EQ(p.reference->rows.at("original").b_deg_h, 34.66);
+  EXPECT_EQ(p.reference->rows.at("a").n_deg_h_rthz, 0.967814);
+  const std::string effective = effective_pipeline_yaml(p, registry_);
+  const auto again = parse_pipeline(effective, "effective.yaml", registry_);
+  ASSERT_TRUE(again.reference.has_value());
+  EXPECT_EQ(again.reference->rows.at("a").b_deg_h, 3.589);
+  EXPECT_EQ(effective_pipeline_yaml(again, registry_), effective);
+  EXPECT_FALSE(parse_pipeline(head, "none.yaml", registry_).reference.has_value());
+  try {
+    parse_pipeline(head + R"(reference:
+  rows: {z: {B_deg_h: 1, N_deg_h_rtHz: 1}, a: {B_deg_h: -1, N_deg_h_rtHz: 1}, original: {B_deg_h: 1}}
+)",
+                   "bad_reference.yaml", registry_);
+    FAIL() << "a bad reference was accepted";
+  } catch (const ConfigError& e) {
+    // The reference map starts on line 6 (its first key): the missing source is reported there.
+    EXPECT_TRUE(reported(e.problems(), 6, "reference.source", "expected the publication")) << all(e.problems());
+    EXPECT_TRUE(reported(e.problems(), 6, "reference.rows", "row 'z' is neither original nor an output"))
+        << all(e.problems());
+    EXPECT_TRUE(reported(e.problems(), 6, "reference.rows.a.B_deg_h", "expected a finite number > 0"))
+        << all(e.problems());
+    EXPECT_TRUE(reported(e.problems(), 6, "reference.rows.original.N_deg_h_rtHz", "missing")) << all(e.problems());
+  }
+}
+
 TEST_F(PipelineTest, RunsStepsInDependencyOrderAndFillsTheReport) {
   const auto pipeline = load_pipeline(kPipelines / "compensate.yaml", registry_);
   std::vector<std::string> order;

@@ -104,5 +104,36 @@ TEST(RateStages, AreTheDeclaredStagesOrElseEveryOutputOfOneRateColumn) {
   EXPECT_THROW(rate_stages(p, outputs), DataError);
 }
 
+// Table 2 shows published figures only beside a pipeline that names them (its `reference`): the
+// text's two columns and source line, each row's "reference" and the report's "reference" entry.
+TEST(RunScores, ShowTheReferenceColumnsOnlyForAPipelineWithAReference) {
+  const Eigen::Index n = 4000;  // 400 s at 10 Hz
+  TimeSeries record(times(n, 10.0));
+  Eigen::VectorXd rate(n);
+  for (Eigen::Index i = 0; i < n; ++i) rate[i] = 1e-3 * std::sin(1.7 * static_cast<double>(i * i % 97));
+  record.set_channel({role::kRate, "rad/s", "test", rate});
+  const std::map<std::string, Signal> outputs{{"out", Signal::single(0.5 * rate, "signal", "rad/s")}};
+  Pipeline p;
+  p.file = "p.yaml";
+  p.outputs = {{"out", "s.signal"}};
+  p.output_order = {"out"};
+  const RunScores plain = score_run(record, p, outputs);
+  EXPECT_EQ(table2_text(plain).find("paper"), std::string::npos) << table2_text(plain);
+  const auto plain_json = scores_json(plain);
+  EXPECT_FALSE(plain_json.contains("reference"));
+  for (const auto& row : plain_json["table2"]) EXPECT_FALSE(row.contains("reference")) << row["stage"];
+
+  p.reference = PipelineReference{"A paper, Table 2", {{"original", {34.66, 99.608}}, {"out", {3.589, 0.967814}}}};
+  const RunScores referenced = score_run(record, p, outputs);
+  const std::string text = table2_text(referenced);
+  EXPECT_NE(text.find("paper B    paper N"), std::string::npos) << text;
+  EXPECT_NE(text.find("3.589"), std::string::npos) << text;
+  EXPECT_NE(text.find("paper: A paper, Table 2\n"), std::string::npos) << text;
+  const auto json = scores_json(referenced);
+  EXPECT_EQ(json["reference"]["source"], "A paper, Table 2");
+  EXPECT_EQ(json["table2"][1]["stage"], "out");
+  EXPECT_EQ(json["table2"][1]["reference"]["N_deg_h_rtHz"], 0.967814);
+}
+
 }  // namespace
 }  // namespace driftlab::evaluation

@@ -73,6 +73,12 @@ void expect_the_papers_claims_hold(const MainJob& job, const std::string& label)
         << stages[k] << " after " << stages[k - 1];
   }
   EXPECT_FALSE(job.report["intrinsic_floor"]["B_resolved"].get<bool>());
+  // The paper's figures come from the pipeline's `reference` block, beside its rows.
+  EXPECT_EQ(job.report["reference"]["source"], "Li et al., Micromachines 2023, 14, 971, Table 2");
+  EXPECT_EQ(job.rows.at("original")["reference"]["B_deg_h"], 34.66);
+  EXPECT_EQ(job.rows.at("rbf_ga_kf")["reference"]["B_deg_h"], kPaperFinalB);
+  EXPECT_FALSE(job.rows.at("px4_polynomial").contains("reference"));
+  EXPECT_NE(job.html.find("paper B (°/h)"), std::string::npos);
   const auto& final_row = job.rows.at("rbf_ga_kf");
   EXPECT_LE(final_row["B_upper_deg_h"].get<double>(), kPaperFinalB);
 

@@ -159,17 +159,14 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
 
   html.section("Table 2: Allan figures per stage");
   HtmlTable t;
-  t.caption = "The stages of the pipeline beside the paper's Table 2, the intrinsic floor and a PX4-style baseline";
-  t.header = {"stage",
-              "paper B (°/h)",
-              "paper N (°/h/√Hz)",
-              "B (°/h)",
-              "B interval (°/h)",
-              "minimum at tau (s)",
-              "N (°/h/√Hz)",
-              "noise bandwidth (Hz)",
-              "residual drift (°/h)",
-              "max error / floor"};
+  const bool ref = scores.reference.has_value();
+  t.caption = ref ? "The stages of the pipeline beside " + scores.reference->source +
+                        ", the intrinsic floor and a PX4-style baseline"
+                  : std::string("The stages of the pipeline, the intrinsic floor and a PX4-style baseline");
+  t.header = {"stage"};
+  if (ref) t.header.insert(t.header.end(), {"paper B (°/h)", "paper N (°/h/√Hz)"});
+  t.header.insert(t.header.end(), {"B (°/h)", "B interval (°/h)", "minimum at tau (s)", "N (°/h/√Hz)",
+                                   "noise bandwidth (Hz)", "residual drift (°/h)", "max error / floor"});
   // B: a value and its interval where the deviation has a floor, otherwise the bound.
   const auto b_cells = [](const allan::FloorReading& b) -> std::pair<HtmlCell, HtmlCell> {
     if (b.resolved)
@@ -177,17 +174,16 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
     return {"< " + fmt(b.high * kDphPerRadPerSec), "not resolved within tau ≤ " + fmt(b.longest_tau_s, "%.0f") + " s"};
   };
   for (const auto& st : scores.stages) {
-    const auto* p = evaluation::paper_row(st.stage);
+    const auto* p = evaluation::reference_row(scores, st.stage);
     const auto& a = st.analysis;
     const auto [b_value, b_interval] = b_cells(a.bias_instability);
-    std::vector<HtmlCell> row{st.label == st.stage ? st.stage : st.stage + " (" + st.label + ")",
-                              p ? HtmlCell(p->b_deg_h) : HtmlCell(std::string("–")),
-                              p ? HtmlCell(p->n_deg_h_rthz) : HtmlCell(std::string("–")),
-                              b_value,
-                              b_interval,
-                              a.bias_instability.tau_s,
-                              a.arw_rad_sqrt_s * kDphPerRadPerSec,
-                              st.bandwidth_hz};
+    std::vector<HtmlCell> row{st.label == st.stage ? st.stage : st.stage + " (" + st.label + ")"};
+    if (ref) {
+      row.push_back(p ? HtmlCell(p->b_deg_h) : HtmlCell(std::string("–")));
+      row.push_back(p ? HtmlCell(p->n_deg_h_rthz) : HtmlCell(std::string("–")));
+    }
+    row.insert(row.end(),
+               {b_value, b_interval, a.bias_instability.tau_s, a.arw_rad_sqrt_s * kDphPerRadPerSec, st.bandwidth_hz});
     row.push_back(st.residual_drift_rad_s ? HtmlCell(*st.residual_drift_rad_s * kDphPerRadPerSec)
                                           : HtmlCell(std::string("–")));
     const auto it = scores.against_floor.find(st.stage);
@@ -199,9 +195,11 @@ void write_run_html(const std::filesystem::path& path, const std::string& title,
   if (scores.intrinsic) {
     const auto& a = *scores.intrinsic;
     const auto [b_value, b_interval] = b_cells(a.bias_instability);
-    t.rows.push_back({std::string("intrinsic floor"), std::string("–"), std::string("–"), b_value, b_interval,
-                      a.bias_instability.tau_s, a.arw_rad_sqrt_s * kDphPerRadPerSec, record.sample_rate_hz() / 2.0,
-                      std::string("–"), std::string("–")});
+    std::vector<HtmlCell> row{std::string("intrinsic floor")};
+    if (ref) row.insert(row.end(), {std::string("–"), std::string("–")});
+    row.insert(row.end(), {b_value, b_interval, a.bias_instability.tau_s, a.arw_rad_sqrt_s * kDphPerRadPerSec,
+                           record.sample_rate_hz() / 2.0, std::string("–"), std::string("–")});
+    t.rows.push_back(row);
   }
   t.note =
       "B: flat floor of the overlapping Allan deviation / 0.664 (IEEE 952 Annex C), read at tau >= the output's "
