@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace driftlab::testing_cli {
 
@@ -25,11 +26,34 @@ inline std::string read_text(const std::filesystem::path& p) {
   return s.str();
 }
 
-// A fresh, empty scratch directory for one test.
+// The scratch directories of this test process, removed when it exits (a fleet test's is 350 MB;
+// set DRIFTLAB_KEEP_SCRATCH=1 to keep them for a look after a failure). Only the process that made
+// them removes them: a forked child that exits leaves them to its parent.
+class ScratchDirs {
+ public:
+  static ScratchDirs& instance() {
+    static ScratchDirs dirs;
+    return dirs;
+  }
+  void add(const std::filesystem::path& dir) { dirs_.push_back(dir); }
+  ~ScratchDirs() {
+    if (::getpid() != owner_ || std::getenv("DRIFTLAB_KEEP_SCRATCH")) return;
+    std::error_code ignored;
+    for (const auto& dir : dirs_) std::filesystem::remove_all(dir, ignored);
+  }
+
+ private:
+  ScratchDirs() : owner_(::getpid()) {}
+  pid_t owner_;
+  std::vector<std::filesystem::path> dirs_;
+};
+
+// A fresh, empty scratch directory for one test, removed when the test process exits.
 inline std::filesystem::path scratch_dir(const std::string& name) {
   const auto dir = std::filesystem::temp_directory_path() / ("driftlab_cli_" + std::to_string(::getpid()) + "_" + name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  ScratchDirs::instance().add(dir);
   return dir;
 }
 
