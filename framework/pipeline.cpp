@@ -313,12 +313,11 @@ class Parser {
           problem(kv.second, where + "." + field, "missing (expected a finite number > 0)");
           continue;
         }
-        try {
-          *value = v.as<double>();
-          if (!(std::isfinite(*value) && *value > 0.0)) throw YAML::Exception(YAML::Mark(), "not positive");
-        } catch (const YAML::Exception&) {
+        double number = 0.0;
+        if (!YAML::convert<double>::decode(v, number) || !(std::isfinite(number) && number > 0.0))
           problem(v, where + "." + field, "expected a finite number > 0");
-        }
+        else
+          *value = number;
       }
       ref.rows.emplace(*name, row);
     }

@@ -20,6 +20,15 @@ using Stream = imu::SensorStream;
 }
 
 // "sensor_gyro[0], sensor_gyro[1], ..." of the IMU topics in the log.
+// imu_topics() as text: "a, b, ... <last_separator> z".
+std::string imu_topic_names(const std::string& last_separator) {
+  const auto& topics = imu_topics();
+  std::string out;
+  for (std::size_t i = 0; i < topics.size(); ++i)
+    out += (i == 0 ? "" : i + 1 == topics.size() ? last_separator : ", ") + topics[i];
+  return out;
+}
+
 std::string imu_topic_list(const Log& log) {
   std::string out;
   for (const auto& name : imu_topics())
@@ -175,8 +184,10 @@ std::optional<imu::TemperatureStream> device_temperature(const Log& log, const s
   for (const auto* t : log.instances(topic)) {
     if (!t->has_column("temperature")) continue;
     Stream s = topic_stream(*t, fifo.sensor);
-    if (stream_device_id(*t, message_order(log, *t, s, nullptr).message, s.label, nullptr) != fifo.device_id) continue;
-    const imu::SampleOrder raw = message_order(log, *t, s, notes);
+    std::vector<std::string> repairs;  // kept only for the topic that is the FIFO's device
+    const imu::SampleOrder raw = message_order(log, *t, s, &repairs);
+    if (stream_device_id(*t, raw.message, s.label, nullptr) != fifo.device_id) continue;
+    if (notes) notes->insert(notes->end(), repairs.begin(), repairs.end());
     auto values = imu::pick_temperature(log.file, s, t->column("temperature"), raw, notes);
     if (values.empty()) return std::nullopt;
     return imu::TemperatureStream{fifo.instance, s.label + " temperature", s.source, raw.time_us, std::move(values)};
@@ -326,14 +337,10 @@ TimeSeries imu_record(const Log& log, const LogSelection& selection, std::vector
     } else if (log.find("sensor_combined", 0)) {
       topic = "sensor_combined";
     } else {
-      fail(log, "--topic",
-           "no IMU topic in the log (looked for sensor_gyro, sensor_accel, sensor_gyro_fifo, sensor_accel_fifo, "
-           "vehicle_imu, sensor_combined)");
+      fail(log, "--topic", "no IMU topic in the log (looked for " + imu_topic_names(", ") + ")");
     }
   } else if (std::find(imu_topics().begin(), imu_topics().end(), topic) == imu_topics().end()) {
-    throw ConfigError({"", 0, "--topic"}, "'" + topic +
-                                              "': a ULog's IMU is read from sensor_gyro, sensor_accel, "
-                                              "sensor_gyro_fifo, sensor_accel_fifo, vehicle_imu or sensor_combined");
+    throw ConfigError({"", 0, "--topic"}, "'" + topic + "': a ULog's IMU is read from " + imu_topic_names(" or "));
   } else if (log.instances(topic).empty()) {
     fail(log, "--topic", "topic '" + topic + "' is not in the log (IMU topics it has: " + imu_topic_list(log) + ")");
   }
