@@ -25,12 +25,32 @@
 // Cost: workers - 1 thread starts and joins per call (some tens of microseconds), so items should
 // be much larger than that. Items are dealt round-robin, not stolen: items of very unequal cost
 // keep the other workers waiting for the slowest.
+//
+// parallel_graph(deps, threads, body): the same for items that depend on each other (a pipeline's
+// steps). deps[i] lists the items that must finish before item i starts; every one is < i, so the
+// index order is an order a serial loop could run them in.
+//
+// Contract:
+//   - body(i) is called at most once per item, after every item in deps[i] has returned from body.
+//   - At most max(threads, 1) items run at once (the calling thread is one of the workers). When a
+//     worker is free it starts the ready item with the smallest index.
+//   - Exceptions: once an item has failed, no item with a larger index starts (running ones
+//     finish); items with a smaller index still run. After every started item has finished, the
+//     exception of the failed item with the smallest index is rethrown: the one a serial loop would
+//     have thrown, with every item before it run. Items after it may or may not have run.
+//   - Determinism is the caller's part, as for parallel_for: body(i) reads only what its deps
+//     wrote, and writes only its own places.
+//   - threads <= 1 runs the items in index order on the calling thread.
+// Cost: one mutex and condition variable; scheduling costs microseconds per item, so items should
+// be whole steps, not loop bodies.
 #pragma once
 
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
 #include <cstddef>
 #include <exception>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -79,6 +99,68 @@ void parallel_for(std::size_t count, unsigned threads, const Body& body) {
     if (f.error && (!first || f.index < first->index)) first = &f;
   }
   if (first) std::rethrow_exception(first->error);
+}
+
+template <class Body>
+void parallel_graph(const std::vector<std::vector<std::size_t>>& deps, unsigned threads, const Body& body) {
+  const std::size_t count = deps.size();
+  if (threads <= 1 || count <= 1) {
+    for (std::size_t i = 0; i < count; ++i) body(i);
+    return;
+  }
+  std::vector<std::vector<std::size_t>> dependents(count);
+  std::vector<std::size_t> waiting_on(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    waiting_on[i] = deps[i].size();
+    for (std::size_t d : deps[i]) dependents[d].push_back(i);
+  }
+  std::vector<bool> started(count, false);
+  std::vector<std::exception_ptr> errors(count);
+  std::size_t first_failed = count;
+  std::size_t running = 0;
+  std::mutex mutex;
+  std::condition_variable changed;
+  const auto next_ready = [&]() -> std::size_t {  // under the lock; count when none
+    for (std::size_t i = 0; i < first_failed; ++i)
+      if (!started[i] && waiting_on[i] == 0) return i;
+    return count;
+  };
+  const auto work = [&] {
+    std::unique_lock<std::mutex> lock(mutex);
+    for (;;) {
+      std::size_t item = count;
+      changed.wait(lock, [&] { return (item = next_ready()) < count || running == 0; });
+      if (item == count) return;  // nothing ready and nothing running that could make something ready
+      started[item] = true;
+      ++running;
+      lock.unlock();
+      std::exception_ptr error;
+      try {
+        body(item);
+      } catch (...) {
+        error = std::current_exception();
+      }
+      lock.lock();
+      --running;
+      if (error) {
+        errors[item] = error;
+        first_failed = std::min(first_failed, item);
+      } else {
+        for (std::size_t d : dependents[item]) --waiting_on[d];
+      }
+      changed.notify_all();
+    }
+  };
+  const std::size_t workers = std::min<std::size_t>(threads, count);
+  std::vector<std::thread> pool;
+  pool.reserve(workers - 1);
+  try {
+    for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(work);
+  } catch (...) {  // fewer threads than asked: the ones started and this one do the work
+  }
+  work();
+  for (std::thread& t : pool) t.join();
+  if (first_failed < count) std::rethrow_exception(errors[first_failed]);
 }
 
 }  // namespace driftlab

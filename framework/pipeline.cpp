@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 #include <regex>
 #include <set>
 
 #include "framework/error.hpp"
+#include "framework/parallel.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
 #include "framework/regular_file.hpp"
@@ -405,13 +407,6 @@ class Parser {
   std::vector<std::pair<std::string, int>> output_refs_;
 };
 
-Signal resolve_ref(const std::string& ref, const std::map<std::string, std::map<std::string, Signal>>& produced,
-                   const std::map<std::string, Signal>& inputs) {
-  const auto dot = ref.find('.');
-  if (dot == std::string::npos) return inputs.at(ref);
-  return produced.at(ref.substr(0, dot)).at(ref.substr(dot + 1));
-}
-
 Signal side_by_side(const std::vector<Signal>& parts) {
   if (parts.size() == 1) return parts.front();
   Signal s;
@@ -502,50 +497,87 @@ std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Regis
     const auto& c = record.channel(role);
     inputs[name] = Signal::single(c.values, name, c.unit);
   }
-  report["steps"] = nlohmann::json::array();
-  std::map<std::string, std::map<std::string, Signal>> produced;
-  for (std::size_t i = 0; i < pipeline.steps.size(); ++i) {
+  const std::size_t count = pipeline.steps.size();
+  std::map<std::string, std::size_t> index_of;
+  for (std::size_t i = 0; i < count; ++i) index_of[pipeline.steps[i].name] = i;
+  std::vector<std::vector<std::size_t>> deps(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    for (const auto& [port, refs] : pipeline.steps[i].inputs)
+      for (const auto& ref : refs)
+        if (const auto dot = ref.find('.'); dot != std::string::npos)
+          deps[i].push_back(index_of.at(ref.substr(0, dot)));
+  }
+  std::vector<SignalMap> produced(count);
+  const auto resolve = [&](const std::string& ref) -> const Signal& {
+    const auto dot = ref.find('.');
+    if (dot == std::string::npos) return inputs.at(ref);
+    return produced[index_of.at(ref.substr(0, dot))].at(ref.substr(dot + 1));
+  };
+  std::vector<nlohmann::json> entries(count);
+  std::mutex progress_mutex;
+  const auto run_step = [&](std::size_t i) {
     const auto& step = pipeline.steps[i];
-    nlohmann::json entry{
-        {"name", step.name}, {"plugin", step.plugin.empty() ? "sum" : step.plugin}, {"status", "running"}};
-    report["steps"].push_back(entry);
-    auto& slot = report["steps"].back();
+    auto& entry = entries[i];
+    entry = {{"name", step.name}, {"plugin", step.plugin.empty() ? "sum" : step.plugin}, {"status", "running"}};
     const auto start = std::chrono::steady_clock::now();
     RunContext ctx;
     ctx.threads = options.threads;
     ctx.time_s = record.time();
     ctx.seed = static_cast<std::uint64_t>(derived_seed(pipeline.seed, step.name));
-    if (options.progress) ctx.progress = [&, i](double f) { options.progress(i, pipeline.steps.size(), step.name, f); };
+    if (options.progress)
+      ctx.progress = [&, i](double f) {
+        const std::lock_guard<std::mutex> lock(progress_mutex);
+        options.progress(i, count, step.name, f);
+      };
     std::map<std::string, Signal> port_values;
     for (const auto& [port, refs] : step.inputs) {
       std::vector<Signal> parts;
-      for (const auto& ref : refs) parts.push_back(resolve_ref(ref, produced, inputs));
+      for (const auto& ref : refs) parts.push_back(resolve(ref));
       port_values[port] = side_by_side(parts);
     }
     ctx.progress(0.0);
     try {
       if (step.plugin.empty()) {
         const auto& terms = port_values.at("terms");
-        produced[step.name]["signal"] = Signal::single(terms.sum(), step.name, terms.unit);
+        produced[i]["signal"] = Signal::single(terms.sum(), step.name, terms.unit);
       } else {
         auto plugin = registry.create(step.plugin, step.params);
-        produced[step.name] = plugin->run(port_values, ctx);
+        produced[i] = plugin->run(port_values, ctx);
       }
     } catch (const std::exception& e) {
-      slot["status"] = "failed";
-      slot["error"] = e.what();
-      slot["diagnostics"] = ctx.diagnostics;
+      entry["status"] = "failed";
+      entry["error"] = e.what();
+      entry["diagnostics"] = ctx.diagnostics;
       throw;
     }
     ctx.progress(1.0);
-    if (options.step_signals != nullptr)
-      for (const auto& [port, signal] : produced[step.name]) (*options.step_signals)[step.name + "." + port] = signal;
-    slot["status"] = "ok";
-    slot["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    slot["diagnostics"] = ctx.diagnostics;
+    entry["status"] = "ok";
+    entry["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    entry["diagnostics"] = ctx.diagnostics;
+  };
+  // The report lists the steps a serial run would have reached: all of them, or those up to and
+  // including the first failed one.
+  const auto fill_report = [&] {
+    report["steps"] = nlohmann::json::array();
+    for (const auto& entry : entries) {
+      if (entry.is_null()) break;
+      report["steps"].push_back(entry);
+      if (entry.at("status") != "ok") break;
+    }
+  };
+  try {
+    parallel_graph(deps, options.threads, run_step);
+  } catch (...) {
+    fill_report();
+    throw;
   }
+  fill_report();
+  if (options.step_signals != nullptr)
+    for (std::size_t i = 0; i < count; ++i)
+      for (const auto& [port, signal] : produced[i])
+        (*options.step_signals)[pipeline.steps[i].name + "." + port] = signal;
   std::map<std::string, Signal> outputs;
-  for (const auto& [name, ref] : pipeline.outputs) outputs[name] = resolve_ref(ref, produced, inputs);
+  for (const auto& [name, ref] : pipeline.outputs) outputs[name] = resolve(ref);
   return outputs;
 }
 

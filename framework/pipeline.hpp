@@ -93,14 +93,19 @@ std::string effective_pipeline_yaml(const Pipeline& pipeline, const Registry& re
 
 struct PipelineRunOptions {
   unsigned threads = 1;
-  // Called with (step index, step count, step name, fraction of that step done).
+  // Called with (step index, step count, step name, fraction of that step done); one call at a
+  // time, but steps that run at once interleave their calls.
   std::function<void(std::size_t, std::size_t, const std::string&, double)> progress;
   // When set, receives every step's output signals as "step.port" (for reports and figures).
   std::map<std::string, Signal>* step_signals = nullptr;
 };
 
-// Runs the steps on a record. `report` is filled as steps complete (status, seconds,
-// diagnostics per step), so it is useful even when a step throws. Throws DataError when a
+// Runs the steps on a record as a graph: a step starts once the steps it reads have finished, and
+// up to `threads` steps run at once (each also gets `threads` for its own kernels). Outputs and
+// report do not depend on the thread count. `report["steps"]` lists status, seconds and
+// diagnostics per step, in file order; when a step throws, it lists the steps before it and the
+// failed one (as a serial run would), and the error of the first failed step in file order
+// propagates. Throws DataError when a
 // pipeline input's role is missing from the record; other errors propagate from plugins.
 std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Registry& registry, const TimeSeries& record,
                                            const PipelineRunOptions& options, nlohmann::json& report);

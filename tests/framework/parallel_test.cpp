@@ -1,12 +1,14 @@
-// The deterministic parallel loop (framework/parallel.hpp).
+// The deterministic parallel loop and dependency graph (framework/parallel.hpp).
 #include "framework/parallel.hpp"
 
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace driftlab {
@@ -93,6 +95,78 @@ TEST(ParallelFor, RethrowsTheFailureWithTheSmallestIndexAfterRunningEveryItemBef
     }
     for (std::size_t i = 0; i <= 40; ++i)
       EXPECT_EQ(calls[i].load(), 1) << "item " << i << ", " << threads << " threads";
+  }
+}
+
+// A fixed graph of 60 items, each depending on up to three earlier ones (a pipeline's shape).
+std::vector<std::vector<std::size_t>> layered_graph() {
+  std::vector<std::vector<std::size_t>> deps(60);
+  for (std::size_t i = 1; i < deps.size(); ++i)
+    for (std::size_t k = 1; k <= 3; ++k)
+      if ((i * 7 + k * 13) % 5 < 2 && i >= k * 3) deps[i].push_back(i - k * 3);
+  return deps;
+}
+
+TEST(ParallelGraph, StartsEveryItemOnceAndOnlyAfterItsDependenciesOnAnyThreadCount) {
+  const auto deps = layered_graph();
+  for (unsigned threads : {1u, 2u, 7u}) {
+    std::vector<std::atomic<bool>> done(deps.size());
+    std::vector<std::atomic<int>> calls(deps.size());
+    std::atomic<int> early_starts{0};
+    std::vector<double> values(deps.size());
+    parallel_graph(deps, threads, [&](std::size_t i) {
+      for (std::size_t d : deps[i])
+        if (!done[d].load()) early_starts.fetch_add(1);
+      calls[i].fetch_add(1);
+      values[i] = item_value(i);
+      for (std::size_t d : deps[i]) values[i] += values[d];
+      done[i].store(true);
+    });
+    EXPECT_EQ(early_starts.load(), 0) << threads << " threads";
+    std::vector<double> serial(deps.size());
+    for (std::size_t i = 0; i < deps.size(); ++i) {
+      EXPECT_EQ(calls[i].load(), 1) << "item " << i << ", " << threads << " threads";
+      serial[i] = item_value(i);
+      for (std::size_t d : deps[i]) serial[i] += serial[d];
+    }
+    EXPECT_EQ(values, serial) << threads << " threads";
+  }
+}
+
+TEST(ParallelGraph, RunsIndependentItemsAtTheSameTime) {
+  // Two items without dependencies on two threads: each waits (a bounded while, not a time limit on
+  // the test) for the other to have started. A serial run would see one item at a time.
+  std::atomic<int> inside{0}, most_at_once{0};
+  parallel_graph({{}, {}}, 2, [&](std::size_t) {
+    const int now = inside.fetch_add(1) + 1;
+    int seen = most_at_once.load();
+    while (now > seen && !most_at_once.compare_exchange_weak(seen, now)) {
+    }
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (most_at_once.load() < 2 && std::chrono::steady_clock::now() < give_up) std::this_thread::yield();
+    inside.fetch_sub(1);
+  });
+  EXPECT_EQ(most_at_once.load(), 2);
+}
+
+TEST(ParallelGraph, ThrowsTheFirstFailureInIndexOrderAfterRunningEveryItemBeforeIt) {
+  // 0 .. 9; item 4 and item 7 fail; item 5 reads item 4, so it never starts.
+  std::vector<std::vector<std::size_t>> deps(10);
+  deps[5] = {4};
+  deps[8] = {0, 2};
+  for (unsigned threads : {1u, 2u, 7u}) {
+    std::vector<std::atomic<int>> calls(deps.size());
+    try {
+      parallel_graph(deps, threads, [&](std::size_t i) {
+        calls[i].fetch_add(1);
+        if (i == 4 || i == 7) throw std::runtime_error("item " + std::to_string(i));
+      });
+      ADD_FAILURE() << "no exception with " << threads << " threads";
+    } catch (const std::runtime_error& e) {
+      EXPECT_EQ(std::string(e.what()), "item 4") << threads << " threads";
+    }
+    for (std::size_t i = 0; i <= 4; ++i) EXPECT_EQ(calls[i].load(), 1) << "item " << i << ", " << threads << " threads";
+    EXPECT_EQ(calls[5].load(), 0) << threads << " threads";
   }
 }
 

@@ -244,5 +244,55 @@ TEST_F(PipelineTest, AMissingChannelIsADataErrorNamingTheRole) {
   EXPECT_THROW(run_pipeline(pipeline, registry_, no_temperature, {}, report), DataError);
 }
 
+TEST_F(PipelineTest, StepsThatRunAtOnceGiveTheSameOutputsAndReportAsASerialRun) {
+  const auto pipeline = load_pipeline(kPipelines / "compensate.yaml", registry_);
+  nlohmann::json serial_report, graph_report;
+  const auto serial = run_pipeline(pipeline, registry_, record(), {.threads = 1}, serial_report);
+  const auto graph = run_pipeline(pipeline, registry_, record(), {.threads = 3}, graph_report);
+  EXPECT_EQ(graph.at("compensated").columns, serial.at("compensated").columns);
+  EXPECT_EQ(graph.at("fitted").columns, serial.at("fitted").columns);
+  for (auto* report : {&serial_report, &graph_report})
+    for (auto& step : (*report)["steps"]) step.erase("seconds");
+  EXPECT_EQ(graph_report, serial_report);
+}
+
+TEST_F(PipelineTest, AFailedStepEndsTheReportAsInASerialRunOnAnyThreadCount) {
+  // `broken` fails; `after` does not read it, so a graph run may have run it too, but the report
+  // lists the steps a serial run reaches, and the error is the failed step's.
+  registry_.add({.name = "filter/test_broken",
+                 .summary = "always fails",
+                 .reference = "",
+                 .params = {},
+                 .make = [](const ParamValues&, const Registry&) -> std::unique_ptr<Plugin> {
+                   struct Broken final : Filter {
+                     Eigen::VectorXd filter(const Eigen::VectorXd&, RunContext&) override {
+                       throw DataError({"", 0, "signal"}, "test_broken: no data for you");
+                     }
+                   };
+                   return std::make_unique<Broken>();
+                 }});
+  const auto pipeline = parse_pipeline(std::string(R"(format: driftlab-pipeline/1
+steps:
+  - {name: before, plugin: filter/test_gain, inputs: {signal: rate}}
+  - {name: broken, plugin: filter/test_broken, inputs: {signal: rate}}
+  - {name: after, plugin: filter/test_gain, inputs: {signal: time}}
+outputs: {a: before.signal, b: broken.signal, c: after.signal})"),
+                                       "broken.yaml", registry_);
+  for (unsigned threads : {1u, 2u, 3u}) {
+    nlohmann::json report;
+    try {
+      run_pipeline(pipeline, registry_, record(), {.threads = threads}, report);
+      ADD_FAILURE() << "no error with " << threads << " threads";
+    } catch (const DataError& e) {
+      EXPECT_THAT(e.what(), HasSubstr("no data for you")) << threads << " threads";
+    }
+    ASSERT_EQ(report["steps"].size(), 2u) << report.dump(1);
+    EXPECT_EQ(report["steps"][0]["status"], "ok");
+    EXPECT_EQ(report["steps"][1]["name"], "broken");
+    EXPECT_EQ(report["steps"][1]["status"], "failed");
+    EXPECT_THAT(report["steps"][1]["error"].get<std::string>(), HasSubstr("no data for you"));
+  }
+}
+
 }  // namespace
 }  // namespace driftlab
