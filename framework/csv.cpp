@@ -526,9 +526,11 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
   return series;
 }
 
-std::string format_csv(const std::vector<CsvColumn>& columns, const std::string& label) {
+void stream_csv(const std::vector<CsvColumn>& columns, const std::string& label,
+                const std::function<void(std::string_view)>& sink) {
   std::vector<Unit> units;
-  Eigen::Index rows = columns.empty() ? 0 : columns.front().values.size();
+  std::vector<Eigen::Map<const Eigen::VectorXd>> values;
+  Eigen::Index rows = columns.empty() ? 0 : columns.front().data().size();
   std::unordered_map<std::string_view, std::size_t> seen;
   for (const auto& c : columns) {
     const auto bad = c.name.empty() || c.name.find_first_of(",\"\r\n") != std::string::npos || c.name.front() == ' ' ||
@@ -541,19 +543,22 @@ std::string format_csv(const std::vector<CsvColumn>& columns, const std::string&
       throw ConfigError({label, 0, c.name}, "two output columns have this name; column names must be unique");
     auto u = find_unit(c.unit);
     if (!u) throw ConfigError({label, 0, c.name}, "unknown output unit '" + c.unit + "'");
-    if (c.values.size() != rows) throw DataError({label, 0, c.name}, "column length differs from the first column");
+    values.push_back(c.data());
+    if (values.back().size() != rows)
+      throw DataError({label, 0, c.name}, "column length differs from the first column");
     units.push_back(*u);
   }
+  constexpr std::size_t kPiece = std::size_t{1} << 20;
   std::string out;
-  out.reserve(static_cast<std::size_t>(rows) * columns.size() * 24 + 256);
+  out.reserve(kPiece + 64 * columns.size() + 256);
   for (std::size_t j = 0; j < columns.size(); ++j) out += (j ? "," : "") + columns[j].name;
   out += '\n';
   char buf[32];
   for (Eigen::Index i = 0; i < rows; ++i) {
     for (std::size_t j = 0; j < columns.size(); ++j) {
       if (j) out += ',';
-      const double v = columns[j].absolute ? from_internal(columns[j].values[i], units[j])
-                                           : difference_from_internal(columns[j].values[i], units[j]);
+      const double v = columns[j].absolute ? from_internal(values[j][i], units[j])
+                                           : difference_from_internal(values[j][i], units[j]);
       if (!std::isfinite(v))
         throw Error(Diagnostic{{label, 0, columns[j].name},
                                "computed value in row " + std::to_string(i + 1) +
@@ -563,8 +568,18 @@ std::string format_csv(const std::vector<CsvColumn>& columns, const std::string&
       out.append(buf, res.ptr);
     }
     out += '\n';
+    if (out.size() >= kPiece) {
+      sink(out);
+      out.clear();
+    }
   }
-  return out;
+  if (!out.empty()) sink(out);
+}
+
+std::string format_csv(const std::vector<CsvColumn>& columns, const std::string& label) {
+  std::string text;
+  stream_csv(columns, label, [&](std::string_view piece) { text += piece; });
+  return text;
 }
 
 void write_csv(const std::filesystem::path& path, const std::vector<CsvColumn>& columns) {

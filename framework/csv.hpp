@@ -188,17 +188,36 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
 // (e.g. {"rate_dps", values_rad_s, "deg/s"}). `absolute` false: the values are differences
 // (deviations, IMFs, standard deviations): a unit with an offset (K) converts them by its scale
 // only, so a 1 degC deviation is written as 1 K, not 274.15 K.
+// A column owns its values, or (CsvColumn::view) refers to values the caller keeps alive until the
+// CSV is written, so that a large output (a record's IMFs) is not copied to be written.
 struct CsvColumn {
   std::string name;
-  Eigen::VectorXd values;
+  Eigen::VectorXd values;  // owned values; empty for a view
   std::string unit = "1";
   bool absolute = true;
+  const double* viewed = nullptr;  // a view's values (set by view())
+  Eigen::Index viewed_size = 0;
+
+  static CsvColumn view(std::string name, const Eigen::Ref<const Eigen::VectorXd>& values, std::string unit,
+                        bool absolute = true) {
+    return {std::move(name), {}, std::move(unit), absolute, values.data(), values.size()};
+  }
+  // The values, owned or viewed.
+  Eigen::Map<const Eigen::VectorXd> data() const {
+    return viewed != nullptr ? Eigen::Map<const Eigen::VectorXd>(viewed, viewed_size)
+                             : Eigen::Map<const Eigen::VectorXd>(values.data(), values.size());
+  }
 };
 
 // The CSV text of equal-length columns (shortest round-trip formatting); `label` names the
 // output in messages. Throws ConfigError for a bad or repeated column name, Error for a
 // non-finite value.
 std::string format_csv(const std::vector<CsvColumn>& columns, const std::string& label);
+// The same text handed to `sink` in pieces of about 1 MiB, in order, so that it is never held
+// whole. The names and units are checked before the first piece; a non-finite value throws after
+// the pieces before its row.
+void stream_csv(const std::vector<CsvColumn>& columns, const std::string& label,
+                const std::function<void(std::string_view)>& sink);
 
 // Writes columns of equal length with shortest round-trip formatting, atomically.
 void write_csv(const std::filesystem::path& path, const std::vector<CsvColumn>& columns);

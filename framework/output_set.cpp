@@ -99,35 +99,42 @@ OutputSet::Entry& OutputSet::entry(const fs::path& path) {
   throw std::logic_error("OutputSet: output " + path.string() + " was not planned");
 }
 
-void OutputSet::write(const fs::path& path, std::string_view content) {
+void OutputSet::write_with(const fs::path& path,
+                           const std::function<void(const std::function<void(std::string_view)>&)>& produce) {
   Entry& e = entry(path);
   const auto fail = [&](const std::string& what) {
     throw Error(Diagnostic{{path.string(), 0, e.option}, "cannot write output: " + what}.to_string());
   };
   const int fd = ::open(e.temp.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
   if (fd < 0) fail(errno_text());
-  std::size_t written = 0;
-  while (written < content.size()) {
-    const auto n = ::write(fd, content.data() + written, content.size() - written);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      const std::string err = errno_text();
-      ::close(fd);
-      fail(err);
+  const auto append = [&](std::string_view content) {
+    std::size_t written = 0;
+    while (written < content.size()) {
+      const auto n = ::write(fd, content.data() + written, content.size() - written);
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        fail(errno_text());  // the handler below closes the file
+      }
+      written += static_cast<std::size_t>(n);
     }
-    written += static_cast<std::size_t>(n);
-  }
-  if (::fsync(fd) != 0) {
-    const std::string err = errno_text();
+  };
+  try {
+    produce(append);
+    if (::fsync(fd) != 0) fail(errno_text());
+  } catch (...) {
     ::close(fd);
-    fail(err);
+    throw;
   }
   if (::close(fd) != 0) fail(errno_text());
   e.written = true;
 }
 
+void OutputSet::write(const fs::path& path, std::string_view content) {
+  write_with(path, [&](const auto& append) { append(content); });
+}
+
 void OutputSet::write_csv(const fs::path& path, const std::vector<CsvColumn>& columns) {
-  write(path, format_csv(columns, path.string()));
+  write_with(path, [&](const auto& append) { stream_csv(columns, path.string(), append); });
 }
 
 void OutputSet::drop(const fs::path& path) {

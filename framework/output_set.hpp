@@ -24,6 +24,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -52,6 +53,7 @@ class OutputSet {
 
   // Stage the content of a planned output (throws std::logic_error when the path was not planned).
   void write(const std::filesystem::path& path, std::string_view content);
+  // Streams the CSV (stream_csv) to the temporary file: the text is never held whole.
   void write_csv(const std::filesystem::path& path, const std::vector<CsvColumn>& columns);
   // For a writer that needs a file name (a library writing the file itself, e.g. an MRPT rawlog):
   // the staged temporary file to write into, in the output's directory; the output counts as
@@ -76,6 +78,10 @@ class OutputSet {
   void commit();
 
  private:
+  // Opens the entry's temporary file, hands `produce` a function that appends to it, then syncs
+  // and closes it.
+  void write_with(const std::filesystem::path& path,
+                  const std::function<void(const std::function<void(std::string_view)>&)>& produce);
   struct Entry {
     std::filesystem::path path;
     std::string option;

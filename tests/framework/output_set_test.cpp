@@ -12,10 +12,12 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "framework/csv.hpp"
 #include "framework/error.hpp"
 
 namespace driftlab {
@@ -256,6 +258,42 @@ TEST(OutputSet, StaleTemporariesOfAKilledRunAreRemovedAndNothingElse) {
   std::sort(left.begin(), left.end());
   EXPECT_EQ(left, (std::vector<std::string>{".model.json.tmp-", ".model.json.tmp-toolong1", ".status.json.tmp-a1B2c3",
                                             "model.json", "notes.txt"}));
+}
+
+TEST(OutputSet, AStreamedCsvEqualsItsTextAndAFailureHalfWayLeavesTheOldFile) {
+  const auto dir = fresh_dir("streamed_csv");
+  // Enough rows for several of stream_csv's 1-MiB pieces; viewed columns are not copied.
+  const Eigen::Index rows = 200000;
+  const Eigen::VectorXd time = Eigen::VectorXd::LinSpaced(rows, 0.0, 1999.99);
+  Eigen::MatrixXd imfs(rows, 2);
+  imfs.col(0) = (time.array() * 0.37).sin();
+  imfs.col(1) = (time.array() * 0.011).cos() * 1e-3;
+  const std::vector<CsvColumn> columns{CsvColumn::view("t_s", time, "s"),
+                                       CsvColumn::view("imf1", imfs.col(0), "1"),
+                                       {"imf2", imfs.col(1), "deg/s", false}};
+  const std::string text = format_csv(columns, "out.csv");
+  ASSERT_GT(text.size(), std::size_t{3} << 20);
+  {
+    OutputSet outputs;
+    outputs.plan(dir / "out.csv", "--out");
+    outputs.write_csv(dir / "out.csv", columns);
+    outputs.commit();
+  }
+  EXPECT_EQ(text_of(dir / "out.csv"), text);
+
+  Eigen::VectorXd broken = imfs.col(0);
+  broken[rows - 10] = std::numeric_limits<double>::infinity();  // after the first pieces were written
+  try {
+    OutputSet outputs;
+    outputs.plan(dir / "out.csv", "--out");
+    outputs.write_csv(dir / "out.csv", {CsvColumn::view("t_s", time, "s"), CsvColumn::view("imf1", broken, "1")});
+    ADD_FAILURE() << "a non-finite value was written";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("row " + std::to_string(rows - 9) + " is not finite"));
+  }
+  EXPECT_EQ(text_of(dir / "out.csv"), text);
+  EXPECT_EQ(files_in(dir), 1u);  // no temporary left
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -113,10 +113,10 @@ void decompose_command(const DecomposeOptions& o, CommandEnv& env) {
   const double scale = display ? display->scale : 1.0;
   // IMFs are differences (zero-mean oscillations): a unit with an offset (K) converts them by its
   // scale only; the residue carries the absolute level, so imf1 + ... + residue is the signal.
-  std::vector<CsvColumn> columns{{"t_s", record.time(), "s"}};
+  std::vector<CsvColumn> columns{CsvColumn::view("t_s", record.time(), "s")};
   for (Eigen::Index k = 0; k < d.imfs.cols(); ++k)
-    columns.push_back({"imf" + std::to_string(k + 1), d.imfs.col(k), unit, false});
-  columns.push_back({"residue", d.residue, unit});
+    columns.push_back(CsvColumn::view("imf" + std::to_string(k + 1), d.imfs.col(k), unit, false));
+  columns.push_back(CsvColumn::view("residue", d.residue, unit));
   outputs.write_csv(o.out, columns);
 
   const double total_energy = d.imfs.colwise().squaredNorm().sum() + d.residue.squaredNorm();

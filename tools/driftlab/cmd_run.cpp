@@ -76,13 +76,13 @@ void run(const RunOptions& o, CommandEnv& env) {
   report["status"] = "ok";
   report["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  std::vector<CsvColumn> columns{{"t_s", record.time(), "s"}};
+  std::vector<CsvColumn> columns{CsvColumn::view("t_s", record.time(), "s")};
   report["outputs"] = nlohmann::json::array();
   for (const auto& [name, signal] : outputs) {
     const auto [unit, suffix] = written_as(signal.unit);
     for (Eigen::Index c = 0; c < signal.columns.cols(); ++c) {
       const auto column = signal.columns.cols() == 1 ? name + suffix : name + "_" + signal.labels[c] + suffix;
-      columns.push_back({column, signal.columns.col(c), unit});
+      columns.push_back(CsvColumn::view(column, signal.columns.col(c), unit));
       report["outputs"].push_back({{"column", column}, {"unit", unit}});
     }
   }
