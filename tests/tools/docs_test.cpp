@@ -1,9 +1,9 @@
 // The documentation against the product: README.md is an entry point of at most 200 lines; every
 // relative link in README.md and docs/ resolves to a file (and heading) inside the repository; the
 // generated references (docs/cli.md, the plugin table of docs/plugins.md) equal what the program
-// prints; and the fenced shell blocks marked `<!-- docs-test: runs -->` run as written, page by
-// page in one scratch directory each, with `driftlab` on the PATH and the repository's devices/,
-// models/, tests/ and tools/ beside them.
+// prints; and the fenced shell and Python blocks marked `<!-- docs-test: runs -->` run as written,
+// page by page in one scratch directory each, with `driftlab` on the PATH, the build tree's Python
+// package importable and the repository's devices/, models/, tests/ and tools/ beside them.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -95,19 +95,21 @@ bool inside_source(const fs::path& p) {
   return normal == root || normal.rfind(root + "/", 0) == 0;
 }
 
-struct ShellBlock {
+struct CodeBlock {
   std::size_t line = 0;  // 1-based line of the opening fence
+  bool python = false;   // a ```python block; otherwise ```sh
   std::string text;
   bool marked_runs = false;
 };
 
-// The ```sh blocks of a page, each with whether the line before its fence is the runs marker.
-std::vector<ShellBlock> shell_blocks(const fs::path& page) {
+// The ```sh and ```python blocks of a page, each with whether the line before its fence is the runs
+// marker.
+std::vector<CodeBlock> code_blocks(const fs::path& page) {
   const auto lines = lines_of(read_text(page));
-  std::vector<ShellBlock> blocks;
+  std::vector<CodeBlock> blocks;
   for (std::size_t i = 0; i < lines.size(); ++i) {
-    if (lines[i] != "```sh") continue;
-    ShellBlock block{i + 1, "", i > 0 && lines[i - 1] == kRunsMarker};
+    if (lines[i] != "```sh" && lines[i] != "```python") continue;
+    CodeBlock block{i + 1, lines[i] == "```python", "", i > 0 && lines[i - 1] == kRunsMarker};
     for (++i; i < lines.size() && lines[i].rfind("```", 0) != 0; ++i) block.text += lines[i] + "\n";
     blocks.push_back(block);
   }
@@ -189,7 +191,8 @@ TEST(Docs, EveryShownCommandIsACommandOfTheProgram) {
   std::size_t shown = 0;
   static const std::regex command(R"(^driftlab ((--?[a-z-]+( [^-][^ ]*)? )*)([a-z]+))");
   for (const auto& page : markdown_pages()) {
-    for (const auto& block : shell_blocks(page)) {
+    for (const auto& block : code_blocks(page)) {
+      if (block.python) continue;
       for (const auto& line : lines_of(block.text)) {
         std::smatch m;
         if (!std::regex_search(line, m, command)) continue;
@@ -205,8 +208,8 @@ TEST(Docs, EveryShownCommandIsACommandOfTheProgram) {
 std::vector<std::string> pages_with_marked_blocks() {
   std::vector<std::string> pages;
   for (const auto& page : markdown_pages()) {
-    const auto blocks = shell_blocks(page);
-    if (std::any_of(blocks.begin(), blocks.end(), [](const ShellBlock& b) { return b.marked_runs; })) {
+    const auto blocks = code_blocks(page);
+    if (std::any_of(blocks.begin(), blocks.end(), [](const CodeBlock& b) { return b.marked_runs; })) {
       pages.push_back(relative_name(page));
     }
   }
@@ -216,11 +219,11 @@ std::vector<std::string> pages_with_marked_blocks() {
 class DocsPage : public ::testing::TestWithParam<std::string> {};
 
 // Runs the page's marked blocks in order in one scratch directory; a block that fails (any command
-// with a nonzero exit) fails the test with its output.
-TEST_P(DocsPage, MarkedShellBlocksRunAsWritten) {
+// with a nonzero exit, a Python exception) fails the test with its output.
+TEST_P(DocsPage, MarkedCodeBlocksRunAsWritten) {
   const auto page = kSource / GetParam();
-  std::vector<ShellBlock> blocks;
-  for (const auto& block : shell_blocks(page)) {
+  std::vector<CodeBlock> blocks;
+  for (const auto& block : code_blocks(page)) {
     if (block.marked_runs) blocks.push_back(block);
   }
   const auto dir = scratch_dir("docs_run_" + page.stem().string());
@@ -231,10 +234,14 @@ TEST_P(DocsPage, MarkedShellBlocksRunAsWritten) {
     const bool needs_mrpt =
         block.text.find("driftlab nav") != std::string::npos || block.text.find("driftlab mrpt") != std::string::npos;
     if (needs_mrpt && !DRIFTLAB_HAVE_MRPT) continue;
-    const auto script = dir / ("block_" + std::to_string(block.line) + ".sh");
+    const std::string python = DRIFTLAB_PYTHON;
+    if (block.python && python.empty()) continue;  // built without the Python module
+    const auto script = dir / ("block_" + std::to_string(block.line) + (block.python ? ".py" : ".sh"));
     std::ofstream(script) << block.text;
     const auto log = dir / "output";
-    const std::string command = "cd " + dir.string() + " && PATH=" + bin.string() + ":$PATH bash -e -o pipefail " +
+    const std::string interpreter =
+        block.python ? std::string("PYTHONPATH=") + DRIFTLAB_PYTHONPATH + " " + python : "bash -e -o pipefail";
+    const std::string command = "cd " + dir.string() + " && PATH=" + bin.string() + ":$PATH " + interpreter + " " +
                                 script.string() + " >" + log.string() + " 2>&1";
     EXPECT_EQ(std::system(command.c_str()), 0) << relative_name(page) << ":" << block.line << ": the block failed:\n"
                                                << block.text << "--- output:\n"
@@ -258,7 +265,7 @@ TEST(Docs, TheReadmeAndEveryTutorialWithCommandsHaveBlocksThatRun) {
   const auto pages = pages_with_marked_blocks();
   for (const auto* page : {"README.md", "docs/usage.md", "docs/tutorials/paper.md", "docs/tutorials/calibrate-imu.md",
                            "docs/tutorials/fleet.md", "docs/tutorials/discrepancy.md", "docs/tutorials/compare.md",
-                           "docs/tutorials/mrpt-navigation.md"}) {
+                           "docs/tutorials/mrpt-navigation.md", "docs/tutorials/python.md"}) {
     EXPECT_THAT(pages, ::testing::Contains(page));
   }
 }
