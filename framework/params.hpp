@@ -2,7 +2,7 @@
 //
 // Each plugin declares a ParamTable: one ParamSpec per parameter (key = YAML key, type, default,
 // unit, constraint, one-line doc) plus cross-parameter rules. Everything else is derived from the
-// table: YAML loading and validation (params_io.hpp), `driftlab plugins describe`, the README's
+// table: YAML loading and validation (params_io.hpp), `driftlab plugins describe`, docs/plugins.md's
 // plugin table and the generated invalid-value tests (invalid_examples()).
 //
 //   ParamTable table{{

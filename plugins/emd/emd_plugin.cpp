@@ -32,7 +32,7 @@ emd::SiftConfig sift_config(const ParamValues& p) {
           .end_policy = p.text("end_policy") == "mirror" ? emd::EndPolicy::Mirror : emd::EndPolicy::Linear};
 }
 
-// One member's sifting per sample, rounded up from the benchmarks (README): BM_Emd/1000000 1.8 s,
+// One member's sifting per sample, rounded up from the benchmarks (docs/performance.md): BM_Emd/1000000 1.8 s,
 // BM_Ceemdan/10000 (100 members) 1.9 s, i.e. 1.8e-6 and 1.9e-6 s per sample and member.
 constexpr double kSecondsPerSampleMember = 2e-6;
 

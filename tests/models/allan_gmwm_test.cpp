@@ -116,7 +116,7 @@ TEST(Gmwm, RecoversWhiteNoiseQuantizationAndRandomWalkWithinTheirIntervals) {
 // Over 10 seeds of a 5-h white + random walk + Gauss-Markov record: how often each one-sigma
 // interval holds the truth (asymptotic and bootstrap), and the accuracy of N and K from GMWM and
 // from the IEEE-952 slope fit of the same curves (noise_fit.hpp, which has no Gauss-Markov term and
-// reads the bump as bias instability). Printed; the README states the figures.
+// reads the bump as bias instability). Printed; docs/evidence.md states the figures.
 TEST(Gmwm, BootstrapIntervalsCoverTheTruthAndTheAccuracyOfBothEstimatorsIsMeasured) {
   const double n = 2e-4, k = 2e-6, sigma = 3e-5, t = 100.0, fs = 10.0;
   const std::vector<Component> truth{term(Process::WhiteNoise, {n}), term(Process::RandomWalk, {k}),

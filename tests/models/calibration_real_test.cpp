@@ -87,7 +87,7 @@ std::vector<Design> designs() {
   return out;
 }
 
-// The one design where the default still loses to the PX4-style cubic (docs: README, calibration
+// The one design where the default still loses to the PX4-style cubic (docs/evidence.md, calibration
 // on real records): tofupilot z, cool2 held out, fitted on cool1 + heat. Its heating-only cubic
 // happens to match cool2 better than any fit to both legs (566.9 vs 417.3 deg/h, 1.36x); the
 // test holds the shortfall where it was measured so that it cannot grow unnoticed.

@@ -53,8 +53,8 @@ devices::DeviceDefinition fmvmg(bool with_drive_frequency) {
   auto device = devices::load_device_file(std::filesystem::path(DRIFTLAB_SOURCE_DIR) / "devices" / "fmvmg.yaml");
   // The seeded set is drawn at the noise level it was designed and measured at: flicker B = 34.7 and
   // K = 20 deg/h/sqrt(h), the paper's raw B taken as intrinsic noise (the FMVMG file before issue 12).
-  // With the file's own small intrinsic noise (B = 1) the workflow is more sensitive, and one record
-  // of ten with two hidden effects got two extra names: see the README's discrepancy section.
+  // With the file's own small intrinsic noise (B = 1) the workflow is more sensitive (both hidden
+  // effects named in 9 of 10 two-effect records, no extra name): see docs/evidence.md, discrepancy.
   device.error_model.noise.bias_instability_rad_s = 34.7 * kRadPerSecPerDph;
   device.error_model.noise.rate_random_walk_rad_s_sqrt_s = 20.0 * kRadPerSecPerDph / 60.0;
   if (!with_drive_frequency)
@@ -287,7 +287,7 @@ TEST(WithoutTheDeviceFile, NothingIsNamedInRecordsWithOnlyColouredNoise) {
 // it into the likelihood, and nothing is named on noise-only records; a hidden effect is still named
 // first through it. Without the device file the noise is estimated from the residual that the
 // candidates leave, and they absorb part of a slow wander: measured, 2 of these 8 records then name
-// an effect (README, discrepancy section) -- printed here, not asserted.
+// an effect (docs/methods.md, discrepancy workflow) -- printed here, not asserted.
 testing_oven::OvenRecord gauss_markov_record(std::uint64_t index, const std::vector<std::string>& hidden,
                                              devices::DeviceDefinition& device) {
   testing_oven::Draw d(kSeed ^ 0x474D, index);

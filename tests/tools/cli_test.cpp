@@ -104,17 +104,5 @@ TEST(Cli, ValidatesAPipelineWithoutData) {
   EXPECT_THAT(r.out, HasSubstr("valid (1 steps)"));
 }
 
-TEST(Cli, TheReadmePluginTableIsTheOneGeneratedFromTheParameterTables) {
-  const auto generated = run_driftlab("plugins describe --markdown");
-  ASSERT_EQ(generated.exit_code, 0) << generated.err;
-  const auto readme = read_text(std::string(DRIFTLAB_SOURCE_DIR) + "/README.md");
-  const std::string begin = "<!-- plugin-table:begin -->\n", end = "<!-- plugin-table:end -->";
-  const auto b = readme.find(begin), e = readme.find(end);
-  ASSERT_NE(b, std::string::npos);
-  ASSERT_NE(e, std::string::npos);
-  EXPECT_EQ(readme.substr(b + begin.size(), e - b - begin.size()), generated.out)
-      << "regenerate it: driftlab plugins describe --markdown";
-}
-
 }  // namespace
 }  // namespace driftlab

@@ -394,7 +394,7 @@ TEST(FleetSimulate, BadSpreadOrOutliersAreRefusedNamingTheOption) {
 // Issue 24's checked fleet: 200 units, 8 planted faults (every kind), a spec limit on the gyro
 // noise density, scored against the key. One test: ctest gives each test its own process, and the
 // fleet is its cost (0.2 Hz over the whole oven profile, 3 241 samples per unit, gyro channels,
-// 2 workers: about 50 s CPU; see the README for the measured wall time).
+// 2 workers: about 50 s CPU; see docs/evidence.md for the measured wall time).
 constexpr int kFleetUnits = 200;
 constexpr double kNoiseLimitDph = 100.0;  // gyro.N_dph_rthz_max: normal units 14-50, the noisy one x5
 

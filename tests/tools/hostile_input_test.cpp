@@ -421,7 +421,7 @@ TEST_F(Hostile, AbsurdParametersAreRefusedOnTheirCostEstimate) {
   EXPECT_THAT(absurd.err, HasSubstr("optimizer: regressor/rbf: 1e+15 objective evaluations x 600 rows at 1e-07 s per "
                                     "row and evaluation: about 6e+10 s"));
   EXPECT_THAT(absurd.err, HasSubstr("above the budget of 4 h"));
-  // `run` records a failed step in its report (README: the one documented exception).
+  // `run` records a failed step in its report (docs/reliability.md: the one documented exception).
   EXPECT_THAT(read_text(p("run") + "/report.json"), HasSubstr("\"status\": \"failed\""));
   const auto small = ga_pipeline("small_ga.yaml", "2", "2");
   EXPECT_EQ(small.exit_code, 0) << small.err;

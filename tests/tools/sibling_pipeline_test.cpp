@@ -2,7 +2,7 @@
 // models/pipelines/iceemdan_tfpf_elm.yaml runs end to end, and swapping one block for another
 // registered plugin is a one-line change that still runs (the VMD paper's pipeline has its own
 // test, tests/models/vmd_wavelet_svr_pipeline_test.cpp). On a short simulated FMVMG oven record
-// (15 min at 1 Hz) so the test stays fast; the full record's numbers are in the README.
+// (15 min at 1 Hz) so the test stays fast; the full record's numbers are in docs/evidence.md.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 

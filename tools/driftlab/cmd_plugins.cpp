@@ -70,7 +70,8 @@ void add_plugins_command(CLI::App& app, CommandEnv& env) {
   };
   auto opts = std::make_shared<Options>();
   describe_cmd->add_option("names", opts->names, "plugin names (kind/name); all plugins when omitted");
-  describe_cmd->add_flag("--markdown", opts->markdown, "print one Markdown table of every parameter (for the README)");
+  describe_cmd->add_flag("--markdown", opts->markdown,
+                         "print one Markdown table of every parameter (for docs/plugins.md)");
   describe_cmd->callback([&env, opts] {
     const auto& registry = env.registry();
     if (opts->markdown) return markdown_table(registry, std::cout);
