@@ -407,19 +407,19 @@ class Parser {
   std::vector<std::pair<std::string, int>> output_refs_;
 };
 
-Signal side_by_side(const std::vector<Signal>& parts) {
-  if (parts.size() == 1) return parts.front();
+Signal side_by_side(const std::vector<const Signal*>& parts) {
+  if (parts.size() == 1) return *parts.front();
   Signal s;
   Eigen::Index cols = 0;
-  for (const auto& p : parts) cols += p.columns.cols();
-  s.columns.resize(parts.front().columns.rows(), cols);
+  for (const Signal* p : parts) cols += p->columns.cols();
+  s.columns.resize(parts.front()->columns.rows(), cols);
   Eigen::Index c = 0;
-  for (const auto& p : parts) {
-    s.columns.middleCols(c, p.columns.cols()) = p.columns;
-    c += p.columns.cols();
-    s.labels.insert(s.labels.end(), p.labels.begin(), p.labels.end());
+  for (const Signal* p : parts) {
+    s.columns.middleCols(c, p->columns.cols()) = p->columns;
+    c += p->columns.cols();
+    s.labels.insert(s.labels.end(), p->labels.begin(), p->labels.end());
   }
-  s.unit = parts.front().unit;
+  s.unit = parts.front()->unit;
   return s;
 }
 
@@ -531,8 +531,8 @@ std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Regis
       };
     std::map<std::string, Signal> port_values;
     for (const auto& [port, refs] : step.inputs) {
-      std::vector<Signal> parts;
-      for (const auto& ref : refs) parts.push_back(resolve(ref));
+      std::vector<const Signal*> parts;
+      for (const auto& ref : refs) parts.push_back(&resolve(ref));
       port_values[port] = side_by_side(parts);
     }
     ctx.progress(0.0);
@@ -572,12 +572,12 @@ std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Regis
     throw;
   }
   fill_report();
-  if (options.step_signals != nullptr)
-    for (std::size_t i = 0; i < count; ++i)
-      for (const auto& [port, signal] : produced[i])
-        (*options.step_signals)[pipeline.steps[i].name + "." + port] = signal;
   std::map<std::string, Signal> outputs;
   for (const auto& [name, ref] : pipeline.outputs) outputs[name] = resolve(ref);
+  if (options.step_signals != nullptr)
+    for (std::size_t i = 0; i < count; ++i)
+      for (auto& [port, signal] : produced[i])
+        (*options.step_signals)[pipeline.steps[i].name + "." + port] = std::move(signal);
   return outputs;
 }
 

@@ -58,6 +58,10 @@
 // and hid itself); the candidates' extra freedom absorbs little noise (measured: no noise-only
 // record names anything, tests/models/discrepancy_test.cpp, WithoutTheDeviceFile). A record with
 // gaps needs the noise terms given.
+// With Options::noise_gmwm the terms are read off the same residual's OADEV curve by GMWM
+// (Guerrier et al. 2013) instead: a Gauss-Markov bias noise (the bump of a MEMS bias instability,
+// correlation time 100-400 s) then enters the covariance as itself rather than as a flicker level,
+// which spreads its power over every scale and leaves the slow wander to the candidates.
 //
 // Without a prior (no device file) and with a true-rate channel that moves, the model also has a
 // free scale-factor polynomial w (T - T0)^i, i = 0..d: there is no device scale factor to differ
@@ -101,8 +105,12 @@ struct Options {
   double drive_frequency_at_reference_hz = 0.0;  // device's drive mode at T0 (for effects; 0 = unknown)
   double drive_frequency_slope_hz_per_k = 0.0;   // its df/dT at T0 (0 = unknown)
   std::optional<error_model::NoiseTerms> noise;  // empty: estimated (see above)
-  double block_s = 0.0;                          // 0: duration / 400, at least one sample interval
-  double significance = 10.0;                    // delta_BIC needed to name an effect
+  // How estimated noise terms are read off the residual's OADEV curve: empty, the IEEE-952 slope
+  // fit (N, B as flicker, K); or a GMWM composite model of wn, rw and gm terms (e.g. "wn+rw+gm",
+  // models/allan/gmwm.hpp): N, K and each Gauss-Markov term (sigma, T) as fitted, no flicker.
+  std::string noise_gmwm;
+  double block_s = 0.0;        // 0: duration / 400, at least one sample interval
+  double significance = 10.0;  // delta_BIC needed to name an effect
   int max_effects = 4;
   int grid_points_per_decade = 8;
   int golden_iterations = 20;

@@ -2,6 +2,7 @@
 
 #include "framework/error.hpp"
 #include "models/allan/analysis.hpp"
+#include "models/allan/gmwm.hpp"
 
 namespace driftlab::discrepancy::detail {
 
@@ -61,13 +62,35 @@ void Workflow::set_noise(Result& result) {
 
 error_model::NoiseTerms Workflow::estimated_noise(const Eigen::VectorXd& residual) const {
   const double tau0 = blocks_.sample_interval_s;
-  const auto analysis = allan::analyze_rate(residual, 1.0 / tau0);
-  if (!analysis.fit) throw DataError({"", 0, "rate"}, "the residual's Allan curve has too few points for noise terms");
-  const auto& fit = *analysis.fit;
+  const auto analysis = allan::analyze_rate(residual, 1.0 / tau0, {.fit_terms = options_.noise_gmwm.empty()});
   error_model::NoiseTerms n;
-  n.arw_rad_sqrt_s = fit[allan::Term::N].value;
-  n.bias_instability_rad_s = fit[allan::Term::B].value;
-  n.rate_random_walk_rad_s_sqrt_s = fit[allan::Term::K].value;
+  if (!options_.noise_gmwm.empty()) {
+    const auto model = allan::gmwm::parse_model(options_.noise_gmwm, "noise_gmwm");
+    const auto fit = allan::gmwm::fit(analysis.curve, 1.0 / tau0, model);
+    for (const auto& c : fit.components) {
+      const auto& p = c.parameters;
+      switch (c.process) {
+        case allan::gmwm::Process::WhiteNoise:
+          n.arw_rad_sqrt_s = p[0].value;
+          break;
+        case allan::gmwm::Process::RandomWalk:
+          n.rate_random_walk_rad_s_sqrt_s = p[0].value;
+          break;
+        case allan::gmwm::Process::GaussMarkov:
+          n.gauss_markov.push_back({p[1].value, p[0].value});
+          break;
+        default:
+          break;  // refused by validate_options
+      }
+    }
+  } else {
+    if (!analysis.fit)
+      throw DataError({"", 0, "rate"}, "the residual's Allan curve has too few points for noise terms");
+    const auto& fit = *analysis.fit;
+    n.arw_rad_sqrt_s = fit[allan::Term::N].value;
+    n.bias_instability_rad_s = fit[allan::Term::B].value;
+    n.rate_random_walk_rad_s_sqrt_s = fit[allan::Term::K].value;
+  }
   n.flicker_tau_min_s = std::max(n.flicker_tau_min_s, tau0);
   n.flicker_tau_max_s = std::max(n.flicker_tau_max_s, blocks_.duration_s());
   return n;

@@ -16,6 +16,12 @@ namespace {
 
 double dph(double rad_s) { return rad_s * kDphPerRadPerSec; }
 
+nlohmann::json gauss_markov_json(const std::vector<error_model::GaussMarkovComponent>& terms) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& g : terms) out.push_back({{"tau_s", g.tau_s}, {"sigma_dph", dph(g.sigma_rad_s)}});
+  return out;
+}
+
 nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 nlohmann::json score_json(const Score& s) {
@@ -179,8 +185,12 @@ nlohmann::json report_json(const Result& r, const ReportInfo& info) {
             {"noise",
              {{"arw_dph_rthz", dph(r.noise.arw_rad_sqrt_s)},
               {"bias_instability_dph", dph(r.noise.bias_instability_rad_s)},
-              {"rate_random_walk_dph_rth", dph(r.noise.rate_random_walk_rad_s_sqrt_s) * 60.0}}},
-            {"noise_estimated", r.noise_estimated}}},
+              {"rate_random_walk_dph_rth", dph(r.noise.rate_random_walk_rad_s_sqrt_s) * 60.0},
+              {"gauss_markov", gauss_markov_json(r.noise.gauss_markov)}}},
+            {"noise_estimated", r.noise_estimated},
+            {"noise_estimator", !r.noise_estimated     ? "given (device file)"
+                                : o.noise_gmwm.empty() ? "IEEE 952 slope fit of the residual's OADEV (N, B, K)"
+                                                       : "GMWM " + o.noise_gmwm + " of the residual's OADEV"}}},
           {"views", {{"initial", views_json(r.initial_views)}, {"final", views_json(r.final_views)}}}};
 }
 

@@ -5,6 +5,7 @@
 #include "framework/error.hpp"
 #include "framework/sampling.hpp"
 #include "framework/signal.hpp"
+#include "models/allan/gmwm.hpp"
 
 namespace driftlab::discrepancy::detail {
 namespace {
@@ -109,6 +110,18 @@ void Workflow::validate_options() const {
     problems.push_back({{"", 0, "sensor_time_constant_s"}, "must be >= 0"});
   for (const auto& c : candidates_)
     if (!c.effect) problems.push_back({{"", 0, c.name}, "candidate without an effect"});
+  if (!options_.noise_gmwm.empty()) {
+    try {
+      for (const auto p : allan::gmwm::parse_model(options_.noise_gmwm, "noise_gmwm"))
+        if (p != allan::gmwm::Process::WhiteNoise && p != allan::gmwm::Process::RandomWalk &&
+            p != allan::gmwm::Process::GaussMarkov)
+          problems.push_back({{"", 0, "noise_gmwm"},
+                              "'" + allan::gmwm::to_string(p) +
+                                  "' is not a noise term of the discrepancy model (use wn, rw and gm terms)"});
+    } catch (const ConfigError& e) {
+      problems.insert(problems.end(), e.problems().begin(), e.problems().end());
+    }
+  }
   if (!problems.empty()) throw ConfigError(std::move(problems));
 }
 

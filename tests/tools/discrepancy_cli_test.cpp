@@ -151,6 +151,35 @@ TEST(DiscrepancyCommand, WithoutADeviceFitsABiasPolynomialAndEstimatesTheNoiseTe
     EXPECT_EQ(report["named_effects"][i]["effect"], "mode_split_drift") << report.dump(2);
 }
 
+TEST(DiscrepancyCommand, EstimatesTheNoiseTermsByGmwmWhenAskedAndRefusesWhatItCannotUse) {
+  const auto dir = scratch_dir("discrepancy_gmwm");
+  const auto csv = simulated(dir, "periodic_disturbance:amplitude_dph=80,period_s=900,phase_deg=30");
+  const auto report_path = (dir / "report.json").string();
+  const auto r = run_driftlab("discrepancy --data " + csv.string() + " --noise-gmwm wn+rw+gm --report " + report_path);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto report = nlohmann::json::parse(read_text(dir / "report.json"));
+  EXPECT_EQ(report["model"]["noise_estimator"], "GMWM wn+rw+gm of the residual's OADEV");
+  EXPECT_EQ(report["model"]["noise"]["gauss_markov"].size(), 1u) << report["model"].dump(2);
+  EXPECT_EQ(report["model"]["noise"]["bias_instability_dph"].get<double>(), 0.0);
+  // The same white noise as the slope fit reads (N = 99.6 deg/h/sqrt(Hz) in devices/fmvmg.yaml).
+  constexpr double kArwTolerance = 10.0;  // deg/h/sqrt(Hz): the fit's spread over one 4.5-h record
+  EXPECT_NEAR(report["model"]["noise"]["arw_dph_rthz"].get<double>(), 99.6, kArwTolerance);
+  ASSERT_GE(report["named_effects"].size(), 1u) << report.dump(2);
+  EXPECT_EQ(report["named_effects"][0]["effect"], "periodic_disturbance");
+
+  const auto quantization =
+      run_driftlab("discrepancy --data " + csv.string() + " --noise-gmwm wn+qn --report " + (dir / "q.json").string());
+  EXPECT_EQ(quantization.exit_code, 2);
+  EXPECT_THAT(quantization.err, HasSubstr("noise_gmwm"));
+  EXPECT_THAT(quantization.err, HasSubstr("'qn' is not a noise term of the discrepancy model"));
+  const auto with_device = run_driftlab("discrepancy --data " + csv.string() +
+                                        " --device fmvmg --noise-gmwm wn+rw+gm --report " + (dir / "d.json").string());
+  EXPECT_EQ(with_device.exit_code, 2);
+  EXPECT_THAT(with_device.err, HasSubstr("the device file gives the noise terms"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "q.json"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "d.json"));
+}
+
 // Keeps the header and the rows whose time stamp (first column, s) passes `keep`.
 std::filesystem::path filtered(const std::filesystem::path& csv, const std::string& name,
                                const std::function<bool(double)>& keep) {

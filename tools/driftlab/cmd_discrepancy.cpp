@@ -25,7 +25,7 @@ namespace {
 
 struct DiscrepancyOptions {
   DataOptions data;
-  std::string device, devices_dir, report, series, html, update_device;
+  std::string device, devices_dir, report, series, html, update_device, noise_gmwm;
   std::vector<std::string> effects, sets;
   bool max_gap_given = false;
   int bias_degree = -1;
@@ -44,6 +44,10 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
     inputs.push_back(device_path);
   }
   if (o.bias_degree >= 0) options.bias_degree = o.bias_degree;
+  if (!o.noise_gmwm.empty() && !o.device.empty())
+    throw ConfigError({o.device, 0, "--noise-gmwm"},
+                      "the device file gives the noise terms; --noise-gmwm estimates them from a record without one");
+  options.noise_gmwm = o.noise_gmwm;
   options.block_s = o.block_s;
   options.significance = o.significance;
   options.max_effects = o.max_effects;
@@ -159,6 +163,10 @@ void add_discrepancy_command(CLI::App& app, CommandEnv& env) {
       ->check(CLI::Range(0, 6));
   cmd->add_option("--block", options->block_s, "block length for the fit, s (default: duration / 400)")
       ->check(finite_number(0.0, 1e12));
+  cmd->add_option("--noise-gmwm", options->noise_gmwm,
+                  "without --device: estimate the noise terms by GMWM with this composite model of wn, rw and gm "
+                  "terms (e.g. wn+rw+gm: a Gauss-Markov bias noise as itself) instead of the IEEE 952 slope fit (N, "
+                  "B as flicker, K)");
   cmd->add_option("--significance", options->significance, "delta BIC needed to name an effect")
       ->check(finite_number(0.0, 1e12))
       ->capture_default_str();
