@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <optional>
 #include <regex>
 #include <set>
 
@@ -485,8 +486,36 @@ std::string effective_pipeline_yaml(const Pipeline& pipeline, const Registry& re
   return std::string(out.c_str()) + "\n";
 }
 
+nlohmann::json StepRecord::to_json() const {
+  nlohmann::json j{{"name", name}, {"plugin", plugin}, {"status", ok ? "ok" : "failed"}, {"diagnostics", diagnostics}};
+  if (ok)
+    j["seconds"] = seconds;
+  else
+    j["error"] = error;
+  return j;
+}
+
+nlohmann::json steps_json(const std::vector<StepRecord>& steps) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& step : steps) j.push_back(step.to_json());
+  return j;
+}
+
 std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Registry& registry, const TimeSeries& record,
                                            const PipelineRunOptions& options, nlohmann::json& report) {
+  std::vector<StepRecord> steps;
+  try {
+    auto outputs = run_pipeline(pipeline, registry, record, options, steps);
+    report["steps"] = steps_json(steps);
+    return outputs;
+  } catch (...) {
+    report["steps"] = steps_json(steps);
+    throw;
+  }
+}
+
+std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Registry& registry, const TimeSeries& record,
+                                           const PipelineRunOptions& options, std::vector<StepRecord>& steps) {
   std::map<std::string, Signal> inputs;
   inputs["time"] = Signal::single(record.time(), "time", "s");
   for (const auto& [name, role] : pipeline.inputs) {
@@ -513,12 +542,13 @@ std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Regis
     if (dot == std::string::npos) return inputs.at(ref);
     return produced[index_of.at(ref.substr(0, dot))].at(ref.substr(dot + 1));
   };
-  std::vector<nlohmann::json> entries(count);
+  std::vector<std::optional<StepRecord>> entries(count);  // empty: the step has not started
   std::mutex progress_mutex;
   const auto run_step = [&](std::size_t i) {
     const auto& step = pipeline.steps[i];
-    auto& entry = entries[i];
-    entry = {{"name", step.name}, {"plugin", step.plugin.empty() ? "sum" : step.plugin}, {"status", "running"}};
+    auto& entry = entries[i].emplace();
+    entry.name = step.name;
+    entry.plugin = step.plugin.empty() ? "sum" : step.plugin;
     const auto start = std::chrono::steady_clock::now();
     RunContext ctx;
     ctx.threads = options.threads;
@@ -545,24 +575,23 @@ std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Regis
         produced[i] = plugin->run(port_values, ctx);
       }
     } catch (const std::exception& e) {
-      entry["status"] = "failed";
-      entry["error"] = e.what();
-      entry["diagnostics"] = ctx.diagnostics;
+      entry.error = e.what();
+      entry.diagnostics = ctx.diagnostics;
       throw;
     }
     ctx.progress(1.0);
-    entry["status"] = "ok";
-    entry["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    entry["diagnostics"] = ctx.diagnostics;
+    entry.ok = true;
+    entry.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    entry.diagnostics = ctx.diagnostics;
   };
-  // The report lists the steps a serial run would have reached: all of them, or those up to and
+  // The records of the steps a serial run would have reached: all of them, or those up to and
   // including the first failed one.
   const auto fill_report = [&] {
-    report["steps"] = nlohmann::json::array();
+    steps.clear();
     for (const auto& entry : entries) {
-      if (entry.is_null()) break;
-      report["steps"].push_back(entry);
-      if (entry.at("status") != "ok") break;
+      if (!entry) break;
+      steps.push_back(*entry);
+      if (!entry->ok) break;
     }
   };
   try {

@@ -100,13 +100,33 @@ struct PipelineRunOptions {
   std::map<std::string, Signal>* step_signals = nullptr;
 };
 
+// One step of a run as reports list it.
+struct StepRecord {
+  std::string name;
+  std::string plugin;                                     // "kind/name", or "sum" for the built-in sum
+  bool ok = false;                                        // false: the step threw
+  double seconds = 0.0;                                   // wall-clock time of an ok step
+  std::string error;                                      // what a failed step threw
+  nlohmann::json diagnostics = nlohmann::json::object();  // the plugin's RunContext::diagnostics
+
+  // report.json's entry: name, plugin, status ("ok" or "failed"), seconds (ok) or error (failed),
+  // diagnostics.
+  nlohmann::json to_json() const;
+};
+
+// report.json's "steps": the records in order.
+nlohmann::json steps_json(const std::vector<StepRecord>& steps);
+
 // Runs the steps on a record as a graph: a step starts once the steps it reads have finished, and
 // up to `threads` steps run at once (each also gets `threads` for its own kernels). Outputs and
-// report do not depend on the thread count. `report["steps"]` lists status, seconds and
-// diagnostics per step, in file order; when a step throws, it lists the steps before it and the
-// failed one (as a serial run would), and the error of the first failed step in file order
-// propagates. Throws DataError when a
-// pipeline input's role is missing from the record; other errors propagate from plugins.
+// steps do not depend on the thread count. `steps` receives status, seconds and diagnostics per
+// step, in file order; when a step throws, it holds the steps before it and the failed one (as a
+// serial run would), and the error of the first failed step in file order propagates. Throws
+// DataError when a pipeline input's role is missing from the record; other errors propagate from
+// plugins.
+std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Registry& registry, const TimeSeries& record,
+                                           const PipelineRunOptions& options, std::vector<StepRecord>& steps);
+// The same, with the steps as `report["steps"]` (steps_json), also when a step throws.
 std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Registry& registry, const TimeSeries& record,
                                            const PipelineRunOptions& options, nlohmann::json& report);
 

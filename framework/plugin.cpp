@@ -1,9 +1,13 @@
 #include "framework/plugin.hpp"
 
+#include <limits>
+
 #include "framework/error.hpp"
 
 namespace driftlab {
 namespace {
+
+constexpr const char* kImfDecisionsKey = "imfs";  // a classifier step's diagnostics entry
 
 const Signal& input(const SignalMap& inputs, const std::string& port) {
   auto it = inputs.find(port);
@@ -68,20 +72,43 @@ SignalMap Decomposer::run(const SignalMap& inputs, RunContext& ctx) {
   return {{"imfs", std::move(imfs)}, {"residue", Signal::single(std::move(d.residue), "residue", x.unit)}};
 }
 
+nlohmann::json imf_decisions_json(const std::vector<ImfDecision>& decisions) {
+  nlohmann::json log = nlohmann::json::array();
+  for (const auto& d : decisions)
+    log.push_back({{"imf", d.imf}, {"group", to_string(d.group)}, {"score", d.score}, {"reason", d.reason}});
+  return log;
+}
+
+std::vector<ImfDecision> imf_decisions(const nlohmann::json& diagnostics) {
+  std::vector<ImfDecision> decisions;
+  if (!diagnostics.is_object() || !diagnostics.contains(kImfDecisionsKey)) return decisions;
+  for (const auto& e : diagnostics.at(kImfDecisionsKey)) {
+    ImfDecision d;
+    d.imf = e.at("imf").get<std::size_t>();
+    const auto group = e.at("group").get<std::string>();
+    for (const auto g : kImfGroups)
+      if (to_string(g) == group) d.group = g;
+    // A score written to a file and read back: infinity is stored as null.
+    d.score = e.at("score").is_number() ? e.at("score").get<double>() : std::numeric_limits<double>::infinity();
+    d.reason = e.at("reason").get<std::string>();
+    decisions.push_back(std::move(d));
+  }
+  return decisions;
+}
+
 SignalMap Classifier::run(const SignalMap& inputs, RunContext& ctx) {
   const auto& imfs = input(inputs, "imfs");
   const auto c = classify(imfs.columns, ctx);
   const Eigen::Index n = imfs.columns.rows();
   Eigen::VectorXd noise = Eigen::VectorXd::Zero(n), mixed = noise, drift = noise;
-  auto& log = ctx.diagnostics["imfs"] = nlohmann::json::array();
+  std::vector<ImfDecision> decisions;
   for (std::size_t k = 0; k < c.groups.size(); ++k) {
     const auto col = imfs.columns.col(static_cast<Eigen::Index>(k));
     (c.groups[k] == ImfGroup::Noise ? noise : c.groups[k] == ImfGroup::Mixed ? mixed : drift) += col;
-    log.push_back({{"imf", k + 1},
-                   {"group", to_string(c.groups[k])},
-                   {"score", k < c.scores.size() ? c.scores[k] : 0.0},
-                   {"reason", k < c.reasons.size() ? c.reasons[k] : ""}});
+    decisions.push_back(
+        {k + 1, c.groups[k], k < c.scores.size() ? c.scores[k] : 0.0, k < c.reasons.size() ? c.reasons[k] : ""});
   }
+  ctx.diagnostics[kImfDecisionsKey] = imf_decisions_json(decisions);
   if (auto it = inputs.find("residue"); it != inputs.end()) drift += it->second.sum();
   return {{"noise", Signal::single(std::move(noise), "noise", imfs.unit)},
           {"mixed", Signal::single(std::move(mixed), "mixed", imfs.unit)},

@@ -95,6 +95,21 @@ struct Classification {
   std::vector<std::string> reasons;  // one logged decision per IMF
 };
 
+// Every group in the order reports list them (the classifier's output ports).
+inline constexpr ImfGroup kImfGroups[] = {ImfGroup::Noise, ImfGroup::Mixed, ImfGroup::Drift};
+
+// One IMF's decision as a classifier step reports it (its diagnostics' "imfs" list: imf, group,
+// score, reason). imf_decisions() reads that list back from a step's diagnostics (empty when it
+// has none), imf_decisions_json() writes it.
+struct ImfDecision {
+  std::size_t imf = 0;  // 1-based
+  ImfGroup group = ImfGroup::Mixed;
+  double score = 0.0;
+  std::string reason;
+};
+nlohmann::json imf_decisions_json(const std::vector<ImfDecision>& decisions);
+std::vector<ImfDecision> imf_decisions(const nlohmann::json& diagnostics);
+
 class Classifier : public Plugin {
  public:
   virtual Classification classify(const Eigen::MatrixXd& imfs, RunContext& ctx) = 0;

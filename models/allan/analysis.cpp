@@ -82,6 +82,13 @@ Analysis analyze_angle(const Eigen::Ref<const Eigen::VectorXd>& angle, double ta
   return a;
 }
 
+Analysis reread(const Analysis& estimated, const AnalysisOptions& options) {
+  Analysis a = estimated;
+  a.fit.reset();
+  read_curve(a, options);
+  return a;
+}
+
 Analysis analyze_segments(const Eigen::Ref<const Eigen::VectorXd>& rate, std::span<const sampling::Segment> segments,
                           double sample_rate_hz, const AnalysisOptions& options) {
   const double tau0 = 1.0 / sample_rate_hz;

@@ -85,6 +85,11 @@ Analysis analyze_rate(const Eigen::Ref<const Eigen::VectorXd>& rate_rad_s, doubl
 Analysis analyze_angle(const Eigen::Ref<const Eigen::VectorXd>& angle_rad, double tau0_s,
                        const AnalysisOptions& options = {});
 
+// The readings (B, N, the fit) of a curve already estimated, read again with other options: what
+// analyze_rate with `options` would give on the same data (the curve's confidence must be the same
+// as options.confidence). Throws DataError like analyze_rate.
+Analysis reread(const Analysis& estimated, const AnalysisOptions& options);
+
 // The same for a record of bursts: rate_rad_s holds every burst's samples, `segments` says where each
 // burst is (framework/sampling.hpp), all sampled at sample_rate_hz. Throws DataError when the median
 // burst has fewer than 9 samples.

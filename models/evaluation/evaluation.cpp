@@ -58,7 +58,8 @@ double block_mean_rms(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, d
 }
 
 StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_rad_s, const Eigen::VectorXd& time_s,
-                       double sample_rate_hz, double reference_arw_rad_sqrt_s, const Truth* truth) {
+                       double sample_rate_hz, double reference_arw_rad_sqrt_s, const Truth* truth,
+                       const allan::Analysis* estimated) {
   StageScore s;
   s.stage = stage;
   s.label = stage;
@@ -67,7 +68,8 @@ StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_r
   s.correlation_time_s = allan::correlation_time_s(s.bandwidth_hz);
   allan::AnalysisOptions options;
   options.min_tau_s = s.correlation_time_s;
-  s.analysis = allan::analyze_rate(output_rad_s, sample_rate_hz, options);
+  s.analysis = estimated != nullptr ? allan::reread(*estimated, options)
+                                    : allan::analyze_rate(output_rad_s, sample_rate_hz, options);
   if (truth != nullptr) {
     const Eigen::VectorXd error = output_rad_s - truth->true_rate_rad_s;
     s.residual_drift_rad_s = block_mean_rms(time_s, error);

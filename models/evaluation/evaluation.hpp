@@ -68,9 +68,11 @@ BlockMeans block_means(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, 
 double block_mean_rms(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, double block_s = kResidualBlockS);
 
 // Scores one output. reference_arw_rad_sqrt_s: N of the original record (for the bandwidth);
-// time_s: the record's time stamps (for the residual drift's blocks).
+// time_s: the record's time stamps (for the residual drift's blocks); estimated: the output's Allan
+// analysis when one was already run (its curve is read again, not estimated again).
 StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_rad_s, const Eigen::VectorXd& time_s,
-                       double sample_rate_hz, double reference_arw_rad_sqrt_s, const Truth* truth);
+                       double sample_rate_hz, double reference_arw_rad_sqrt_s, const Truth* truth,
+                       const allan::Analysis* estimated = nullptr);
 
 // Allan analysis of measured - systematic (read like the original record: full bandwidth).
 allan::Analysis intrinsic_floor(const Eigen::VectorXd& measured_rad_s, const Eigen::VectorXd& systematic_rad_s,

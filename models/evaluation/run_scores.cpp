@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "framework/error.hpp"
+#include "framework/number_text.hpp"
 #include "framework/units.hpp"
 #include "models/calibration/fit.hpp"
 #include "models/calibration/oven_run.hpp"
@@ -86,10 +87,13 @@ RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const st
     if (record.has(role::kSystematic)) truth->systematic_rad_s = record.channel(role::kSystematic).values;
   }
   const Truth* t = truth ? &*truth : nullptr;
-  const double reference_n = allan::analyze_rate(rate, fs, {.fit_terms = false}).arw_rad_sqrt_s;
+  // The record's Allan curve, estimated once: its N is the reference of every bandwidth, and the
+  // original stage reads its B from the same curve.
+  const auto raw = allan::analyze_rate(rate, fs, {.fit_terms = false});
+  const double reference_n = raw.arw_rad_sqrt_s;
 
   const Eigen::VectorXd& time = record.time();
-  s.stages.push_back(score_stage(kOriginalStage, rate, time, fs, reference_n, t));
+  s.stages.push_back(score_stage(kOriginalStage, rate, time, fs, reference_n, t, &raw));
   s.stages.back().source = StageScore::Source::Record;
   for (const auto& stage : rate_stages(pipeline, outputs)) {
     s.stages.push_back(score_stage(stage.output, outputs.at(stage.output).columns.col(0), time, fs, reference_n, t));
@@ -132,13 +136,51 @@ nlohmann::json b_json(const allan::FloorReading& b) {
   return j;
 }
 
-std::string b_text(const allan::FloorReading& b) {
+BDegH b_deg_h(const allan::FloorReading& b) {
   const double f = kDphPerRadPerSec;
-  if (b.resolved)
-    return number_text(b.value * f, "%.3g") + " [" + number_text(b.low * f, "%.2g") + "," +
-           number_text(b.high * f, "%.2g") + "]";
-  return "< " + number_text(b.high * f, "%.3g") + " (tau<=" + number_text(b.longest_tau_s, "%.0f") + "s)";
+  return {b.resolved, b.value * f, b.low * f, b.high * f, b.tau_s, b.longest_tau_s};
 }
+
+std::string b_text(const BDegH& b, BStyle style) {
+  const auto n4 = [](double v) { return format_number(v); };
+  switch (style) {
+    case BStyle::Table2Text:
+      if (b.resolved)
+        return number_text(b.value, "%.3g") + " [" + number_text(b.low, "%.2g") + "," + number_text(b.high, "%.2g") +
+               "]";
+      return "< " + number_text(b.high, "%.3g") + " (tau<=" + number_text(b.longest_tau_s, "%.0f") + "s)";
+    case BStyle::AllanLine: {
+      char line[320];
+      if (b.resolved)
+        std::snprintf(line, sizeof line,
+                      "B = %.4g deg/h (flat floor of the OADEV / 0.664, IEEE 952) at tau = %g s, 68.3 %% interval "
+                      "[%.3g, %.3g]",
+                      b.value, b.tau_s, b.low, b.high);
+      else
+        std::snprintf(line, sizeof line,
+                      "B < %.3g deg/h (not resolved within tau <= %g s: the OADEV has no floor there, its minimum is "
+                      "at tau = %g s; 68.3 %% bound)",
+                      b.high, b.longest_tau_s, b.tau_s);
+      return line;
+    }
+    case BStyle::Bound:
+      return b.resolved ? n4(b.value) : "< " + number_text(b.high, "%.3g");
+    case BStyle::BoundFourDigits:
+      return b.resolved ? n4(b.value) : "< " + n4(b.high);
+    case BStyle::BoundWithin:
+      return b.resolved ? n4(b.value)
+                        : "< " + n4(b.high) + " (not resolved within tau ≤ " + n4(b.longest_tau_s) + " s)";
+    case BStyle::Interval:
+      if (b.resolved) return number_text(b.low, "%.3g") + " – " + number_text(b.high, "%.3g");
+      return "not resolved within tau ≤ " + number_text(b.longest_tau_s, "%.0f") + " s";
+    case BStyle::IntervalBracketed:
+      if (b.resolved) return "[" + n4(b.low) + ", " + n4(b.high) + "]";
+      return "not resolved within tau ≤ " + n4(b.longest_tau_s) + " s";
+  }
+  return "";
+}
+
+std::string b_text(const allan::FloorReading& b) { return b_text(b_deg_h(b), BStyle::Table2Text); }
 
 nlohmann::json stage_json(const RunScores& s, const StageScore& st) {
   const auto& a = st.analysis;

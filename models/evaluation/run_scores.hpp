@@ -58,6 +58,30 @@ RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const st
 nlohmann::json b_json(const allan::FloorReading& b);
 std::string b_text(const allan::FloorReading& b);
 
+// B in deg/h, as every report words it (the one home of that wording): a FloorReading converted,
+// or the figures a report kept (value or bound, and the longest tau read).
+struct BDegH {
+  bool resolved = false;
+  double value = 0.0;            // B (resolved)
+  double low = 0.0, high = 0.0;  // its 68.3 % interval; high: the bound when not resolved
+  double tau_s = 0.0;            // the minimum's tau
+  double longest_tau_s = 0.0;    // the longest tau read
+};
+BDegH b_deg_h(const allan::FloorReading& b);
+
+enum class BStyle {
+  Table2Text,         // table2_text: "1.75 [1.6,1.9]" or "< 1.89 (tau<=3277s)"
+  AllanLine,          // driftlab allan's line: "B = 1.754 deg/h (...) at tau = ..., 68.3 % interval [...]" or "B < ..."
+  Bound,              // a table's value cell when not resolved: "< 1.89"
+  BoundFourDigits,    // the same with four significant digits: "< 1.891"
+  BoundWithin,        // one cell, bound and range: "< 1.891 (not resolved within tau ≤ 3277 s)"
+  Interval,           // a table's interval cell: "1.6 – 1.9" or "not resolved within tau ≤ 3277 s"
+  IntervalBracketed,  // the same as "[1.601, 1.9]" or "not resolved within tau ≤ 3277 s" (four digits)
+};
+// The text of B in a style; for the value-cell styles (Bound, BoundFourDigits, BoundWithin) of a
+// resolved B, the value with four significant digits (tables write the number itself).
+std::string b_text(const BDegH& b, BStyle style);
+
 // report.json's "table2", "intrinsic_floor", "baseline" and "allan" entries.
 nlohmann::json scores_json(const RunScores& scores);
 // One "table2" row of scores_json, and its "intrinsic_floor" entry.

@@ -528,9 +528,8 @@ PipelineRun run(const PipelineHandle& p, const py::object& inputs, int threads, 
   return r;
 }
 
-}  // namespace
-
-void bind_data(py::module_& m) {
+// Record and read_record: a record read from a file.
+void bind_record(py::module_& m) {
   py::class_<Record>(m, "Record",
                      "A record read from a file: time stamps and channels by role, in SI units (rad/s, m/s^2, "
                      "degC, Hz), as the command line reads it. Arrays view the record's storage.")
@@ -568,7 +567,10 @@ columns: mappings 'role=column:unit' (e.g. 'rate=gyro_z:rad/s', 'time=timestamp:
 max_gap_factor: a time step above this times the median step is a DataError (0 reads gaps as they are).
 topic, instance, sensor: what to take from a log (ignored for CSV). required: roles that must be
 present. Returns Record (time_s, channels, units, sources, sample_rate_hz, notes, path).)");
+}
 
+// device_files and simulate: the oven simulator.
+void bind_simulation(py::module_& m) {
   m.def(
       "device_files", [] { return devices::list_device_files(package("devices_dir")().cast<std::filesystem::path>()); },
       "The device files (*.yaml) of driftlab.devices_dir(), sorted.");
@@ -590,7 +592,10 @@ accel m/s^2, temperature degC snapped to the instance's resolution): time_s, the
 (no digit for the first) gyro{i}_{x,y,z}_rad_s, accel{i}_{x,y,z}_mps2, temp{i}_c, device_id{i},
 true_gyro{i}_*, true_accel{i}_*, systematic_gyro{i}_*, systematic_accel{i}_*; the CSV's gyro columns
 (_dps) are these / (pi / 180).)");
+}
 
+// Compensation, CalibrationModel, Calibration, calibrate and load_calibration.
+void bind_calibration(py::module_& m) {
   py::class_<Compensation>(m, "Compensation", "A compensated record (models/calibration: w = (w_m - bias) / sf)")
       .def_readonly("rate_rad_s", &Compensation::rate_rad_s,
                     "compensated samples, rad/s (m/s^2 for an accelerometer channel)")
@@ -689,7 +694,10 @@ gate's findings that did not stop the fit).)");
             std::make_shared<const calibration::ImuCalibration>(calibration::read_calibration(path))};
       },
       py::arg("path"), "Reads a calibration model file (driftlab-calibration/2, or /1 as one gyro channel).");
+}
 
+// Discrepancy and discrepancy: the missing effects.
+void bind_discrepancy(py::module_& m) {
   py::class_<Discrepancy>(m, "Discrepancy", "What discrepancy() found: the named effects and the gaps")
       .def_readonly("report", &Discrepancy::report,
                     "report.json's data as `driftlab discrepancy` writes it (named_effects, gap_initial, gap_final, "
@@ -733,7 +741,10 @@ effects: candidate effect/* plugins (default: all). sets: 'effect/NAME.key=value
 The record is taken as given (read_record refuses irregular gaps unless max_gap_factor=0).
 Returns Discrepancy (report, named_effects, gap_initial_deg_h, gap_final_deg_h, noise_floor_deg_h,
 unexplained, model_initial_rad_s, model_final_rad_s).)");
+}
 
+// PipelineRun and Pipeline.
+void bind_pipeline(py::module_& m) {
   py::class_<PipelineRun>(m, "PipelineRun", "The outputs of a pipeline run and its report")
       .def_readonly("outputs", &PipelineRun::outputs,
                     "output name -> samples (one column: shape (N,); several: (columns, N)), SI units")
@@ -774,6 +785,16 @@ unexplained, model_initial_rad_s, model_final_rad_s).)");
           "...) with 'time' (s) or fs_hz. threads: worker threads (results do not depend on them). "
           "Returns PipelineRun (outputs, units, report, table2_text); a record with a rate is scored as `driftlab run` "
           "scores it (Table 2 in report).");
+}
+
+}  // namespace
+
+void bind_data(py::module_& m) {
+  bind_record(m);
+  bind_simulation(m);
+  bind_calibration(m);
+  bind_discrepancy(m);
+  bind_pipeline(m);
 }
 
 }  // namespace driftlab::python

@@ -11,6 +11,7 @@
 #include "models/allan/analysis.hpp"
 #include "models/calibration/evidence.hpp"
 #include "models/evaluation/evaluation.hpp"
+#include "models/evaluation/run_scores.hpp"
 #include "tools/driftlab/html_report.hpp"
 
 namespace driftlab::cli {
@@ -206,15 +207,11 @@ nlohmann::json model_json(const CompetingModel& m) {
   return j;
 }
 
-}  // namespace
-
-std::vector<HeldOutScores> write_calibration_report(const ReportInput& in, const ReportFiles& files,
-                                                    OutputSet& outputs) {
+// report.json's head: the command, the records, what each metric means, the gate, the models.
+nlohmann::json report_head_json(const ReportInput& in, const std::vector<std::string>& names) {
   nlohmann::json j;
   j["format"] = "driftlab-calibrate-report/1";
   j["command"] = in.command;
-  std::vector<std::string> names;
-  for (const auto& r : in.calibration) names.push_back(r.name);
   j["calibration_records"] = names;
   j["truth"] = in.truth_note;
   j["metrics"] = {
@@ -231,8 +228,11 @@ std::vector<HeldOutScores> write_calibration_report(const ReportInput& in, const
   j["notes"] = in.notes;
   j["models"] = nlohmann::json::array();
   for (const auto& m : in.models) j["models"].push_back(model_json(m));
+  return j;
+}
 
-  HtmlReport html("driftlab calibrate: held-out evidence");
+// report.html's head: the command, the records, the gate's findings and the competing models.
+void add_overview(HtmlReport& html, const ReportInput& in, const std::vector<std::string>& names) {
   html.paragraph("Command: " + in.command);
   html.paragraph("Calibration records: " + [&] {
     std::string s;
@@ -272,95 +272,123 @@ std::vector<HeldOutScores> write_calibration_report(const ReportInput& in, const
         "of the calibration records (each model's fit.holdout_design).";
     html.table(t);
   }
+}
+
+// Every model (and every method run outside, e.g. the paper pipeline) on held-out record e.
+std::vector<MethodScore> score_methods(const ReportInput& in, std::size_t e, const RecordBlocks& blocks) {
+  const auto& r = in.evaluations[e];
+  std::vector<MethodScore> scores;
+  for (const auto& m : in.models) {
+    if (!m.model) {
+      scores.push_back(score(m.name, m.description, r, blocks, r.rate_rad_s, nullptr));
+    } else {
+      const auto c = calibration::compensate(*m.model, r.time_s, r.rate_rad_s, r.temp_c);
+      scores.push_back(score(m.name, m.description, r, blocks, c.rate_rad_s, &c));
+    }
+    scores.back().bandwidth = "fs/2 (unchanged: the correction is a slow bias)";
+  }
+  for (const auto& x : in.external) {
+    if (x.record == e) {
+      scores.push_back(score(x.name, x.description, r, blocks, x.rate_rad_s, nullptr));
+      scores.back().bandwidth = x.bandwidth;
+    }
+  }
+  return scores;
+}
+
+// The section of held-out record e: its evaluations[] entry (returned), its tables and figures
+// (into html), and its scores (into held_out).
+nlohmann::json held_out_section(const ReportInput& in, std::size_t e,
+                                const std::vector<RecordBlocks>& calibration_blocks, HtmlReport& html,
+                                std::vector<HeldOutScores>& held_out) {
+  const auto& r = in.evaluations[e];
+  const RecordBlocks blocks = blocks_of(r);
+  auto scores = score_methods(in, e, blocks);
+  nlohmann::json ej{{"record", r.name},
+                    {"samples", r.time_s.size()},
+                    {"duration_s", r.time_s[r.time_s.size() - 1] - r.time_s[0]},
+                    {"temperature_range_c", {r.temp_c.minCoeff(), r.temp_c.maxCoeff()}}};
+  ej["legs"] = nlohmann::json::array();
+  for (const auto& leg : blocks.legs)
+    ej["legs"].push_back({{"direction", leg.name()},
+                          {"from_c", leg.from_c},
+                          {"to_c", leg.to_c},
+                          {"start_s", leg.start_s},
+                          {"end_s", leg.end_s}});
+  std::optional<double> floor_dph;
+  if (r.systematic_rad_s.size()) {
+    floor_dph =
+        evaluation::block_mean_rms(r.time_s, Eigen::VectorXd(r.rate_rad_s - r.systematic_rad_s)) * kDphPerRadPerSec;
+    ej["intrinsic_floor_drift_dph"] = *floor_dph;
+  }
+  const auto number_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
+  ej["methods"] = nlohmann::json::array();
+  HtmlTable t{"Held-out record " + r.name,
+              {"method", "residual drift (°/h)", "B (°/h)", "N (°/h/√Hz)", "output bandwidth", "extrapolated (%)"}};
+  std::vector<std::string> leg_header{"method"};
+  for (const auto& leg : blocks.legs) leg_header.push_back(leg_text(leg) + " (°/h)");
+  HtmlTable by_leg{"Residual drift of every method on each leg of " + r.name, leg_header};
+  for (const auto& s : scores) {
+    nlohmann::json by_leg_json = nlohmann::json::array();
+    std::vector<HtmlCell> leg_row{s.name};
+    for (const double v : s.leg_drift_dph) {
+      by_leg_json.push_back(number_or_null(v));
+      leg_row.push_back(v);
+    }
+    by_leg.rows.push_back(std::move(leg_row));
+    ej["methods"].push_back({{"name", s.name},
+                             {"description", s.description},
+                             {"residual_drift_dph", s.drift_dph},
+                             {"residual_drift_by_leg_dph", by_leg_json},
+                             {"B_dph", s.b_resolved ? number_or_null(s.b_dph) : nlohmann::json()},
+                             {"B_resolved", s.b_resolved},
+                             {"B_upper_dph", !s.b_resolved ? number_or_null(s.b_dph) : nlohmann::json()},
+                             {"N_dph_rthz", number_or_null(s.n_dph_rthz)},
+                             {"output_bandwidth", s.bandwidth},
+                             {"extrapolated_fraction", s.extrapolated}});
+    evaluation::BDegH b_reading;
+    b_reading.resolved = s.b_resolved;
+    b_reading.value = b_reading.high = s.b_dph;  // B, or the bound when not resolved
+    b_reading.longest_tau_s = s.b_within_tau_s;
+    const HtmlCell b = !std::isfinite(s.b_dph) ? HtmlCell(std::string("–"))
+                       : s.b_resolved          ? HtmlCell(s.b_dph)
+                                      : HtmlCell(evaluation::b_text(b_reading, evaluation::BStyle::BoundWithin));
+    t.rows.push_back({s.name, s.drift_dph, b, s.n_dph_rthz, s.bandwidth, 100.0 * s.extrapolated});
+  }
+  t.note =
+      "Residual drift: rms of 60-s block means of (output - true rate). B and N need an evenly sampled "
+      "record (none for burst records); B is a value only where the Allan deviation has a floor, otherwise "
+      "the bound '< x'. " +
+      (r.systematic_rad_s.size()
+           ? "Intrinsic floor (measured - true systematic rate): " + format_number(*floor_dph) + " °/h."
+           : std::string("No systematic-rate column: no intrinsic floor."));
+  by_leg.note =
+      "Legs as the quality gate finds them (zig-zag reversals of the 60-s temperature means); – where "
+      "a leg is shorter than one 60-s block.";
+  html.section("Held-out record " + r.name + " (" + std::to_string(r.time_s.size()) + " samples)");
+  html.table(t);
+  if (!blocks.legs.empty()) html.table(by_leg);
+  add_figures(html, in, calibration_blocks, r, blocks, scores);
+  held_out.push_back({r.name, std::move(scores), floor_dph});
+  return ej;
+}
+
+}  // namespace
+
+std::vector<HeldOutScores> write_calibration_report(const ReportInput& in, const ReportFiles& files,
+                                                    OutputSet& outputs) {
+  std::vector<std::string> names;
+  for (const auto& r : in.calibration) names.push_back(r.name);
+  nlohmann::json j = report_head_json(in, names);
+  HtmlReport html("driftlab calibrate: held-out evidence");
+  add_overview(html, in, names);
 
   std::vector<RecordBlocks> calibration_blocks;
   for (const auto& c : in.calibration) calibration_blocks.push_back(blocks_of(c));
   std::vector<HeldOutScores> held_out;
   j["evaluations"] = nlohmann::json::array();
-  for (std::size_t e = 0; e < in.evaluations.size(); ++e) {
-    const auto& r = in.evaluations[e];
-    const RecordBlocks blocks = blocks_of(r);
-    std::vector<MethodScore> scores;
-    for (const auto& m : in.models) {
-      if (!m.model) {
-        scores.push_back(score(m.name, m.description, r, blocks, r.rate_rad_s, nullptr));
-      } else {
-        const auto c = calibration::compensate(*m.model, r.time_s, r.rate_rad_s, r.temp_c);
-        scores.push_back(score(m.name, m.description, r, blocks, c.rate_rad_s, &c));
-      }
-      scores.back().bandwidth = "fs/2 (unchanged: the correction is a slow bias)";
-    }
-    for (const auto& x : in.external) {
-      if (x.record == e) {
-        scores.push_back(score(x.name, x.description, r, blocks, x.rate_rad_s, nullptr));
-        scores.back().bandwidth = x.bandwidth;
-      }
-    }
-    nlohmann::json ej{{"record", r.name},
-                      {"samples", r.time_s.size()},
-                      {"duration_s", r.time_s[r.time_s.size() - 1] - r.time_s[0]},
-                      {"temperature_range_c", {r.temp_c.minCoeff(), r.temp_c.maxCoeff()}}};
-    ej["legs"] = nlohmann::json::array();
-    for (const auto& leg : blocks.legs)
-      ej["legs"].push_back({{"direction", leg.name()},
-                            {"from_c", leg.from_c},
-                            {"to_c", leg.to_c},
-                            {"start_s", leg.start_s},
-                            {"end_s", leg.end_s}});
-    std::optional<double> floor_dph;
-    if (r.systematic_rad_s.size()) {
-      floor_dph =
-          evaluation::block_mean_rms(r.time_s, Eigen::VectorXd(r.rate_rad_s - r.systematic_rad_s)) * kDphPerRadPerSec;
-      ej["intrinsic_floor_drift_dph"] = *floor_dph;
-    }
-    const auto number_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
-    ej["methods"] = nlohmann::json::array();
-    HtmlTable t{"Held-out record " + r.name,
-                {"method", "residual drift (°/h)", "B (°/h)", "N (°/h/√Hz)", "output bandwidth", "extrapolated (%)"}};
-    std::vector<std::string> leg_header{"method"};
-    for (const auto& leg : blocks.legs) leg_header.push_back(leg_text(leg) + " (°/h)");
-    HtmlTable by_leg{"Residual drift of every method on each leg of " + r.name, leg_header};
-    for (const auto& s : scores) {
-      nlohmann::json by_leg_json = nlohmann::json::array();
-      std::vector<HtmlCell> leg_row{s.name};
-      for (const double v : s.leg_drift_dph) {
-        by_leg_json.push_back(number_or_null(v));
-        leg_row.push_back(v);
-      }
-      by_leg.rows.push_back(std::move(leg_row));
-      ej["methods"].push_back({{"name", s.name},
-                               {"description", s.description},
-                               {"residual_drift_dph", s.drift_dph},
-                               {"residual_drift_by_leg_dph", by_leg_json},
-                               {"B_dph", s.b_resolved ? number_or_null(s.b_dph) : nlohmann::json()},
-                               {"B_resolved", s.b_resolved},
-                               {"B_upper_dph", !s.b_resolved ? number_or_null(s.b_dph) : nlohmann::json()},
-                               {"N_dph_rthz", number_or_null(s.n_dph_rthz)},
-                               {"output_bandwidth", s.bandwidth},
-                               {"extrapolated_fraction", s.extrapolated}});
-      const HtmlCell b = !std::isfinite(s.b_dph) ? HtmlCell(std::string("–"))
-                         : s.b_resolved          ? HtmlCell(s.b_dph)
-                                        : HtmlCell("< " + format_number(s.b_dph) + " (not resolved within tau ≤ " +
-                                                   format_number(s.b_within_tau_s) + " s)");
-      t.rows.push_back({s.name, s.drift_dph, b, s.n_dph_rthz, s.bandwidth, 100.0 * s.extrapolated});
-    }
-    t.note =
-        "Residual drift: rms of 60-s block means of (output - true rate). B and N need an evenly sampled "
-        "record (none for burst records); B is a value only where the Allan deviation has a floor, otherwise "
-        "the bound '< x'. " +
-        (r.systematic_rad_s.size()
-             ? "Intrinsic floor (measured - true systematic rate): " + format_number(*floor_dph) + " °/h."
-             : std::string("No systematic-rate column: no intrinsic floor."));
-    by_leg.note =
-        "Legs as the quality gate finds them (zig-zag reversals of the 60-s temperature means); – where "
-        "a leg is shorter than one 60-s block.";
-    html.section("Held-out record " + r.name + " (" + std::to_string(r.time_s.size()) + " samples)");
-    html.table(t);
-    if (!blocks.legs.empty()) html.table(by_leg);
-    add_figures(html, in, calibration_blocks, r, blocks, scores);
-    j["evaluations"].push_back(ej);
-    held_out.push_back({r.name, std::move(scores), floor_dph});
-  }
+  for (std::size_t e = 0; e < in.evaluations.size(); ++e)
+    j["evaluations"].push_back(held_out_section(in, e, calibration_blocks, html, held_out));
   outputs.write(files.json, j.dump(2) + "\n");
   outputs.write(files.html, html.html());
   return held_out;

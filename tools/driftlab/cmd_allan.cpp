@@ -25,6 +25,7 @@
 #include "models/allan/analysis.hpp"
 #include "models/allan/noise_fit.hpp"
 #include "models/allan/tau_grid.hpp"
+#include "models/evaluation/run_scores.hpp"
 #include "tools/driftlab/cli.hpp"
 #include "tools/driftlab/plot.hpp"
 
@@ -236,6 +237,155 @@ Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& c
   return figure;
 }
 
+// One angle series per burst (one for an evenly sampled record); no difference spans a gap.
+struct BurstAngles {
+  std::vector<Eigen::VectorXd> angles;
+  std::size_t samples = 0;        // rate samples of every burst
+  std::size_t median_length = 0;  // angle samples of the median burst (of the record when even)
+};
+
+BurstAngles burst_angles(const Channel& channel, const sampling::Facts& facts, allan::InputType input, double tau0) {
+  BurstAngles b;
+  for (const auto& segment : facts.segments) {
+    const auto values = channel.values.segment(segment.first, segment.samples);
+    b.angles.push_back(input == allan::InputType::Rate
+                           ? allan::angle_from_rate(Eigen::Ref<const Eigen::VectorXd>(values), tau0)
+                           : Eigen::VectorXd(values));
+    b.samples += static_cast<std::size_t>(segment.samples);
+  }
+  std::vector<std::size_t> lengths;
+  for (const auto& a : b.angles) lengths.push_back(static_cast<std::size_t>(a.size()));
+  std::nth_element(lengths.begin(), lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2), lengths.end());
+  b.median_length = lengths[lengths.size() / 2];
+  return b;
+}
+
+// allan.csv: tau, the deviation and its interval (display unit), the number of terms.
+void write_curve_csv(OutputSet& outputs, const std::string& path, const std::vector<allan::Estimate>& curve,
+                     const std::string& unit) {
+  // Deviations are differences: a unit with an offset (K) converts them by its scale only.
+  std::vector<CsvColumn> columns{{"tau_s", {}, "s"},
+                                 {"dev", {}, unit, false},
+                                 {"dev_lo", {}, unit, false},
+                                 {"dev_hi", {}, unit, false},
+                                 {"n", {}, "1"}};
+  for (auto& c : columns) c.values.resize(static_cast<Eigen::Index>(curve.size()));
+  for (std::size_t i = 0; i < curve.size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    columns[0].values(k) = curve[i].tau;
+    columns[1].values(k) = curve[i].dev;
+    columns[2].values(k) = curve[i].dev_lo;
+    columns[3].values(k) = curve[i].dev_hi;
+    columns[4].values(k) = static_cast<double>(curve[i].terms);
+  }
+  outputs.write_csv(path, columns);
+}
+
+// The OADEV readings (B, N) and the noise-term fit of the channel; none (a note on stderr) when the
+// record is too short for them, unless --json asks for them (then DataError).
+std::optional<allan::Analysis> channel_analysis(const AllanOptions& o, const Channel& channel,
+                                                const sampling::Facts& facts, const BurstAngles& b, bool bursts,
+                                                allan::InputType input, double fs, const std::string& why) {
+  const double tau0 = 1.0 / fs;
+  std::optional<allan::Analysis> analysis;
+  try {
+    if (bursts && input == allan::InputType::Rate) {
+      analysis = allan::analyze_segments(channel.values, facts.segments, fs, {.confidence = o.confidence});
+    } else if (bursts) {  // an angle record: each burst's rate is its angle's differences / tau0
+      Eigen::VectorXd rate(static_cast<Eigen::Index>(b.samples - b.angles.size()));
+      std::vector<sampling::Segment> rate_segments;
+      Eigen::Index at = 0;
+      for (const auto& a : b.angles) {
+        const Eigen::Index k = a.size() - 1;
+        rate.segment(at, k) = (a.tail(k) - a.head(k)) / tau0;
+        rate_segments.push_back({at, k});
+        at += k;
+      }
+      analysis = allan::analyze_segments(rate, rate_segments, fs, {.confidence = o.confidence});
+    } else {
+      analysis = allan::analyze_angle(b.angles.front(), tau0, {.confidence = o.confidence});
+    }
+  } catch (const DataError& e) {
+    if (!o.json.empty()) throw DataError({o.data.path, 0, channel.source}, std::string(e.what()) + why);
+    std::cerr << "note: no Allan readings: " << e.what() << why << "\n";
+  }
+  return analysis;
+}
+
+// The --gmwm composite model fitted to the curve (with the bootstrap's intervals unless
+// --gmwm-bootstrap 0); none without --gmwm.
+std::optional<allan::gmwm::Fit> gmwm_fit(const AllanOptions& o, const std::optional<allan::Analysis>& analysis,
+                                         const std::string& role, const sampling::Facts& facts, bool bursts,
+                                         std::size_t samples, double fs, const std::string& why) {
+  if (o.gmwm.empty()) return std::nullopt;
+  const auto model = allan::gmwm::parse_model(o.gmwm, "--gmwm");
+  if (!analysis) throw DataError({o.data.path, 0, role}, "no Allan curve for the GMWM fit" + why);
+  if (bursts && o.gmwm_bootstrap > 0)
+    throw ConfigError({"", 0, "--gmwm-bootstrap"}, "the bootstrap simulates a contiguous record and this one is " +
+                                                       std::to_string(facts.segments.size()) +
+                                                       " bursts; give --gmwm-bootstrap 0 for the asymptotic intervals");
+  auto gmwm = allan::gmwm::fit(analysis->curve, fs, model);
+  if (o.gmwm_bootstrap > 0)
+    gmwm = allan::gmwm::bootstrap(gmwm, static_cast<Eigen::Index>(samples), o.gmwm_bootstrap, o.seed, o.threads);
+  return gmwm;
+}
+
+// ---- the console summary ----
+
+void print_readings(const allan::Analysis& analysis) {
+  std::printf(
+      "%s\n",
+      evaluation::b_text(evaluation::b_deg_h(analysis.bias_instability), evaluation::BStyle::AllanLine).c_str());
+  std::printf("N = %.4g deg/h/sqrt(Hz) (-1/2 slope line at tau = 1 s)\n", analysis.arw_rad_sqrt_s * kDphPerRadPerSec);
+  std::fflush(stdout);
+}
+
+void print_fit(const allan::NoiseFit& fit) {
+  char head[160];
+  std::snprintf(head, sizeof head,
+                "least-squares fit of the five IEEE 952 terms (chi2/dof = %.3g, %zu points, %zu dof; "
+                "one-sigma intervals):\n",
+                fit.reduced_chi2(), fit.points, fit.dof);
+  std::cout << head;
+  for (const auto& c : allan::kIeee952Units) {
+    const auto& t = fit[c.term];
+    const std::string key(c.key), term_unit(c.unit);
+    char line[200];
+    if (t.resolved) {
+      std::snprintf(line, sizeof line, "%s = %.4g +- %.2g %s [%.3g, %.3g]\n", key.c_str(), t.value * c.factor,
+                    t.sigma * c.factor, term_unit.c_str(), t.low * c.factor, t.high * c.factor);
+    } else {
+      std::snprintf(line, sizeof line, "%s < %.3g %s  (not resolved%s)\n", key.c_str(), t.high * c.factor,
+                    term_unit.c_str(),
+                    t.fitted ? ": kept by the fit, but within one sigma of 0" : ": set to 0 by the fit");
+    }
+    std::cout << line;
+  }
+}
+
+void print_gmwm(const allan::gmwm::Fit& gmwm, bool angular, const std::string& unit) {
+  std::vector<allan::gmwm::Process> model;
+  for (const auto& c : gmwm.components) model.push_back(c.process);
+  std::printf("GMWM %s (Guerrier et al. 2013; one-sigma intervals: %s; chi2/dof = %.3g, %zu points):\n",
+              allan::gmwm::to_string(model).c_str(), gmwm.intervals.c_str(), gmwm.reduced_chi2(), gmwm.points);
+  for (const auto& c : gmwm.components)
+    for (const auto& p : c.parameters) {
+      const auto [u, factor] = gmwm_unit(p, angular, unit);
+      if (p.resolved)
+        std::printf("  %s %s = %.4g %s [%.3g, %.3g]\n", allan::gmwm::to_string(c.process).c_str(), p.name.c_str(),
+                    p.value * factor, u.c_str(), p.low * factor, p.high * factor);
+      else if (!c.observable && !std::isfinite(p.high))
+        std::printf("  %s %s not determined (the component is below what the curve resolves)\n",
+                    allan::gmwm::to_string(c.process).c_str(), p.name.c_str());
+      else
+        std::printf("  %s %s < %.3g %s  (not resolved: %s)\n", allan::gmwm::to_string(c.process).c_str(),
+                    p.name.c_str(), p.high * factor, u.c_str(),
+                    c.observable ? "its interval spans more than a factor e^0.5 either way"
+                                 : "below what the curve resolves; the bound is where it would show");
+    }
+  std::fflush(stdout);
+}
+
 void allan_command(const AllanOptions& o) {
   OutputSet outputs({o.data.path});
   outputs.plan(o.out, "--out");
@@ -259,86 +409,24 @@ void allan_command(const AllanOptions& o) {
   const double fs = sampling::rate_within_segments_hz(record.time(), facts);
   if (!(fs > 0.0)) throw DataError({o.data.path, 0, "t_s"}, "cannot derive a sample interval");
   const double tau0 = 1.0 / fs;
-  // One angle series per burst (one for an evenly sampled record); no difference spans a gap.
-  std::vector<Eigen::VectorXd> angles;
-  std::size_t samples = 0;
-  for (const auto& segment : facts.segments) {
-    const auto values = channel.values.segment(segment.first, segment.samples);
-    angles.push_back(input == allan::InputType::Rate
-                         ? allan::angle_from_rate(Eigen::Ref<const Eigen::VectorXd>(values), tau0)
-                         : Eigen::VectorXd(values));
-    samples += static_cast<std::size_t>(segment.samples);
-  }
-  std::vector<std::size_t> lengths;
-  for (const auto& a : angles) lengths.push_back(static_cast<std::size_t>(a.size()));
-  std::nth_element(lengths.begin(), lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2), lengths.end());
-  const std::size_t n = lengths[lengths.size() / 2];  // angle samples of the median burst (of the record when even)
-
-  const auto factors = allan::averaging_factors(grid, *kind, n, tau0);
-  const auto curve = bursts ? allan::estimate_bursts(*kind, angles, tau0, input, factors, o.confidence)
-                            : allan::estimate(*kind, angles.front(), tau0, input, factors, o.confidence);
+  const auto b = burst_angles(channel, facts, input, tau0);
+  const auto factors = allan::averaging_factors(grid, *kind, b.median_length, tau0);
+  const auto curve = bursts ? allan::estimate_bursts(*kind, b.angles, tau0, input, factors, o.confidence)
+                            : allan::estimate(*kind, b.angles.front(), tau0, input, factors, o.confidence);
 
   const std::string unit = display_unit(record, role, o.data);
   const auto display = find_unit(unit);
   const double scale = display ? display->scale : 1.0;
-  // Deviations are differences: a unit with an offset (K) converts them by its scale only.
-  std::vector<CsvColumn> columns{{"tau_s", {}, "s"},
-                                 {"dev", {}, unit, false},
-                                 {"dev_lo", {}, unit, false},
-                                 {"dev_hi", {}, unit, false},
-                                 {"n", {}, "1"}};
-  for (auto& c : columns) c.values.resize(static_cast<Eigen::Index>(curve.size()));
-  for (std::size_t i = 0; i < curve.size(); ++i) {
-    const auto k = static_cast<Eigen::Index>(i);
-    columns[0].values(k) = curve[i].tau;
-    columns[1].values(k) = curve[i].dev;
-    columns[2].values(k) = curve[i].dev_lo;
-    columns[3].values(k) = curve[i].dev_hi;
-    columns[4].values(k) = static_cast<double>(curve[i].terms);
-  }
-  outputs.write_csv(o.out, columns);
+  write_curve_csv(outputs, o.out, curve, unit);
 
-  std::optional<allan::Analysis> analysis;
-  try {
-    if (bursts && input == allan::InputType::Rate) {
-      analysis = allan::analyze_segments(channel.values, facts.segments, fs, {.confidence = o.confidence});
-    } else if (bursts) {  // an angle record: each burst's rate is its angle's differences / tau0
-      Eigen::VectorXd rate(static_cast<Eigen::Index>(samples - angles.size()));
-      std::vector<sampling::Segment> rate_segments;
-      Eigen::Index at = 0;
-      for (const auto& a : angles) {
-        const Eigen::Index k = a.size() - 1;
-        rate.segment(at, k) = (a.tail(k) - a.head(k)) / tau0;
-        rate_segments.push_back({at, k});
-        at += k;
-      }
-      analysis = allan::analyze_segments(rate, rate_segments, fs, {.confidence = o.confidence});
-    } else {
-      analysis = allan::analyze_angle(angles.front(), tau0, {.confidence = o.confidence});
-    }
-  } catch (const DataError& e) {
-    if (!o.json.empty()) throw DataError({o.data.path, 0, channel.source}, std::string(e.what()) + why);
-    std::cerr << "note: no Allan readings: " << e.what() << why << "\n";
-  }
+  const auto analysis = channel_analysis(o, channel, facts, b, bursts, input, fs, why);
   const allan::NoiseFit* fit = analysis && analysis->fit ? &*analysis->fit : nullptr;
   if (analysis && !fit) {
     if (!o.json.empty()) throw DataError({o.data.path, 0, role}, "too few Allan points for the noise-term fit" + why);
     std::cerr << "note: no noise-term fit: too few Allan points" << why << "\n";
   }
   const bool angular = channel.unit == "rad/s";
-  std::optional<allan::gmwm::Fit> gmwm;
-  if (!o.gmwm.empty()) {
-    const auto model = allan::gmwm::parse_model(o.gmwm, "--gmwm");
-    if (!analysis) throw DataError({o.data.path, 0, role}, "no Allan curve for the GMWM fit" + why);
-    if (bursts && o.gmwm_bootstrap > 0)
-      throw ConfigError({"", 0, "--gmwm-bootstrap"},
-                        "the bootstrap simulates a contiguous record and this one is " +
-                            std::to_string(facts.segments.size()) +
-                            " bursts; give --gmwm-bootstrap 0 for the asymptotic intervals");
-    gmwm = allan::gmwm::fit(analysis->curve, fs, model);
-    if (o.gmwm_bootstrap > 0)
-      gmwm = allan::gmwm::bootstrap(*gmwm, static_cast<Eigen::Index>(samples), o.gmwm_bootstrap, o.seed, o.threads);
-  }
+  const auto gmwm = gmwm_fit(o, analysis, role, facts, bursts, b.samples, fs, why);
   const std::string sampled = sampling::describe(facts, record.time());
   const nlohmann::json sampling_json{
       {"layout", bursts ? "regular_bursts" : "even"},
@@ -348,7 +436,7 @@ void allan_command(const AllanOptions& o) {
                        "bursts summed, tau up to the grid of the median burst"
                      : "one contiguous record"}};
   if (!o.json.empty()) {
-    auto summary = summary_json(o, *fit, angular, channel.unit, samples, tau0, sampling_json);
+    auto summary = summary_json(o, *fit, angular, channel.unit, b.samples, tau0, sampling_json);
     summary["readings"] = readings_json(*analysis, angular, channel.unit);
     if (gmwm) summary["gmwm"] = gmwm_json(*gmwm, angular, channel.unit);
     outputs.write(o.json, summary.dump(2) + "\n");
@@ -358,70 +446,13 @@ void allan_command(const AllanOptions& o) {
   outputs.commit();
 
   std::cout << o.kind << " of " << role << ": " << curve.size() << " taus from " << curve.front().tau << " s to "
-            << curve.back().tau << " s, " << samples << " samples, " << sampled << "\n";
+            << curve.back().tau << " s, " << b.samples << " samples, " << sampled << "\n";
   if (bursts)
     std::cout << "per burst: the " << o.kind << " of every burst pooled (no difference spans a gap), the edf of all "
               << facts.segments.size() << " bursts summed; tau only up to " << curve.back().tau << " s\n";
-  if (analysis && angular) {
-    const auto& b = analysis->bias_instability;
-    if (b.resolved) {
-      std::printf(
-          "B = %.4g deg/h (flat floor of the OADEV / 0.664, IEEE 952) at tau = %g s, 68.3 %% interval [%.3g, %.3g]\n",
-          b.value * kDphPerRadPerSec, b.tau_s, b.low * kDphPerRadPerSec, b.high * kDphPerRadPerSec);
-    } else {
-      std::printf(
-          "B < %.3g deg/h (not resolved within tau <= %g s: the OADEV has no floor there, its minimum is at "
-          "tau = %g s; 68.3 %% bound)\n",
-          b.high * kDphPerRadPerSec, b.longest_tau_s, b.tau_s);
-    }
-    std::printf("N = %.4g deg/h/sqrt(Hz) (-1/2 slope line at tau = 1 s)\n",
-                analysis->arw_rad_sqrt_s * kDphPerRadPerSec);
-    std::fflush(stdout);
-  }
-  if (fit && angular) {
-    char head[160];
-    std::snprintf(head, sizeof head,
-                  "least-squares fit of the five IEEE 952 terms (chi2/dof = %.3g, %zu points, %zu dof; "
-                  "one-sigma intervals):\n",
-                  fit->reduced_chi2(), fit->points, fit->dof);
-    std::cout << head;
-    for (const auto& c : allan::kIeee952Units) {
-      const auto& t = (*fit)[c.term];
-      const std::string key(c.key), term_unit(c.unit);
-      char line[200];
-      if (t.resolved) {
-        std::snprintf(line, sizeof line, "%s = %.4g +- %.2g %s [%.3g, %.3g]\n", key.c_str(), t.value * c.factor,
-                      t.sigma * c.factor, term_unit.c_str(), t.low * c.factor, t.high * c.factor);
-      } else {
-        std::snprintf(line, sizeof line, "%s < %.3g %s  (not resolved%s)\n", key.c_str(), t.high * c.factor,
-                      term_unit.c_str(),
-                      t.fitted ? ": kept by the fit, but within one sigma of 0" : ": set to 0 by the fit");
-      }
-      std::cout << line;
-    }
-  }
-  if (gmwm) {
-    std::vector<allan::gmwm::Process> model;
-    for (const auto& c : gmwm->components) model.push_back(c.process);
-    std::printf("GMWM %s (Guerrier et al. 2013; one-sigma intervals: %s; chi2/dof = %.3g, %zu points):\n",
-                allan::gmwm::to_string(model).c_str(), gmwm->intervals.c_str(), gmwm->reduced_chi2(), gmwm->points);
-    for (const auto& c : gmwm->components)
-      for (const auto& p : c.parameters) {
-        const auto [u, factor] = gmwm_unit(p, angular, channel.unit);
-        if (p.resolved)
-          std::printf("  %s %s = %.4g %s [%.3g, %.3g]\n", allan::gmwm::to_string(c.process).c_str(), p.name.c_str(),
-                      p.value * factor, u.c_str(), p.low * factor, p.high * factor);
-        else if (!c.observable && !std::isfinite(p.high))
-          std::printf("  %s %s not determined (the component is below what the curve resolves)\n",
-                      allan::gmwm::to_string(c.process).c_str(), p.name.c_str());
-        else
-          std::printf("  %s %s < %.3g %s  (not resolved: %s)\n", allan::gmwm::to_string(c.process).c_str(),
-                      p.name.c_str(), p.high * factor, u.c_str(),
-                      c.observable ? "its interval spans more than a factor e^0.5 either way"
-                                   : "below what the curve resolves; the bound is where it would show");
-      }
-    std::fflush(stdout);
-  }
+  if (analysis && angular) print_readings(*analysis);
+  if (fit && angular) print_fit(*fit);
+  if (gmwm) print_gmwm(*gmwm, angular, channel.unit);
 }
 
 }  // namespace

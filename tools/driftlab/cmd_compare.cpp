@@ -38,7 +38,7 @@ struct CompareOptions {
 struct PipelineResult {
   std::string file, label;
   Pipeline pipeline;
-  nlohmann::json report;
+  std::vector<StepRecord> steps;
   double seconds = 0.0;
   RunScores scores;
 };
@@ -49,9 +49,9 @@ double stage_seconds(const PipelineResult& r, const std::string& output) {
   if (it == r.pipeline.outputs.end()) return r.seconds;
   const std::string step = it->second.substr(0, it->second.find('.'));
   double total = 0.0;
-  for (const auto& s : r.report.value("steps", nlohmann::json::array())) {
-    total += s.value("seconds", 0.0);
-    if (s.value("name", std::string()) == step) return total;
+  for (const auto& s : r.steps) {
+    total += s.seconds;
+    if (s.name == step) return total;
   }
   return r.seconds;
 }
@@ -64,18 +64,12 @@ std::string unique_label(const std::string& file, std::set<std::string>& taken) 
   return label;
 }
 
-std::vector<HtmlCell> row(const std::string& pipeline, const evaluation::StageScore& s, std::optional<double> seconds) {
-  const auto& b = s.analysis.bias_instability;
-  const double f = kDphPerRadPerSec;
-  return {pipeline,
-          s.stage,
-          b.resolved ? HtmlCell(b.value * f) : HtmlCell("< " + format_number(b.high * f)),
-          b.resolved ? "[" + format_number(b.low * f) + ", " + format_number(b.high * f) + "]"
-                     : "not resolved within tau ≤ " + format_number(b.longest_tau_s) + " s",
-          s.analysis.arw_rad_sqrt_s * kDphPerRadPerSec,
-          s.bandwidth_hz,
-          s.residual_drift_rad_s ? HtmlCell(*s.residual_drift_rad_s * kDphPerRadPerSec) : HtmlCell(std::string("–")),
-          seconds ? HtmlCell(*seconds) : HtmlCell(std::string("–"))};
+Table2Row row(const std::string& pipeline, const RunScores& scores, const evaluation::StageScore& s,
+              std::optional<double> seconds) {
+  Table2Row r = table2_row(scores, s);
+  r.pipeline = pipeline;
+  r.seconds = seconds;
+  return r;
 }
 
 PlotSeries curve_series(const std::string& label, const allan::Analysis& a, PlotSeries::Style style) {
@@ -120,9 +114,8 @@ void compare(const CompareOptions& o, CommandEnv& env) {
     options.progress = [&](std::size_t k, std::size_t n, const std::string& name, double f) {
       env.progress(prefix + "[" + std::to_string(k + 1) + "/" + std::to_string(n) + "] " + name, f);
     };
-    r.report = nlohmann::json::object();
     const auto start = std::chrono::steady_clock::now();
-    const auto outputs = run_pipeline(r.pipeline, registry, record, options, r.report);
+    const auto outputs = run_pipeline(r.pipeline, registry, record, options, r.steps);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     env.progress(prefix + "scoring", 0.0);
     r.scores = score_run(record, r.pipeline, outputs);
@@ -131,21 +124,13 @@ void compare(const CompareOptions& o, CommandEnv& env) {
   // The record-level rows (original, PX4-style baseline, intrinsic floor) are the same for every
   // pipeline: taken from the first.
   const RunScores& first = results.front().scores;
-  HtmlTable table{"Table 2 columns per pipeline and stage",
-                  {"pipeline", "stage", "B (°/h)", "B interval (°/h)", "N (°/h/√Hz)", "bandwidth (Hz)",
-                   "residual drift (°/h)", "run time (s)"},
-                  {},
-                  "B: flat floor of the overlapping Allan deviation / 0.664 beyond the output's correlation time, "
-                  "with the chi-square interval of that point (68.3 %), where the deviation has a floor; otherwise "
-                  "only the bound '< x' within the taus read; N: the -1/2 line at tau = 1 s, comparable "
-                  "only at equal noise bandwidth (one-sided, relative to the record's white level); residual "
-                  "drift: rms of 60-s block means of output - true rate (records with a truth column); run time: "
-                  "wall-clock seconds until the stage's step finished, on this machine."};
+  std::vector<Table2Row> rows;
   for (const auto& s : first.stages)
-    if (!is_pipeline_stage(s)) table.rows.push_back(row("(record)", s, std::nullopt));
+    if (!is_pipeline_stage(s)) rows.push_back(row("(record)", first, s, std::nullopt));
   for (const auto& r : results)
     for (const auto& s : r.scores.stages)
-      if (is_pipeline_stage(s)) table.rows.push_back(row(r.label, s, stage_seconds(r, s.stage)));
+      if (is_pipeline_stage(s)) rows.push_back(row(r.label, r.scores, s, stage_seconds(r, s.stage)));
+  const HtmlTable table = table2_html(Table2Layout::Compare, rows, std::nullopt);
 
   PlotPanel panel;
   panel.title = "Overlapping Allan deviation of every output";
@@ -180,9 +165,8 @@ void compare(const CompareOptions& o, CommandEnv& env) {
     p["seed"] = r.pipeline.seed;
     p["seconds"] = r.seconds;
     p["steps"] = nlohmann::json::array();
-    for (const auto& s : r.report.value("steps", nlohmann::json::array()))
-      p["steps"].push_back(
-          {{"name", s.value("name", "")}, {"plugin", s.value("plugin", "")}, {"seconds", s.value("seconds", 0.0)}});
+    for (const auto& s : r.steps)
+      p["steps"].push_back({{"name", s.name}, {"plugin", s.plugin}, {"seconds", s.seconds}});
     for (std::size_t i = 0; i < r.scores.stages.size(); ++i)  // table2 has one row per stage, in order
       if (is_pipeline_stage(r.scores.stages[i])) p["table2"][i]["seconds"] = stage_seconds(r, r.scores.stages[i].stage);
     report["pipelines"].push_back(p);

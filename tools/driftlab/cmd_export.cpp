@@ -13,12 +13,12 @@
 namespace driftlab::cli {
 namespace {
 
-struct ExportOptions {
+struct ExportCommandOptions {
   std::string model, format, out;
   calibration::ExportOptions e;
 };
 
-void export_command(const ExportOptions& o) {
+void export_command(const ExportCommandOptions& o) {
   OutputSet outputs({o.model});
   outputs.plan(o.out, "--out");
   const auto model = calibration::read_calibration(o.model);
@@ -51,7 +51,7 @@ void export_command(const ExportOptions& o) {
 }  // namespace
 
 void add_export_command(CLI::App& app, CommandEnv&) {
-  auto o = std::make_shared<ExportOptions>();
+  auto o = std::make_shared<ExportCommandOptions>();
   auto* cmd = app.add_subcommand(
       "export",
       "export a calibration model, every channel: C99 header, PX4 TC_G*/TC_A* .params, ArduPilot INS_TCAL*, Kalibr "

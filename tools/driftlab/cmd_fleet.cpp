@@ -304,13 +304,14 @@ std::string input_hash(const ManifestUnit& u, const FleetOptions& o) {
   return f.hex();
 }
 
+// The input hash of the unit's last finished run; empty when it has none (or no readable status).
 std::string recorded_hash(const fs::path& status_json) {
   std::ifstream in(status_json);
   if (!in) return "";
   try {
     nlohmann::json j;
     in >> j;
-    return j.at("input_hash").get<std::string>();
+    return unit_status_from_json(j).input_hash;
   } catch (const nlohmann::json::exception&) {
     return "";
   }
@@ -319,7 +320,7 @@ std::string recorded_hash(const fs::path& status_json) {
 // The discrepancy check of one gyro channel (`driftlab discrepancy` without a device file, every
 // effect/* plugin a candidate, default options) on the unit's first record: what it names, in
 // status.json's words.
-nlohmann::json discrepancy_check(const ChannelRecords& ch, const Registry& registry) {
+DiscrepancyCheck discrepancy_check(const ChannelRecords& ch, const Registry& registry) {
   const calibration::Record& r = ch.records.front();
   TimeSeries record(r.time_s);
   record.set_channel({role::kRate, "rad/s", ch.column, r.rate_rad_s});
@@ -328,20 +329,20 @@ nlohmann::json discrepancy_check(const ChannelRecords& ch, const Registry& regis
     record.set_channel({role::kTrueRate, "rad/s", "", r.true_rate_rad_s});
   const auto candidates = discrepancy::make_candidates(registry, {}, {}, false);
   const auto result = discrepancy::find_missing_effects(record, candidates.candidates, {});
-  nlohmann::json named = nlohmann::json::array();
+  DiscrepancyCheck check;
   std::string text;
   for (const auto& step : result.steps) {
-    named.push_back({{"effect", step.effect}, {"delta_bic", step.delta_bic}});
+    check.named.push_back({step.effect, step.delta_bic});
     char bic[32];
     std::snprintf(bic, sizeof bic, "%.4g", step.delta_bic);
     text += (text.empty() ? "" : ", ") + step.effect + " named, delta BIC " + bic;
   }
   if (result.unexplained.found) text += (text.empty() ? "" : "; ") + std::string("unexplained structure remains");
-  return {{"named", named},
-          {"unexplained", result.unexplained.found},
-          {"gap_initial_dph", result.gap_initial_rad_s * kDphPerRadPerSec},
-          {"gap_final_dph", result.gap_final_rad_s * kDphPerRadPerSec},
-          {"text", ch.id.role() + ": " + (text.empty() ? std::string("nothing significant missing") : text)}};
+  check.unexplained = result.unexplained.found;
+  check.gap_initial_dph = result.gap_initial_rad_s * kDphPerRadPerSec;
+  check.gap_final_dph = result.gap_final_rad_s * kDphPerRadPerSec;
+  check.text = ch.id.role() + ": " + (text.empty() ? std::string("nothing significant missing") : text);
+  return check;
 }
 
 // Runs one unit: the calibrate path (records, quality gate, fit of every channel, held-out check),
@@ -353,12 +354,12 @@ std::string run_unit(const ManifestUnit& u, const FleetOptions& o, const fs::pat
   // neither a rerun nor the report can take it for this run's.
   std::error_code stale;
   if (non_regular_kind(dir / "status.json").empty()) fs::remove(dir / "status.json", stale);
-  nlohmann::json status = {{"format", "driftlab-fleet-unit/2"}, {"unit", u.id}, {"input_hash", hash}, {"data", u.data}};
+  UnitStatus status;
+  status.unit = u.id;
+  status.input_hash = hash;
+  status.data = u.data;
   calibration::ImuCalibration model;
   std::vector<calibration::ExportResult> exports;
-  nlohmann::json gate = nlohmann::json::array(), figures = nlohmann::json::object();
-  nlohmann::json quantisation = nlohmann::json::object(), curves = nlohmann::json::object();
-  nlohmann::json discrepancy = nlohmann::json::object();
   // Wall time per stage (--timings), on the console only: the unit's files do not depend on it.
   std::vector<std::pair<const char*, double>> stages;
   auto clock = std::chrono::steady_clock::now();
@@ -368,9 +369,9 @@ std::string run_unit(const ManifestUnit& u, const FleetOptions& o, const fs::pat
     clock = now;
   };
   auto fail = [&](int exit_class, const std::string& reason) {
-    status["status"] = "failed";
-    status["exit_class"] = exit_class;
-    status["reason"] = reason;
+    status.status = "failed";
+    status.exit_class = exit_class;
+    status.reason = reason;
   };
   try {
     CalibrationDataOptions data = o.data;
@@ -378,7 +379,7 @@ std::string run_unit(const ManifestUnit& u, const FleetOptions& o, const fs::pat
     const auto channels = load_channel_records(u.data, data);
     lap("read");
     for (const auto& f : run_quality_gate(channels, calibration::FitOptions{}.bin_s, o.strict, nullptr))
-      gate.push_back({{"severity", calibration::to_string(f.severity)}, {"code", f.code}, {"message", f.message}});
+      status.quality_gate.push_back({calibration::to_string(f.severity), f.code, f.message});
     lap("gate");
     calibration::FitOptions fit;
     fit.kind = model_kind_option(o.model);
@@ -390,8 +391,8 @@ std::string run_unit(const ManifestUnit& u, const FleetOptions& o, const fs::pat
     lap("fit");
     exports = {calibration::export_px4_params(model), calibration::export_ardupilot_params(model)};
     for (const auto& ch : model.channels) {
-      figures[ch.id.role()] = channel_figures(ch);
-      curves[ch.id.role()] = bias_curve(ch);
+      status.figures[ch.id.role()] = channel_figures(ch);
+      status.bias_curves[ch.id.role()] = bias_curve(ch);
     }
     for (const auto& ch : channels) {
       Eigen::Index n = 0;
@@ -401,19 +402,16 @@ std::string run_unit(const ManifestUnit& u, const FleetOptions& o, const fs::pat
       for (const auto& r : ch.records) raw.segment(n, r.rate_rad_s.size()) = r.rate_rad_s, n += r.rate_rad_s.size();
       const Quantisation q = quantisation_check(raw);
       const double display = imu::display_unit(ch.id.sensor).per_internal;
-      quantisation[ch.id.role()] = {{"lsb", q.lsb * display},
-                                    {"share", q.share},
-                                    {"sample_sigma", q.sample_sigma * display},
-                                    {"quantised", q.quantised}};
+      status.quantisation[ch.id.role()] = {q.lsb * display, q.share, q.sample_sigma * display, q.quantised};
     }
     lap("figures");
     if (o.discrepancy)
       for (const auto& ch : channels)
-        if (ch.id.sensor == imu::Sensor::Gyro) discrepancy[ch.id.role()] = discrepancy_check(ch, *o.registry);
+        if (ch.id.sensor == imu::Sensor::Gyro) status.discrepancy[ch.id.role()] = discrepancy_check(ch, *o.registry);
     lap("discrepancy");
-    status["status"] = "passed";
-    status["exit_class"] = 0;
-    status["reason"] = "";
+    status.status = "passed";
+    status.exit_class = 0;
+    status.reason = "";
   } catch (const ConfigError& e) {
     fail(kExitUsage, e.what());
   } catch (const DataError& e) {
@@ -421,22 +419,15 @@ std::string run_unit(const ManifestUnit& u, const FleetOptions& o, const fs::pat
   } catch (const std::exception& e) {
     fail(kExitFailure, e.what());
   }
-  status["quality_gate"] = gate;
-  status["figures"] = figures;
-  status["quantisation"] = quantisation;
-  status["bias_curves"] = curves;
-  status["discrepancy"] = discrepancy;
-  nlohmann::json notes = nlohmann::json::array();
   for (const auto& e : exports)
-    for (const auto& n : e.notes) notes.push_back(n);
-  status["export_notes"] = notes;
+    for (const auto& n : e.notes) status.export_notes.push_back(n);
 
   // The unit's folder holds exactly these files of its last run (a failed run retires an earlier
   // model and exports); a killed run's hidden temporaries are cleared first (the folder is the
   // unit's alone).
   OutputSet files({u.data.begin(), u.data.end()});
   files.make_directory(dir, "--out");
-  const bool passed = status["status"] == "passed";
+  const bool passed = status.status == "passed";
   const std::pair<const char*, std::string> products[] = {
       {"model.json", passed ? calibration::to_json_text(model) : ""},
       {"px4.params", passed ? exports[0].text : ""},
@@ -452,7 +443,7 @@ std::string run_unit(const ManifestUnit& u, const FleetOptions& o, const fs::pat
   }
   OutputSet::remove_stale_temporaries(dir / "status.json");
   files.plan(dir / "status.json", "status.json");  // last: a unit is finished once it is in place
-  files.write(dir / "status.json", status.dump(2) + "\n");
+  files.write(dir / "status.json", to_json(status).dump(2) + "\n");
   files.commit();
   lap("exports");
   std::string times;
@@ -465,8 +456,7 @@ std::string run_unit(const ManifestUnit& u, const FleetOptions& o, const fs::pat
     times += "]";
   }
   return (passed ? u.id + ": passed (" + std::to_string(model.channels.size()) + " channels)"
-                 : u.id + ": failed (exit class " + std::to_string(status["exit_class"].get<int>()) +
-                       "): " + status["reason"].get<std::string>()) +
+                 : u.id + ": failed (exit class " + std::to_string(status.exit_class) + "): " + status.reason) +
          times;
 }
 

@@ -367,12 +367,12 @@ void info_command(const std::string& path) {
   }
 }
 
-struct ExportOptions {
+struct LogExportOptions {
   std::string path, out;
   LogSelection log;
 };
 
-void export_command(const ExportOptions& o) {
+void log_export_command(const LogExportOptions& o) {
   OutputSet outputs({o.path});
   outputs.plan(o.out, "--out");
   require_log(o.path);
@@ -408,7 +408,7 @@ void add_log_command(CLI::App& app, CommandEnv&) {
       ->required();
   info->callback([path] { info_command(*path); });
 
-  auto o = std::make_shared<ExportOptions>();
+  auto o = std::make_shared<LogExportOptions>();
   auto* exp = log->add_subcommand(
       "export",
       "write a log's IMU record as CSV: t_s (ULog, DataFlash: s since boot; bags: header stamps, s since the "
@@ -421,7 +421,7 @@ void add_log_command(CLI::App& app, CommandEnv&) {
       ->required();
   exp->add_option("--out", o->out, "output CSV (written atomically)")->required();
   add_log_selection_options(exp, o->log);
-  exp->callback([o] { export_command(*o); });
+  exp->callback([o] { log_export_command(*o); });
 }
 
 }  // namespace driftlab::cli

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
+#include <optional>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -112,9 +113,13 @@ void write_report(const NavReport& report, nlohmann::ordered_json info, OutputSe
   const Eigen::Index n = report.input.time_s.size();
   // summary.json: the keys (degrees and metres; magnitudes).
   nlohmann::ordered_json summary, heading_final, position_final, heading_rms;
+  std::optional<double> raw_heading_final, compensated_heading_final;
   for (const auto& run : report.runs) {
     if (run.name == "noise_only") continue;  // reported in nav_info.json and on stdout
-    heading_final[run.name] = std::abs(run.track.heading_error_rad[n - 1]) * kDegPerRad;
+    const double heading = std::abs(run.track.heading_error_rad[n - 1]) * kDegPerRad;
+    if (run.name == "raw") raw_heading_final = heading;
+    if (run.name == "compensated") compensated_heading_final = heading;
+    heading_final[run.name] = heading;
     position_final[run.name] = run.track.position_error_m[n - 1];
     heading_rms[run.name] = rms(run.track.heading_error_rad) * kDegPerRad;
   }
@@ -125,9 +130,8 @@ void write_report(const NavReport& report, nlohmann::ordered_json info, OutputSe
 
   for (const auto& run : report.runs)
     info["heading_error_max_abs_deg"][run.name] = run.track.heading_error_rad.cwiseAbs().maxCoeff() * kDegPerRad;
-  if (heading_final.contains("compensated") && heading_final["compensated"].get<double>() > 0)
-    info["heading_error_final_raw_over_compensated"] =
-        heading_final["raw"].get<double>() / heading_final["compensated"].get<double>();
+  if (raw_heading_final && compensated_heading_final && *compensated_heading_final > 0)
+    info["heading_error_final_raw_over_compensated"] = *raw_heading_final / *compensated_heading_final;
   const std::string ref = report.reference;
   info["outputs"]["summary.json"] = "final heading error (deg), final position error (m), heading error RMS (deg)";
   info["outputs"]["trajectory.csv"] = "t_s, " + ref + "_x_m, " + ref + "_y_m, " + ref +
@@ -197,92 +201,64 @@ void print_runs(const NavReport& report) {
 constexpr double kNavBytesPerSample = 600.0;
 constexpr double kNavSecondsPerSample = 5e-5;
 
-// The simulated drive of a device in a scenario, against the truth.
-void simulated_nav(const NavOptions& o, CommandEnv& env) {
-  if (o.device.empty())
-    throw ConfigError(Location{"", 0, "--device"},
-                      "the simulated drive needs --device (or navigate a record with --rawlog / --data)");
-  const auto device_path = resolve_device_file(o.device, o.devices_dir);
-  const auto device = devices::load_device_file(device_path);
-  const fs::path scenario_path = o.scenario.empty() ? mrpt_bridge::default_scenario_path() : fs::path(o.scenario);
-  auto scenario = mrpt_bridge::load_nav_scenario(scenario_path);
-  if (o.fixes && scenario.fix_period_s <= 0.0)
-    throw ConfigError(Location{scenario_path.string(), 0, "fixes.period_s"},
-                      "--fixes needs a scenario with position fixes (fixes.period_s > 0)");
-  {  // cost before the drive (a 1e6-Hz scenario or a 1e7-s segment must not end in bad_alloc hours later)
-    const double samples = std::floor(scenario.duration_s() * scenario.sample_rate_hz) + 1.0;
-    char what[160];
-    std::snprintf(what, sizeof what, "%.3g samples (scenario sample_rate_hz x duration %.3g s) at %.0f bytes each",
-                  samples, scenario.duration_s(), kNavBytesPerSample);
-    const Location where{input_name(scenario_path), 0, "sample_rate_hz, duration"};
-    check_memory_estimate(samples * kNavBytesPerSample, where, what);
-    std::snprintf(what, sizeof what, "%.3g samples (scenario sample_rate_hz x duration %.3g s) at %.2g s each", samples,
-                  scenario.duration_s(), kNavSecondsPerSample);
-    check_time_estimate(samples * kNavSecondsPerSample, where, what);
-  }
-  const fs::path out(o.out);
-  // Every output planned before the drive is simulated, committed together at the end.
-  OutputSet outputs({device_path, scenario_path, o.model});
-  outputs.make_directory(out, "--out");
-  for (const auto* name : {"summary.json", "trajectory.csv", "errors.csv", "nav.svg", "nav_info.json"})
-    outputs.plan(out / name, name);
-  if (!o.no_rawlog) outputs.plan(out / "drive.rawlog", "drive.rawlog");
-  if (o.model.empty()) outputs.plan(out / "model.json", "model.json");
+// Refuses a scenario whose drive would not fit in memory or time, before it is simulated (a 1e6-Hz
+// scenario or a 1e7-s segment must not end in bad_alloc hours later).
+void check_drive_cost(const mrpt_bridge::NavScenario& scenario, const fs::path& scenario_path) {
+  const double samples = std::floor(scenario.duration_s() * scenario.sample_rate_hz) + 1.0;
+  char what[160];
+  std::snprintf(what, sizeof what, "%.3g samples (scenario sample_rate_hz x duration %.3g s) at %.0f bytes each",
+                samples, scenario.duration_s(), kNavBytesPerSample);
+  const Location where{input_name(scenario_path), 0, "sample_rate_hz, duration"};
+  check_memory_estimate(samples * kNavBytesPerSample, where, what);
+  std::snprintf(what, sizeof what, "%.3g samples (scenario sample_rate_hz x duration %.3g s) at %.2g s each", samples,
+                scenario.duration_s(), kNavSecondsPerSample);
+  check_time_estimate(samples * kNavSecondsPerSample, where, what);
+}
 
-  std::cerr << "driftlab nav: device " << device.name << ", scenario " << scenario_path.string() << " ("
-            << scenario.duration_s() << " s at " << scenario.sample_rate_hz << " Hz, seed " << scenario.seed << ")\n";
-  env.progress("nav: simulate drive", 0.0);
-  const auto drive = mrpt_bridge::simulate_drive(device, scenario);
-  const Eigen::Index n = drive.gyro.time_s.size();
-
-  // The compensated rate: the given model, or one calibrated on a simulated oven run.
-  std::string model_source;
+// The yaw gyro's temperature model and where it came from.
+struct YawModel {
   calibration::CalibrationModel model;
+  std::string source;
+};
+
+// The given model's yaw gyro, or one calibrated on a simulated oven run of the device (written to
+// model.json).
+YawModel yaw_model(const NavOptions& o, const devices::DeviceDefinition& device,
+                   const mrpt_bridge::NavScenario& scenario, OutputSet& outputs, const fs::path& out, CommandEnv& env) {
+  YawModel yaw;
   if (!o.model.empty()) {
     const auto imu_model = calibration::read_calibration(o.model);
-    const auto* yaw = imu_model.find({imu::Sensor::Gyro, 'z', o.instance});
-    if (!yaw)
+    const auto* channel = imu_model.find({imu::Sensor::Gyro, 'z', o.instance});
+    if (!channel)
       throw ConfigError({o.model, 0, "channels"}, "nav needs the model of the yaw gyro (" +
                                                       imu::ChannelId{imu::Sensor::Gyro, 'z', o.instance}.role() +
                                                       "), which this model lacks");
-    model = yaw->model;
-    model_source = o.model;
-  } else {
-    mrpt_bridge::OvenCalibration oven;
-    oven.kind =
-        o.calibration_kind == "physical" ? calibration::ModelKind::Physical : calibration::ModelKind::Polynomial;
-    oven.seed = scenario.calibration_seed;
-    oven.progress = [&env](const std::string& label, double f) { env.progress("nav: calibrate: " + label, f); };
-    std::cerr << "driftlab nav: no --model given: calibrating a " << o.calibration_kind
-              << " model on a simulated oven run of the same device (seed " << scenario.calibration_seed
-              << "; the drive uses seed " << scenario.seed << ")\n";
-    model = mrpt_bridge::calibrate_on_oven_run(device, oven);
-    model.validate();
-    outputs.write(out / "model.json", calibration::to_json_text(calibration::single_axis(model, 'z', device.name)));
-    model_source = (out / "model.json").string() + " (" + o.calibration_kind + ", calibrated by nav on a " +
-                   (model.fit.records.empty() ? std::string("simulated oven run") : model.fit.records.front()) + ")";
+    yaw.model = channel->model;
+    yaw.source = o.model;
+    return yaw;
   }
-  std::size_t extrapolated = 0;
-  const Eigen::VectorXd compensated = mrpt_bridge::compensate_drive(model, drive, &extrapolated);
-  if (extrapolated > 0)
-    std::cerr << "driftlab nav: warning: " << extrapolated
-              << " drive samples had a temperature outside the model's calibrated range (extrapolated)\n";
+  mrpt_bridge::OvenCalibration oven;
+  oven.kind = o.calibration_kind == "physical" ? calibration::ModelKind::Physical : calibration::ModelKind::Polynomial;
+  oven.seed = scenario.calibration_seed;
+  oven.progress = [&env](const std::string& label, double f) { env.progress("nav: calibrate: " + label, f); };
+  std::cerr << "driftlab nav: no --model given: calibrating a " << o.calibration_kind
+            << " model on a simulated oven run of the same device (seed " << scenario.calibration_seed
+            << "; the drive uses seed " << scenario.seed << ")\n";
+  yaw.model = mrpt_bridge::calibrate_on_oven_run(device, oven);
+  yaw.model.validate();
+  outputs.write(out / "model.json", calibration::to_json_text(calibration::single_axis(yaw.model, 'z', device.name)));
+  yaw.source = (out / "model.json").string() + " (" + o.calibration_kind + ", calibrated by nav on a " +
+               (yaw.model.fit.records.empty() ? std::string("simulated oven run") : yaw.model.fit.records.front()) +
+               ")";
+  return yaw;
+}
 
-  NavReport report;
-  report.input = mrpt_bridge::nav_input(drive);
-  report.temp_c = drive.gyro.temp_c;
-  report.reference = "true";
-  report.title = "Heading error, " + device.name + " on " + scenario_path.filename().string();
-  // The intrinsic floor (DESIGN.md §1): the true rate plus only the gyro's noise (measured minus
-  // the simulator's systematic rate), i.e. what a perfect temperature model would leave.
-  report.runs = {
-      {"raw", drive.gyro.rate_rad_s, {}},
-      {"compensated", compensated, {}},
-      {"perfect", drive.gyro.true_rate_rad_s, {}},
-      {"noise_only", drive.gyro.true_rate_rad_s + (drive.gyro.rate_rad_s - drive.gyro.systematic_rate_rad_s), {}}};
-  const auto noise = mrpt_bridge::nav_noise(device, scenario);
-  run_filters(report, noise, o, env);
-
+// nav_info.json's facts of a simulated drive (write_report adds the errors).
+nlohmann::ordered_json simulated_info(const NavOptions& o, const fs::path& device_path, const fs::path& scenario_path,
+                                      const mrpt_bridge::NavScenario& scenario, const mrpt_bridge::DriveRecord& drive,
+                                      const std::string& model_source, const mrpt_bridge::NavNoise& noise,
+                                      const NavReport& report) {
+  const Eigen::Index n = drive.gyro.time_s.size();
   nlohmann::ordered_json info;
   info["device"] = device_path.string();
   info["scenario"] = scenario_path.string();
@@ -306,38 +282,96 @@ void simulated_nav(const NavOptions& o, CommandEnv& env) {
         "the drive for `nav --rawlog`: CObservationIMU (raw IMU_WZ rad/s, IMU_TEMPERATURE degC) with "
         "CActionRobotMovement2D odometry whose pose increments are the true motion (the reference) and whose "
         "velocity is the noisy odometry speed the EKF uses";
-  write_report(report, info, outputs, out, o.every_s);
+  return info;
+}
 
-  // The rawlog of the drive (raw rates): odometry increments in the robot frame of the previous
-  // true pose, so that composing them gives the true track back.
-  if (!o.no_rawlog) {
-    env.progress("nav: write drive.rawlog", 0.0);
-    mrpt_bridge::ImuTable table;
-    table.time_s = drive.gyro.time_s;
-    table.sensor_label = "GYRO";
-    Eigen::VectorXd dx = Eigen::VectorXd::Zero(n), dy = Eigen::VectorXd::Zero(n), dphi = Eigen::VectorXd::Zero(n);
-    for (Eigen::Index k = 1; k < n; ++k) {
-      const double ex = drive.x_m[k] - drive.x_m[k - 1], ey = drive.y_m[k] - drive.y_m[k - 1];
-      const double c = std::cos(drive.heading_rad[k - 1]), s = std::sin(drive.heading_rad[k - 1]);
-      dx[k] = c * ex + s * ey;
-      dy[k] = -s * ex + c * ey;
-      dphi[k] = mrpt_bridge::wrap_angle(drive.heading_rad[k] - drive.heading_rad[k - 1]);
-    }
-    table.columns = {{"rate_rps", drive.gyro.rate_rad_s, "1"},
-                     {"temp_c", drive.gyro.temp_c, "1"},
-                     {"odom_dx_m", dx, "1"},
-                     {"odom_dy_m", dy, "1"},
-                     {"odom_dphi_rad", dphi, "1"},
-                     {"odom_speed_mps", drive.odometry_speed_mps, "1"}};
-    mrpt_bridge::export_rawlog(table, outputs, out / "drive.rawlog");
+// The rawlog of the drive (raw rates): odometry increments in the robot frame of the previous
+// true pose, so that composing them gives the true track back.
+void write_drive_rawlog(const mrpt_bridge::DriveRecord& drive, OutputSet& outputs, const fs::path& path,
+                        CommandEnv& env) {
+  env.progress("nav: write drive.rawlog", 0.0);
+  const Eigen::Index n = drive.gyro.time_s.size();
+  mrpt_bridge::ImuTable table;
+  table.time_s = drive.gyro.time_s;
+  table.sensor_label = "GYRO";
+  Eigen::VectorXd dx = Eigen::VectorXd::Zero(n), dy = Eigen::VectorXd::Zero(n), dphi = Eigen::VectorXd::Zero(n);
+  for (Eigen::Index k = 1; k < n; ++k) {
+    const double ex = drive.x_m[k] - drive.x_m[k - 1], ey = drive.y_m[k] - drive.y_m[k - 1];
+    const double c = std::cos(drive.heading_rad[k - 1]), s = std::sin(drive.heading_rad[k - 1]);
+    dx[k] = c * ex + s * ey;
+    dy[k] = -s * ex + c * ey;
+    dphi[k] = mrpt_bridge::wrap_angle(drive.heading_rad[k] - drive.heading_rad[k - 1]);
   }
+  table.columns = {{"rate_rps", drive.gyro.rate_rad_s, "1"},
+                   {"temp_c", drive.gyro.temp_c, "1"},
+                   {"odom_dx_m", dx, "1"},
+                   {"odom_dy_m", dy, "1"},
+                   {"odom_dphi_rad", dphi, "1"},
+                   {"odom_speed_mps", drive.odometry_speed_mps, "1"}};
+  mrpt_bridge::export_rawlog(table, outputs, path);
+}
+
+// The simulated drive of a device in a scenario, against the truth.
+void simulated_nav(const NavOptions& o, CommandEnv& env) {
+  if (o.device.empty())
+    throw ConfigError(Location{"", 0, "--device"},
+                      "the simulated drive needs --device (or navigate a record with --rawlog / --data)");
+  const auto device_path = resolve_device_file(o.device, o.devices_dir);
+  const auto device = devices::load_device_file(device_path);
+  const fs::path scenario_path = o.scenario.empty() ? mrpt_bridge::default_scenario_path() : fs::path(o.scenario);
+  auto scenario = mrpt_bridge::load_nav_scenario(scenario_path);
+  if (o.fixes && scenario.fix_period_s <= 0.0)
+    throw ConfigError(Location{scenario_path.string(), 0, "fixes.period_s"},
+                      "--fixes needs a scenario with position fixes (fixes.period_s > 0)");
+  check_drive_cost(scenario, scenario_path);
+  const fs::path out(o.out);
+  // Every output planned before the drive is simulated, committed together at the end.
+  OutputSet outputs({device_path, scenario_path, o.model});
+  outputs.make_directory(out, "--out");
+  for (const auto* name : {"summary.json", "trajectory.csv", "errors.csv", "nav.svg", "nav_info.json"})
+    outputs.plan(out / name, name);
+  if (!o.no_rawlog) outputs.plan(out / "drive.rawlog", "drive.rawlog");
+  if (o.model.empty()) outputs.plan(out / "model.json", "model.json");
+
+  std::cerr << "driftlab nav: device " << device.name << ", scenario " << scenario_path.string() << " ("
+            << scenario.duration_s() << " s at " << scenario.sample_rate_hz << " Hz, seed " << scenario.seed << ")\n";
+  env.progress("nav: simulate drive", 0.0);
+  const auto drive = mrpt_bridge::simulate_drive(device, scenario);
+  const Eigen::Index n = drive.gyro.time_s.size();
+
+  // The compensated rate: the given model, or one calibrated on a simulated oven run.
+  const auto yaw = yaw_model(o, device, scenario, outputs, out, env);
+  std::size_t extrapolated = 0;
+  const Eigen::VectorXd compensated = mrpt_bridge::compensate_drive(yaw.model, drive, &extrapolated);
+  if (extrapolated > 0)
+    std::cerr << "driftlab nav: warning: " << extrapolated
+              << " drive samples had a temperature outside the model's calibrated range (extrapolated)\n";
+
+  NavReport report;
+  report.input = mrpt_bridge::nav_input(drive);
+  report.temp_c = drive.gyro.temp_c;
+  report.reference = "true";
+  report.title = "Heading error, " + device.name + " on " + scenario_path.filename().string();
+  // The intrinsic floor (DESIGN.md §1): the true rate plus only the gyro's noise (measured minus
+  // the simulator's systematic rate), i.e. what a perfect temperature model would leave.
+  report.runs = {
+      {"raw", drive.gyro.rate_rad_s, {}},
+      {"compensated", compensated, {}},
+      {"perfect", drive.gyro.true_rate_rad_s, {}},
+      {"noise_only", drive.gyro.true_rate_rad_s + (drive.gyro.rate_rad_s - drive.gyro.systematic_rate_rad_s), {}}};
+  const auto noise = mrpt_bridge::nav_noise(device, scenario);
+  run_filters(report, noise, o, env);
+
+  write_report(report, simulated_info(o, device_path, scenario_path, scenario, drive, yaw.source, noise, report),
+               outputs, out, o.every_s);
+  if (!o.no_rawlog) write_drive_rawlog(drive, outputs, out / "drive.rawlog", env);
   outputs.commit();
   env.progress("nav", 1.0);
 
   std::cout << std::fixed << std::setprecision(3);
   std::cout << "driftlab nav: " << n << " samples, " << drive.gyro.time_s[n - 1] / 60.0 << " min, "
             << (o.fixes ? std::to_string(drive.fix_index.size()) + " position fixes" : std::string("no position fixes"))
-            << ", model " << model_source << "; errors against the simulated truth\n";
+            << ", model " << yaw.source << "; errors against the simulated truth\n";
   print_runs(report);
   std::cout << "  written to " << out.string() << ": summary.json, nav_info.json, trajectory.csv, errors.csv, nav.svg"
             << (o.no_rawlog ? "" : ", drive.rawlog") << (o.model.empty() ? ", model.json" : "") << "\n";

@@ -65,10 +65,13 @@ void run(const RunOptions& o, CommandEnv& env) {
   };
   const auto start = std::chrono::steady_clock::now();
   std::map<std::string, Signal> outputs, step_signals;
+  std::vector<StepRecord> steps;
   options.step_signals = &step_signals;
   try {
-    outputs = run_pipeline(pipeline, registry, record, options, report);
+    outputs = run_pipeline(pipeline, registry, record, options, steps);
+    report["steps"] = steps_json(steps);
   } catch (...) {
+    report["steps"] = steps_json(steps);
     report["status"] = "failed";
     write_file_atomically(report_json, report.dump(2) + "\n");
     throw;
@@ -103,8 +106,8 @@ void run(const RunOptions& o, CommandEnv& env) {
   files.write(report_json, report.dump(2) + "\n");
   if (scores) {
     env.progress("figures (gnuplot)", 0.0);
-    write_run_html(files.stage_path(report_html), "driftlab run: " + pipeline.file, record, pipeline, outputs,
-                   step_signals, report, *scores);
+    files.write(report_html, run_html("driftlab run: " + pipeline.file, o.data.path, record, pipeline, outputs,
+                                      step_signals, steps, *scores));
     env.progress("figures (gnuplot)", 1.0);
     std::cout << table2_text(*scores);
   } else {

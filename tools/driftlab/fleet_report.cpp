@@ -113,29 +113,100 @@ SpecLimit parse_spec_column(const std::string& header, const Location& where) {
                                ")");
 }
 
-UnitSummary read_unit_summary(const std::filesystem::path& status_json) {
+nlohmann::json to_json(const UnitStatus& u) {
+  nlohmann::json gate = nlohmann::json::array();
+  for (const auto& f : u.quality_gate)
+    gate.push_back({{"severity", f.severity}, {"code", f.code}, {"message", f.message}});
+  nlohmann::json quantisation = nlohmann::json::object();
+  for (const auto& [channel, q] : u.quantisation)
+    quantisation[channel] = {
+        {"lsb", q.lsb}, {"share", q.share}, {"sample_sigma", q.sample_sigma}, {"quantised", q.quantised}};
+  nlohmann::json discrepancy = nlohmann::json::object();
+  for (const auto& [channel, check] : u.discrepancy) {
+    nlohmann::json named = nlohmann::json::array();
+    for (const auto& n : check.named) named.push_back({{"effect", n.effect}, {"delta_bic", n.delta_bic}});
+    discrepancy[channel] = {{"named", named},
+                            {"unexplained", check.unexplained},
+                            {"gap_initial_dph", check.gap_initial_dph},
+                            {"gap_final_dph", check.gap_final_dph},
+                            {"text", check.text}};
+  }
+  nlohmann::json figures = nlohmann::json::object(), curves = nlohmann::json::object();
+  for (const auto& [channel, f] : u.figures) figures[channel] = f;
+  for (const auto& [channel, c] : u.bias_curves) curves[channel] = c;
+  return {{"format", kUnitStatusFormat},
+          {"unit", u.unit},
+          {"input_hash", u.input_hash},
+          {"data", u.data},
+          {"status", u.status},
+          {"exit_class", u.exit_class},
+          {"reason", u.reason},
+          {"quality_gate", gate},
+          {"figures", figures},
+          {"quantisation", quantisation},
+          {"bias_curves", curves},
+          {"discrepancy", discrepancy},
+          {"export_notes", u.export_notes}};
+}
+
+UnitStatus unit_status_from_json(const nlohmann::json& j) {
+  UnitStatus u;
+  u.unit = j.at("unit").get<std::string>();
+  u.input_hash = j.at("input_hash").get<std::string>();
+  u.data = j.at("data").get<std::vector<std::string>>();
+  u.status = j.at("status").get<std::string>();
+  u.exit_class = j.at("exit_class").get<int>();
+  u.reason = j.at("reason").get<std::string>();
+  for (const auto& f : j.at("quality_gate"))
+    u.quality_gate.push_back(
+        {f.at("severity").get<std::string>(), f.at("code").get<std::string>(), f.at("message").get<std::string>()});
+  for (const auto& [channel, figures] : j.at("figures").items())
+    for (const auto& [key, value] : figures.items()) u.figures[channel][key] = value.get<double>();
+  for (const auto& [channel, q] : j.at("quantisation").items())
+    u.quantisation[channel] = {q.at("lsb").get<double>(), q.at("share").get<double>(),
+                               q.at("sample_sigma").get<double>(), q.at("quantised").get<bool>()};
+  for (const auto& [channel, curve] : j.at("bias_curves").items())
+    u.bias_curves[channel] = curve.get<std::vector<double>>();
+  for (const auto& [channel, check] : j.at("discrepancy").items()) {
+    DiscrepancyCheck c;
+    for (const auto& n : check.at("named"))
+      c.named.push_back({n.at("effect").get<std::string>(), n.at("delta_bic").get<double>()});
+    c.unexplained = check.at("unexplained").get<bool>();
+    c.gap_initial_dph = check.at("gap_initial_dph").get<double>();
+    c.gap_final_dph = check.at("gap_final_dph").get<double>();
+    c.text = check.at("text").get<std::string>();
+    u.discrepancy[channel] = std::move(c);
+  }
+  u.export_notes = j.at("export_notes").get<std::vector<std::string>>();
+  return u;
+}
+
+UnitStatus read_unit_status(const std::filesystem::path& status_json) {
   std::ifstream in(status_json);
   nlohmann::json j;
   try {
     in >> j;
-    UnitSummary u;
-    u.unit = j.at("unit").get<std::string>();
-    u.status = j.at("status").get<std::string>();
-    u.exit_class = j.at("exit_class").get<int>();
-    u.reason = j.at("reason").get<std::string>();
-    for (const auto& [channel, figures] : j.at("figures").items())
-      for (const auto& [key, value] : figures.items()) u.figures[channel][key] = value.get<double>();
-    for (const auto& [channel, q] : j.at("quantisation").items())
-      u.quantisation[channel] = {q.at("lsb").get<double>(), q.at("share").get<double>(),
-                                 q.at("sample_sigma").get<double>(), q.at("quantised").get<bool>()};
-    for (const auto& [channel, curve] : j.at("bias_curves").items())
-      u.bias_curves[channel] = curve.get<std::vector<double>>();
-    for (const auto& [channel, check] : j.at("discrepancy").items())
-      u.discrepancy.push_back(check.at("text").get<std::string>());
-    return u;
+    return unit_status_from_json(j);
   } catch (const nlohmann::json::exception& e) {
     throw ConfigError({status_json.string(), 0, ""}, std::string("not a fleet unit status file: ") + e.what());
   }
+}
+
+UnitSummary unit_summary(const UnitStatus& status) {
+  UnitSummary u;
+  u.unit = status.unit;
+  u.status = status.status;
+  u.exit_class = status.exit_class;
+  u.reason = status.reason;
+  u.figures = status.figures;
+  u.quantisation = status.quantisation;
+  u.bias_curves = status.bias_curves;
+  for (const auto& [channel, check] : status.discrepancy) u.discrepancy.push_back(check.text);
+  return u;
+}
+
+UnitSummary read_unit_summary(const std::filesystem::path& status_json) {
+  return unit_summary(read_unit_status(status_json));
 }
 
 // The FigureDef::holdout_floor of `key` (0 for no figure).
@@ -494,22 +565,37 @@ std::string family_sizes(const Families& families) {
   return text;
 }
 
-}  // namespace
-
-void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector<Outlier>& outliers,
-                        const Families& families, const std::filesystem::path& out, const std::string& command,
-                        OutputSet& files) {
-  std::map<std::string, std::vector<std::string>> flags;
-  for (const auto& o : outliers) flags[o.unit].push_back(o.text);
+// What every part of the report counts and lists per unit.
+struct FleetTally {
+  std::map<std::string, std::vector<std::string>> flags;  // unit -> its findings' texts
+  std::vector<std::vector<std::string>> spec;             // per unit, the limits it does not meet
   std::size_t passed = 0, within = 0;
+  double yield = 0.0;
+};
+
+FleetTally tally(const std::vector<UnitSummary>& units, const std::vector<Outlier>& outliers) {
+  FleetTally t;
+  for (const auto& o : outliers) t.flags[o.unit].push_back(o.text);
+  for (const auto& u : units) t.flags[u.unit];  // every unit has an entry (perhaps empty)
+  t.spec.resize(units.size());
+  for (std::size_t i = 0; i < units.size(); ++i) {
+    t.spec[i] = spec_violations(units[i]);
+    const bool ok = units[i].status == "passed";
+    t.passed += ok;
+    t.within += ok && t.spec[i].empty();
+  }
+  t.yield = units.empty() ? 0.0 : static_cast<double>(t.within) / static_cast<double>(units.size());
+  return t;
+}
+
+// report.json
+nlohmann::json report_json(const std::vector<UnitSummary>& units, const std::vector<Outlier>& outliers,
+                           const Families& families, const std::string& command, const FleetTally& t) {
   nlohmann::json unit_results = nlohmann::json::array(), failures = nlohmann::json::array();
-  std::vector<std::vector<std::string>> spec(units.size());
+  const auto& spec = t.spec;
   for (std::size_t i = 0; i < units.size(); ++i) {
     const auto& u = units[i];
-    spec[i] = spec_violations(u);
     const bool ok = u.status == "passed";
-    passed += ok;
-    within += ok && spec[i].empty();
     if (!ok) failures.push_back({{"unit", u.unit}, {"exit_class", u.exit_class}, {"reason", u.reason}});
     unit_results.push_back({{"unit", u.unit},
                             {"folder", "units/" + u.unit},
@@ -520,7 +606,7 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
                             {"spec_violations", spec[i]},
                             {"family", families.family.count(u.unit) ? nlohmann::json(families.family.at(u.unit))
                                                                      : nlohmann::json(nullptr)},
-                            {"outliers", flags[u.unit]},
+                            {"outliers", t.flags.at(u.unit)},
                             {"discrepancy", u.discrepancy}});
   }
   nlohmann::json dist = nlohmann::json::object();
@@ -539,51 +625,50 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
                             {"fleet_median", o.median},
                             {"robust_z", o.z},
                             {"text", o.text}});
-  const double yield = units.empty() ? 0.0 : static_cast<double>(within) / static_cast<double>(units.size());
-  const nlohmann::json report = {
-      {"format", "driftlab-fleet-report/1"},
-      {"command", command},
-      {"units", units.size()},
-      {"passed", passed},
-      {"failed", units.size() - passed},
-      {"within_spec", within},
-      {"yield", yield},
-      {"figure_units",
-       "gyro figures in deg/h (a1 deg/h/K, N deg/h/sqrt(Hz)), accelerometer figures in mg (a1 "
-       "mg/K, N mg/sqrt(Hz)), as each key's suffix says"},
-      {"outlier_rule",
-       {{"statistic",
-         "modified z-score 0.6745 (x - median) / MAD per channel and figure over the passed units "
-         "(Iglewicz & Hoaglin 1993); MAD = 0: (x - median) / (1.2533 mean |x - median|); the scale is at "
-         "least the channel's fleet-median held-out residual for a0 and hysteresis, half of it for "
-         "holdout"},
-        {"threshold", kOutlierZ},
-        {"distance",
-         "robust distance^2 = sum of the unit's squared robust z over its figures; flagged above the "
-         "chi-square quantile " +
-             number(kDistanceQuantile) +
-             " with as many degrees of freedom as "
-             "figures; robust_z of a distance finding is D^2 / threshold"},
-        {"quantisation", "raw output on multiples of its smallest step (share >= " + number(kQuantisedShare) +
-                             ") and that step >= the per-sample noise; robust_z of a quantisation finding is LSB / "
-                             "noise"}}},
-      {"families",
-       {{"k", families.k},
-        {"silhouette", families.silhouette},
-        {"silhouette_by_k", families.silhouette_by_k},
-        {"medoids", families.medoids},
-        {"channels", families.channels},
-        {"rule", "k-medoids (PAM) of the gyro bias curves at " + std::to_string(std::size(kFamilyGridC)) +
-                     " temperatures, k = 2.." + std::to_string(kMaxFamilies) +
-                     " by mean silhouette >= " + number(kFamilySilhouette) +
-                     ", smallest family >= " + number(100 * kMinFamilyShare) + " % of the units; else one family"}}},
-      {"distributions", dist},
-      {"outliers", outlier_list},
-      {"failures", failures},
-      {"unit_results", unit_results}};
-  files.write(out / "report.json", report.dump(2) + "\n");
+  return {{"format", "driftlab-fleet-report/1"},
+          {"command", command},
+          {"units", units.size()},
+          {"passed", t.passed},
+          {"failed", units.size() - t.passed},
+          {"within_spec", t.within},
+          {"yield", t.yield},
+          {"figure_units",
+           "gyro figures in deg/h (a1 deg/h/K, N deg/h/sqrt(Hz)), accelerometer figures in mg (a1 "
+           "mg/K, N mg/sqrt(Hz)), as each key's suffix says"},
+          {"outlier_rule",
+           {{"statistic",
+             "modified z-score 0.6745 (x - median) / MAD per channel and figure over the passed units "
+             "(Iglewicz & Hoaglin 1993); MAD = 0: (x - median) / (1.2533 mean |x - median|); the scale is at "
+             "least the channel's fleet-median held-out residual for a0 and hysteresis, half of it for "
+             "holdout"},
+            {"threshold", kOutlierZ},
+            {"distance",
+             "robust distance^2 = sum of the unit's squared robust z over its figures; flagged above the "
+             "chi-square quantile " +
+                 number(kDistanceQuantile) +
+                 " with as many degrees of freedom as "
+                 "figures; robust_z of a distance finding is D^2 / threshold"},
+            {"quantisation", "raw output on multiples of its smallest step (share >= " + number(kQuantisedShare) +
+                                 ") and that step >= the per-sample noise; robust_z of a quantisation finding is LSB / "
+                                 "noise"}}},
+          {"families",
+           {{"k", families.k},
+            {"silhouette", families.silhouette},
+            {"silhouette_by_k", families.silhouette_by_k},
+            {"medoids", families.medoids},
+            {"channels", families.channels},
+            {"rule", "k-medoids (PAM) of the gyro bias curves at " + std::to_string(std::size(kFamilyGridC)) +
+                         " temperatures, k = 2.." + std::to_string(kMaxFamilies) + " by mean silhouette >= " +
+                         number(kFamilySilhouette) + ", smallest family >= " + number(100 * kMinFamilyShare) +
+                         " % of the units; else one family"}}},
+          {"distributions", dist},
+          {"outliers", outlier_list},
+          {"failures", failures},
+          {"unit_results", unit_results}};
+}
 
-  // units.csv: one row per unit, every figure of every channel any passed unit has.
+// units.csv: one row per unit, every figure of every channel any passed unit has.
+std::string units_csv(const std::vector<UnitSummary>& units, const FleetTally& t) {
   std::set<std::pair<std::string, std::string>> columns;
   for (const auto& u : units)
     for (const auto& [channel, figures] : u.figures)
@@ -596,9 +681,9 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
   for (std::size_t i = 0; i < units.size(); ++i) {
     const auto& u = units[i];
     std::string f;
-    for (const auto& t : flags[u.unit]) f += (f.empty() ? "" : "; ") + t;
-    csv << u.unit << "," << u.status << "," << u.exit_class << "," << (u.status == "passed" && spec[i].empty() ? 1 : 0)
-        << "," << csv_cell(f) << "," << csv_cell(u.reason);
+    for (const auto& text : t.flags.at(u.unit)) f += (f.empty() ? "" : "; ") + text;
+    csv << u.unit << "," << u.status << "," << u.exit_class << ","
+        << (u.status == "passed" && t.spec[i].empty() ? 1 : 0) << "," << csv_cell(f) << "," << csv_cell(u.reason);
     for (const auto& c : columns) {
       csv << ",";
       const auto ch = u.figures.find(c.first);
@@ -608,22 +693,23 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
     }
     csv << "\n";
   }
-  files.write(out / "units.csv", csv.str());
+  return csv.str();
+}
 
-  HtmlReport html("driftlab fleet: " + std::to_string(units.size()) + " units");
-  html.section("Summary").paragraph(std::to_string(passed) + " of " + std::to_string(units.size()) +
-                                    " units calibrated; " + std::to_string(within) + " within spec (yield " +
-                                    number(100.0 * yield) + " %); " + std::to_string(outliers.size()) +
-                                    " outlier figures. Command: " + command);
+HtmlCell unit_link(const std::string& unit) { return HtmlLink{unit, "units/" + unit + "/status.json"}; }
+
+// The tables of report.html: failures, outliers, every unit, the figures' keys.
+HtmlTable failed_table(const std::vector<UnitSummary>& units) {
   HtmlTable failed{"Units that failed",
                    {"unit", "exit class", "reason"},
                    {},
                    "exit class: 1 failure, 2 configuration, 3 bad input data"};
-  const auto unit_link = [](const std::string& unit) -> HtmlCell {
-    return HtmlLink{unit, "units/" + unit + "/status.json"};
-  };
   for (const auto& u : units)
     if (u.status != "passed") failed.rows.push_back({unit_link(u.unit), static_cast<double>(u.exit_class), u.reason});
+  return failed;
+}
+
+HtmlTable outlier_table(const std::vector<Outlier>& outliers) {
   HtmlTable flagged{"Outliers",
                     {"unit", "model", "rule", "channel", "figure", "value", "fleet median", "z"},
                     {},
@@ -637,35 +723,57 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
   for (const auto& o : outliers)
     flagged.rows.push_back({unit_link(o.unit), HtmlLink{"model.json", "units/" + o.unit + "/model.json"}, o.rule,
                             o.channel, o.figure_key, o.value, o.median, o.z});
+  return flagged;
+}
+
+HtmlTable units_table(const std::vector<UnitSummary>& units, const FleetTally& t) {
   HtmlTable all{"Every unit", {"unit", "status", "within spec", "outliers", "spec violations"}, {}, ""};
   for (std::size_t i = 0; i < units.size(); ++i) {
     std::string v, f;
-    for (const auto& t : spec[i]) v += (v.empty() ? "" : "; ") + t;
-    for (const auto& t : flags[units[i].unit]) f += (f.empty() ? "" : "; ") + t;
+    for (const auto& text : t.spec[i]) v += (v.empty() ? "" : "; ") + text;
+    for (const auto& text : t.flags.at(units[i].unit)) f += (f.empty() ? "" : "; ") + text;
     all.rows.push_back({unit_link(units[i].unit), units[i].status,
-                        std::string(units[i].status == "passed" && spec[i].empty() ? "yes" : "no"), f, v});
+                        std::string(units[i].status == "passed" && t.spec[i].empty() ? "yes" : "no"), f, v});
   }
+  return all;
+}
+
+HtmlTable figures_table() {
   HtmlTable figures{"Figures of a channel",
                     {"figure", "gyro key", "accelerometer key"},
                     {},
                     "gyro figures in deg/h, accelerometer figures in mg, as each key's suffix says"};
   for (const auto& f : kFigures)
     figures.rows.push_back({std::string(f.doc), figure_key(f, imu::Sensor::Gyro), figure_key(f, imu::Sensor::Accel)});
-  html.section("Failures").table(failed).section("Outliers").table(flagged);
+  return figures;
+}
+
+// The families' paragraph: their count, silhouette and sizes, or why there is one.
+std::string families_text(const Families& families) {
+  return families.k == 1
+             ? "One family: no split of the gyro bias-vs-temperature curves is supported (best mean silhouette " +
+                   number(families.silhouette_by_k.empty()
+                              ? 0.0
+                              : *std::max_element(families.silhouette_by_k.begin(), families.silhouette_by_k.end())) +
+                   " below " + number(kFamilySilhouette) + ", or a family smaller than " +
+                   number(100 * kMinFamilyShare) + " % of the units)."
+             : std::to_string(families.k) + " families of gyro bias-vs-temperature curves (mean silhouette " +
+                   number(families.silhouette) + "); " + family_sizes(families) + ".";
+}
+
+// report.html
+std::string report_html(const std::vector<UnitSummary>& units, const std::vector<Outlier>& outliers,
+                        const Families& families, const std::string& command, const FleetTally& t) {
+  HtmlReport html("driftlab fleet: " + std::to_string(units.size()) + " units");
+  html.section("Summary").paragraph(std::to_string(t.passed) + " of " + std::to_string(units.size()) +
+                                    " units calibrated; " + std::to_string(t.within) + " within spec (yield " +
+                                    number(100.0 * t.yield) + " %); " + std::to_string(outliers.size()) +
+                                    " outlier figures. Command: " + command);
+  html.section("Failures").table(failed_table(units)).section("Outliers").table(outlier_table(outliers));
   if (const Figure f = holdout_figure(units, outliers); !f.panels.empty())
     html.figure_or_note(
         f, "Held-out residual of every calibrated unit per channel; red: a unit with a finding on that channel");
-  html.section("Families")
-      .paragraph(
-          families.k == 1
-              ? "One family: no split of the gyro bias-vs-temperature curves is supported (best mean silhouette " +
-                    number(families.silhouette_by_k.empty()
-                               ? 0.0
-                               : *std::max_element(families.silhouette_by_k.begin(), families.silhouette_by_k.end())) +
-                    " below " + number(kFamilySilhouette) + ", or a family smaller than " +
-                    number(100 * kMinFamilyShare) + " % of the units)."
-              : std::to_string(families.k) + " families of gyro bias-vs-temperature curves (mean silhouette " +
-                    number(families.silhouette) + "); " + family_sizes(families) + ".");
+  html.section("Families").paragraph(families_text(families));
   if (const Figure f = family_figure(units, families); !f.panels.empty())
     html.figure_or_note(f, "Fitted gyro bias against temperature, one line per unit, coloured by family");
   HtmlTable checks{"Discrepancy check (--discrepancy)",
@@ -676,9 +784,20 @@ void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector
   for (const auto& u : units)
     for (const auto& text : u.discrepancy) checks.rows.push_back({unit_link(u.unit), text});
   if (!checks.rows.empty()) html.section("Discrepancy check").table(checks);
-  html.section("Units").table(all);
-  html.section("Figures").table(figures);
-  files.write(out / "report.html", html.html());
+  html.section("Units").table(units_table(units, t));
+  html.section("Figures").table(figures_table());
+  return html.html();
+}
+
+}  // namespace
+
+void write_fleet_report(const std::vector<UnitSummary>& units, const std::vector<Outlier>& outliers,
+                        const Families& families, const std::filesystem::path& out, const std::string& command,
+                        OutputSet& files) {
+  const FleetTally t = tally(units, outliers);
+  files.write(out / "report.json", report_json(units, outliers, families, command, t).dump(2) + "\n");
+  files.write(out / "units.csv", units_csv(units, t));
+  files.write(out / "report.html", report_html(units, outliers, families, command, t));
 }
 
 }  // namespace driftlab::cli

@@ -121,6 +121,43 @@ struct SpecLimit {
 // Parses a manifest header "<channels>.<figure key>_max"; ConfigError naming `where` otherwise.
 SpecLimit parse_spec_column(const std::string& header, const Location& where);
 
+// status.json of one unit (OUT/units/<id>/status.json, format kUnitStatusFormat): the one
+// definition of its keys. cmd_fleet writes it; a resumed run (its input_hash) and the fleet report
+// (unit_summary) read it back.
+inline constexpr const char* kUnitStatusFormat = "driftlab-fleet-unit/2";
+struct GateFinding {  // one finding of the calibration quality gate
+  std::string severity, code, message;
+};
+struct DiscrepancyCheck {  // `driftlab discrepancy` on a gyro channel's first record
+  struct Named {
+    std::string effect;
+    double delta_bic = 0.0;
+  };
+  std::vector<Named> named;
+  bool unexplained = false;
+  double gap_initial_dph = 0.0, gap_final_dph = 0.0;
+  std::string text;  // "gyro_x: ... named, delta BIC ..."
+};
+struct UnitStatus {
+  std::string unit;
+  std::string input_hash;         // of the unit's inputs and options
+  std::vector<std::string> data;  // its records
+  std::string status = "failed";  // "passed", "failed"
+  int exit_class = 0;             // of a failed unit: 1, 2 or 3
+  std::string reason;             // of a failed unit
+  std::vector<GateFinding> quality_gate;
+  std::map<std::string, std::map<std::string, double>> figures;  // channel role -> key -> value
+  std::map<std::string, Quantisation> quantisation;              // channel role -> check, display units
+  std::map<std::string, std::vector<double>> bias_curves;        // channel role -> bias_curve
+  std::map<std::string, DiscrepancyCheck> discrepancy;           // gyro channel role -> check (--discrepancy)
+  std::vector<std::string> export_notes;
+};
+nlohmann::json to_json(const UnitStatus& status);
+// Throws nlohmann::json::exception when `j` is not a unit status.
+UnitStatus unit_status_from_json(const nlohmann::json& j);
+// ConfigError naming the file when it is not a unit status file.
+UnitStatus read_unit_status(const std::filesystem::path& status_json);
+
 struct UnitSummary {
   std::string unit;
   std::string status;  // "passed", "failed"
@@ -132,8 +169,10 @@ struct UnitSummary {
   std::map<std::string, std::vector<double>> bias_curves;        // channel role -> bias_curve
   std::vector<std::string> discrepancy;  // per gyro channel checked (--discrepancy): "gyro_x: ... named, delta BIC ..."
 };
-// A unit's summary from its status.json (the format cmd_fleet writes); ConfigError naming the file
-// when it is not one.
+// What the report needs of a unit's status (limits: none, they come from the manifest).
+UnitSummary unit_summary(const UnitStatus& status);
+// A unit's summary from its status.json (read_unit_status); ConfigError naming the file when it is
+// not one.
 UnitSummary read_unit_summary(const std::filesystem::path& status_json);
 
 // A finding about one unit. rule "robust_z": channel, figure_key, value, fleet median, z;

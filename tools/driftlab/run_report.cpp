@@ -68,22 +68,21 @@ Figure imf_figure(const std::string& step, const Signal& imfs, const Signal* res
   return f;
 }
 
-Figure entropy_figure(const std::string& step, const nlohmann::json& imfs) {
+Figure entropy_figure(const std::string& step, const std::vector<ImfDecision>& decisions) {
   PlotPanel p;
   p.title = step + ": sample entropy per IMF and the groups (paper Fig. 12)";
   p.x_label = "IMF";
   p.y_label = "SampEn";
   p.legend = PlotPanel::Legend::TopRight;
-  std::map<std::string, PlotSeries> groups;
-  for (const auto& e : imfs) {
-    if (!e["score"].is_number()) continue;
-    auto& s = groups[e["group"].get<std::string>()];
-    s.label = e["group"].get<std::string>();
+  std::map<ImfGroup, PlotSeries> groups;
+  for (const auto& d : decisions) {
+    auto& s = groups[d.group];
+    s.label = to_string(d.group);
     s.style = PlotSeries::Style::Markers;
-    s.x.push_back(e["imf"].get<double>());
-    s.y.push_back(e["score"].get<double>());
+    s.x.push_back(static_cast<double>(d.imf));
+    s.y.push_back(d.score);
   }
-  for (const char* g : {"noise", "mixed", "drift"})
+  for (const auto g : kImfGroups)
     if (groups.count(g)) p.series.push_back(groups[g]);
   return {{p}, 700, 300, 1, ""};
 }
@@ -145,187 +144,264 @@ std::string fmt(double v, const char* format = "%.3g") {
   return b;
 }
 
+const char* const kRunTable2Note =
+    "B: flat floor of the overlapping Allan deviation / 0.664 (IEEE 952 Annex C), read at tau >= the output's "
+    "correlation time (1 / noise bandwidth), with its 68.3 % chi-square interval, where the deviation has a floor "
+    "(a minimum with rising or flat neighbours within the intervals); where it is still falling at the longest "
+    "tau, only the bound '< x' (the upper end of the minimum's interval / 0.664). N: the -1/2 slope line at "
+    "tau = 1 s; N is only comparable at equal noise bandwidth (one-sided equivalent bandwidth relative to the "
+    "original record's white level). Residual drift: rms of 60-s block means of output - true rate. Max error / "
+    "floor: largest ratio over tau of the Allan deviation of (output - true rate) to that of the intrinsic "
+    "noise (measured - true systematic rate); 'within 1.5x' when every tau is, allowing for both intervals. "
+    "px4_polynomial: third-order polynomial in temperature fitted on the first heating leg, clipped to it.";
+
+const char* const kCompareTable2Note =
+    "B: flat floor of the overlapping Allan deviation / 0.664 beyond the output's correlation time, "
+    "with the chi-square interval of that point (68.3 %), where the deviation has a floor; otherwise "
+    "only the bound '< x' within the taus read; N: the -1/2 line at tau = 1 s, comparable "
+    "only at equal noise bandwidth (one-sided, relative to the record's white level); residual "
+    "drift: rms of 60-s block means of output - true rate (records with a truth column); run time: "
+    "wall-clock seconds until the stage's step finished, on this machine.";
+
+const HtmlCell kNone = std::string("–");
+
+// The value cell of B: the number where resolved, otherwise the bound's text.
+HtmlCell b_value_cell(const allan::FloorReading& reading, BStyle bound) {
+  const auto b = b_deg_h(reading);
+  return b.resolved ? HtmlCell(b.value) : HtmlCell(b_text(b, bound));
+}
+
+std::vector<HtmlCell> run_cells(const Table2Row& r, bool reference) {
+  const auto& a = *r.analysis;
+  std::vector<HtmlCell> row{r.stage};
+  if (reference) {
+    row.push_back(r.reference ? HtmlCell(r.reference->b_deg_h) : kNone);
+    row.push_back(r.reference ? HtmlCell(r.reference->n_deg_h_rthz) : kNone);
+  }
+  row.insert(row.end(),
+             {b_value_cell(a.bias_instability, BStyle::Bound), b_text(b_deg_h(a.bias_instability), BStyle::Interval),
+              a.bias_instability.tau_s, a.arw_rad_sqrt_s * kDphPerRadPerSec, r.bandwidth_hz});
+  row.push_back(r.residual_drift_rad_s ? HtmlCell(*r.residual_drift_rad_s * kDphPerRadPerSec) : kNone);
+  row.push_back(r.against_floor ? HtmlCell(fmt(r.against_floor->max_ratio, "%.2f") +
+                                           (r.against_floor->within ? " (within 1.5x)" : " (above)"))
+                                : kNone);
+  return row;
+}
+
+std::vector<HtmlCell> compare_cells(const Table2Row& r) {
+  const auto& a = *r.analysis;
+  return {r.pipeline,
+          r.stage,
+          b_value_cell(a.bias_instability, BStyle::BoundFourDigits),
+          b_text(b_deg_h(a.bias_instability), BStyle::IntervalBracketed),
+          a.arw_rad_sqrt_s * kDphPerRadPerSec,
+          r.bandwidth_hz,
+          r.residual_drift_rad_s ? HtmlCell(*r.residual_drift_rad_s * kDphPerRadPerSec) : kNone,
+          r.seconds ? HtmlCell(*r.seconds) : kNone};
+}
+
+// ---- the sections of report.html, in order ----
+
+void add_table2(HtmlReport& html, const TimeSeries& record, const RunScores& scores) {
+  html.section("Table 2: Allan figures per stage");
+  std::vector<Table2Row> rows;
+  for (const auto& st : scores.stages) {
+    rows.push_back(table2_row(scores, st));
+    if (st.label != st.stage) rows.back().stage = st.stage + " (" + st.label + ")";
+  }
+  if (scores.intrinsic) {
+    Table2Row floor;
+    floor.stage = "intrinsic floor";
+    floor.analysis = &*scores.intrinsic;
+    floor.bandwidth_hz = record.sample_rate_hz() / 2.0;
+    rows.push_back(floor);
+  }
+  html.table(table2_html(Table2Layout::Run, rows, scores.reference));
+  html.figure(allan_figure(scores),
+              "Allan deviation of the original record, every stage, the PX4-style baseline and "
+              "the intrinsic floor, with 68.3 % intervals (bands)");
+}
+
+void add_decomposition(HtmlReport& html, const PipelineStep& step, const TimeSeries& record,
+                       const std::map<std::string, Signal>& step_signals) {
+  const auto imfs = step_signals.find(step.name + ".imfs");
+  const auto residue = step_signals.find(step.name + ".residue");
+  if (imfs == step_signals.end()) return;
+  html.section("Decomposition: " + step.name + " (" + step.plugin + ")");
+  html.figure(
+      imf_figure(step.name, imfs->second, residue == step_signals.end() ? nullptr : &residue->second, record.time()),
+      imfs->second.unit == "rad/s" ? "IMFs of the rate (paper Fig. 11)" : "IMFs of the temperature (paper Fig. 13)");
+}
+
+void add_grouping(HtmlReport& html, const PipelineStep& step, const std::vector<StepRecord>& steps) {
+  std::vector<ImfDecision> decisions;
+  for (const auto& s : steps)
+    if (s.name == step.name) decisions = imf_decisions(s.diagnostics);
+  if (decisions.empty()) return;
+  html.section("Grouping: " + step.name + " (" + step.plugin + ")");
+  html.figure(entropy_figure(step.name, decisions), "Sample entropy per IMF and the groups (paper Fig. 12)");
+  HtmlTable g;
+  g.caption = step.name + ": the group of each IMF and why";
+  g.header = {"IMF", "sample entropy", "group", "reason"};
+  for (const auto& d : decisions) g.rows.push_back({static_cast<double>(d.imf), d.score, to_string(d.group), d.reason});
+  html.table(g);
+}
+
+// Temperature trend: degC step outputs over the temperature.
+void add_temperature_trend(HtmlReport& html, const TimeSeries& record,
+                           const std::map<std::string, Signal>& step_signals) {
+  PlotPanel p;
+  p.title = "Temperature and its trend (paper Fig. 13)";
+  p.x_label = "time (h)";
+  p.y_label = "temperature (°C)";
+  p.series.push_back(
+      line("case temperature", record.time(), record.channel(role::kTemperature).values, kHoursPerSecond, 1.0));
+  for (const auto& [name, s] : step_signals)
+    if (s.unit == "degC" && s.columns.cols() == 1 && name.size() > 7 && name.substr(name.size() - 7) == ".signal")
+      p.series.push_back(line(name, record.time(), s.columns.col(0), kHoursPerSecond, 1.0));
+  html.section("Temperature trend");
+  html.figure({{p}, 900, 320, 1, ""}, "The case temperature and the trend the drift is compensated with");
+}
+
+// The rate of every stage (the record, the pipeline's, the baseline), by name in Table 2's order.
+struct StageOutputs {
+  std::map<std::string, Eigen::VectorXd> rates;
+  std::vector<std::string> names;
+  std::optional<std::string> final_stage, baseline_stage;
+};
+
+StageOutputs stage_outputs(const RunScores& scores, const std::map<std::string, Signal>& outputs) {
+  StageOutputs s;
+  for (const auto& st : scores.stages) {
+    if (st.source == StageScore::Source::Record) continue;
+    if (st.source == StageScore::Source::Baseline) {
+      s.baseline_stage = st.stage;
+      s.rates[st.stage] = scores.baseline->compensated_rad_s;
+    } else {
+      s.final_stage = st.stage;
+      s.rates[st.stage] = outputs.at(st.stage).columns.col(0);
+    }
+    s.names.push_back(st.stage);
+  }
+  return s;
+}
+
+void add_reconstruction(HtmlReport& html, const TimeSeries& record, const Pipeline& pipeline,
+                        const std::map<std::string, Signal>& step_signals, const StageOutputs& stages) {
+  // Minute means: the noise of a 10-Hz record hides the drift the stages remove.
+  const Eigen::VectorXd& time = record.time();
+  const Eigen::VectorXd minutes = evaluation::block_means(time, time).means;
+  PlotPanel p;
+  p.title = "Reconstructed rate per stage, 60-s means (paper Fig. 14)";
+  p.x_label = "time (h)";
+  p.y_label = "rate (°/h)";
+  for (const auto& name : stages.names) {
+    p.series.push_back(line(name, minutes, evaluation::block_means(time, stages.rates.at(name)).means, kHoursPerSecond,
+                            kDphPerRadPerSec));
+  }
+  // Every filter step on a rate: its input and its output over the first 10 minutes.
+  PlotPanel filtered;
+  filtered.title = "Filter steps on a rate, input and output, first 10 minutes";
+  filtered.x_label = "time (s)";
+  filtered.y_label = "rate (°/h)";
+  const auto first = std::min<Eigen::Index>(record.size(), static_cast<Eigen::Index>(600.0 * record.sample_rate_hz()));
+  const auto add_rate = [&](const std::string& name) {
+    const auto it = step_signals.find(name);
+    if (it != step_signals.end() && it->second.unit == "rad/s" && it->second.columns.cols() == 1)
+      filtered.series.push_back(
+          line(name, record.time().head(first), it->second.columns.col(0).head(first), 1.0, kDphPerRadPerSec));
+  };
+  for (const auto& step : pipeline.steps) {
+    if (step.plugin.rfind("filter/", 0) != 0) continue;
+    const auto in = step.inputs.find("signal");
+    if (in == step.inputs.end() || in->second.size() != 1) continue;
+    const auto before = filtered.series.size();
+    add_rate(in->second.front());
+    if (filtered.series.size() > before) add_rate(step.name + ".signal");
+  }
+  Figure f{{p}, 900, 320, 1, ""};
+  if (!filtered.series.empty()) f.panels.push_back(filtered);
+  html.section("Reconstruction");
+  html.figure(f, "The reconstructed rate of every stage (60-s means) and what each filter step on a rate does");
+}
+
+void add_residual(HtmlReport& html, const TimeSeries& record, const StageOutputs& stages) {
+  std::vector<std::string> shown;
+  if (stages.final_stage) shown.push_back(*stages.final_stage);
+  if (stages.baseline_stage) shown.push_back(*stages.baseline_stage);
+  html.section("Residual against temperature");
+  html.figure(residual_figure(record, shown, stages.rates),
+              "Residual of the final stage and of the PX4-style baseline against temperature, heating (red) and "
+              "cooling (blue) apart: what a temperature model left");
+}
+
 }  // namespace
 
-void write_run_html(const std::filesystem::path& path, const std::string& title, const TimeSeries& record,
-                    const Pipeline& pipeline, const std::map<std::string, Signal>& outputs,
-                    const std::map<std::string, Signal>& step_signals, const nlohmann::json& report,
-                    const RunScores& scores) {
-  HtmlReport html(title);
-  html.paragraph("Pipeline " + pipeline.file + " on " + report.value("data", std::string()) + ": " +
-                 std::to_string(record.size()) + " samples at " + fmt(record.sample_rate_hz()) + " Hz (" +
-                 fmt(record.size() / record.sample_rate_hz() * kHoursPerSecond) + " h), seed " +
-                 std::to_string(pipeline.seed) + ".");
+Table2Row table2_row(const RunScores& scores, const StageScore& st) {
+  Table2Row r;
+  r.stage = st.stage;
+  r.analysis = &st.analysis;
+  r.bandwidth_hz = st.bandwidth_hz;
+  r.residual_drift_rad_s = st.residual_drift_rad_s;
+  r.reference = evaluation::reference_row(scores, st.stage);
+  if (const auto it = scores.against_floor.find(st.stage); it != scores.against_floor.end())
+    r.against_floor = &it->second;
+  return r;
+}
 
-  html.section("Table 2: Allan figures per stage");
+HtmlTable table2_html(Table2Layout layout, const std::vector<Table2Row>& rows,
+                      const std::optional<PipelineReference>& reference) {
   HtmlTable t;
-  const bool ref = scores.reference.has_value();
-  t.caption = ref ? "The stages of the pipeline beside " + scores.reference->source +
-                        ", the intrinsic floor and a PX4-style baseline"
-                  : std::string("The stages of the pipeline, the intrinsic floor and a PX4-style baseline");
+  if (layout == Table2Layout::Compare) {
+    t.caption = "Table 2 columns per pipeline and stage";
+    t.header = {
+        "pipeline",    "stage", "B (°/h)", "B interval (°/h)", "N (°/h/√Hz)", "bandwidth (Hz)", "residual drift (°/h)",
+        "run time (s)"};
+    for (const auto& r : rows) t.rows.push_back(compare_cells(r));
+    t.note = kCompareTable2Note;
+    return t;
+  }
+  const bool ref = reference.has_value();
+  t.caption =
+      ref ? "The stages of the pipeline beside " + reference->source + ", the intrinsic floor and a PX4-style baseline"
+          : std::string("The stages of the pipeline, the intrinsic floor and a PX4-style baseline");
   t.header = {"stage"};
   if (ref) t.header.insert(t.header.end(), {"paper B (°/h)", "paper N (°/h/√Hz)"});
   t.header.insert(t.header.end(), {"B (°/h)", "B interval (°/h)", "minimum at tau (s)", "N (°/h/√Hz)",
                                    "noise bandwidth (Hz)", "residual drift (°/h)", "max error / floor"});
-  // B: a value and its interval where the deviation has a floor, otherwise the bound.
-  const auto b_cells = [](const allan::FloorReading& b) -> std::pair<HtmlCell, HtmlCell> {
-    if (b.resolved)
-      return {b.value * kDphPerRadPerSec, fmt(b.low * kDphPerRadPerSec) + " – " + fmt(b.high * kDphPerRadPerSec)};
-    return {"< " + fmt(b.high * kDphPerRadPerSec), "not resolved within tau ≤ " + fmt(b.longest_tau_s, "%.0f") + " s"};
-  };
-  for (const auto& st : scores.stages) {
-    const auto* p = evaluation::reference_row(scores, st.stage);
-    const auto& a = st.analysis;
-    const auto [b_value, b_interval] = b_cells(a.bias_instability);
-    std::vector<HtmlCell> row{st.label == st.stage ? st.stage : st.stage + " (" + st.label + ")"};
-    if (ref) {
-      row.push_back(p ? HtmlCell(p->b_deg_h) : HtmlCell(std::string("–")));
-      row.push_back(p ? HtmlCell(p->n_deg_h_rthz) : HtmlCell(std::string("–")));
-    }
-    row.insert(row.end(),
-               {b_value, b_interval, a.bias_instability.tau_s, a.arw_rad_sqrt_s * kDphPerRadPerSec, st.bandwidth_hz});
-    row.push_back(st.residual_drift_rad_s ? HtmlCell(*st.residual_drift_rad_s * kDphPerRadPerSec)
-                                          : HtmlCell(std::string("–")));
-    const auto it = scores.against_floor.find(st.stage);
-    row.push_back(it != scores.against_floor.end() ? HtmlCell(fmt(it->second.max_ratio, "%.2f") +
-                                                              (it->second.within ? " (within 1.5x)" : " (above)"))
-                                                   : HtmlCell(std::string("–")));
-    t.rows.push_back(row);
-  }
-  if (scores.intrinsic) {
-    const auto& a = *scores.intrinsic;
-    const auto [b_value, b_interval] = b_cells(a.bias_instability);
-    std::vector<HtmlCell> row{std::string("intrinsic floor")};
-    if (ref) row.insert(row.end(), {std::string("–"), std::string("–")});
-    row.insert(row.end(), {b_value, b_interval, a.bias_instability.tau_s, a.arw_rad_sqrt_s * kDphPerRadPerSec,
-                           record.sample_rate_hz() / 2.0, std::string("–"), std::string("–")});
-    t.rows.push_back(row);
-  }
-  t.note =
-      "B: flat floor of the overlapping Allan deviation / 0.664 (IEEE 952 Annex C), read at tau >= the output's "
-      "correlation time (1 / noise bandwidth), with its 68.3 % chi-square interval, where the deviation has a floor "
-      "(a minimum with rising or flat neighbours within the intervals); where it is still falling at the longest "
-      "tau, only the bound '< x' (the upper end of the minimum's interval / 0.664). N: the -1/2 slope line at "
-      "tau = 1 s; N is only comparable at equal noise bandwidth (one-sided equivalent bandwidth relative to the "
-      "original record's white level). Residual drift: rms of 60-s block means of output - true rate. Max error / "
-      "floor: largest ratio over tau of the Allan deviation of (output - true rate) to that of the intrinsic "
-      "noise (measured - true systematic rate); 'within 1.5x' when every tau is, allowing for both intervals. "
-      "px4_polynomial: third-order polynomial in temperature fitted on the first heating leg, clipped to it.";
-  html.table(t);
-  html.figure(allan_figure(scores),
-              "Allan deviation of the original record, every stage, the PX4-style baseline and "
-              "the intrinsic floor, with 68.3 % intervals (bands)");
+  for (const auto& r : rows) t.rows.push_back(run_cells(r, ref));
+  t.note = kRunTable2Note;
+  return t;
+}
+
+std::string run_html(const std::string& title, const std::string& data, const TimeSeries& record,
+                     const Pipeline& pipeline, const std::map<std::string, Signal>& outputs,
+                     const std::map<std::string, Signal>& step_signals, const std::vector<StepRecord>& steps,
+                     const RunScores& scores) {
+  HtmlReport html(title);
+  html.paragraph("Pipeline " + pipeline.file + " on " + data + ": " + std::to_string(record.size()) + " samples at " +
+                 fmt(record.sample_rate_hz()) + " Hz (" +
+                 fmt(record.size() / record.sample_rate_hz() * kHoursPerSecond) + " h), seed " +
+                 std::to_string(pipeline.seed) + ".");
+  add_table2(html, record, scores);
 
   html.section("The record");
   html.figure(raw_figure(record), "Rate and case temperature over time (paper Fig. 10)");
-
   for (const auto& step : pipeline.steps) {
     if (step.plugin.empty()) continue;
     const auto kind = step.plugin.substr(0, step.plugin.find('/'));
-    if (kind == "decomposition") {
-      const auto imfs = step_signals.find(step.name + ".imfs");
-      const auto residue = step_signals.find(step.name + ".residue");
-      if (imfs == step_signals.end()) continue;
-      html.section("Decomposition: " + step.name + " (" + step.plugin + ")");
-      html.figure(imf_figure(step.name, imfs->second, residue == step_signals.end() ? nullptr : &residue->second,
-                             record.time()),
-                  imfs->second.unit == "rad/s" ? "IMFs of the rate (paper Fig. 11)"
-                                               : "IMFs of the temperature (paper Fig. 13)");
-    } else if (kind == "classifier") {
-      nlohmann::json imfs;
-      for (const auto& s : report["steps"])
-        if (s["name"] == step.name) imfs = s["diagnostics"].value("imfs", nlohmann::json::array());
-      if (imfs.empty()) continue;
-      html.section("Grouping: " + step.name + " (" + step.plugin + ")");
-      html.figure(entropy_figure(step.name, imfs), "Sample entropy per IMF and the groups (paper Fig. 12)");
-      HtmlTable g;
-      g.caption = step.name + ": the group of each IMF and why";
-      g.header = {"IMF", "sample entropy", "group", "reason"};
-      for (const auto& e : imfs)
-        g.rows.push_back({e["imf"].get<double>(),
-                          e["score"].is_number() ? HtmlCell(e["score"].get<double>()) : HtmlCell(std::string("Inf")),
-                          e["group"].get<std::string>(), e["reason"].get<std::string>()});
-      html.table(g);
-    }
+    if (kind == "decomposition")
+      add_decomposition(html, step, record, step_signals);
+    else if (kind == "classifier")
+      add_grouping(html, step, steps);
   }
+  if (record.has(role::kTemperature)) add_temperature_trend(html, record, step_signals);
 
-  // Temperature trend (degC step outputs over the temperature) and the mixed group before/after.
-  if (record.has(role::kTemperature)) {
-    PlotPanel p;
-    p.title = "Temperature and its trend (paper Fig. 13)";
-    p.x_label = "time (h)";
-    p.y_label = "temperature (°C)";
-    p.series.push_back(
-        line("case temperature", record.time(), record.channel(role::kTemperature).values, kHoursPerSecond, 1.0));
-    for (const auto& [name, s] : step_signals)
-      if (s.unit == "degC" && s.columns.cols() == 1 && name.size() > 7 && name.substr(name.size() - 7) == ".signal")
-        p.series.push_back(line(name, record.time(), s.columns.col(0), kHoursPerSecond, 1.0));
-    html.section("Temperature trend");
-    html.figure({{p}, 900, 320, 1, ""}, "The case temperature and the trend the drift is compensated with");
-  }
-
-  std::map<std::string, Eigen::VectorXd> stage_outputs;
-  std::vector<std::string> stage_names;
-  std::optional<std::string> final_stage, baseline_stage;
-  for (const auto& st : scores.stages) {
-    if (st.source == StageScore::Source::Record) continue;
-    if (st.source == StageScore::Source::Baseline) {
-      baseline_stage = st.stage;
-      stage_outputs[st.stage] = scores.baseline->compensated_rad_s;
-    } else {
-      final_stage = st.stage;
-      stage_outputs[st.stage] = outputs.at(st.stage).columns.col(0);
-    }
-    stage_names.push_back(st.stage);
-  }
-  {
-    // Minute means: the noise of a 10-Hz record hides the drift the stages remove.
-    const Eigen::VectorXd& time = record.time();
-    const Eigen::VectorXd minutes = evaluation::block_means(time, time).means;
-    PlotPanel p;
-    p.title = "Reconstructed rate per stage, 60-s means (paper Fig. 14)";
-    p.x_label = "time (h)";
-    p.y_label = "rate (°/h)";
-    for (const auto& name : stage_names) {
-      p.series.push_back(line(name, minutes, evaluation::block_means(time, stage_outputs[name]).means, kHoursPerSecond,
-                              kDphPerRadPerSec));
-    }
-    // Every filter step on a rate: its input and its output over the first 10 minutes.
-    PlotPanel filtered;
-    filtered.title = "Filter steps on a rate, input and output, first 10 minutes";
-    filtered.x_label = "time (s)";
-    filtered.y_label = "rate (°/h)";
-    const auto first =
-        std::min<Eigen::Index>(record.size(), static_cast<Eigen::Index>(600.0 * record.sample_rate_hz()));
-    const auto add_rate = [&](const std::string& name) {
-      const auto it = step_signals.find(name);
-      if (it != step_signals.end() && it->second.unit == "rad/s" && it->second.columns.cols() == 1)
-        filtered.series.push_back(
-            line(name, record.time().head(first), it->second.columns.col(0).head(first), 1.0, kDphPerRadPerSec));
-    };
-    for (const auto& step : pipeline.steps) {
-      if (step.plugin.rfind("filter/", 0) != 0) continue;
-      const auto in = step.inputs.find("signal");
-      if (in == step.inputs.end() || in->second.size() != 1) continue;
-      const auto before = filtered.series.size();
-      add_rate(in->second.front());
-      if (filtered.series.size() > before) add_rate(step.name + ".signal");
-    }
-    Figure f{{p}, 900, 320, 1, ""};
-    if (!filtered.series.empty()) f.panels.push_back(filtered);
-    html.section("Reconstruction");
-    html.figure(f, "The reconstructed rate of every stage (60-s means) and what each filter step on a rate does");
-  }
-  if (record.has(role::kTrueRate) && record.has(role::kTemperature) && !stage_names.empty()) {
-    std::vector<std::string> shown;
-    if (final_stage) shown.push_back(*final_stage);
-    if (baseline_stage) shown.push_back(*baseline_stage);
-    html.section("Residual against temperature");
-    html.figure(residual_figure(record, shown, stage_outputs),
-                "Residual of the final stage and of the PX4-style baseline against temperature, heating (red) and "
-                "cooling (blue) apart: what a temperature model left");
-  }
-  html.write(path);
+  const auto stages = stage_outputs(scores, outputs);
+  add_reconstruction(html, record, pipeline, step_signals, stages);
+  if (record.has(role::kTrueRate) && record.has(role::kTemperature) && !stages.names.empty())
+    add_residual(html, record, stages);
+  return html.html();
 }
 
 }  // namespace driftlab::cli

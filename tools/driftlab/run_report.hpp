@@ -5,14 +5,19 @@
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "framework/pipeline.hpp"
 #include "framework/time_series.hpp"
 #include "models/evaluation/run_scores.hpp"
+#include "tools/driftlab/html_report.hpp"
 
 namespace driftlab::cli {
 
+using evaluation::b_deg_h;
+using evaluation::b_text;
+using evaluation::BStyle;
 using evaluation::intrinsic_floor_json;
 using evaluation::is_pipeline_stage;
 using evaluation::rate_stages;
@@ -23,14 +28,37 @@ using evaluation::stage_json;
 using evaluation::StageScore;
 using evaluation::table2_text;
 
+// One row of a Table 2 HTML table: a scored stage (or the intrinsic floor) and what the report
+// adds beside it.
+struct Table2Row {
+  std::string pipeline;                       // compare: the pipeline's label, "(record)"
+  std::string stage;                          // the stage column's text
+  const allan::Analysis* analysis = nullptr;  // B, N and the minimum's tau
+  double bandwidth_hz = 0.0;
+  std::optional<double> residual_drift_rad_s;         // none: "–"
+  const PipelineReference::Row* reference = nullptr;  // the published figures, if any
+  const evaluation::FloorComparison* against_floor = nullptr;
+  std::optional<double> seconds;  // compare: until the stage's step finished
+};
+// A stage's row: its analysis, bandwidth, residual drift, reference row and comparison with the floor.
+Table2Row table2_row(const RunScores& scores, const StageScore& stage);
+
+// The two Table 2 tables: `driftlab run`'s (stage, the reference's B and N when the pipeline has
+// one, B, its interval, the minimum's tau, N, noise bandwidth, residual drift, max error / floor)
+// and `driftlab compare`'s (pipeline, stage, B, interval, N, bandwidth, residual drift, run time).
+enum class Table2Layout { Run, Compare };
+HtmlTable table2_html(Table2Layout layout, const std::vector<Table2Row>& rows,
+                      const std::optional<PipelineReference>& reference);
+
 // report.html: Table 2 with the honest columns, the IMF groups and their reasons, and the paper's
 // figures (Figs. 10-15) plus the residual against temperature, heating and cooling apart. The
 // figures come from what the run produced: every decomposition step (its IMFs), every classifier
-// step (sample entropy per IMF and the groups), temperature-unit step outputs (the trend), the
-// stages and, with a truth column, the residual. Throws PlotError when gnuplot fails.
-void write_run_html(const std::filesystem::path& path, const std::string& title, const TimeSeries& record,
-                    const Pipeline& pipeline, const std::map<std::string, Signal>& outputs,
-                    const std::map<std::string, Signal>& step_signals, const nlohmann::json& report,
-                    const RunScores& scores);
+// step (sample entropy per IMF and the groups, from its step record), temperature-unit step outputs
+// (the trend), the stages and, with a truth column, the residual. `data`: the record's path as the
+// report names it. Returns the document. Throws PlotError when gnuplot fails.
+std::string run_html(const std::string& title, const std::string& data, const TimeSeries& record,
+                     const Pipeline& pipeline, const std::map<std::string, Signal>& outputs,
+                     const std::map<std::string, Signal>& step_signals, const std::vector<StepRecord>& steps,
+                     const RunScores& scores);
 
 }  // namespace driftlab::cli
