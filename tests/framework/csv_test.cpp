@@ -50,7 +50,7 @@ TEST(CsvReader, SynthesizesTimeFromTheSampleRateWhenThereIsNoTimeColumn) {
   options.sample_rate_hz = 50.0;
   const auto record = read_csv(kCsvDir / "gyro_z_rad_s.csv", options);
   EXPECT_DOUBLE_EQ(record.time()[5], 0.1);
-  EXPECT_NEAR(record.channel("rate").values[3], 0.003 * kRadPerDeg / 3600.0, kUnitConversionTolerance);
+  EXPECT_NEAR(record.channel("rate").values[3], 0.003 * kRadPerDeg / kSecondsPerHour, kUnitConversionTolerance);
 }
 
 TEST(ColumnMapping, AcceptsTheThreeSpellingsAndRejectsUnknownUnits) {

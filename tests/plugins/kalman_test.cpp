@@ -13,11 +13,10 @@
 #include "framework/params_io.hpp"
 #include "framework/pipeline.hpp"
 #include "framework/registry.hpp"
+#include "framework/units.hpp"
 
 namespace driftlab {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // Standard normal samples by Box-Muller from a seeded 64-bit Mersenne Twister.
 class Gaussian {
@@ -245,8 +244,8 @@ double allan_variance(const Eigen::VectorXd& rate, Eigen::Index m) {
 
 TEST(Kalman, AllanTermsConvertToPerSampleVariancesThatReproduceThoseTerms) {
   constexpr double fs = 100.0;
-  const double arw = 0.3 * (kPi / 180.0) / 60.0;           // 0.3 deg/sqrt(h) in rad/s/sqrt(Hz)
-  const double rrw = 2.0 * (kPi / 180.0) / 3600.0 / 60.0;  // 2 deg/h/sqrt(h) in rad/s^2/sqrt(Hz)
+  const double arw = 0.3 * kRadPerDeg / kSqrtSecondsPerHour;                    // 0.3 deg/sqrt(h) in rad/s/sqrt(Hz)
+  const double rrw = 2.0 * kRadPerDeg / kSecondsPerHour / kSqrtSecondsPerHour;  // 2 deg/h/sqrt(h) in rad/s^2/sqrt(Hz)
   const double r = kalman::measurement_variance_from_arw(arw, fs);
   const double q = kalman::process_variance_from_rrw(rrw, fs);
   EXPECT_DOUBLE_EQ(r, arw * arw * fs);  // 7.615e-7 (rad/s)^2
