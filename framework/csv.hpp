@@ -33,6 +33,7 @@
 #include <string_view>
 #include <vector>
 
+#include "framework/sampling.hpp"
 #include "framework/time_series.hpp"
 #include "framework/units.hpp"
 
@@ -58,11 +59,11 @@ std::optional<Quantity> quantity_of_role(const std::string& role);
 ColumnMapping parse_column_mapping(const std::string& text);
 
 struct CsvReadOptions {
-  std::vector<ColumnMapping> columns;  // empty: the default columns described above
-  double sample_rate_hz = 0.0;         // > 0: the file has no time column; t = i / fs
-  double max_gap_factor = 3.0;         // a step > factor x median step is a gap error; <= 0 reads gaps as
-                                       // they are (never as contiguous: analyses that assume even sampling
-                                       // still find them, framework/sampling.hpp)
+  std::vector<ColumnMapping> columns;            // empty: the default columns described above
+  double sample_rate_hz = 0.0;                   // > 0: the file has no time column; t = i / fs
+  double max_gap_factor = sampling::kGapFactor;  // a step > factor x median step is a gap error; <= 0 reads gaps as
+                                                 // they are (never as contiguous: analyses that assume even sampling
+                                                 // still find them, framework/sampling.hpp)
   std::vector<std::string> required_roles{"rate"};
 };
 
