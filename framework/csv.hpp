@@ -20,9 +20,9 @@
 // on one in-memory buffer: O(file size), about 0.1 s per million 3-column rows on one core
 // (the header check is linear in the number of columns too).
 //
-// Writing goes through write_file_atomically (temporary file + rename) or an OutputSet. Column
-// names must be valid, unique CSV header cells (ConfigError); values must be finite (Error: a
-// computation overflowed).
+// Writing: format_csv() gives the text, an OutputSet (output_set.hpp) writes it atomically, with
+// every other output of the command. Column names must be valid, unique CSV header cells (ConfigError); values must be
+// finite (Error: a computation overflowed).
 #pragma once
 
 #include <Eigen/Core>
@@ -200,8 +200,5 @@ struct CsvColumn {
 // output in messages. Throws ConfigError for a bad or repeated column name, Error for a
 // non-finite value.
 std::string format_csv(const std::vector<CsvColumn>& columns, const std::string& label);
-
-// Writes columns of equal length with shortest round-trip formatting, atomically.
-void write_csv(const std::filesystem::path& path, const std::vector<CsvColumn>& columns);
 
 }  // namespace driftlab
