@@ -9,6 +9,7 @@
 #include "devices/device_file.hpp"
 #include "framework/effect_catalogue.hpp"
 #include "framework/error.hpp"
+#include "framework/yaml_io.hpp"
 
 namespace driftlab::devices {
 namespace {
@@ -77,7 +78,9 @@ std::string add_effects_to_device_text(const std::string& text, const std::strin
     if (comment != std::string::npos) rest = rest.substr(0, comment);
     if (rest.find_first_not_of(' ') != std::string::npos) {
       // Flow style on one line: rewrite as a block with the existing entries kept in order.
-      const YAML::Node existing = YAML::Load(rest);
+      // The shared checked loader (framework/yaml_io.hpp); the leading newlines put an error on
+      // the file's line.
+      const YAML::Node existing = load_yaml_checked(std::string(at, '\n') + rest, file);
       std::vector<std::string> block{"effects:" + trailing_comment};
       for (const auto& entry : existing) {
         const std::string name = entry.first.as<std::string>();

@@ -149,7 +149,7 @@ std::string describe(FaultKind kind) {
       break;
     case FaultKind::BiasStep:
       std::snprintf(text, sizeof text, "gyro_y bias step of %g deg/s (%g deg/h) at the middle of the record",
-                    kBiasStepDps, kBiasStepDps * 3600.0);
+                    kBiasStepDps, kBiasStepDps * kSecondsPerHour);
       break;
     case FaultKind::Noisy:
       std::snprintf(text, sizeof text, "instance 1 gyro angle random walk N x %g", kNoisyFactor);
@@ -166,7 +166,7 @@ std::string describe(FaultKind kind) {
       break;
     case FaultKind::Lsb:
       std::snprintf(text, sizeof text, "instance 1 gyro_x quantised to an LSB of %g deg/s (%g deg/h)", kLsbDps,
-                    kLsbDps * 3600.0);
+                    kLsbDps * kSecondsPerHour);
       break;
   }
   return text;
@@ -232,7 +232,7 @@ ImuSimulationRecord simulate_unit(const FleetUnit& unit, const SimulationProfile
   } else if (unit.fault == FaultKind::BiasStep) {
     ImuAxisRecord& axis = r.instances.front().gyro[1];
     const Eigen::Index n = r.time_s.size();
-    const double step = kBiasStepDps * 3600.0 * kRadPerSecPerDph;
+    const double step = kBiasStepDps * kSecondsPerHour * kRadPerSecPerDph;
     axis.measured.tail(n - n / 2).array() += step;
     axis.systematic.tail(n - n / 2).array() += step;
   } else if (unit.fault == FaultKind::Lag) {
@@ -247,7 +247,7 @@ ImuSimulationRecord simulate_unit(const FleetUnit& unit, const SimulationProfile
     axis.systematic.setConstant(axis.measured[0]);
   } else if (unit.fault == FaultKind::Lsb) {
     ImuAxisRecord& axis = r.instances[1].gyro[0];
-    const double lsb = kLsbDps * 3600.0 * kRadPerSecPerDph;
+    const double lsb = kLsbDps * kSecondsPerHour * kRadPerSecPerDph;
     axis.measured = (axis.measured / lsb).array().round() * lsb;
   }
   return r;

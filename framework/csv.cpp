@@ -11,7 +11,6 @@
 #include <string_view>
 #include <unordered_map>
 
-#include "framework/atomic_file.hpp"
 #include "framework/error.hpp"
 #include "framework/imu.hpp"
 #include "framework/regular_file.hpp"
@@ -580,10 +579,6 @@ std::string format_csv(const std::vector<CsvColumn>& columns, const std::string&
   std::string text;
   stream_csv(columns, label, [&](std::string_view piece) { text += piece; });
   return text;
-}
-
-void write_csv(const std::filesystem::path& path, const std::vector<CsvColumn>& columns) {
-  write_file_atomically(path, format_csv(columns, path.string()));
 }
 
 }  // namespace driftlab

@@ -20,9 +20,9 @@
 // on one in-memory buffer: O(file size), about 0.1 s per million 3-column rows on one core
 // (the header check is linear in the number of columns too).
 //
-// Writing goes through write_file_atomically (temporary file + rename) or an OutputSet. Column
-// names must be valid, unique CSV header cells (ConfigError); values must be finite (Error: a
-// computation overflowed).
+// Writing: format_csv() gives the text, an OutputSet (output_set.hpp) writes it atomically, with
+// every other output of the command. Column names must be valid, unique CSV header cells (ConfigError); values must be
+// finite (Error: a computation overflowed).
 #pragma once
 
 #include <Eigen/Core>
@@ -33,6 +33,7 @@
 #include <string_view>
 #include <vector>
 
+#include "framework/sampling.hpp"
 #include "framework/time_series.hpp"
 #include "framework/units.hpp"
 
@@ -58,11 +59,11 @@ std::optional<Quantity> quantity_of_role(const std::string& role);
 ColumnMapping parse_column_mapping(const std::string& text);
 
 struct CsvReadOptions {
-  std::vector<ColumnMapping> columns;  // empty: the default columns described above
-  double sample_rate_hz = 0.0;         // > 0: the file has no time column; t = i / fs
-  double max_gap_factor = 3.0;         // a step > factor x median step is a gap error; <= 0 reads gaps as
-                                       // they are (never as contiguous: analyses that assume even sampling
-                                       // still find them, framework/sampling.hpp)
+  std::vector<ColumnMapping> columns;            // empty: the default columns described above
+  double sample_rate_hz = 0.0;                   // > 0: the file has no time column; t = i / fs
+  double max_gap_factor = sampling::kGapFactor;  // a step > factor x median step is a gap error; <= 0 reads gaps as
+                                                 // they are (never as contiguous: analyses that assume even sampling
+                                                 // still find them, framework/sampling.hpp)
   std::vector<std::string> required_roles{"rate"};
 };
 
@@ -218,8 +219,5 @@ std::string format_csv(const std::vector<CsvColumn>& columns, const std::string&
 // the pieces before its row.
 void stream_csv(const std::vector<CsvColumn>& columns, const std::string& label,
                 const std::function<void(std::string_view)>& sink);
-
-// Writes columns of equal length with shortest round-trip formatting, atomically.
-void write_csv(const std::filesystem::path& path, const std::vector<CsvColumn>& columns);
 
 }  // namespace driftlab

@@ -41,8 +41,6 @@ OutputSet::~OutputSet() {
   if (!committed_) discard();
 }
 
-void OutputSet::add_input(const fs::path& input) { inputs_.push_back(input); }
-
 void OutputSet::check_output(const fs::path& path, const Location& where) const {
   for (const auto& e : entries_)
     if (same_file(e.path, path))

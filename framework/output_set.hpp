@@ -41,8 +41,6 @@ class OutputSet {
   OutputSet(const OutputSet&) = delete;
   OutputSet& operator=(const OutputSet&) = delete;
 
-  // Adds an input that outputs must never overwrite (e.g. a file named inside a pipeline).
-  void add_input(const std::filesystem::path& input);
   // Checks and reserves one output; `option` names it in messages ("--json"). Empty path: no-op.
   void plan(const std::filesystem::path& path, const std::string& option);
   bool planned(const std::filesystem::path& path) const;
@@ -52,6 +50,8 @@ class OutputSet {
   void make_directory(const std::filesystem::path& dir, const std::string& option);
 
   // Stage the content of a planned output (throws std::logic_error when the path was not planned).
+  // Different planned outputs may be written from different threads at once, as long as nothing is
+  // planned, dropped, retired or committed meanwhile (`simulate --fleet` writes its units so).
   void write(const std::filesystem::path& path, std::string_view content);
   // Streams the CSV (stream_csv) to the temporary file: the text is never held whole.
   void write_csv(const std::filesystem::path& path, const std::vector<CsvColumn>& columns);

@@ -553,6 +553,7 @@ std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Regis
     RunContext ctx;
     ctx.threads = options.threads;
     ctx.time_s = record.time();
+    ctx.sample_rate_hz = record.sample_rate_hz();
     ctx.seed = static_cast<std::uint64_t>(derived_seed(pipeline.seed, step.name));
     if (options.progress)
       ctx.progress = [&, i](double f) {

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "framework/sampling.hpp"
 #include "framework/time_series.hpp"
 
 namespace driftlab {
@@ -49,6 +50,13 @@ struct RunContext {
   std::uint64_t seed = 1;  // used when a plugin has no seed parameter
   unsigned threads = 1;    // worker threads; results never depend on it
   Eigen::VectorXd time_s;  // the record's time stamps
+  // The record's mean sample rate, Hz (sampling::mean_rate_hz of time_s), set once by run_pipeline.
+  // 0 means "not given": a context built outside a pipeline (python, tests) may leave it, and
+  // rate_hz() then derives it from time_s with the same function. Plugins read rate_hz().
+  double sample_rate_hz = 0.0;
+  // The sample rate a plugin uses: sample_rate_hz when > 0, else sampling::mean_rate_hz(time_s)
+  // (0 for fewer than 2 time stamps or a zero span: no rate known).
+  double rate_hz() const { return sample_rate_hz > 0.0 ? sample_rate_hz : sampling::mean_rate_hz(time_s); }
   std::function<void(double fraction)> progress = [](double) {};
   nlohmann::json diagnostics = nlohmann::json::object();  // per-step report entries
 };

@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <optional>
 
+#include "framework/units.hpp"
+
 namespace driftlab {
 
 namespace {
@@ -51,7 +53,7 @@ void check_time_estimate(double seconds, const Location& where, const std::strin
   char text[320];
   std::snprintf(
       text, sizeof text, "%s: about %.3g s (%.3g h) of computing, above the budget of %.3g h (%s)", what.c_str(),
-      seconds, seconds / 3600.0, limit / 3600.0,
+      seconds, seconds / kSecondsPerHour, limit / kSecondsPerHour,
       std::getenv("DRIFTLAB_TIME_LIMIT_S") ? "DRIFTLAB_TIME_LIMIT_S" : "the default; DRIFTLAB_TIME_LIMIT_S raises it");
   throw ConfigError(where, text);
 }

@@ -13,10 +13,11 @@
 #include <string>
 
 #include "framework/error.hpp"
+#include "framework/units.hpp"
 
 namespace driftlab {
 
-inline constexpr double kDefaultTimeBudgetS = 4.0 * 3600.0;
+inline constexpr double kDefaultTimeBudgetS = 4.0 * kSecondsPerHour;
 
 // The memory budget in bytes.
 double memory_limit_bytes();

@@ -79,9 +79,13 @@ std::string describe(const Facts& facts, const Eigen::VectorXd& time_s) {
          " s from one segment's start to the next)";
 }
 
-DataError uneven_sampling_error(const Facts& facts, const Eigen::VectorXd& time_s, const std::string& file,
-                                std::string_view analysis, std::string_view hint) {
-  std::string message = std::string(analysis) + " assumes even sampling, and this record has " +
+namespace {
+
+// The message of both errors below: `analysis` `takes`, the record's gaps, the first one, the
+// layout, the ways out and `hint`.
+DataError sampling_error(const Facts& facts, const Eigen::VectorXd& time_s, const std::string& file,
+                         std::string_view analysis, std::string_view takes, std::string_view hint) {
+  std::string message = std::string(analysis) + " " + std::string(takes) + ", and this record has " +
                         std::to_string(facts.gaps) + " gap(s) (steps longer than " + message_number(facts.gap_factor) +
                         " x the median step of " + message_number(facts.median_step_s) +
                         " s, see --max-gap): the first of " + message_number(facts.first_gap_s) +
@@ -91,6 +95,19 @@ DataError uneven_sampling_error(const Facts& facts, const Eigen::VectorXd& time_
                         "that file, split it at its gaps, or analyse the segments one by one";
   if (!hint.empty()) message += " (" + std::string(hint) + ")";
   return DataError({file, 0, "time"}, message + ".");
+}
+
+}  // namespace
+
+DataError uneven_sampling_error(const Facts& facts, const Eigen::VectorXd& time_s, const std::string& file,
+                                std::string_view analysis, std::string_view hint) {
+  return sampling_error(facts, time_s, file, analysis, "assumes even sampling", hint);
+}
+
+DataError irregular_sampling_error(const Facts& facts, const Eigen::VectorXd& time_s, const std::string& file,
+                                   std::string_view analysis, std::string_view hint) {
+  return sampling_error(facts, time_s, file, analysis,
+                        "takes an evenly sampled record or regular bursts, not gaps that are not regular bursts", hint);
 }
 
 }  // namespace driftlab::sampling

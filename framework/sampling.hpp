@@ -12,7 +12,8 @@
 // An analysis that assumes even sampling (Allan family, decompositions, spectra) takes an evenly
 // sampled record as it is; regular bursts only per burst (models/allan/bursts.hpp), never as one
 // contiguous record; an irregular record not at all: uneven_sampling_error() names the first gap and
-// the ways out.
+// the ways out. An analysis on block means (the discrepancy search) takes regular bursts as they are;
+// an irregular record not: irregular_sampling_error().
 // Cost O(n) (the median by selection). Time in s.
 #pragma once
 
@@ -75,5 +76,9 @@ std::string describe(const Facts& facts, const Eigen::VectorXd& time_s);
 // adds the command that does, when there is one).
 DataError uneven_sampling_error(const Facts& facts, const Eigen::VectorXd& time_s, const std::string& file,
                                 std::string_view analysis, std::string_view hint = {});
+// The same for an analysis that also takes regular bursts as they are (the discrepancy search: its
+// block means never span a gap), given an irregular record.
+DataError irregular_sampling_error(const Facts& facts, const Eigen::VectorXd& time_s, const std::string& file,
+                                   std::string_view analysis, std::string_view hint = {});
 
 }  // namespace driftlab::sampling

@@ -41,6 +41,8 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegPerRad = 180.0 / kPi;
 constexpr double kRadPerDeg = kPi / 180.0;
 constexpr double kSecondsPerHour = 3600.0;
+constexpr double kHoursPerSecond = 1.0 / kSecondsPerHour;
+constexpr double kSqrtSecondsPerHour = 60.0;  // sqrt(3600 s): x/sqrt(h) = x/(60 sqrt(s)) (angle random walk)
 constexpr double kRadPerSecPerDph = kRadPerDeg / kSecondsPerHour;  // rad/s per deg/h (gyro bias unit)
 constexpr double kDphPerRadPerSec = 1.0 / kRadPerSecPerDph;        // deg/h per rad/s
 constexpr double kPpm = 1e-6;                                      // parts per million

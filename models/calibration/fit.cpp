@@ -12,14 +12,29 @@
 #include "models/calibration/oven_run.hpp"
 #include "plugins/common/holdout.hpp"
 #include "plugins/ga/ga.hpp"
+#include "plugins/ga/ga_plugin.hpp"
 #include "plugins/polynomial/polynomial.hpp"
 #include "plugins/rbf/rbf.hpp"
+#include "plugins/tuning/tuning.hpp"
 
 namespace driftlab::calibration {
 namespace {
 
 constexpr int kScaleFactorOrder = 2;       // k_0 + k_1 dT + k_2 dT^2
 constexpr double kVaryingTrueRate = 1e-3;  // rad/s: a true rate with a larger std drives a scale-factor fit
+
+// How the RBF network on the physical residual is tuned (add_rbf): the shared tuning loop
+// (plugins/tuning search(), optimizer/ga with --ga-population, --ga-generations and --seed) on a
+// blocked holdout of the bins, over these ranges.
+struct RbfTuning {
+  double holdout_fraction = 0.2;                                          // share of the bins held out
+  std::size_t holdout_blocks = 10;                                        // contiguous held-out runs
+  Bound sigma{"sigma", 0.1, 3.0, false};                                  // kernel width, in standardized input units
+  Bound log10_regularization{"log10_regularization", -8.0, -1.0, false};  // ridge penalty, decades
+  Bound centres{"centres", 3.0, 40.0, true};  // the upper end also at most a quarter of the training bins
+  std::size_t kmeans_sample = 2000;           // rows the k-means of the centres sees at most
+};
+const RbfTuning kRbfTuning;
 
 // Per-bin means of the causal features for one (lag, width) candidate.
 struct Features {
@@ -421,12 +436,16 @@ class Fitter {
     X.col(0) = tm_.cwiseMax(m.valid_min_c).cwiseMin(m.valid_max_c);
     X.col(1) = d_;
     X.col(2) = s_;
-    const auto split = holdout::blocked_holdout(X.rows(), 0.2, 10, o_.seed);
-    const Eigen::MatrixXd Xt = X(split.train, Eigen::all), Xh = X(split.holdout, Eigen::all);
-    const Eigen::VectorXd rt = residual(split.train), rh = residual(split.holdout);
+    tuning::Settings settings;
+    settings.plugin = "calibrate: RBF tuning";
+    settings.holdout_fraction = kRbfTuning.holdout_fraction;
+    settings.holdout_blocks = kRbfTuning.holdout_blocks;
+    settings.max_samples = 0;  // every bin
+    settings.seed = o_.seed;
+    const tuning::Split split = tuning::split(X, residual, settings);
     rbf::Config base;
     base.seed = o_.seed;
-    base.kmeans_sample = 2000;
+    base.kmeans_sample = kRbfTuning.kmeans_sample;
     const auto decode = [&](const Eigen::VectorXd& v) {
       rbf::Config cfg = base;
       cfg.sigma = v[0];
@@ -436,26 +455,42 @@ class Fitter {
     };
     std::size_t evals = 0;
     const std::size_t expected = o_.ga_population * (o_.ga_generations + 1);
-    const auto objective = [&](const Eigen::VectorXd& v) {
-      double e = std::numeric_limits<double>::infinity();
+    const auto counted = [&] { o_.progress("calibrate: RBF tuning (GA)", std::min(1.0, double(++evals) / expected)); };
+    const auto fit_and_score = [&](const tuning::Split& d, const Eigen::VectorXd& v) {
+      tuning::Score score;
       try {
-        e = holdout::rmse(rbf::fit(Xt, rt, decode(v)).network.predict(Xh), rh);
-      } catch (const std::invalid_argument&) {
+        score.holdout_prediction = rbf::fit(d.X_train, d.y_train, decode(v)).network.predict(d.X_holdout);
+      } catch (...) {
+        counted();
+        throw;
       }
-      o_.progress("calibrate: RBF tuning (GA)", std::min(1.0, double(++evals) / expected));
-      return e;
+      counted();
+      return score;
     };
     ga::Config gc;
     gc.population = o_.ga_population;
     gc.generations = o_.ga_generations;
     gc.seed = o_.seed;
-    gc.threads = 1;  // one thread: the progress counter is not thread safe, and fits are seconds
-    const double max_centres = std::min<double>(40.0, static_cast<double>(split.train.size()) / 4.0);
-    const auto result =
-        ga::minimize(objective, {{0.1, 3.0, false}, {-8.0, -1.0, false}, {3.0, std::max(3.0, max_centres), true}}, gc);
+    const auto optimizer = make_ga_optimizer(gc);
+    RunContext ctx;
+    ctx.seed = o_.seed;
+    ctx.threads = 1;  // one thread: the progress counter is not thread safe, and fits are seconds
+    Bound centres = kRbfTuning.centres;
+    centres.upper =
+        std::max(centres.lower, std::min<double>(centres.upper, static_cast<double>(split.X_train.rows()) / 4.0));
+    double best_value = std::numeric_limits<double>::infinity();
+    Eigen::VectorXd best;
+    try {
+      auto found = tuning::search(*optimizer, {kRbfTuning.sigma, kRbfTuning.log10_regularization, centres}, settings,
+                                  split, fit_and_score, ctx);
+      best_value = found.result.best_value;
+      best = std::move(found.result.best);
+    } catch (const DataError&) {  // no candidate gave a finite held-out error: no network
+    }
+    const Eigen::VectorXd& rh = split.y_holdout;
     const double no_rbf = holdout::rmse(Eigen::VectorXd::Zero(rh.size()), rh);
-    if (std::isfinite(result.best_value) && result.best_value < (1.0 - kTransferMargin) * no_rbf) {
-      const auto net = rbf::fit(X, residual, decode(result.best)).network;
+    if (std::isfinite(best_value) && best_value < (1.0 - kTransferMargin) * no_rbf) {
+      const auto net = rbf::fit(X, residual, decode(best)).network;
       RbfTerm t;
       for (int k = 0; k < 3; ++k) {
         t.mean.push_back(net.mean()[k]);
@@ -469,7 +504,7 @@ class Fitter {
       t.bias_rad_s = net.bias();
       m.rbf = std::move(t);
       m.kind = ModelKind::Rbf;
-      m.fit.selection += "; RBF on the physical residual, GA-tuned (holdout RMSE " + std::to_string(result.best_value) +
+      m.fit.selection += "; RBF on the physical residual, GA-tuned (holdout RMSE " + std::to_string(best_value) +
                          " vs " + std::to_string(no_rbf) + " rad/s without it)";
     } else {
       m.fit.selection += "; no RBF network: it did not lower the held-out residual (" + std::to_string(no_rbf) +

@@ -1,3 +1,5 @@
+#include "plugins/ga/ga_plugin.hpp"
+
 #include <stdexcept>
 
 #include "framework/error.hpp"
@@ -9,6 +11,7 @@ namespace {
 
 class GaPlugin final : public Optimizer {
  public:
+  explicit GaPlugin(const ga::Config& config) : config_(config) {}
   explicit GaPlugin(const ParamValues& p)
       : config_{.population = static_cast<std::size_t>(p.integer("population")),
                 .generations = static_cast<std::size_t>(p.integer("generations")),
@@ -51,6 +54,8 @@ class GaPlugin final : public Optimizer {
 };
 
 }  // namespace
+
+std::unique_ptr<Optimizer> make_ga_optimizer(const ga::Config& config) { return std::make_unique<GaPlugin>(config); }
 
 void register_ga_plugins(Registry& registry) {
   registry.add(

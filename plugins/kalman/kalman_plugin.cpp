@@ -5,7 +5,6 @@
 #include <memory>
 #include <stdexcept>
 
-#include "framework/sampling.hpp"
 #include "framework/error.hpp"
 #include "framework/registry.hpp"
 #include "plugins/kalman/kalman.hpp"
@@ -117,9 +116,7 @@ class KalmanFilter final : public Filter {
     return kalman::filter_states(z, model, x0, initial_variance_);
   }
 
-  double sample_rate(const RunContext& ctx) const {
-    return sample_rate_hz_ > 0.0 ? sample_rate_hz_ : sampling::mean_rate_hz(ctx.time_s);
-  }
+  double sample_rate(const RunContext& ctx) const { return sample_rate_hz_ > 0.0 ? sample_rate_hz_ : ctx.rate_hz(); }
 
   std::string model_;
   bool from_allan_;

@@ -6,7 +6,6 @@
 #include <string>
 #include <variant>
 
-#include "framework/sampling.hpp"
 #include "framework/error.hpp"
 #include "framework/registry.hpp"
 #include "plugins/tfpf/tfpf.hpp"
@@ -48,7 +47,7 @@ class TfpfFilter final : public Filter {
     ctx.diagnostics["window_samples"] = r.window;
     ctx.diagnostics["noise_sigma"] = r.noise_sigma;
     ctx.diagnostics["noise_share"] = r.noise_share;
-    if (const double fs = sampling::mean_rate_hz(ctx.time_s); fs > 0.0) ctx.diagnostics["window_s"] = r.window / fs;
+    if (const double fs = ctx.rate_hz(); fs > 0.0) ctx.diagnostics["window_s"] = r.window / fs;
     return std::move(r.filtered);
   }
 

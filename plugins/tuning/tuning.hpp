@@ -1,8 +1,8 @@
 // Hyperparameter tuning shared by the regressor adapters (regressor/elm, regressor/svr,
-// regressor/rbf): the rows the tuning sees, a blocked holdout (holdout::blocked_holdout), the one
-// tuning loop (search(): the nested optimizer plugin minimizing one criterion, the held-out RMSE, or
-// two, the held-out RMSE and a complexity measure the regressor names), and the common parameters.
-// Adapter-level code: it knows the plugin interfaces, not files.
+// regressor/rbf) and by `driftlab calibrate`'s RBF network (models/calibration/fit.cpp): the rows the tuning sees, a
+// blocked holdout (holdout::blocked_holdout), the one tuning loop (search(): the nested optimizer plugin minimizing one
+// criterion, the held-out RMSE, or two, the held-out RMSE and a complexity measure the regressor names), and the common
+// parameters. Adapter-level code: it knows the plugin interfaces, not files.
 #pragma once
 
 #include <Eigen/Core>

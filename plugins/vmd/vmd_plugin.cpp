@@ -7,7 +7,6 @@
 #include <string>
 #include <vector>
 
-#include "framework/sampling.hpp"
 #include "framework/error.hpp"
 #include "framework/registry.hpp"
 #include "plugins/vmd/vmd.hpp"
@@ -46,7 +45,7 @@ class VmdDecomposer final : public Decomposer {
     const std::vector<double> cycles(result.centre_frequencies.data(),
                                      result.centre_frequencies.data() + result.centre_frequencies.size());
     ctx.diagnostics["centre_frequencies_cycles_per_sample"] = cycles;
-    if (const double fs = sampling::mean_rate_hz(ctx.time_s); fs > 0.0) {
+    if (const double fs = ctx.rate_hz(); fs > 0.0) {
       std::vector<double> hz = cycles;
       for (double& f : hz) f *= fs;
       ctx.diagnostics["centre_frequencies_hz"] = hz;

@@ -49,7 +49,7 @@ TEST(ImuSimulator, MeasuredMinusSystematicHasTheStatedNoiseOnEveryAxis) {
   constexpr double kConfidence = 0.99;
   constexpr double kFs = 10.0;
   const ImuDefinition imu = imu3();
-  const auto record = simulate_imu(imu, static_at(25.0), options(kFs, 3600.0, 11));
+  const auto record = simulate_imu(imu, static_at(25.0), options(kFs, kSecondsPerHour, 11));
   const std::vector<std::size_t> one_second{static_cast<std::size_t>(kFs)};
   for (std::size_t i = 0; i < imu.instances.size(); ++i)
     for (bool gyro : {true, false})
@@ -165,7 +165,7 @@ TEST(ImuSimulator, ABadOrientationScheduleIsRefusedWithItsLineAndTheSingleAxisSi
 }
 
 TEST(ImuSimulator, InstancesHaveTheirOwnTemperaturesBiasesAndNoise) {
-  const auto record = simulate_imu(imu3(), default_oven_profile(), options(1.0, 3600.0, 3));
+  const auto record = simulate_imu(imu3(), default_oven_profile(), options(1.0, kSecondsPerHour, 3));
   const auto& a = record.instances[0];
   const auto& b = record.instances[1];
   // During the ramp the slower die (420 s against 240 s) stays further behind the chamber.

@@ -58,7 +58,7 @@ TEST(Simulator, AllanAnalysisOfAStaticRecordRecoversNAndK) {
   noise.bias_instability_rad_s = 0.0;
   noise.rate_random_walk_rad_s_sqrt_s = 300.0 * kDph / 60.0;  // 300 deg/h/sqrt(h)
   const double fs = 10.0;
-  const auto record = simulate(device, static_at(25.0), options(fs, 20 * 3600.0, 21));
+  const auto record = simulate(device, static_at(25.0), options(fs, 20 * kSecondsPerHour, 21));
   Eigen::MatrixXd a(0, 2);
   Eigen::VectorXd y(0);
   for (const auto& d : oadev(record.rate_rad_s, fs)) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "framework/error.hpp"
+#include "framework/output_set.hpp"
 #include "framework/units.hpp"
 
 namespace driftlab {
@@ -50,7 +51,7 @@ TEST(CsvReader, SynthesizesTimeFromTheSampleRateWhenThereIsNoTimeColumn) {
   options.sample_rate_hz = 50.0;
   const auto record = read_csv(kCsvDir / "gyro_z_rad_s.csv", options);
   EXPECT_DOUBLE_EQ(record.time()[5], 0.1);
-  EXPECT_NEAR(record.channel("rate").values[3], 0.003 * kRadPerDeg / 3600.0, kUnitConversionTolerance);
+  EXPECT_NEAR(record.channel("rate").values[3], 0.003 * kRadPerDeg / kSecondsPerHour, kUnitConversionTolerance);
 }
 
 TEST(ColumnMapping, AcceptsTheThreeSpellingsAndRejectsUnknownUnits) {
@@ -127,13 +128,21 @@ TEST(CsvReader, RejectsAMappedColumnThatIsMissing) {
   }
 }
 
+// A CSV output the way commands write one: an OutputSet of one file.
+void write_csv_atomically(const std::filesystem::path& path, const std::vector<CsvColumn>& columns) {
+  OutputSet outputs;
+  outputs.plan(path, "--out");
+  outputs.write_csv(path, columns);
+  outputs.commit();
+}
+
 TEST(CsvWriter, WritesAtomicallyAndRoundTripsExactly) {
   const auto dir = std::filesystem::temp_directory_path() / "driftlab_csv_writer_test";
   std::filesystem::create_directories(dir);
   const auto path = dir / "out.csv";
   Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(100, 0.0, 9.9);
   Eigen::VectorXd rate = (t.array() * 1.2345678901234567).sin() * 0.01;
-  write_csv(path, {{"t_s", t, "s"}, {"rate_rps", rate, "rad/s"}});
+  write_csv_atomically(path, {{"t_s", t, "s"}, {"rate_rps", rate, "rad/s"}});
   const auto back = read_csv(path);
   EXPECT_EQ(back.channel("rate").values, rate) << "shortest round-trip formatting is exact";
   for (const auto& entry : std::filesystem::directory_iterator(dir))
@@ -143,7 +152,7 @@ TEST(CsvWriter, WritesAtomicallyAndRoundTripsExactly) {
 
 TEST(CsvWriter, FailsClearlyWhenTheDirectoryIsMissing) {
   // A usage error (exit 2), not bad input data: the user named a directory that is not there.
-  EXPECT_THROW(write_csv("/nonexistent-dir/out.csv", {{"t_s", Eigen::VectorXd::Zero(2), "s"}}), ConfigError);
+  EXPECT_THROW(write_csv_atomically("/nonexistent-dir/out.csv", {{"t_s", Eigen::VectorXd::Zero(2), "s"}}), ConfigError);
 }
 
 TEST(CsvWriter, RefusesColumnNamesThatCannotBeReadBack) {

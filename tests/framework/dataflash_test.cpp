@@ -37,6 +37,9 @@ namespace df = testing_dataflash;
 
 constexpr double kSecondsPerMicrosecond = 1e-6;
 constexpr double kTimeTolerance = 1e-9;  // s: a us count divided by 1e6, compared as double
+// A rotation matrix entry computed two ways (the firmware's sequence of rotations, a closed form):
+// a few ulps of 1.
+constexpr double kRotationTolerance = 1e-15;
 
 fs::path logs_dir() { return fs::path(DRIFTLAB_TEST_DATA) / "logs"; }
 
@@ -548,14 +551,14 @@ TEST(DataflashBoardOrientation, TheFirmwaresOwnRotationsBeyondPymavlinksTableAnd
   const auto r38 = dataflash::board_rotation(38);
   ASSERT_TRUE(r38);
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) EXPECT_NEAR(r38->body_from_sensor[i][j], m38[i][j], 1e-15) << i << j;
+    for (int j = 0; j < 3; ++j) EXPECT_NEAR(r38->body_from_sensor[i][j], m38[i][j], kRotationTolerance) << i << j;
   // ROTATION_ROLL_315 (43): Vector3::rotate gives y' = s (y + z), z' = s (z - y), s = sqrt(2)/2.
   const auto r43 = dataflash::board_rotation(43);
   ASSERT_TRUE(r43);
   EXPECT_EQ(r43->name, "ROTATION_ROLL_315");
-  EXPECT_NEAR(r43->body_from_sensor[1][1], std::sqrt(0.5), 1e-15);
-  EXPECT_NEAR(r43->body_from_sensor[1][2], std::sqrt(0.5), 1e-15);
-  EXPECT_NEAR(r43->body_from_sensor[2][1], -std::sqrt(0.5), 1e-15);
+  EXPECT_NEAR(r43->body_from_sensor[1][1], std::sqrt(0.5), kRotationTolerance);
+  EXPECT_NEAR(r43->body_from_sensor[1][2], std::sqrt(0.5), kRotationTolerance);
+  EXPECT_NEAR(r43->body_from_sensor[2][1], -std::sqrt(0.5), kRotationTolerance);
   // Quarter turns are exact: the record of a ROLL_180 board is the logged value with its sign flipped.
   const auto r8 = dataflash::board_rotation(8);
   ASSERT_TRUE(r8);

@@ -56,6 +56,17 @@ class PipelineTest : public ::testing::Test {
   Registry registry_;
 };
 
+// RunContext's sample rate (framework/plugin.hpp): run_pipeline gives it; a context built by hand
+// (python, tests) may leave it at 0 and rate_hz() derives it from the time stamps.
+TEST(RunContextSampleRate, IsGivenOrDerivedFromTheTimeStamps) {
+  RunContext ctx;
+  EXPECT_EQ(ctx.rate_hz(), 0.0) << "no time stamps: no rate";
+  ctx.time_s = Eigen::VectorXd::LinSpaced(11, 0.0, 1.0);
+  EXPECT_EQ(ctx.rate_hz(), 10.0);
+  ctx.sample_rate_hz = 4.0;
+  EXPECT_EQ(ctx.rate_hz(), 4.0);
+}
+
 TEST_F(PipelineTest, ReportsThreeDifferentMistakesTogetherWithTheirLines) {
   const auto problems = problems_of("three_mistakes.yaml");
   const auto file = (kPipelines / "three_mistakes.yaml").string();

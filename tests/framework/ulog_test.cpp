@@ -145,7 +145,9 @@ TEST(UlogPyulogSamples, SampleUlgCountsInfoDropoutsAndMessagesAreThoseOfPyulog) 
   }
   EXPECT_EQ(longest, 62);
   EXPECT_EQ(total / 4, 29);
-  EXPECT_NEAR(total / 1000.0, 0.1, 0.05);
+  // A coarse check of the total beside the exact longest and mean above: about 0.1 s lost in all.
+  constexpr double kDropoutTotalTolerance = 0.05;  // s
+  EXPECT_NEAR(total / 1000.0, 0.1, kDropoutTotalTolerance);
   expect_logged_as_pyulog(log, pyulog_dir() / "sample_messages.txt");
 }
 
@@ -246,8 +248,10 @@ TEST(UlogPyulogSamples, SensorCombinedIsTheFallbackAndSaysItHasNoTemperature) {
   EXPECT_TRUE(record.has("gyro_z") && record.has("accel_z"));
   EXPECT_FALSE(record.has("temperature"));
   EXPECT_THAT(notes, ::testing::Contains(HasSubstr("no IMU temperature")));
-  // Level on the ground before take-off: gravity on -z.
-  EXPECT_NEAR(record.channel("accel_z").values[0], -9.8, 0.5);
+  // Level on the ground before take-off: gravity on -z, within the accelerometer's bias and the
+  // vehicle's small tilt on the ground.
+  constexpr double kOnGroundTolerance = 0.5;  // m/s^2
+  EXPECT_NEAR(record.channel("accel_z").values[0], -9.8, kOnGroundTolerance);
 }
 
 // vehicle_imu (PX4's integrated IMU) of sample_log_small.ulg against pyulog's reading of the same

@@ -3,6 +3,7 @@
 // Gauss-Markov sum, random walk).
 #include "models/allan/analysis.hpp"
 #include "framework/sampling.hpp"
+#include "framework/units.hpp"
 #include "models/allan/confidence.hpp"
 #include "models/allan/deviation.hpp"
 #include "models/allan/tau_grid.hpp"
@@ -17,8 +18,6 @@
 
 namespace driftlab::allan {
 namespace {
-
-constexpr double kRadPerSecPerDph = 3.14159265358979323846 / 180.0 / 3600.0;
 
 Eigen::VectorXd white_rate(double arw_rad_sqrt_s, double fs_hz, Eigen::Index n, std::uint64_t seed) {
   error_model::NoiseTerms terms;
@@ -140,8 +139,8 @@ TEST(FloorReading, ReadsATrueFloorWithinItsInterval) {
   terms.rate_random_walk_rad_s_sqrt_s = 0.3 / 60.0 * kRadPerSecPerDph;
   terms.flicker_tau_min_s = 2.0;
   terms.flicker_tau_max_s = 1e6;
-  const Analysis a =
-      analyze_rate(error_model::rate_noise(terms, kFs, static_cast<Eigen::Index>(kHours * 3600 * kFs), 11), kFs);
+  const Analysis a = analyze_rate(
+      error_model::rate_noise(terms, kFs, static_cast<Eigen::Index>(kHours * kSecondsPerHour * kFs), 11), kFs);
   const auto& b = a.bias_instability;
   std::printf("B = %.3g [%.3g, %.3g] deg/h at tau = %g s (resolved: %d)\n", b.value / kRadPerSecPerDph,
               b.low / kRadPerSecPerDph, b.high / kRadPerSecPerDph, b.tau_s, b.resolved);

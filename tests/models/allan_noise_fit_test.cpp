@@ -6,20 +6,18 @@
 #include "models/allan/noise_fit.hpp"
 #include "models/allan/tau_grid.hpp"
 #include "framework/error.hpp"
+#include "framework/units.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <numbers>
 #include <random>
 #include <vector>
 
 namespace driftlab::allan {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 // Portable standard normal numbers (Box-Muller on mt19937_64), same on every standard library.
 class Normal {
@@ -98,9 +96,9 @@ NoiseFit fit_record(const Eigen::VectorXd& rate, double tau0) {
 bool inside(const TermEstimate& t, double truth, double width) { return std::abs(t.value - truth) <= width * t.sigma; }
 
 // deg/sqrt(h), deg/h, deg/h/sqrt(h) -> SI.
-constexpr double arw(double deg_per_sqrt_h) { return deg_per_sqrt_h * kPi / 180.0 / 60.0; }
-constexpr double bias(double deg_per_h) { return deg_per_h * kPi / 180.0 / 3600.0; }
-constexpr double rrw(double deg_per_h_sqrt_h) { return deg_per_h_sqrt_h * kPi / 180.0 / 3600.0 / 60.0; }
+constexpr double arw(double deg_per_sqrt_h) { return deg_per_sqrt_h * kRadPerDeg / kSqrtSecondsPerHour; }
+constexpr double bias(double deg_per_h) { return deg_per_h * kRadPerSecPerDph; }
+constexpr double rrw(double deg_per_h_sqrt_h) { return deg_per_h_sqrt_h * kRadPerSecPerDph / kSqrtSecondsPerHour; }
 
 TEST(NoiseFitUnits, ConvertEveryTermToTheUsualGyroUnits) {
   constexpr double kConversionTolerance = 1e-12;  // a few roundings of exact factors

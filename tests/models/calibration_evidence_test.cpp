@@ -5,10 +5,10 @@
 #include <cstdio>
 
 #include <cmath>
-#include <numbers>
 
 #include "devices/device_file.hpp"
 #include "devices/simulator.hpp"
+#include "framework/units.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "models/calibration/fit.hpp"
 #include "models/evaluation/evaluation.hpp"
@@ -16,7 +16,6 @@
 namespace driftlab::calibration {
 namespace {
 
-constexpr double kRadPerSecPerDph = std::numbers::pi / 180.0 / 3600.0;
 constexpr double kSampleRateHz = 2.0;  // enough for 60-s block means; keeps every test to well under a second
 
 devices::DeviceDefinition fmvmg(bool with_effects) {

@@ -9,11 +9,11 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <numbers>
 #include <string>
 #include <vector>
 
 #include "framework/csv.hpp"
+#include "framework/units.hpp"
 #include "models/calibration/calibration_model.hpp"
 #include "models/calibration/fit.hpp"
 #include "models/calibration/oven_run.hpp"
@@ -22,7 +22,7 @@
 namespace driftlab::calibration {
 namespace {
 
-constexpr double kDph = std::numbers::pi / 180.0 / 3600.0;  // rad/s per deg/h
+constexpr double kDph = kRadPerSecPerDph;  // rad/s per deg/h
 constexpr double kNoWorseThanSimple = 1.1;
 
 const std::filesystem::path kReal = std::filesystem::path(DRIFTLAB_SHARED_DATA) / "real";

@@ -8,6 +8,7 @@
 #include "models/allan/confidence.hpp"
 #include "models/allan/deviation.hpp"
 #include "models/allan/gmwm.hpp"
+#include "framework/units.hpp"
 
 namespace driftlab::error_model {
 namespace {
@@ -64,7 +65,7 @@ TEST(ErrorModel, GaussMarkovSumGivesTheFlickerFloorOfB) {
   terms.flicker_tau_min_s = 0.5;
   terms.flicker_tau_max_s = 5000.0;
   const double fs = 5.0;
-  const Eigen::VectorXd noise = rate_noise(terms, fs, static_cast<Eigen::Index>(20 * 3600 * fs), 5);
+  const Eigen::VectorXd noise = rate_noise(terms, fs, static_cast<Eigen::Index>(20 * kSecondsPerHour * fs), 5);
   const double floor = terms.bias_instability_rad_s * std::sqrt(2.0 * std::numbers::ln2 / std::numbers::pi);
   for (const auto& d : oadev(noise, fs, {10, 25, 50, 100, 250, 500, 1500}))
     EXPECT_NEAR(d.dev / floor, 1.0, kFloorTolerance) << "tau " << d.tau;
@@ -75,7 +76,7 @@ TEST(ErrorModel, AnExplicitGaussMarkovTermHasTheClosedFormAllanVarianceOfGmwm) {
   NoiseTerms terms;
   terms.gauss_markov.push_back({100.0, 2e-4});
   const double fs = 5.0;
-  const Eigen::VectorXd noise = rate_noise(terms, fs, static_cast<Eigen::Index>(20 * 3600 * fs), 8);
+  const Eigen::VectorXd noise = rate_noise(terms, fs, static_cast<Eigen::Index>(20 * kSecondsPerHour * fs), 8);
   for (const auto& d : oadev(noise, fs, {5, 50, 250, 1000, 2500})) {
     const double sigma_tau = std::sqrt(allan::gmwm::process_variance(
         allan::gmwm::Process::GaussMarkov, std::vector<double>{2e-4, 100.0}, d.tau * fs, 1.0 / fs));

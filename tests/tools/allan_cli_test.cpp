@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "models/allan/gmwm.hpp"
+#include "framework/units.hpp"
 #include "tests/tools/cli_harness.hpp"
 
 namespace driftlab {
@@ -171,7 +172,7 @@ TEST(AllanCommand, FitsAGmwmModelBesideTheSlopeFit) {
     out << "t_s,rate_dps\n";
     char line[80];
     for (Eigen::Index i = 0; i < x.size(); ++i) {
-      std::snprintf(line, sizeof line, "%.17g,%.17g\n", static_cast<double>(i) / fs, x[i] * 180.0 / M_PI);
+      std::snprintf(line, sizeof line, "%.17g,%.17g\n", static_cast<double>(i) / fs, x[i] * kDegPerRad);
       out << line;
     }
   }
@@ -184,8 +185,8 @@ TEST(AllanCommand, FitsAGmwmModelBesideTheSlopeFit) {
   EXPECT_EQ(g["model"], "wn+rw+gm");
 
   // In the IEEE 952 units: N deg/sqrt(h), K deg/h/sqrt(h), the Gauss-Markov sigma deg/h and T s.
-  const double deg_sqrt_h = 180.0 / M_PI * 60.0, deg_h = 180.0 / M_PI * 3600.0;
-  const double truth[] = {n * deg_sqrt_h, k * deg_h * 60.0, sigma * deg_h, t};
+  const double deg_sqrt_h = kDegPerRad * kSqrtSecondsPerHour, deg_h = kDphPerRadPerSec;
+  const double truth[] = {n * deg_sqrt_h, k * deg_h * kSqrtSecondsPerHour, sigma * deg_h, t};
   for (int i = 0; i < 4; ++i) {
     const auto& file = g["components"][std::min(i, 2)]["parameters"][i == 3 ? 1 : 0];
     ASSERT_TRUE(file["resolved"].get<bool>()) << file.dump();

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "tests/tools/cli_harness.hpp"
+#include "framework/units.hpp"
 
 namespace driftlab {
 namespace {
@@ -87,7 +88,8 @@ std::filesystem::path with_bias_step(const std::filesystem::path& csv, double le
   out << header << "\n" << std::setprecision(17);
   while (std::getline(in, line)) {
     auto cells = split(line);
-    if (std::stod(cells.at(die)) > level_c) cells[rate] = std::to_string(std::stod(cells[rate]) + step_dph / 3600.0);
+    if (std::stod(cells.at(die)) > level_c)
+      cells[rate] = std::to_string(std::stod(cells[rate]) + step_dph / kSecondsPerHour);
     for (std::size_t i = 0; i < cells.size(); ++i) out << (i ? "," : "") << cells[i];
     out << "\n";
   }
@@ -272,7 +274,8 @@ TEST(DiscrepancyCommand, UpdatesACopyOfTheDeviceFileWhoseSimulationReproducesThe
   std::size_t blocks = 0;
   for (std::size_t start = 0; start + block <= measured.size(); start += block, ++blocks) {
     double mean = 0.0;
-    for (std::size_t k = start; k < start + block; ++k) mean += (measured[k] - again[k]) * 3600.0 / block;  // deg/h
+    for (std::size_t k = start; k < start + block; ++k)
+      mean += (measured[k] - again[k]) * kSecondsPerHour / block;  // deg/h
     sum_squares += mean * mean;
   }
   EXPECT_LT(std::sqrt(sum_squares / blocks), report["noise_floor"].get<double>());

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "tests/tools/cli_harness.hpp"
+#include "framework/units.hpp"
 
 namespace driftlab {
 namespace {
@@ -467,7 +468,7 @@ TEST(FleetOf200, EveryPlantedFaultIsFoundForItsReasonAndTheYieldIsTheKeys) {
     if (o["rule"] == "quantisation") {
       EXPECT_EQ(o["unit"], lsb);
       EXPECT_EQ(o["channel"], "gyro1_x");
-      EXPECT_NEAR(o["value"].get<double>(), 0.05 * 3600.0, kLsbDph);  // the LSB, deg/h
+      EXPECT_NEAR(o["value"].get<double>(), 0.05 * kSecondsPerHour, kLsbDph);  // the LSB, deg/h
     }
   EXPECT_TRUE(read_json(out / "units" / lsb / "status.json")["quantisation"]["gyro1_x"]["quantised"].get<bool>());
 

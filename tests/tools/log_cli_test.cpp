@@ -66,8 +66,13 @@ TEST_F(LogCli, ExportWritesTheImuRecordTheCsvReaderReadsBack) {
   EXPECT_EQ(record.device_id(0), "11");
   EXPECT_EQ(record.device_id(1), "22");
   EXPECT_EQ(record.channel("gyro_z").unit, "rad/s");
-  EXPECT_NEAR(record.channel("temperature").values[0], 30.01, 1e-6);
-  EXPECT_NEAR(record.channel("temperature1").values[0], 31.007, 1e-5);  // 31.00 at 1.003 s, 31.01 at 1.013 s
+  // Temperatures are logged as float32 (spacing 1.9e-6 degC near 30 degC) and written with 6
+  // decimals; instance 1's is interpolated onto the base time stamps.
+  constexpr double kFloatTemperatureTolerance = 1e-6;         // degC: a stored float32 value
+  constexpr double kInterpolatedTemperatureTolerance = 1e-5;  // degC: between two such values
+  EXPECT_NEAR(record.channel("temperature").values[0], 30.01, kFloatTemperatureTolerance);
+  EXPECT_NEAR(record.channel("temperature1").values[0], 31.007,
+              kInterpolatedTemperatureTolerance);  // 31.00 at 1.003 s, 31.01 at 1.013 s
 
   const auto one = run_driftlab("log export " + p("gyros.ulg") + " --instance 1 --out " + p("one.csv"));
   ASSERT_EQ(one.exit_code, 0) << one.err;
@@ -211,7 +216,9 @@ TEST_F(LogCli, InfoAndExportOfTheFifoTopics) {
   EXPECT_EQ(record.device_id(1), "22");
   // 30 degC + 0.5 degC/s, stored as float32 (spacing 1.9e-6 degC near 30: each stored value within
   // 9.6e-7 of the line, and so their linear interpolation); the CSV's numbers round-trip exactly.
-  EXPECT_NEAR(record.channel("temperature").values[0], 30.0 + 0.5 * (record.time()[0] - 0.99), 1e-6);
+  constexpr double kFloatTemperatureTolerance = 1e-6;  // degC: the float32 spacing and half of it, bounded
+  EXPECT_NEAR(record.channel("temperature").values[0], 30.0 + 0.5 * (record.time()[0] - 0.99),
+              kFloatTemperatureTolerance);
 }
 
 TEST(LogCliPyulog, InfoOnEachFixture) {

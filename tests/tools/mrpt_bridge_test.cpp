@@ -754,7 +754,7 @@ TEST(MrptNavEkf, EstimatesAKnownConstantGyroBiasWithinTwoSigma) {
   // a position fix (sigma 2 m) every 2 s. The bias is observable through the position track.
   const double fs = 20.0, dt = 1.0 / fs, bias = 200.0 * driftlab::kRadPerSecPerDph;
   NavNoise noise;
-  noise.arw_rad_sqrt_s = 0.1 * driftlab::kRadPerDeg / 60.0;  // 0.1 deg/sqrt(h) (sqrt(3600 s) = 60)
+  noise.arw_rad_sqrt_s = 0.1 * driftlab::kRadPerDeg / driftlab::kSqrtSecondsPerHour;  // 0.1 deg/sqrt(h)
   noise.speed_sigma_mps = 0.02;
   noise.fix_sigma_m = 2.0;
   NavState start;

@@ -84,7 +84,7 @@ void BM_CompensateStreamCommand(benchmark::State& state) {
     out << "t_s,rate_dps,temp_c\n";
     char line[96];
     for (Eigen::Index i = 0; i < r.t.size(); ++i) {
-      std::snprintf(line, sizeof line, "%.2f,%.6f,%.2f\n", r.t[i], r.rate[i] * 57.29577951308232, r.temp[i]);
+      std::snprintf(line, sizeof line, "%.2f,%.6f,%.2f\n", r.t[i], r.rate[i] * kDegPerRad, r.temp[i]);
       out << line;
     }
   }

@@ -22,7 +22,7 @@ namespace {
 
 using namespace driftlab;
 
-constexpr double kDuration = 5.0 * 3600.0;
+constexpr double kDuration = 5.0 * kSecondsPerHour;
 
 void BM_Discrepancy(benchmark::State& state) {
   auto device = devices::load_device_file(std::string(DRIFTLAB_SOURCE_DIR) + "/devices/fmvmg.yaml");

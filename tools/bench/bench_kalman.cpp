@@ -6,14 +6,14 @@
 #include <benchmark/benchmark.h>
 
 #include "plugins/kalman/kalman.hpp"
+#include "framework/units.hpp"
 #include "tools/bench/bench_signals.hpp"
 
 namespace driftlab {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kArw = 0.3 * (kPi / 180.0) / 60.0;           // rad/s/sqrt(Hz)
-constexpr double kRrw = 1.0 * (kPi / 180.0) / 3600.0 / 60.0;  // rad/s^2/sqrt(Hz)
+constexpr double kArw = 0.3 * kRadPerDeg / kSqrtSecondsPerHour;                    // rad/s/sqrt(Hz)
+constexpr double kRrw = 1.0 * kRadPerDeg / kSecondsPerHour / kSqrtSecondsPerHour;  // rad/s^2/sqrt(Hz)
 
 const Eigen::VectorXd* rate_or_skip(benchmark::State& state) {
   try {

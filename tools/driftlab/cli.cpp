@@ -182,6 +182,14 @@ TimeSeries load_evenly_sampled_record(const DataOptions& data, std::vector<std::
   return std::move(record);
 }
 
+TimeSeries load_even_or_bursts_record(const DataOptions& data, std::vector<std::string> required_roles,
+                                      std::string_view analysis, std::string_view hint) {
+  auto [record, facts] = load_sampled_record(data, std::move(required_roles));
+  if (facts.layout() == sampling::Layout::Irregular)
+    throw sampling::irregular_sampling_error(facts, record.time(), data.path, analysis, hint);
+  return std::move(record);
+}
+
 std::string display_unit(const TimeSeries& record, const std::string& role, const DataOptions& data) {
   for (const auto& c : data.columns) {
     const auto m = parse_column_mapping(c);

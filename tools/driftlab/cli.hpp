@@ -46,10 +46,10 @@ int run(int argc, char** argv, const std::vector<AddCommand>& commands);
 
 // How a record file is read: the options every record-reading command shares.
 struct RecordReadOptions {
-  std::vector<std::string> columns;  // --column mappings (see csv.hpp; for a log, record_reader.hpp)
-  double sample_rate_hz = 0.0;       // --fs
-  double max_gap_factor = 3.0;       // --max-gap
-  LogSelection log;                  // --topic, --instance, --sensor (logs only)
+  std::vector<std::string> columns;              // --column mappings (see csv.hpp; for a log, record_reader.hpp)
+  double sample_rate_hz = 0.0;                   // --fs
+  double max_gap_factor = sampling::kGapFactor;  // --max-gap
+  LogSelection log;                              // --topic, --instance, --sensor (logs only)
 };
 
 // The CSV reader's options for these: the --column mappings parsed (ConfigError naming a bad one),
@@ -94,7 +94,7 @@ std::vector<CsvColumn> imu_record_columns(const TimeSeries& record);
 // of instance 0, rad/s) or `--column gyro1_x`. What a log reader repaired goes to stderr as notes.
 TimeSeries load_record(const DataOptions& data, std::vector<std::string> required_roles = {"rate"});
 // The record of a command that assumes even sampling (allan; through load_evenly_sampled_record run,
-// compare, decompose and entropy), with its sampling facts
+// compare, decompose and entropy; through load_even_or_bursts_record discrepancy), with its sampling facts
 // (framework/sampling.hpp): gaps are read as they are and then classified with --max-gap's factor,
 // the default 3 when --max-gap is 0, so that 0 never makes a gapped record contiguous. What the
 // command does with regular bursts or an irregular record is its own business; none reads across a
@@ -109,6 +109,11 @@ SampledRecord load_sampled_record(const DataOptions& data, std::vector<std::stri
 // bursts, `driftlab allan` (which analyses them per burst). `analysis` names what assumes even sampling.
 TimeSeries load_evenly_sampled_record(const DataOptions& data, std::vector<std::string> required_roles,
                                       std::string_view analysis);
+// The same for a command that also takes regular bursts as they are (discrepancy: its block means
+// never span a gap): an evenly sampled record or regular bursts are returned; an irregular record is
+// the DataError of sampling::irregular_sampling_error, with `hint` (the way to accept it anyway).
+TimeSeries load_even_or_bursts_record(const DataOptions& data, std::vector<std::string> required_roles,
+                                      std::string_view analysis, std::string_view hint);
 // Role analysed by single-signal commands: the role of the first --column that is not `time`
 // (so --column time=t:s --column rate=r:deg/s analyses rate), else "rate".
 std::string primary_role(const DataOptions& data);

@@ -13,7 +13,6 @@
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/regular_file.hpp"
-#include "framework/sampling.hpp"
 #include "framework/output_set.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
@@ -64,19 +63,13 @@ void discrepancy_command(const DiscrepancyOptions& o, CommandEnv& env) {
   const auto candidates = discrepancy::make_candidates(env.registry(), o.effects, o.sets, !o.update_device.empty());
 
   // Gaps: unless --max-gap is given, a record of regular bursts is accepted as it is (the block
-  // means handle it); irregular gaps are refused with where the first one is.
-  DataOptions data = o.data;
-  if (!o.max_gap_given) data.max_gap_factor = 0.0;
-  const TimeSeries record = load_record(data, {role::kRate, role::kTemperature});
-  if (!o.max_gap_given) {
-    const auto gaps = sampling::facts_of(record.time(), o.data.max_gap_factor);
-    if (gaps.gaps > 0 && !gaps.regular_bursts())
-      throw DataError({o.data.path, 0, "time"},
-                      std::to_string(gaps.gaps) + " gap(s) longer than " + std::to_string(o.data.max_gap_factor) +
-                          " x the median step, the first after t = " + std::to_string(gaps.first_gap_time_s) +
-                          " s, and not regular bursts (burst periods " + std::to_string(gaps.shortest_period_s) +
-                          " .. " + std::to_string(gaps.longest_period_s) + " s); give --max-gap 0 to accept them");
-  }
+  // means handle it); irregular gaps are refused with where the first one is (the shared policy,
+  // cli.hpp load_even_or_bursts_record). A given --max-gap is the CSV reader's, as for any command.
+  const std::vector<std::string> roles{role::kRate, role::kTemperature};
+  const TimeSeries record = o.max_gap_given
+                                ? load_record(o.data, roles)
+                                : load_even_or_bursts_record(o.data, roles, "The discrepancy search (block means)",
+                                                             "give --max-gap 0 to accept them as they are");
   env.progress("discrepancy", 0.0);
   const auto result = discrepancy::find_missing_effects(record, candidates.candidates, options);
   env.progress("discrepancy", 1.0);

@@ -14,7 +14,6 @@
 #include "devices/imu_simulation_columns.hpp"
 #include "devices/imu_simulator.hpp"
 #include "devices/simulator.hpp"
-#include "framework/atomic_file.hpp"
 #include "framework/csv.hpp"
 #include "framework/error.hpp"
 #include "framework/effect_catalogue.hpp"
@@ -87,15 +86,16 @@ void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::De
     throw ConfigError({device_path.string(), 0, "imu"},
                       "--fleet simulates a whole-IMU device file (an imu: section, e.g. devices/imu3.yaml)");
   const std::filesystem::path dir(o.out);
-  // The directory stays: each unit file is written atomically on its own.
-  {
-    OutputSet directory;
-    directory.make_directory(dir, "--out");
-    directory.commit();
-  }
   const devices::FleetSpread spread = devices::parse_fleet_spread(o.spread);
   const auto plan = devices::parse_fault_plan(o.outliers);
   const auto fleet = devices::plan_fleet(*device.imu, o.fleet, o.seed, spread, plan);
+  // One OutputSet for the whole fleet: the directory, every unit file, manifest.csv and key.json are
+  // planned (and checked against the device file) before any simulation, and committed together.
+  OutputSet outputs({device_path});
+  outputs.make_directory(dir, "--out");
+  for (const auto& unit : fleet) outputs.plan(dir / (unit.id + ".csv"), "--out");
+  outputs.plan(dir / "manifest.csv", "--out");
+  outputs.plan(dir / "key.json", "--out");
   devices::SimulationOptions options;
   options.sample_rate_hz = o.fs;
   if (o.duration > 0.0) options.duration_s = o.duration;
@@ -117,7 +117,7 @@ void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::De
         format_csv(imu_columns(unit.imu, devices::simulate_unit(unit, profile, options)), unit.id + ".csv");
     if (unit.fault == devices::FaultKind::Truncated)
       text.resize(static_cast<std::size_t>(devices::kTruncatedFraction * static_cast<double>(text.size())));
-    write_file_atomically(dir / (unit.id + ".csv"), text);
+    outputs.write(dir / (unit.id + ".csv"), text);  // each thread its own planned output
   });
   std::string manifest = "unit,data\n";
   nlohmann::json units = nlohmann::json::array();
@@ -168,9 +168,6 @@ void simulate_fleet(const SimulateOptions& o, CommandEnv& env, const devices::De
         {"time_constants_sigma", spread.time_constant}}},
       {"outliers", o.outliers},
       {"units", units}};
-  OutputSet outputs({device_path});
-  outputs.plan(dir / "manifest.csv", "--out");
-  outputs.plan(dir / "key.json", "--out");
   outputs.write(dir / "manifest.csv", manifest);
   outputs.write(dir / "key.json", key.dump(2) + "\n");
   outputs.commit();

@@ -11,8 +11,6 @@
 namespace driftlab::cli {
 namespace {
 
-constexpr double kHoursPerSecond = 1.0 / 3600.0;
-
 std::vector<double> to_vector(const Eigen::VectorXd& v, double scale = 1.0) {
   std::vector<double> out(static_cast<std::size_t>(v.size()));
   for (Eigen::Index i = 0; i < v.size(); ++i) out[static_cast<std::size_t>(i)] = v[i] * scale;
