@@ -371,10 +371,6 @@ std::string read_text_file(const std::filesystem::path& path) {
   return buffer;
 }
 
-TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& options) {
-  return parse_csv(read_text_file(path), path.string(), options);
-}
-
 CsvRowParser::CsvRowParser(std::string file, CsvReadOptions options)
     : file_(std::move(file)), options_(std::move(options)) {
   if (!std::isfinite(options_.sample_rate_hz) || options_.sample_rate_hz > 1.0 / kMinTimeStep)
@@ -471,9 +467,12 @@ void CsvRowParser::finish() const {
   if (rows_ == 0) throw DataError({file_, header_line_, ""}, "no data rows after the header");
 }
 
-TimeSeries parse_csv(const std::string& text, const std::string& file, const CsvReadOptions& options) {
+namespace {
+
+// The rows of `lines` (a CsvLineCursor or a CsvLineStream over `bytes` of text) as a record.
+template <class Lines>
+TimeSeries parse_lines(Lines& cursor, std::size_t bytes, const std::string& file, const CsvReadOptions& options) {
   CsvRowParser parser(file, options);
-  CsvLineCursor cursor(text);
   std::string_view line;
   if (cursor.next(line))
     parser.header(line, cursor.line_number());
@@ -483,13 +482,15 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
   std::vector<std::vector<double>> values(columns.size());
   std::vector<double> time;
   std::vector<int> line_of_row;
-  const std::size_t estimated_rows = text.size() / std::max<std::size_t>(1, line.size() + 1);
-  for (auto& v : values) v.reserve(estimated_rows);
+  const std::size_t estimated_rows = bytes / std::max<std::size_t>(1, line.size() + 1);
+  for (std::size_t k = 0; k < columns.size(); ++k)
+    if (columns[k].mapping.role != "time") values[k].reserve(estimated_rows);
   time.reserve(estimated_rows);
   line_of_row.reserve(estimated_rows);
   while (cursor.next(line)) {
     parser.row(line, cursor.line_number());
-    for (std::size_t k = 0; k < columns.size(); ++k) values[k].push_back(parser.values()[k]);
+    for (std::size_t k = 0; k < columns.size(); ++k)
+      if (columns[k].mapping.role != "time") values[k].push_back(parser.values()[k]);  // the time is in `time`
     time.push_back(parser.time_s());
     line_of_row.push_back(cursor.line_number());
   }
@@ -509,6 +510,8 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
   }
 
   TimeSeries series(Eigen::Map<const Eigen::VectorXd>(time.data(), static_cast<Eigen::Index>(rows)));
+  std::vector<double>().swap(time);
+  std::vector<int>().swap(line_of_row);
   for (std::size_t k = 0; k < columns.size(); ++k) {
     const PlannedColumn& c = columns[k];
     if (c.mapping.role == "time") continue;
@@ -521,8 +524,31 @@ TimeSeries parse_csv(const std::string& text, const std::string& file, const Csv
     series.set_channel(Channel{c.mapping.role, internal_unit_symbol(c.unit.quantity), c.mapping.column,
                                Eigen::Map<const Eigen::VectorXd>(values[k].data(), static_cast<Eigen::Index>(rows)),
                                c.unit.symbol});
+    std::vector<double>().swap(values[k]);  // one column's copy at a time
   }
   return series;
+}
+
+}  // namespace
+
+TimeSeries parse_csv(const std::string& text, const std::string& file, const CsvReadOptions& options) {
+  CsvLineCursor cursor(text);
+  return parse_lines(cursor, text.size(), file, options);
+}
+
+TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& options) {
+  if (is_stdin(path)) return parse_csv(read_text_file(path), path.string(), options);
+  // Streamed: the parsed columns (8 bytes per value, about half the text's bytes) are held, the
+  // text never is.
+  const auto size = check_data_input(path);
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!f) throw DataError({path.string(), 0, ""}, std::string("cannot open: ") + std::strerror(errno));
+  check_memory_estimate(1.0 * static_cast<double>(size), {path.string(), 0, ""},
+                        "reading a " + std::to_string(size >> 20) + " MB file");
+  constexpr std::size_t kMaxLineBytes = std::size_t{1} << 20;
+  CsvLineStream lines([&](char* buffer, std::size_t n) { return std::fread(buffer, 1, n, f.get()); }, path.string(),
+                      kMaxLineBytes);
+  return parse_lines(lines, size, path.string(), options);
 }
 
 void stream_csv(const std::vector<CsvColumn>& columns, const std::string& label,

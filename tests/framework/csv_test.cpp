@@ -2,6 +2,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -228,6 +229,49 @@ CsvLineStream::Read reads_of(const std::string& text, std::size_t piece, std::si
 // The stream reader (compensate --stream) gives exactly CsvLineCursor's lines and line numbers on
 // the whole text, however the text is cut into reads: a CR LF split between two reads stays one
 // line end, and a byte-order mark is skipped only at the very start.
+TEST(CsvReader, AFileIsReadInPiecesToTheSameRecordAndErrorsAsItsText) {
+  // Several of read_csv's 1-MiB reads, with a byte-order mark, CR LF and CR line ends, comments and
+  // blank lines, so that line numbers differ from row numbers.
+  const auto dir = std::filesystem::temp_directory_path() / ("driftlab_csv_pieces_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto record_text = [](double gap_s) {
+    std::string text = "\xEF\xBB\xBF# oven run\r\nt_s,rate_dps,temp_c\r\n";
+    for (int i = 0; i < 80000; ++i) {
+      text += std::to_string(i * 0.01 + (i >= 40000 ? gap_s : 0.0)) + "," + std::to_string(std::sin(i * 1e-3)) + "," +
+              std::to_string(20 + i * 1e-4);
+      text += i % 7 == 0 ? "\r" : "\r\n";
+      if (i % 5000 == 0) text += "# a comment\n\n";
+    }
+    return text;
+  };
+  const std::string text = record_text(0.0);
+  ASSERT_GT(text.size(), std::size_t{2} << 20);
+  std::ofstream(dir / "pieces.csv", std::ios::binary) << text;
+  const auto from_file = read_csv(dir / "pieces.csv");
+  const auto from_text = parse_csv(text, (dir / "pieces.csv").string());
+  EXPECT_EQ(from_file.time(), from_text.time());
+  EXPECT_EQ(from_file.channel("rate").values, from_text.channel("rate").values);
+  EXPECT_EQ(from_file.channel("temperature").values, from_text.channel("temperature").values);
+
+  // A gap after row 40000: the same message, naming the same line, either way.
+  const std::string gapped = record_text(100.0);
+  std::ofstream(dir / "gapped.csv", std::ios::binary) << gapped;
+  std::string file_error, text_error;
+  try {
+    read_csv(dir / "gapped.csv");
+  } catch (const DataError& e) {
+    file_error = e.what();
+  }
+  try {
+    parse_csv(gapped, (dir / "gapped.csv").string());
+  } catch (const DataError& e) {
+    text_error = e.what();
+  }
+  EXPECT_THAT(file_error, HasSubstr("gap of"));
+  EXPECT_EQ(file_error, text_error);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(CsvLineStream, GivesTheCursorsLinesHoweverTheReadsAreCut) {
   const std::string text =
       "\xEF\xBB\xBFt_s,rate_dps\r\n# note\r\n\r\n0,1\r1,2\n\n2,3\r\n\xEF\xBB\xBF"

@@ -11,7 +11,7 @@ int main(int argc, char** argv) {
   if (driftlab::bench::bench_signal_dir().empty()) {
     std::fprintf(stderr,
                  "driftlab-bench: DRIFTLAB_BENCH_SIGNALS is not set. Generate the benchmark signals with\n"
-                 "  python3 ../shared/bench/gen_signals.py --out DIR\n"
+                 "  python3 tools/bench/gen_signals.py --out DIR\n"
                  "and run DRIFTLAB_BENCH_SIGNALS=DIR driftlab-bench\n");
     return 2;
   }

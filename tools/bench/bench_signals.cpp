@@ -46,7 +46,7 @@ BenchSignal load(std::size_t n) {
   }
   throw std::runtime_error("benchmark signal " + csv.string() +
                            " (or .f64) not found; generate the signals with\n"
-                           "  python3 ../shared/bench/gen_signals.py --out DIR\nand set DRIFTLAB_BENCH_SIGNALS=DIR");
+                           "  python3 tools/bench/gen_signals.py --out DIR\nand set DRIFTLAB_BENCH_SIGNALS=DIR");
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// The benchmark records written by ../shared/bench/gen_signals.py (static gyro at 100 Hz, one
+// The benchmark records written by tools/bench/gen_signals.py (static gyro at 100 Hz, one
 // thermal cycle per record), read from $DRIFTLAB_BENCH_SIGNALS:
 //   gyro_N{1000,10000,100000,1000000}.csv  (t_s, rate_dps, temp_c)
 //   gyro_N10000000.f64                     (raw little-endian float64 rate_dps only)

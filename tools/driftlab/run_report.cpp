@@ -61,7 +61,7 @@ Figure imf_figure(const std::string& step, const Signal& imfs, const Signal* res
     const Eigen::VectorXd values =
         k < imfs.columns.cols() ? Eigen::VectorXd(imfs.columns.col(k)) : residue->columns.col(0);
     p.series.push_back(line("", time, values, kHoursPerSecond, ys));
-    f.panels.push_back(p);
+    f.panels.push_back(std::move(p));
   }
   return f;
 }
@@ -131,7 +131,7 @@ Figure residual_figure(const TimeSeries& record, const std::vector<std::string>&
       series.y.push_back(residual.means[b] * kDphPerRadPerSec);
     }
     p.series = {heat, cool};
-    f.panels.push_back(p);
+    f.panels.push_back(std::move(p));
   }
   return f;
 }
