@@ -347,18 +347,28 @@ TEST(GaussMarkovNoise, WithoutTheDeviceFileGmwmReadsOneGaussMarkovTermAndNoFlick
               kNoiseOnlyRecords / 2, named_records);
 }
 
-TEST(GaussMarkovNoise, WithoutTheDeviceFileGmwmNoiseTermsNameNothingWrongWhenAnEffectIsHidden) {
-  const int records = kSingleEffectRecords / 4;
+// Records with Gauss-Markov bias noise and one hidden effect, run with the options `options_of`
+// gives for each record's device: nothing but the hidden effect is named (asserted); returns in how
+// many the hidden effect is named first.
+int hidden_effect_named_first(int records,
+                              const std::function<discrepancy::Options(const devices::DeviceDefinition&)>& options_of) {
   int named_first = 0;
   for (int i = 0; i < records; ++i) {
     const auto index = 800000 + static_cast<std::uint64_t>(i);
     devices::DeviceDefinition device;
     const auto hidden = testing_oven::draw_effects(kSeed, index, 1);
     const auto record = gauss_markov_record(index, hidden, device);
-    const auto result = discrepancy::find_missing_effects(record.series, candidates().list, gmwm_options());
+    const auto result = discrepancy::find_missing_effects(record.series, candidates().list, options_of(device));
     for (const auto& n : named(result)) EXPECT_EQ(n, hidden.front()) << devices::describe_effects(record.effects)[0];
     named_first += !result.steps.empty() && result.steps.front().effect == hidden.front();
   }
+  return named_first;
+}
+
+TEST(GaussMarkovNoise, WithoutTheDeviceFileGmwmNoiseTermsNameNothingWrongWhenAnEffectIsHidden) {
+  const int records = kSingleEffectRecords / 4;
+  const int named_first =
+      hidden_effect_named_first(records, [](const devices::DeviceDefinition&) { return gmwm_options(); });
   std::printf(
       "[ summary  ] Gauss-Markov noise, no device file, GMWM noise terms: the hidden effect named first in %d of %d\n",
       named_first, records);
@@ -366,17 +376,8 @@ TEST(GaussMarkovNoise, WithoutTheDeviceFileGmwmNoiseTermsNameNothingWrongWhenAnE
 
 TEST(GaussMarkovNoise, HiddenEffectsAreStillNamedThroughIt) {
   const int records = kSingleEffectRecords / 4;
-  int named_first = 0;
-  for (int i = 0; i < records; ++i) {
-    const auto index = 800000 + static_cast<std::uint64_t>(i);
-    devices::DeviceDefinition device;
-    const auto hidden = testing_oven::draw_effects(kSeed, index, 1);
-    const auto record = gauss_markov_record(index, hidden, device);
-    const auto result =
-        discrepancy::find_missing_effects(record.series, candidates().list, devices::discrepancy_options(device));
-    for (const auto& n : named(result)) EXPECT_EQ(n, hidden.front()) << devices::describe_effects(record.effects)[0];
-    named_first += !result.steps.empty() && result.steps.front().effect == hidden.front();
-  }
+  const int named_first = hidden_effect_named_first(
+      records, [](const devices::DeviceDefinition& device) { return devices::discrepancy_options(device); });
   std::printf("[ summary  ] Gauss-Markov noise in the device file: the hidden effect named first in %d of %d\n",
               named_first, records);
   EXPECT_GE(named_first, static_cast<int>(std::ceil(kNearlyAll * records))) << named_first << " of " << records;
