@@ -545,9 +545,10 @@ TimeSeries read_csv(const std::filesystem::path& path, const CsvReadOptions& opt
   if (!f) throw DataError({path.string(), 0, ""}, std::string("cannot open: ") + std::strerror(errno));
   check_memory_estimate(1.0 * static_cast<double>(size), {path.string(), 0, ""},
                         "reading a " + std::to_string(size >> 20) + " MB file");
-  constexpr std::size_t kMaxLineBytes = std::size_t{1} << 20;
+  // No line cap of its own: a line may be the whole file, as when the text was held whole, and the
+  // row parser names a cell that is too long.
   CsvLineStream lines([&](char* buffer, std::size_t n) { return std::fread(buffer, 1, n, f.get()); }, path.string(),
-                      kMaxLineBytes);
+                      static_cast<std::size_t>(size) + 1);
   return parse_lines(lines, size, path.string(), options);
 }
 
