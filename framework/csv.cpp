@@ -482,15 +482,16 @@ TimeSeries parse_lines(Lines& cursor, std::size_t bytes, const std::string& file
   std::vector<std::vector<double>> values(columns.size());
   std::vector<double> time;
   std::vector<int> line_of_row;
-  const std::size_t estimated_rows = bytes / std::max<std::size_t>(1, line.size() + 1);
+  std::vector<std::size_t> kept;  // the columns held in `values`; the time is in `time`
   for (std::size_t k = 0; k < columns.size(); ++k)
-    if (columns[k].mapping.role != "time") values[k].reserve(estimated_rows);
+    if (columns[k].mapping.role != "time") kept.push_back(k);
+  const std::size_t estimated_rows = bytes / std::max<std::size_t>(1, line.size() + 1);
+  for (std::size_t k : kept) values[k].reserve(estimated_rows);
   time.reserve(estimated_rows);
   line_of_row.reserve(estimated_rows);
   while (cursor.next(line)) {
     parser.row(line, cursor.line_number());
-    for (std::size_t k = 0; k < columns.size(); ++k)
-      if (columns[k].mapping.role != "time") values[k].push_back(parser.values()[k]);  // the time is in `time`
+    for (std::size_t k : kept) values[k].push_back(parser.values()[k]);
     time.push_back(parser.time_s());
     line_of_row.push_back(cursor.line_number());
   }

@@ -16,13 +16,15 @@
 // duplicated or decreasing time stamps, a gap larger than max_gap_factor x the median step, a
 // unit the mapping does not know or one of another dimension than the role (ConfigError).
 // Messages quote at most 80 bytes of a bad cell, control bytes escaped (quoted_excerpt).
-// A UTF-8 byte-order mark is skipped; lines end in LF, CR LF or CR. Parsing uses std::from_chars
-// on one in-memory buffer: O(file size), about 0.1 s per million 3-column rows on one core
-// (the header check is linear in the number of columns too).
+// A UTF-8 byte-order mark is skipped; lines end in LF, CR LF or CR. Parsing uses std::from_chars:
+// O(file size), about 0.1 s per million 3-column rows on one core (the header check is linear in
+// the number of columns too). read_csv reads a file in 1-MiB pieces: it holds the parsed columns,
+// never the whole text (standard input and parse_csv take the text whole).
 //
-// Writing: format_csv() gives the text, an OutputSet (output_set.hpp) writes it atomically, with
-// every other output of the command. Column names must be valid, unique CSV header cells (ConfigError); values must be
-// finite (Error: a computation overflowed).
+// Writing: an OutputSet (output_set.hpp) streams the text (stream_csv) to its temporary file and
+// commits it with every other output of the command; format_csv() gives it whole. Column names
+// must be valid, unique CSV header cells (ConfigError); values must be finite (Error: a
+// computation overflowed).
 #pragma once
 
 #include <Eigen/Core>

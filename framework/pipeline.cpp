@@ -542,6 +542,7 @@ std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Regis
     if (dot == std::string::npos) return inputs.at(ref);
     return produced[index_of.at(ref.substr(0, dot))].at(ref.substr(dot + 1));
   };
+  const double sample_rate_hz = record.sample_rate_hz();
   std::vector<std::optional<StepRecord>> entries(count);  // empty: the step has not started
   std::mutex progress_mutex;
   const auto run_step = [&](std::size_t i) {
@@ -553,7 +554,7 @@ std::map<std::string, Signal> run_pipeline(const Pipeline& pipeline, const Regis
     RunContext ctx;
     ctx.threads = options.threads;
     ctx.time_s = record.time();
-    ctx.sample_rate_hz = record.sample_rate_hz();
+    ctx.sample_rate_hz = sample_rate_hz;
     ctx.seed = static_cast<std::uint64_t>(derived_seed(pipeline.seed, step.name));
     if (options.progress)
       ctx.progress = [&, i](double f) {
