@@ -498,9 +498,10 @@ TimeSeries parse_lines(Lines& cursor, std::size_t bytes, const std::string& file
   parser.finish();
   const std::size_t rows = time.size();
   const PlannedColumn* time_column = parser.find("time");
+  TimeSeries series(Eigen::Map<const Eigen::VectorXd>(time.data(), static_cast<Eigen::Index>(rows)),
+                    options.max_gap_factor > 0.0 ? options.max_gap_factor : sampling::kGapFactor);
   if (time_column && options.max_gap_factor > 0.0) {
-    const auto facts = sampling::facts_of(
-        Eigen::Map<const Eigen::VectorXd>(time.data(), static_cast<Eigen::Index>(rows)), options.max_gap_factor);
+    const auto& facts = series.sampling_facts();
     if (!facts.evenly_sampled()) {
       const auto i = static_cast<std::size_t>(facts.first_gap_index);
       throw DataError({file, line_of_row[i + 1], time_column->mapping.column},
@@ -510,7 +511,6 @@ TimeSeries parse_lines(Lines& cursor, std::size_t bytes, const std::string& file
     }
   }
 
-  TimeSeries series(Eigen::Map<const Eigen::VectorXd>(time.data(), static_cast<Eigen::Index>(rows)));
   std::vector<double>().swap(time);
   std::vector<int>().swap(line_of_row);
   for (std::size_t k = 0; k < columns.size(); ++k) {

@@ -55,9 +55,10 @@ TimeSeries mapped_record(const TimeSeries& imu_record, const CsvReadOptions& opt
   return record;
 }
 
-void check_gaps(const TimeSeries& record, double max_gap_factor, const std::string& file) {
+void check_gaps(TimeSeries& record, double max_gap_factor, const std::string& file) {
   if (max_gap_factor <= 0.0) return;
-  const auto facts = sampling::facts_of(record.time(), max_gap_factor);
+  record.set_gap_factor(max_gap_factor);
+  const auto& facts = record.sampling_facts();
   if (!facts.evenly_sampled())
     throw DataError({file, 0, "time"}, "gap of " + std::to_string(facts.first_gap_s) + " s after t = " +
                                            std::to_string(facts.first_gap_time_s) + " s (median step " +

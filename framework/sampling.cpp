@@ -1,6 +1,8 @@
 #include "framework/sampling.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <stdexcept>
 
 #include "framework/signal.hpp"
 
@@ -41,6 +43,21 @@ Facts facts_of(const Eigen::VectorXd& time_s, double gap_factor) {
     f.longest_period_s = std::max(f.longest_period_s, period);
   }
   return f;
+}
+
+std::vector<TimeBlock> time_blocks(const Eigen::VectorXd& time_s, double block_s) {
+  if (!(block_s > 0.0)) throw std::invalid_argument("block length must be positive");
+  std::vector<TimeBlock> blocks;
+  const Eigen::Index n = time_s.size();
+  const auto number_of = [&](Eigen::Index i) {
+    return static_cast<long>(std::floor((time_s[i] - time_s[0]) / block_s + kBlockBoundaryTolerance));
+  };
+  for (Eigen::Index first = 0, end = 0; first < n; first = end) {
+    const long k = number_of(first);
+    while (end < n && number_of(end) == k) ++end;
+    blocks.push_back({first, end - first, k});
+  }
+  return blocks;
 }
 
 double rate_within_segments_hz(const Eigen::VectorXd& time_s, const Facts& facts) {

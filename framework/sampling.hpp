@@ -57,6 +57,20 @@ struct Facts {
 
 Facts facts_of(const Eigen::VectorXd& time_s, double gap_factor = kGapFactor);
 
+// The samples of each block of block_s seconds, the one home of time blocking (residual-drift block
+// means, the discrepancy search's blocks, calibration bins): block k holds the samples with
+// t0 + k block_s <= t < t0 + (k+1) block_s, t0 = time_s[0]; the boundaries allow
+// kBlockBoundaryTolerance x block_s, so that time stamps such as k x 0.1 s that do not add up exactly
+// fall in the block they name. A block without samples (a gap) is left out. In time order; O(n).
+// Throws std::invalid_argument unless block_s > 0.
+inline constexpr double kBlockBoundaryTolerance = 1e-9;
+struct TimeBlock {
+  Eigen::Index first = 0;  // index of its first sample
+  Eigen::Index samples = 0;
+  long number = 0;  // k
+};
+std::vector<TimeBlock> time_blocks(const Eigen::VectorXd& time_s, double block_s);
+
 // (n - 1) / (t_last - t_first): the mean sample rate, Hz; 0 for fewer than 2 samples or a zero span.
 double mean_rate_hz(const Eigen::VectorXd& time_s);
 

@@ -5,7 +5,12 @@
 
 namespace driftlab {
 
-double TimeSeries::sample_rate_hz() const { return sampling::mean_rate_hz(time_); }
+TimeSeries::TimeSeries(Eigen::VectorXd time_s, double gap_factor)
+    : time_(std::move(time_s)), facts_(sampling::facts_of(time_, gap_factor)) {}
+
+void TimeSeries::set_gap_factor(double gap_factor) {
+  if (gap_factor != facts_.gap_factor) facts_ = sampling::facts_of(time_, gap_factor);
+}
 
 void TimeSeries::set_channel(Channel channel) {
   if (channel.values.size() != time_.size())

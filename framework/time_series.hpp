@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "framework/sampling.hpp"
+
 namespace driftlab {
 
 // Well-known channel roles. Any other string is allowed too (it is the column's name stem).
@@ -30,12 +32,19 @@ struct Channel {
 class TimeSeries {
  public:
   TimeSeries() = default;
-  explicit TimeSeries(Eigen::VectorXd time_s) : time_(std::move(time_s)) {}
+  // The time stamps, s; their sampling facts are computed here, once (sampling::facts_of, O(n)): a
+  // step longer than gap_factor x the median step is a gap.
+  explicit TimeSeries(Eigen::VectorXd time_s, double gap_factor = sampling::kGapFactor);
 
   const Eigen::VectorXd& time() const { return time_; }
   Eigen::Index size() const { return time_.size(); }
-  // Mean sample rate in Hz (sampling::mean_rate_hz: 0 for fewer than two samples or a zero span).
-  double sample_rate_hz() const;
+  // Median step, mean rate, gaps, segments and layout (evenly sampled, regular bursts, irregular)
+  // of the time stamps: what every analysis asks before it assumes even sampling.
+  const sampling::Facts& sampling_facts() const { return facts_; }
+  // Computes the sampling facts again with another gap factor (a reader's --max-gap).
+  void set_gap_factor(double gap_factor);
+  // Mean sample rate in Hz (0 for fewer than two samples or a zero span).
+  double sample_rate_hz() const { return facts_.mean_rate_hz; }
 
   // Adds or replaces the channel with this role. Throws DataError when the length differs.
   void set_channel(Channel channel);
@@ -51,6 +60,7 @@ class TimeSeries {
 
  private:
   Eigen::VectorXd time_;
+  sampling::Facts facts_;
   std::vector<Channel> channels_;
   std::vector<std::string> device_ids_;
 };

@@ -33,17 +33,10 @@ std::string to_string(Finding::Severity severity) {
 Binning make_bins(const Eigen::VectorXd& time_s, double bin_s) {
   Binning b;
   b.bin_of.resize(static_cast<std::size_t>(time_s.size()));
-  long last = -1;
-  for (Eigen::Index i = 0; i < time_s.size(); ++i) {
-    const long k = static_cast<long>(std::floor((time_s[i] - time_s[0]) / bin_s));
-    if (k != last) {
-      ++b.bins;
-      b.count.push_back(0.0);
-      b.first.push_back(i);
-      last = k;
-    }
-    b.bin_of[static_cast<std::size_t>(i)] = b.bins - 1;
-    b.count.back() += 1.0;
+  for (const auto& block : sampling::time_blocks(time_s, bin_s)) {
+    b.count.push_back(static_cast<double>(block.samples));
+    b.first.push_back(block.first);
+    std::fill_n(b.bin_of.begin() + block.first, block.samples, b.bins++);
   }
   return b;
 }

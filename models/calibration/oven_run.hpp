@@ -47,8 +47,8 @@ inline constexpr double kMinHistorySpanK = 10.0;
 inline constexpr double kMaxRampKPerMin = 5.0;
 inline constexpr double kMinLegS = 300.0;
 
-// Bins of bin_s seconds from the first sample (bin k: t0 + k bin_s <= t < t0 + (k+1) bin_s), empty
-// bins dropped: the rows every calibration fit and this analysis average over.
+// The time blocks of bin_s seconds (sampling::time_blocks) with a bin index per sample: the rows
+// every calibration fit and this analysis average over.
 struct Binning {
   std::vector<int> bin_of;          // per sample: its bin
   std::vector<double> count;        // per bin: samples

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "framework/sampling.hpp"
 #include "framework/signal.hpp"
 
 namespace driftlab::discrepancy {
@@ -24,37 +25,23 @@ double gauss_markov_covariance(double sigma, double tau, double length_i, double
 
 }  // namespace
 
-Blocks make_blocks(const Eigen::VectorXd& time_s, double block_s) {
-  const Eigen::Index n = time_s.size();
-  if (!(block_s > 0.0)) throw std::invalid_argument("block length must be positive");
+Blocks make_blocks(const TimeSeries& record, double block_s) {
+  const Eigen::VectorXd& time_s = record.time();
   Blocks b;
-  b.sample_interval_s = signal::median_step(time_s);
-  b.record_start_s = time_s[0];
-  std::vector<double> start, end, mean;
-  Eigen::Index current = -1;
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const auto index = static_cast<Eigen::Index>(std::floor((time_s[k] - time_s[0]) / block_s));
-    if (index != current) {
-      current = index;
-      b.first.push_back(k);
-      b.count.push_back(0);
-      start.push_back(time_s[k]);
-      end.push_back(time_s[k]);
-      mean.push_back(0.0);
-    }
-    ++b.count.back();
-    end.back() = time_s[k];
-    mean.back() += time_s[k];
-  }
-  const auto blocks = static_cast<Eigen::Index>(b.first.size());
-  b.start_s.resize(blocks);
-  b.end_s.resize(blocks);
-  b.time_s.resize(blocks);
-  for (Eigen::Index i = 0; i < blocks; ++i) {
-    const auto m = static_cast<double>(b.count[static_cast<std::size_t>(i)]);
-    b.start_s[i] = start[static_cast<std::size_t>(i)];
-    b.end_s[i] = b.start_s[i] + m * b.sample_interval_s;
-    b.time_s[i] = mean[static_cast<std::size_t>(i)] / m;
+  b.sample_interval_s = record.sampling_facts().median_step_s;
+  b.record_start_s = time_s.size() ? time_s[0] : 0.0;
+  const auto blocks = sampling::time_blocks(time_s, block_s);
+  const auto count = static_cast<Eigen::Index>(blocks.size());
+  b.start_s.resize(count);
+  b.end_s.resize(count);
+  b.time_s.resize(count);
+  for (Eigen::Index i = 0; i < count; ++i) {
+    const auto& block = blocks[static_cast<std::size_t>(i)];
+    b.first.push_back(block.first);
+    b.count.push_back(block.samples);
+    b.start_s[i] = time_s[block.first];
+    b.end_s[i] = b.start_s[i] + static_cast<double>(block.samples) * b.sample_interval_s;
+    b.time_s[i] = time_s.segment(block.first, block.samples).mean();
   }
   return b;
 }

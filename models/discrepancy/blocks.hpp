@@ -2,8 +2,8 @@
 //
 // The discrepancy workflow (discrepancy.hpp) works on block means: the nonlinear searches then
 // cost O(blocks) instead of O(samples) per evaluation, and sensor noise on the temperature is
-// averaged out before derivatives and hysteresis states are taken. A block is every sample with
-// floor((t - t_first) / block_s) = k; empty blocks (gaps in the record) are dropped. Block i spans
+// averaged out before derivatives and hysteresis states are taken. The blocks are the record's time
+// blocks (sampling::time_blocks; empty blocks, gaps in the record, dropped). Block i spans
 // [a_i, b_i] = [first sample time, last sample time + dt] with L_i = b_i - a_i = m_i dt, dt the
 // median sample interval.
 //
@@ -26,6 +26,7 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "framework/time_series.hpp"
 #include "models/error_model/error_model.hpp"
 
 namespace driftlab::discrepancy {
@@ -47,8 +48,9 @@ struct Blocks {
 // Gaps and regular bursts of a record: framework/sampling.hpp (block averaging handles regular
 // bursts like evenly spaced data with fewer samples: blocks of at least one burst period).
 
-// Throws std::invalid_argument when block_s <= 0 or the record has fewer than 2 samples.
-Blocks make_blocks(const Eigen::VectorXd& time_s, double block_s);
+// The blocks of `record` (its time and its sampling facts' median step). Throws
+// std::invalid_argument when block_s <= 0.
+Blocks make_blocks(const TimeSeries& record, double block_s);
 
 // Mean of x over each block.
 Eigen::VectorXd block_means(const Blocks& blocks, const Eigen::VectorXd& x);

@@ -61,12 +61,12 @@ void Workflow::set_noise(Result& result) {
 }
 
 error_model::NoiseTerms Workflow::estimated_noise(const Eigen::VectorXd& residual) const {
-  const double tau0 = blocks_.sample_interval_s;
-  const auto analysis = allan::analyze_rate(residual, 1.0 / tau0, {.fit_terms = options_.noise_gmwm.empty()});
+  const double rate_hz = record_.sample_rate_hz();
+  const auto analysis = allan::analyze_rate(residual, rate_hz, {.fit_terms = options_.noise_gmwm.empty()});
   error_model::NoiseTerms n;
   if (!options_.noise_gmwm.empty()) {
     const auto model = allan::gmwm::parse_model(options_.noise_gmwm, "noise_gmwm");
-    const auto fit = allan::gmwm::fit(analysis.curve, 1.0 / tau0, model);
+    const auto fit = allan::gmwm::fit(analysis.curve, rate_hz, model);
     for (const auto& c : fit.components) {
       const auto& p = c.parameters;
       switch (c.process) {
@@ -91,7 +91,7 @@ error_model::NoiseTerms Workflow::estimated_noise(const Eigen::VectorXd& residua
     n.bias_instability_rad_s = fit[allan::Term::B].value;
     n.rate_random_walk_rad_s_sqrt_s = fit[allan::Term::K].value;
   }
-  n.flicker_tau_min_s = std::max(n.flicker_tau_min_s, tau0);
+  n.flicker_tau_min_s = std::max(n.flicker_tau_min_s, 1.0 / rate_hz);
   n.flicker_tau_max_s = std::max(n.flicker_tau_max_s, blocks_.duration_s());
   return n;
 }

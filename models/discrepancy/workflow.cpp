@@ -22,9 +22,10 @@ Workflow::Workflow(const TimeSeries& record, const std::vector<Candidate>& candi
   record.channel(role::kRate);
   record.channel(role::kTemperature);
   const double duration = t[t.size() - 1] - t[0];
-  block_s_ = options.block_s > 0.0 ? options.block_s : std::max(signal::median_step(t), duration / kTargetBlocks);
-  blocks_ = make_blocks(t, block_s_);
-  evenly_sampled_ = sampling::facts_of(t).evenly_sampled();
+  block_s_ = options.block_s > 0.0 ? options.block_s
+                                   : std::max(record.sampling_facts().median_step_s, duration / kTargetBlocks);
+  blocks_ = make_blocks(record, block_s_);
+  evenly_sampled_ = record.sampling_facts().evenly_sampled();
   free_scale_factor_ = !options.prior && record.has(role::kTrueRate) &&
                        record.channel(role::kTrueRate).values.cwiseAbs().maxCoeff() > 0.0;
   const Eigen::Index parameters = model_columns();

@@ -1,7 +1,5 @@
 #include "models/evaluation/evaluation.hpp"
 
-#include "framework/sampling.hpp"
-
 #include <Eigen/Dense>
 
 #include <algorithm>
@@ -12,41 +10,20 @@
 
 namespace driftlab::evaluation {
 
-namespace {
-
-constexpr double kBoundaryTolerance = 1e-9;  // of a block: time stamps like k * 0.1 s
-
-bool has_gaps(const Eigen::VectorXd& time_s) { return !sampling::facts_of(time_s).evenly_sampled(); }
-
-}  // namespace
-
 BlockMeans block_means(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, double block_s) {
   if (time_s.size() != x.size()) throw DataError({"", 0, "t_s"}, "time and values differ in length");
   BlockMeans out;
   const Eigen::Index n = x.size();
   if (n == 0 || !(block_s > 0)) return out;
-  const auto block_of = [&](Eigen::Index i) {
-    return static_cast<long>(std::floor((time_s[i] - time_s[0]) / block_s + kBoundaryTolerance));
-  };
-  std::vector<double> means;
-  long last_block = -1;
-  for (Eigen::Index first = 0, end = 0; first < n; first = end) {
-    const long k = block_of(first);
-    while (end < n && block_of(end) == k) ++end;
-    means.push_back(x.segment(first, end - first).mean());
-    out.first.push_back(first);
-    out.samples.push_back(end - first);
-    last_block = k;
-  }
+  out.blocks = sampling::time_blocks(time_s, block_s);
   const double last_step = n > 1 ? time_s[n - 1] - time_s[n - 2] : 0.0;
-  const double block_end = time_s[0] + static_cast<double>(last_block + 1) * block_s;
-  const bool reaches_end = n > 1 && time_s[n - 1] + last_step >= block_end - kBoundaryTolerance * block_s;
-  if (!reaches_end && !has_gaps(time_s)) {
-    means.pop_back();
-    out.first.pop_back();
-    out.samples.pop_back();
-  }
-  out.means = Eigen::Map<const Eigen::VectorXd>(means.data(), static_cast<Eigen::Index>(means.size()));
+  const double block_end = time_s[0] + static_cast<double>(out.blocks.back().number + 1) * block_s;
+  const bool reaches_end =
+      n > 1 && time_s[n - 1] + last_step >= block_end - sampling::kBlockBoundaryTolerance * block_s;
+  if (!reaches_end && sampling::facts_of(time_s).evenly_sampled()) out.blocks.pop_back();
+  out.means.resize(static_cast<Eigen::Index>(out.blocks.size()));
+  for (std::size_t k = 0; k < out.blocks.size(); ++k)
+    out.means[static_cast<Eigen::Index>(k)] = x.segment(out.blocks[k].first, out.blocks[k].samples).mean();
   return out;
 }
 
@@ -78,9 +55,16 @@ StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_r
   return s;
 }
 
+Eigen::VectorXd intrinsic_noise(const Eigen::VectorXd& measured_rad_s, const Eigen::VectorXd& systematic_rad_s) {
+  if (measured_rad_s.size() != systematic_rad_s.size())
+    throw DataError({"", 0, "systematic"}, "the systematic rate has " + std::to_string(systematic_rad_s.size()) +
+                                               " samples, the measured rate " + std::to_string(measured_rad_s.size()));
+  return measured_rad_s - systematic_rad_s;
+}
+
 allan::Analysis intrinsic_floor(const Eigen::VectorXd& measured_rad_s, const Eigen::VectorXd& systematic_rad_s,
                                 double sample_rate_hz) {
-  return allan::analyze_rate(measured_rad_s - systematic_rad_s, sample_rate_hz);
+  return allan::analyze_rate(intrinsic_noise(measured_rad_s, systematic_rad_s), sample_rate_hz);
 }
 
 FloorComparison compare_to_floor(const allan::Analysis& error, const allan::Analysis& floor, double factor) {

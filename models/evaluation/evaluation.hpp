@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "framework/sampling.hpp"
 #include "models/allan/analysis.hpp"
 
 namespace driftlab::evaluation {
@@ -58,8 +59,8 @@ struct StageScore {
 // sample-count blocking (whole blocks of block_s x rate samples, the remainder left out).
 // Throws DataError when time_s and x differ in length.
 struct BlockMeans {
-  Eigen::VectorXd means;                     // one per kept block, unit of x
-  std::vector<Eigen::Index> first, samples;  // the samples of each kept block: [first, first + samples)
+  Eigen::VectorXd means;                    // one per kept block, unit of x
+  std::vector<sampling::TimeBlock> blocks;  // the samples of each kept block
 };
 BlockMeans block_means(const Eigen::VectorXd& time_s, const Eigen::VectorXd& x, double block_s = kResidualBlockS);
 
@@ -74,7 +75,11 @@ StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_r
                        double sample_rate_hz, double reference_arw_rad_sqrt_s, const Truth* truth,
                        const allan::Analysis* estimated = nullptr);
 
-// Allan analysis of measured - systematic (read like the original record: full bandwidth).
+// measured - systematic: the gyro's own noise, rad/s, with the true systematic rate of a simulated
+// record taken out (no compensation can do better). Throws DataError when the lengths differ.
+Eigen::VectorXd intrinsic_noise(const Eigen::VectorXd& measured_rad_s, const Eigen::VectorXd& systematic_rad_s);
+
+// Allan analysis of intrinsic_noise (read like the original record: full bandwidth).
 allan::Analysis intrinsic_floor(const Eigen::VectorXd& measured_rad_s, const Eigen::VectorXd& systematic_rad_s,
                                 double sample_rate_hz);
 

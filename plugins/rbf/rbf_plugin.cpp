@@ -3,7 +3,7 @@
 // minimizing the held-out RMSE over sigma, log10(regularization), (k-means only) the integer number
 // of centres and (tune_linear_tail) the linear tail on or off; then it refits on all samples with
 // the best values; ctx.diagnostics["tuning"] logs the start, the best and the per-generation
-// history. Tuning sees at most tune_rows means of consecutive rows (see tuned()). Hyperparameters
+// history. Tuning sees at most tune_max_samples means of consecutive rows (see tuned()). Hyperparameters
 // that make the kernel reject the fit score +infinity.
 #include <cmath>
 #include <limits>
@@ -50,7 +50,7 @@ class RbfPlugin final : public Regressor {
         tuning_{.plugin = "regressor/rbf",
                 .holdout_fraction = p.real("holdout_fraction"),
                 .holdout_blocks = static_cast<std::size_t>(p.integer("holdout_blocks")),
-                .max_samples = static_cast<std::size_t>(p.integer("tune_rows")),
+                .max_samples = static_cast<std::size_t>(p.integer("tune_max_samples")),
                 .rows = tuning::Rows::RunMeans,
                 .seed = static_cast<std::uint64_t>(p.integer("seed"))},
         tune_linear_tail_(p.boolean("tune_linear_tail")) {
@@ -105,7 +105,7 @@ class RbfPlugin final : public Regressor {
     return out;
   }
 
-  // Tuning sees the means of consecutive runs of rows (tuning::Rows::RunMeans, at most tune_rows of
+  // Tuning sees the means of consecutive runs of rows (tuning::Rows::RunMeans, at most tune_max_samples of
   // them); the final fit uses every row.
   rbf::Config tuned(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, RunContext& ctx) const {
     const tuning::Split data = tuning::split(X, y, tuning_);
@@ -204,10 +204,7 @@ void register_rbf_plugins(Registry& registry) {
                            .less_than(1),
                        param::integer("holdout_blocks", 10, "1", "evenly spread contiguous held-out runs when tuning")
                            .at_least(1),
-                       param::integer("tune_rows", 20000, "1",
-                                      "rows the tuning sees at most: means of ceil(rows / tune_rows) consecutive rows; "
-                                      "the final fit uses all rows")
-                           .at_least(10),
+                       tuning::max_samples_param(tuning::Rows::RunMeans),
                        param::seed()},
                       {{"centres <= kmeans_sample",
                         {"centres", "kmeans_sample"},

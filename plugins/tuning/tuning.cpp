@@ -36,10 +36,17 @@ std::vector<ParamSpec> params(const std::string& complexity_key, const std::stri
                         "when the optimizer takes two objectives"),
       param::real("holdout_fraction", 0.2, "1", "share of samples held out when tuning").greater_than(0).less_than(1),
       param::integer("holdout_blocks", 10, "1", "evenly spread contiguous held-out runs when tuning").at_least(1),
-      param::integer("tune_max_samples", 20000, "1",
-                     "tuning uses an evenly spaced subsample of at most this many rows (0: all); the final fit "
-                     "uses all")
-          .at_least(0)};
+      max_samples_param(Rows::EvenSubsample)};
+}
+
+ParamSpec max_samples_param(Rows rows) {
+  return param::integer("tune_max_samples", 20000, "1",
+                        rows == Rows::EvenSubsample
+                            ? "tuning uses an evenly spaced subsample of at most this many rows (0: all); the final "
+                              "fit uses all"
+                            : "tuning uses at most this many means of ceil(rows / tune_max_samples) consecutive rows "
+                              "(0: every row); the final fit uses all")
+      .at_least(0);
 }
 
 Settings settings(const ParamValues& p, const Optimizer& optimizer, std::string plugin, std::string complexity_name) {

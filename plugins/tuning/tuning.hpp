@@ -26,6 +26,10 @@ ParamSpec search_range(std::string key, std::vector<double> def, std::string uni
 // How the rows are thinned before the split (see split()).
 enum class Rows { EvenSubsample, RunMeans };
 
+// The `tune_max_samples` parameter (rows the tuning sees at most, 0: all), documented for `rows`:
+// the one declaration of it, in params() and in the adapters that thin by RunMeans.
+ParamSpec max_samples_param(Rows rows);
+
 struct Settings {
   std::string plugin;           // e.g. "regressor/elm", for messages
   std::string complexity_name;  // e.g. "output_weight_norm"

@@ -506,7 +506,7 @@ TEST(Blocks, AverageEachTimeSpanAndDropEmptyOnesInGaps) {
   Eigen::VectorXd t(8), x(8);
   t << 0, 1, 2, 3, 20, 21, 22, 23;
   x << 1, 2, 3, 4, 10, 20, 30, 40;
-  const auto b = discrepancy::make_blocks(t, 2.0);
+  const auto b = discrepancy::make_blocks(TimeSeries(t), 2.0);
   ASSERT_EQ(b.size(), 4);
   EXPECT_THAT(b.count, ::testing::ElementsAre(2, 2, 2, 2));
   const Eigen::VectorXd m = discrepancy::block_means(b, x);
@@ -526,7 +526,7 @@ TEST(NoiseCovariance, MatchesTheSampleCovarianceOfSimulatedBlockMeans) {
   noise.rate_random_walk_rad_s_sqrt_s = 2e-6;
   const int realizations = 400, n = 3600;
   const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(n, 0.0, n - 1.0);
-  const auto blocks = discrepancy::make_blocks(t, 120.0);
+  const auto blocks = discrepancy::make_blocks(TimeSeries(t), 120.0);
   const Eigen::MatrixXd model = discrepancy::noise_covariance(blocks, noise);
   Eigen::MatrixXd sample = Eigen::MatrixXd::Zero(blocks.size(), blocks.size());
   for (int r = 0; r < realizations; ++r) {
@@ -574,7 +574,7 @@ TEST(ResidualViews, SeparateHeatingFromCoolingAndFindTheSinusoid) {
     temp[k] = k < 360 ? 0.02 * t[k] : 0.02 * (7190.0 - t[k]);
     residual[k] = (k < 360 ? -1e-4 : 1e-4) + 6e-5 * std::sin(2.0 * std::numbers::pi * t[k] / 600.0);
   }
-  const auto blocks = discrepancy::make_blocks(t, 10.0);
+  const auto blocks = discrepancy::make_blocks(TimeSeries(t), 10.0);
   const auto v = discrepancy::residual_views(blocks, temp, residual, residual, error_model::NoiseTerms{}, 6);
   constexpr double kSinusoidAverage = 1e-5;  // the sinusoid averages out over each leg within this
   EXPECT_NEAR(v.heating.mean_rad_s, -1e-4, kSinusoidAverage);

@@ -37,8 +37,8 @@ TEST(BlockMeans, OnAnEvenlySampledRecordEqualTheWholeBlocksOfSamples) {
   ASSERT_EQ(b.means.size(), n / per_block);
   for (Eigen::Index k = 0; k < n / per_block; ++k) {
     EXPECT_NEAR(b.means[k], x.segment(k * per_block, per_block).mean(), kSum) << "block " << k;
-    EXPECT_EQ(b.first[static_cast<std::size_t>(k)], k * per_block);
-    EXPECT_EQ(b.samples[static_cast<std::size_t>(k)], per_block);
+    EXPECT_EQ(b.blocks[static_cast<std::size_t>(k)].first, k * per_block);
+    EXPECT_EQ(b.blocks[static_cast<std::size_t>(k)].samples, per_block);
   }
 }
 

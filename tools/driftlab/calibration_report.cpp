@@ -31,17 +31,16 @@ struct RecordBlocks {
   std::vector<calibration::Leg> legs;
   std::vector<double> t_s, temp_c;
   std::vector<int> direction;
-  std::vector<Eigen::Index> first, samples;
+  std::vector<sampling::TimeBlock> blocks;
 };
 
 RecordBlocks blocks_of(const calibration::Record& r) {
   RecordBlocks b;
   b.legs = calibration::analyse_oven_run(r.name, r.time_s, r.temp_c, evaluation::kResidualBlockS).legs;
   const auto means = evaluation::block_means(r.time_s, r.temp_c);
-  b.first = means.first;
-  b.samples = means.samples;
-  for (std::size_t k = 0; k < means.first.size(); ++k) {
-    const double t = r.time_s.segment(means.first[k], means.samples[k]).mean();
+  b.blocks = means.blocks;
+  for (std::size_t k = 0; k < means.blocks.size(); ++k) {
+    const double t = r.time_s.segment(means.blocks[k].first, means.blocks[k].samples).mean();
     b.t_s.push_back(t);
     b.temp_c.push_back(means.means[static_cast<Eigen::Index>(k)]);
     int direction = 0;
@@ -55,8 +54,8 @@ RecordBlocks blocks_of(const calibration::Record& r) {
 // Mean of x over each block, deg/h.
 std::vector<double> block_means_dph(const RecordBlocks& b, const Eigen::VectorXd& x_rad_s) {
   std::vector<double> out;
-  for (std::size_t k = 0; k < b.first.size(); ++k)
-    out.push_back(x_rad_s.segment(b.first[k], b.samples[k]).mean() * kDphPerRadPerSec);
+  for (const auto& block : b.blocks)
+    out.push_back(x_rad_s.segment(block.first, block.samples).mean() * kDphPerRadPerSec);
   return out;
 }
 
@@ -317,8 +316,8 @@ nlohmann::json held_out_section(const ReportInput& in, std::size_t e,
                           {"end_s", leg.end_s}});
   std::optional<double> floor_dph;
   if (r.systematic_rad_s.size()) {
-    floor_dph =
-        evaluation::block_mean_rms(r.time_s, Eigen::VectorXd(r.rate_rad_s - r.systematic_rad_s)) * kDphPerRadPerSec;
+    floor_dph = evaluation::block_mean_rms(r.time_s, evaluation::intrinsic_noise(r.rate_rad_s, r.systematic_rad_s)) *
+                kDphPerRadPerSec;
     ej["intrinsic_floor_drift_dph"] = *floor_dph;
   }
   const auto number_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };

@@ -162,32 +162,33 @@ TimeSeries load_record(const DataOptions& data, std::vector<std::string> require
   return record;
 }
 
-SampledRecord load_sampled_record(const DataOptions& data, std::vector<std::string> required_roles) {
+TimeSeries load_record_with_gaps(const DataOptions& data, std::vector<std::string> required_roles) {
   DataOptions with_gaps = data;
   with_gaps.max_gap_factor = 0.0;
-  SampledRecord r{load_record(with_gaps, std::move(required_roles)), {}};
-  r.facts = sampling::facts_of(r.record.time(), data.max_gap_factor > 0.0 ? data.max_gap_factor : sampling::kGapFactor);
-  return r;
+  TimeSeries record = load_record(with_gaps, std::move(required_roles));
+  if (data.max_gap_factor > 0.0) record.set_gap_factor(data.max_gap_factor);
+  return record;
 }
 
 TimeSeries load_evenly_sampled_record(const DataOptions& data, std::vector<std::string> required_roles,
                                       std::string_view analysis) {
-  auto [record, facts] = load_sampled_record(data, std::move(required_roles));
+  TimeSeries record = load_record_with_gaps(data, std::move(required_roles));
+  const auto& facts = record.sampling_facts();
   if (!facts.evenly_sampled())
     throw sampling::uneven_sampling_error(facts, record.time(), data.path, analysis,
                                           facts.regular_bursts()
                                               ? "for these regular bursts, `driftlab allan` gives the "
                                                 "noise per burst"
                                               : "");
-  return std::move(record);
+  return record;
 }
 
 TimeSeries load_even_or_bursts_record(const DataOptions& data, std::vector<std::string> required_roles,
                                       std::string_view analysis, std::string_view hint) {
-  auto [record, facts] = load_sampled_record(data, std::move(required_roles));
-  if (facts.layout() == sampling::Layout::Irregular)
-    throw sampling::irregular_sampling_error(facts, record.time(), data.path, analysis, hint);
-  return std::move(record);
+  TimeSeries record = load_record_with_gaps(data, std::move(required_roles));
+  if (record.sampling_facts().layout() == sampling::Layout::Irregular)
+    throw sampling::irregular_sampling_error(record.sampling_facts(), record.time(), data.path, analysis, hint);
+  return record;
 }
 
 std::string display_unit(const TimeSeries& record, const std::string& role, const DataOptions& data) {

@@ -94,16 +94,12 @@ std::vector<CsvColumn> imu_record_columns(const TimeSeries& record);
 // of instance 0, rad/s) or `--column gyro1_x`. What a log reader repaired goes to stderr as notes.
 TimeSeries load_record(const DataOptions& data, std::vector<std::string> required_roles = {"rate"});
 // The record of a command that assumes even sampling (allan; through load_evenly_sampled_record run,
-// compare, decompose and entropy; through load_even_or_bursts_record discrepancy), with its sampling facts
-// (framework/sampling.hpp): gaps are read as they are and then classified with --max-gap's factor,
-// the default 3 when --max-gap is 0, so that 0 never makes a gapped record contiguous. What the
+// compare, decompose and entropy; through load_even_or_bursts_record discrepancy): gaps are read as
+// they are and the record's sampling facts (TimeSeries::sampling_facts) classify them with --max-gap's
+// factor, the default 3 when --max-gap is 0, so that 0 never makes a gapped record contiguous. What the
 // command does with regular bursts or an irregular record is its own business; none reads across a
 // gap.
-struct SampledRecord {
-  TimeSeries record;
-  sampling::Facts facts;
-};
-SampledRecord load_sampled_record(const DataOptions& data, std::vector<std::string> required_roles = {"rate"});
+TimeSeries load_record_with_gaps(const DataOptions& data, std::vector<std::string> required_roles = {"rate"});
 // The same for a command that takes only an evenly sampled record (run, compare, decompose, entropy):
 // any gap is the DataError of sampling::uneven_sampling_error, naming the first gap and, for regular
 // bursts, `driftlab allan` (which analyses them per burst). `analysis` names what assumes even sampling.

@@ -396,7 +396,8 @@ void allan_command(const AllanOptions& o) {
   const auto input = o.input == "angle" ? allan::InputType::Angle : allan::InputType::Rate;
   const allan::TauGrid grid = allan::parse_tau_grid(o.taus);
 
-  const auto [record, facts] = load_sampled_record(o.data);
+  const TimeSeries record = load_record_with_gaps(o.data);
+  const auto& facts = record.sampling_facts();
   const bool bursts = facts.layout() == sampling::Layout::RegularBursts;
   if (facts.layout() == sampling::Layout::Irregular)
     throw sampling::uneven_sampling_error(facts, record.time(), o.data.path, "an Allan analysis",

@@ -21,6 +21,7 @@
 #include "framework/regular_file.hpp"
 #include "framework/resources.hpp"
 #include "framework/units.hpp"
+#include "models/evaluation/evaluation.hpp"
 #include "tools/driftlab/cli.hpp"
 #include "tools/driftlab/devices_dir.hpp"
 #include "tools/driftlab/plot.hpp"
@@ -354,11 +355,13 @@ void simulated_nav(const NavOptions& o, CommandEnv& env) {
   report.title = "Heading error, " + device.name + " on " + scenario_path.filename().string();
   // The intrinsic floor (DESIGN.md §1): the true rate plus only the gyro's noise (measured minus
   // the simulator's systematic rate), i.e. what a perfect temperature model would leave.
-  report.runs = {
-      {"raw", drive.gyro.rate_rad_s, {}},
-      {"compensated", compensated, {}},
-      {"perfect", drive.gyro.true_rate_rad_s, {}},
-      {"noise_only", drive.gyro.true_rate_rad_s + (drive.gyro.rate_rad_s - drive.gyro.systematic_rate_rad_s), {}}};
+  report.runs = {{"raw", drive.gyro.rate_rad_s, {}},
+                 {"compensated", compensated, {}},
+                 {"perfect", drive.gyro.true_rate_rad_s, {}},
+                 {"noise_only",
+                  drive.gyro.true_rate_rad_s +
+                      evaluation::intrinsic_noise(drive.gyro.rate_rad_s, drive.gyro.systematic_rate_rad_s),
+                  {}}};
   const auto noise = mrpt_bridge::nav_noise(device, scenario);
   run_filters(report, noise, o, env);
 

@@ -124,8 +124,8 @@ Figure residual_figure(const TimeSeries& record, const std::vector<std::string>&
     cool.color = "#1f77b4";
     const auto residual = evaluation::block_means(time, outputs.at(stage) - truth);
     for (Eigen::Index b = 0; b < residual.means.size(); ++b) {
-      const auto first = residual.first[static_cast<std::size_t>(b)];
-      const double slope = temp[first + residual.samples[static_cast<std::size_t>(b)] - 1] - temp[first];
+      const auto& block = residual.blocks[static_cast<std::size_t>(b)];
+      const double slope = temp[block.first + block.samples - 1] - temp[block.first];
       auto& series = slope >= 0 ? heat : cool;
       series.x.push_back(temperature[b]);
       series.y.push_back(residual.means[b] * kDphPerRadPerSec);
