@@ -4,6 +4,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <utility>
 
 #include "framework/error.hpp"
 #include "framework/regular_file.hpp"
@@ -63,6 +64,20 @@ double horner_derivative(const std::vector<double>& a, double u) {
 
 }  // namespace
 
+std::string outside_inputs_text(unsigned flags) {
+  std::string out;
+  for (const auto& [bit, name] :
+       {std::pair{kOutsideTemperature, "model temperature"}, std::pair{kOutsideTemperatureRate, "dT/dt"},
+        std::pair{kOutsideBranchState, "branch state"}, std::pair{kOutsideRbfInputs, "RBF input"}})
+    if (flags & bit) out += (out.empty() ? "" : ", ") + std::string(name);
+  return out;
+}
+
+std::string OutsideCount::text(const std::string& what) const {
+  return std::to_string(samples) + " " + what + " had a model input outside its fitted range (" +
+         outside_inputs_text(inputs) + ")";
+}
+
 double CalibrationModel::polynomial_bias_rad_s(double temp_c) const {
   const double t0 = reference_temp_c;
   if (temp_c < valid_min_c || temp_c > valid_max_c) {
@@ -116,6 +131,10 @@ void CalibrationModel::validate() const {
   if (!finite(bias_rad_s)) bad("bias.polynomial_rad_s_per_k_i", "non-finite coefficient");
   if (!finite(bias_sigma_rad_s)) bad("bias.sigma_rad_s_per_k_i", "non-finite value");
   if (!finite(scale_factor_per_k)) bad("scale_factor.polynomial_per_k_j", "non-finite coefficient");
+  for (const auto& [range, key] : {std::pair{&temperature_rate_range_k_s, "physical.temperature_rate_range_k_s"},
+                                   std::pair{&hysteresis_state_range, "physical.hysteresis_state_range"}})
+    if (*range && !(std::isfinite((*range)->min) && std::isfinite((*range)->max) && (*range)->min <= (*range)->max))
+      bad(key, "needs [min, max], finite, with min <= max");
   if (!finite({temperature_rate_rad_s_per_k_s, temperature_rate_sigma, hysteresis_rad_s, hysteresis_sigma_rad_s}))
     bad("physical", "non-finite coefficient");
   if (!finite({noise.arw_rad_sqrt_s, noise.bias_instability_rad_s, noise.rate_random_walk_rad_s_sqrt_s,
@@ -226,6 +245,11 @@ nlohmann::json model_body(const CalibrationModel& m, imu::Sensor sensor) {
                    {"hysteresis_" + u.value, m.hysteresis_rad_s},
                    {"hysteresis_sigma_" + u.value, m.hysteresis_sigma_rad_s},
                    {"hysteresis_width_k", m.hysteresis_width_k}};
+  if (m.temperature_rate_range_k_s)
+    j["physical"]["temperature_rate_range_k_s"] = {m.temperature_rate_range_k_s->min,
+                                                   m.temperature_rate_range_k_s->max};
+  if (m.hysteresis_state_range)
+    j["physical"]["hysteresis_state_range"] = {m.hysteresis_state_range->min, m.hysteresis_state_range->max};
   if (m.rbf) {
     json centres = json::array();
     for (Eigen::Index k = 0; k < m.rbf->centres.rows(); ++k) {
@@ -426,6 +450,14 @@ CalibrationModel read_model_body(const Reader& r, const nlohmann::json& j, const
     if (m.lag_tau_s < 0) r.fail(Reader::join(pa, "lag_tau_s"), "must be >= 0 s");
     if (!(m.derivative_tau_s > 0)) r.fail(Reader::join(pa, "derivative_tau_s"), "must be > 0 s");
     if (m.hysteresis_width_k < 0) r.fail(Reader::join(pa, "hysteresis_width_k"), "must be >= 0 K");
+    for (const auto& [range, name] : {std::pair{&m.temperature_rate_range_k_s, "temperature_rate_range_k_s"},
+                                      std::pair{&m.hysteresis_state_range, "hysteresis_state_range"}})
+      if (const auto* v = r.optional(*p, name)) {
+        const auto values = r.numbers(*v, Reader::join(pa, name));
+        if (values.size() != 2 || !(values[0] <= values[1]))
+          r.fail(Reader::join(pa, name), "expected [min, max] with min <= max");
+        *range = InputRange{values[0], values[1]};
+      }
   }
   if (const auto* b = r.optional(j, "rbf")) {
     const std::string ba = key("rbf");
@@ -662,10 +694,14 @@ CausalCompensator::CausalCompensator(const CalibrationModel& model)
   model_.validate();
 }
 
-double CausalCompensator::rbf_value(double tc) const {
+double CausalCompensator::rbf_value(double tc) {
   const RbfTerm& r = *model_.rbf;
   const auto input = [&](std::size_t k, double x) {
-    return ((r.input_min.empty() ? x : std::clamp(x, r.input_min[k], r.input_max[k])) - r.mean[k]) / r.scale[k];
+    if (!r.input_min.empty() && (x < r.input_min[k] || x > r.input_max[k])) {
+      outside_ |= kOutsideRbfInputs;
+      x = std::clamp(x, r.input_min[k], r.input_max[k]);
+    }
+    return (x - r.mean[k]) / r.scale[k];
   };
   const double u0 = input(0, tc);
   const double u1 = input(1, state_.temp_rate_k_s());
@@ -698,11 +734,18 @@ double CausalCompensator::step(double t_s, double rate_rad_s, double temp_c) {
     started_ = true;
     t_prev_ = t_s;
   }
-  extrapolated_ = tm < model_.valid_min_c || tm > model_.valid_max_c;
+  outside_ = tm < model_.valid_min_c || tm > model_.valid_max_c ? kOutsideTemperature : 0;
   double b = model_.polynomial_bias_rad_s(tm);
   if (stateful_) {
-    b += model_.temperature_rate_rad_s_per_k_s * state_.temp_rate_k_s() +
-         model_.hysteresis_rad_s * state_.hysteresis_state();
+    const auto limited = [&](double x, const std::optional<InputRange>& range, unsigned bit) {
+      if (!range || range->contains(x)) return x;
+      outside_ |= bit;
+      return std::clamp(x, range->min, range->max);
+    };
+    b += model_.temperature_rate_rad_s_per_k_s *
+             limited(state_.temp_rate_k_s(), model_.temperature_rate_range_k_s, kOutsideTemperatureRate) +
+         model_.hysteresis_rad_s *
+             limited(state_.hysteresis_state(), model_.hysteresis_state_range, kOutsideBranchState);
     if (model_.rbf) b += rbf_value(std::clamp(tm, model_.valid_min_c, model_.valid_max_c));
   }
   bias_ = b;
@@ -720,11 +763,11 @@ Compensated compensate(const CalibrationModel& model, const Eigen::VectorXd& tim
   const Eigen::Index n = time_s.size();
   out.rate_rad_s.resize(n);
   out.bias_rad_s.resize(n);
-  out.extrapolated.resize(static_cast<std::size_t>(n));
+  out.outside.resize(static_cast<std::size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) {
     out.rate_rad_s[i] = c.step(time_s[i], rate_rad_s[i], temp_c[i]);
     out.bias_rad_s[i] = c.last_bias_rad_s();
-    out.extrapolated[static_cast<std::size_t>(i)] = c.last_extrapolated() ? 1 : 0;
+    out.outside[static_cast<std::size_t>(i)] = static_cast<unsigned char>(c.last_outside());
   }
   return out;
 }

@@ -21,8 +21,10 @@
 //   s     : hysteresis branch state in [-1, 1] driven by the increments dT of y1:
 //           s <- sgn(dT) + (s - sgn(dT)) exp(-|dT| / hysteresis_width_k)   (+1 heating, -1 cooling)
 //   T_c   = T_m limited by the extrapolation policy to the valid range [valid_min_c, valid_max_c]
-//   bias  = sum_i bias_rad_s[i] (T_c - T0)^i  + temperature_rate_rad_s_per_k_s * D
-//           + hysteresis_rad_s * s  + rbf(T_c, D, s)                                       (rad/s)
+//   D_c   = D limited to temperature_rate_range_k_s, s_c = s limited to hysteresis_state_range
+//           (the ranges the fitted bins cover, when the term was fitted)
+//   bias  = sum_i bias_rad_s[i] (T_c - T0)^i  + temperature_rate_rad_s_per_k_s * D_c
+//           + hysteresis_rad_s * s_c  + rbf(T_c, D, s)                                     (rad/s)
 //   sf    = 1 + sum_j scale_factor_per_k[j] (T_c - T0)^j      (j from 0: constant scale error)
 //   w     = (w_m - bias) / sf                                  compensated rate, rad/s
 //
@@ -35,7 +37,9 @@
 //   clamp     the polynomial, scale factor and RBF are evaluated at the nearest range edge (PX4)
 //   linear    the polynomial continues along its tangent at the edge (scale factor and RBF clamp)
 //   evaluate  the polynomial is evaluated as is (scale factor and RBF clamp)
-// Either way last_extrapolated() says so, and `driftlab compensate` writes it per row.
+// Every model input is limited to the range it was fitted on: T_m as above, D and s to their fitted
+// ranges, the RBF's inputs to theirs. CausalCompensator::last_outside() says which input was outside
+// at each step (the kOutside* bits), and `driftlab compensate` writes them per row.
 //
 // Validation (CalibrationModel::validate, issue 28): a model is checked as physics, not only as
 // syntax, by the same rules where calibrate writes it and where compensate / export / mrpt / nav
@@ -74,6 +78,34 @@ inline constexpr double kMinRbfSigma = 1e-3, kMaxRbfSigma = 1e3;  // standardize
 // 1 + sum_j k_j dT^j: a MEMS scale error is percent-sized; 0 or below would divide by 0 or flip the sign.
 inline constexpr double kMinScaleFactor = 0.1, kMaxScaleFactor = 10.0;
 inline constexpr double kExtrapolationMarginK = 50.0;  // beyond the valid range, where a policy evaluates
+
+// Which model inputs a compensator step found outside their fitted range (bits, ORed; 0: none):
+inline constexpr unsigned kOutsideTemperature = 1;      // T_m outside [valid_min_c, valid_max_c]
+inline constexpr unsigned kOutsideTemperatureRate = 2;  // D outside temperature_rate_range_k_s
+inline constexpr unsigned kOutsideBranchState = 4;      // s outside hysteresis_state_range
+inline constexpr unsigned kOutsideRbfInputs = 8;        // an RBF input outside [input_min, input_max]
+// "model temperature, dT/dt": the inputs named by `flags`, for messages ("" for 0).
+std::string outside_inputs_text(unsigned flags);
+
+// Steps with a model input outside its fitted range, and which inputs (the bits of any of them).
+struct OutsideCount {
+  std::size_t samples = 0;
+  unsigned inputs = 0;
+  void add(unsigned flags) {
+    if (flags == 0) return;
+    ++samples;
+    inputs |= flags;
+  }
+  // "12 samples had a model input outside its fitted range (model temperature, dT/dt)": `what`
+  // names the samples ("drive samples", "observations").
+  std::string text(const std::string& what) const;
+};
+
+// A closed range of one model input, in its unit.
+struct InputRange {
+  double min = 0.0, max = 0.0;
+  bool contains(double x) const { return x >= min && x <= max; }
+};
 
 enum class ModelKind { Polynomial, Physical, Rbf };
 std::string to_string(ModelKind kind);                               // "poly", "physical", "rbf"
@@ -144,6 +176,9 @@ struct CalibrationModel {
   double hysteresis_rad_s = 0.0;  // coefficient of s (cooling branch: -s), rad/s
   double hysteresis_sigma_rad_s = 0.0;
   double hysteresis_width_k = 0.0;  // 0: no hysteresis term
+  // The range of D (K/s) and of s over the fitted bins, present when the term was fitted; files
+  // without them (written before they existed): no limit.
+  std::optional<InputRange> temperature_rate_range_k_s, hysteresis_state_range;
   std::optional<RbfTerm> rbf;
 
   std::vector<double> scale_factor_per_k;  // k_j, 1/K^j, j = 0..; empty: no scale-factor model
@@ -217,11 +252,11 @@ class CausalCompensator {
   explicit CausalCompensator(const CalibrationModel& model);
   // time (s), measured rate (rad/s), case temperature (degC) -> compensated rate (rad/s)
   double step(double t_s, double rate_rad_s, double temp_c);
-  double last_bias_rad_s() const { return bias_; }          // the correction subtracted at the last step
-  bool last_extrapolated() const { return extrapolated_; }  // model temperature outside the range
+  double last_bias_rad_s() const { return bias_; }    // the correction subtracted at the last step
+  unsigned last_outside() const { return outside_; }  // kOutside* bits of the last step
 
  private:
-  double rbf_value(double tc) const;
+  double rbf_value(double tc);
 
   CalibrationModel model_;
   CausalState state_;
@@ -229,13 +264,13 @@ class CausalCompensator {
   bool started_ = false;  // stateless models still check the time order
   double t_prev_ = 0.0;
   double bias_ = 0.0;
-  bool extrapolated_ = false;
+  unsigned outside_ = 0;
 };
 
 // Batch form: the same compensator run over a whole record (equal to streaming by construction).
 struct Compensated {
   Eigen::VectorXd rate_rad_s, bias_rad_s;
-  std::vector<char> extrapolated;
+  std::vector<unsigned char> outside;  // kOutside* bits per sample
 };
 Compensated compensate(const CalibrationModel& model, const Eigen::VectorXd& time_s, const Eigen::VectorXd& rate_rad_s,
                        const Eigen::VectorXd& temp_c);

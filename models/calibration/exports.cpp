@@ -566,6 +566,10 @@ typedef struct {
   double rate_coef;           /* u per K/s */
   double hyst_coef;           /* u */
   double hyst_width_k;        /* 0: no hysteresis term */
+  int rate_ranged;            /* dT/dt limited to [rate_min, rate_max] (K/s) in the dT/dt term */
+  double rate_min, rate_max;
+  int state_ranged;           /* branch state limited to [state_min, state_max] in the hysteresis term */
+  double state_min, state_max;
   int stateful;               /* lag, dT/dt, hysteresis or RBF in use */
   int sf_terms;               /* 0: no scale-factor model */
   const double* sf;           /* k_j, 1/K^j */
@@ -614,15 +618,24 @@ static inline double @P@_poly(const @P@_model* m, double t) {
   return @P@_horner(m->bias, n, t - m->t0_c);
 }
 
-static inline double @P@_rbf(const @P@_model* m, double tc, double rate, double s) {
+/* Which inputs were outside their fitted range (bits of *outside_out in @P@_step). */
+enum { @P@_OUTSIDE_TEMPERATURE = 1, @P@_OUTSIDE_TEMPERATURE_RATE = 2, @P@_OUTSIDE_BRANCH_STATE = 4, @P@_OUTSIDE_RBF_INPUTS = 8 };
+
+static inline double @P@_limit(double x, int ranged, double lo, double hi, int bit, int* flags) {
+  if (!ranged || (x >= lo && x <= hi)) return x;
+  *flags |= bit;
+  return x < lo ? lo : hi;
+}
+
+static inline double @P@_rbf(const @P@_model* m, double tc, double rate, double s, int* flags) {
   double x[3], u[3], y, g;
   int i, k;
   x[0] = tc;
   x[1] = rate;
   x[2] = s;
-  if (m->rbf_ranged) {
-    for (i = 0; i < 3; ++i) x[i] = x[i] < m->rbf_input_min[i] ? m->rbf_input_min[i] : (x[i] > m->rbf_input_max[i] ? m->rbf_input_max[i] : x[i]);
-  }
+  for (i = 0; i < 3; ++i)
+    x[i] = @P@_limit(x[i], m->rbf_ranged, m->rbf_ranged ? m->rbf_input_min[i] : 0.0,
+                     m->rbf_ranged ? m->rbf_input_max[i] : 0.0, @P@_OUTSIDE_RBF_INPUTS, flags);
   for (i = 0; i < 3; ++i) u[i] = (x[i] - m->rbf_mean[i]) / m->rbf_scale[i];
   g = -0.5 / (m->rbf_sigma * m->rbf_sigma);
   y = m->rbf_bias;
@@ -635,10 +648,12 @@ static inline double @P@_rbf(const @P@_model* m, double tc, double rate, double 
 
 /* One sample of one channel: time t_s (s, increasing), measured value x and case temperature temp_c
    (degC) -> compensated value (the channel's internal unit); *bias_out = the correction subtracted,
-   *extrapolated_out = 1 when the model temperature is outside the valid range (either may be 0). */
+   *outside_out = the @P@_OUTSIDE_* bits of the inputs outside their fitted range, 0 for none (either
+   pointer may be 0). */
 static inline double @P@_step(const @P@_model* m, @P@_state* st, double t_s, double x, double temp_c, double* bias_out,
-                              int* extrapolated_out) {
+                              int* outside_out) {
   double tm = temp_c, b, tc;
+  int flags;
   if (m->stateful) {
     if (!st->started) {
       st->started = 1;
@@ -671,14 +686,16 @@ static inline double @P@_step(const @P@_model* m, @P@_state* st, double t_s, dou
     }
     tm = st->tm;
   }
-  if (extrapolated_out) *extrapolated_out = (tm < m->tmin_c || tm > m->tmax_c);
+  flags = (tm < m->tmin_c || tm > m->tmax_c) ? @P@_OUTSIDE_TEMPERATURE : 0;
   b = @P@_poly(m, tm);
   tc = tm < m->tmin_c ? m->tmin_c : (tm > m->tmax_c ? m->tmax_c : tm);
   if (m->stateful) {
-    b += m->rate_coef * st->rate + m->hyst_coef * st->s;
-    if (m->rbf_centres > 0) b += @P@_rbf(m, tc, st->rate, st->s);
+    b += m->rate_coef * @P@_limit(st->rate, m->rate_ranged, m->rate_min, m->rate_max, @P@_OUTSIDE_TEMPERATURE_RATE, &flags) +
+         m->hyst_coef * @P@_limit(st->s, m->state_ranged, m->state_min, m->state_max, @P@_OUTSIDE_BRANCH_STATE, &flags);
+    if (m->rbf_centres > 0) b += @P@_rbf(m, tc, st->rate, st->s, &flags);
   }
   if (bias_out) *bias_out = b;
+  if (outside_out) *outside_out = flags;
   if (m->sf_terms > 0) return (x - b) / (1.0 + @P@_horner(m->sf, m->sf_terms, tc - m->t0_c));
   return x - b;
 }
@@ -694,16 +711,18 @@ static inline void @P@_imu_init(@P@_imu_state* st) {
   for (k = 0; k < @P@_CHANNELS; ++k) @P@_init(&st->ch[k]);
 }
 
-/* One sample of every channel: in[k] / out[k] / bias[k] (bias may be 0) in channel k's internal unit
-   (order of @P@_roles), temp_c[j] the temperature @P@_temperature_columns[j] (degC). Returns the
-   number of channels whose model temperature is outside their valid range. */
+/* One sample of every channel: in[k] / out[k] / bias[k] in channel k's internal unit (order of
+   @P@_roles), temp_c[j] the temperature @P@_temperature_columns[j] (degC), outside[k] channel k's
+   @P@_OUTSIDE_* bits (bias and outside may be 0). Returns the number of channels with a model input
+   outside its fitted range. */
 static inline int @P@_imu_step(@P@_imu_state* st, double t_s, const double* in, const double* temp_c, double* out,
-                               double* bias) {
+                               double* bias, int* outside) {
   int k, n = 0;
   for (k = 0; k < @P@_CHANNELS; ++k) {
-    int ex = 0;
-    out[k] = @P@_step(@P@_models[k], &st->ch[k], t_s, in[k], temp_c[@P@_temperature_of[k]], bias ? &bias[k] : 0, &ex);
-    n += ex;
+    int flags = 0;
+    out[k] = @P@_step(@P@_models[k], &st->ch[k], t_s, in[k], temp_c[@P@_temperature_of[k]], bias ? &bias[k] : 0, &flags);
+    if (outside) outside[k] = flags;
+    n += flags != 0;
   }
   return n;
 }
@@ -737,11 +756,12 @@ ExportResult export_c_header(const ImuCalibration& model, const ExportOptions& o
     << " * sample, O(1) state. Units: time s, temperature degC, values in each channel's internal unit\n"
     << " * (gyro rad/s, accelerometer m/s^2: convert from the column's read unit first).\n"
     << " *   bias = sum_i a_i (T_c - T0)^i + dT/dt and hysteresis terms + RBF; T_c = model temperature limited by\n"
-    << " *   the channel's extrapolation policy to its valid range; out = (x - bias) / sf.\n"
+    << " *   the channel's extrapolation policy to its valid range, dT/dt, branch state and RBF inputs limited to\n"
+    << " *   their fitted ranges (flagged in *outside); out = (x - bias) / sf.\n"
     << " * Usage: " << P << "_state st; " << P << "_init(&st); y = " << P << "_step(&" << P
-    << "_<role>, &st, t, x, temp, &bias, &extrap);\n"
+    << "_<role>, &st, t, x, temp, &bias, &outside);\n"
     << " *    or " << P << "_imu_state st; " << P << "_imu_init(&st); " << P
-    << "_imu_step(&st, t, in, temps, out, bias);\n"
+    << "_imu_step(&st, t, in, temps, out, bias, outside);\n"
     << " * Channels (role: column [read unit] -> internal unit, temperature column, model):\n";
   for (std::size_t k = 0; k < model.channels.size(); ++k) {
     const auto& c = model.channels[k];
@@ -778,8 +798,12 @@ ExportResult export_c_header(const ImuCalibration& model, const ExportOptions& o
       << ", .tmax_c = " << num(m.valid_max_c) << ", .policy = " << static_cast<int>(m.extrapolation) << ",\n"
       << "    .lag_tau_s = " << num(m.lag_tau_s) << ", .deriv_tau_s = " << num(m.derivative_tau_s) << ",\n"
       << "    .rate_coef = " << num(m.temperature_rate_rad_s_per_k_s) << ", .hyst_coef = " << num(m.hysteresis_rad_s)
-      << ", .hyst_width_k = " << num(m.hysteresis_width_k) << ",\n"
-      << "    .stateful = " << (m.uses_state() ? 1 : 0);
+      << ", .hyst_width_k = " << num(m.hysteresis_width_k) << ",\n";
+    if (const auto& r = m.temperature_rate_range_k_s)
+      s << "    .rate_ranged = 1, .rate_min = " << num(r->min) << ", .rate_max = " << num(r->max) << ",\n";
+    if (const auto& r = m.hysteresis_state_range)
+      s << "    .state_ranged = 1, .state_min = " << num(r->min) << ", .state_max = " << num(r->max) << ",\n";
+    s << "    .stateful = " << (m.uses_state() ? 1 : 0);
     if (!m.scale_factor_per_k.empty())
       s << ",\n    .sf_terms = " << m.scale_factor_per_k.size() << ", .sf = " << name << "_sf";
     if (rbf) {

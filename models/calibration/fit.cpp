@@ -387,12 +387,14 @@ class Fitter {
     if (best.rate_term) {
       m.temperature_rate_rad_s_per_k_s = lf.coefficients[c];
       m.temperature_rate_sigma = inflate * lf.standard_errors[c];
+      m.temperature_rate_range_k_s = InputRange{d_.minCoeff(), d_.maxCoeff()};  // what the fitted bins cover
       ++c;
     }
     if (best.width_k > 0) {
       m.hysteresis_width_k = best.width_k;
       m.hysteresis_rad_s = lf.coefficients[c];
       m.hysteresis_sigma_rad_s = inflate * lf.standard_errors[c];
+      m.hysteresis_state_range = InputRange{s_.minCoeff(), s_.maxCoeff()};
       ++c;
     }
     if (with_sf_) {

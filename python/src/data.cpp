@@ -211,15 +211,16 @@ Compensation compensate(const CalibrationModel& m, const InputArray& time_s, con
     py::gil_scoped_release release;
     c = calibration::compensate(channel.model, t, w, temp);
   }
-  py::array_t<bool> extrapolated(static_cast<py::ssize_t>(c.extrapolated.size()));
-  std::copy(c.extrapolated.begin(), c.extrapolated.end(), extrapolated.mutable_data());
+  py::array_t<std::uint8_t> extrapolated(static_cast<py::ssize_t>(c.outside.size()));
+  std::copy(c.outside.begin(), c.outside.end(), extrapolated.mutable_data());
   return {to_numpy(std::move(c.rate_rad_s)), to_numpy(std::move(c.bias_rad_s)), extrapolated};
 }
 
 // Every channel of the model applied to a record, as `driftlab compensate` applies it: by role, each
 // with its instance's temperature (calibration::temperature_of), the record's device id checked
 // against the channel's. Keys: the role (compensated, SI), bias_<role> (the correction subtracted)
-// and extrapolated (any channel outside its calibrated range).
+// and extrapolated (the calibration::kOutside* bits of every channel, ORed: which model inputs were
+// outside their fitted range).
 py::dict compensate_record(const CalibrationModel& m, const py::object& inputs, std::optional<double> fs_hz) {
   const auto record = series_of(inputs, fs_hz);
   std::vector<calibration::Compensated> results(m.model->channels.size());
@@ -243,12 +244,11 @@ py::dict compensate_record(const CalibrationModel& m, const py::object& inputs, 
     }
   }
   py::dict d;
-  py::array_t<bool> extrapolated(static_cast<py::ssize_t>(record->size()));
-  std::fill_n(extrapolated.mutable_data(), record->size(), false);
+  py::array_t<std::uint8_t> extrapolated(static_cast<py::ssize_t>(record->size()));
+  std::fill_n(extrapolated.mutable_data(), record->size(), 0);
   for (std::size_t i = 0; i < results.size(); ++i) {
     const auto& role = m.model->channels[i].role;
-    for (std::size_t k = 0; k < results[i].extrapolated.size(); ++k)
-      if (results[i].extrapolated[k]) extrapolated.mutable_data()[k] = true;
+    for (std::size_t k = 0; k < results[i].outside.size(); ++k) extrapolated.mutable_data()[k] |= results[i].outside[k];
     d[py::str(role)] = to_numpy(std::move(results[i].rate_rad_s));
     d[py::str("bias_" + role)] = to_numpy(std::move(results[i].bias_rad_s));
   }
@@ -601,7 +601,8 @@ void bind_calibration(py::module_& m) {
                     "compensated samples, rad/s (m/s^2 for an accelerometer channel)")
       .def_readonly("bias_rad_s", &Compensation::bias_rad_s, "the correction subtracted at each sample, same unit")
       .def_readonly("extrapolated", &Compensation::extrapolated,
-                    "True where the model temperature was outside the calibrated range");
+                    "per sample, 0 where every model input was inside the range it was fitted on, else the sum of "
+                    "the inputs outside: 1 model temperature, 2 dT/dt, 4 branch state, 8 an RBF input (uint8)");
   py::class_<CalibrationModel>(m, "CalibrationModel",
                                "A calibration model (driftlab-calibration/2 or /1): one model per IMU channel")
       .def_property_readonly("channels", &channel_list,
@@ -618,8 +619,8 @@ void bind_calibration(py::module_& m) {
            "Record or a dict of arrays by role ('time' s, 'gyro_x' rad/s, 'accel_z' m/s^2, 'temperature' degC, "
            "...; or fs_hz). Each channel uses its instance's temperature (temperature1, ... else temperature); a "
            "record of another device (device_id) is refused. Returns a dict: <role> (compensated, SI), "
-           "bias_<role> (the correction subtracted, same unit) per channel, and extrapolated (True where some "
-           "channel's model temperature was outside its calibrated range).")
+           "bias_<role> (the correction subtracted, same unit) per channel, and extrapolated (per sample, the "
+           "inputs outside their fitted range over the channels, as in Compensation.extrapolated).")
       .def(
           "to_json", [](const CalibrationModel& c) { return calibration::to_json_text(*c.model); },
           "The model as a driftlab-calibration/2 file's text.")

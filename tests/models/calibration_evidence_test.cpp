@@ -149,7 +149,7 @@ TEST(CalibrationEvidence, OutsideThePartialCalibratedRangeThePolicyHoldsAndIsRep
   int outside = 0;
   for (Eigen::Index i = 0; i < test.time_s.size(); ++i) {
     const bool out = test.temp_c[i] < m.valid_min_c || test.temp_c[i] > m.valid_max_c;
-    ASSERT_EQ(static_cast<bool>(c.extrapolated[static_cast<std::size_t>(i)]), out) << i;
+    ASSERT_EQ(c.outside[static_cast<std::size_t>(i)], out ? kOutsideTemperature : 0u) << i;
     if (out) {
       ++outside;
       const double edge = test.temp_c[i] < m.valid_min_c ? m.valid_min_c : m.valid_max_c;

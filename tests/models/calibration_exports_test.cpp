@@ -384,11 +384,12 @@ int main(void) {
   for (i = 0; i < 3000; ++i) {
     const double t = 0.5 * i;
     double temps[P_x_TEMPERATURES], in[P_x_CHANNELS], out[P_x_CHANNELS], bias[P_x_CHANNELS];
+    int outside[P_x_CHANNELS];
     temps[0] = 15.0 + 50.0 * sin(t / 200.0);
     temps[1] = 10.0 + 45.0 * sin(t / 170.0 + 0.3);
     for (k = 0; k < P_x_CHANNELS; ++k) in[k] = (k >= 6 ? 9.8 : 0.0) + 0.01 + 0.02 * cos(t / 7.0 + k);
-    printf("%d", P_x_imu_step(&st, t, in, temps, out, bias));
-    for (k = 0; k < P_x_CHANNELS; ++k) printf(" %.17g %.17g", out[k], bias[k]);
+    printf("%d", P_x_imu_step(&st, t, in, temps, out, bias, outside));
+    for (k = 0; k < P_x_CHANNELS; ++k) printf(" %.17g %.17g %d", out[k], bias[k], outside[k]);
     printf("\n");
   }
   return P_x_ch_accel1_z == 11 ? 0 : 1;
@@ -400,23 +401,29 @@ int main(void) {
   for (const auto& c : imu.channels) reference.emplace_back(c.model);
   // The same formulas in C and C++; libm's exp may differ in the last bit: a few ulps of the value.
   constexpr double kLibmUlps = 8.0;
+  unsigned seen_outside = 0;
   for (int i = 0; i < 3000; ++i) {
     const double t = 0.5 * i;
     const double temps[2] = {15.0 + 50.0 * std::sin(t / 200.0), 10.0 + 45.0 * std::sin(t / 170.0 + 0.3)};
-    int extrapolated = 0, expected_extrapolated = 0;
-    ASSERT_TRUE(in >> extrapolated);
+    int channels_outside = 0, expected_channels_outside = 0;
+    ASSERT_TRUE(in >> channels_outside);
     for (std::size_t k = 0; k < imu.channels.size(); ++k) {
       const double x = (k >= 6 ? 9.8 : 0.0) + 0.01 + 0.02 * std::cos(t / 7.0 + static_cast<double>(k));
       double out = 0, bias = 0;
-      ASSERT_TRUE(in >> out >> bias);
+      unsigned outside = 0;
+      ASSERT_TRUE(in >> out >> bias >> outside);
       const double expected = reference[k].step(t, x, temps[imu.channels[k].id.instance]);
       const double tolerance = kLibmUlps * DBL_EPSILON * (1.0 + std::abs(expected));
       ASSERT_NEAR(out, expected, tolerance) << imu.channels[k].id.role() << " sample " << i;
       ASSERT_NEAR(bias, reference[k].last_bias_rad_s(), tolerance) << imu.channels[k].id.role() << " sample " << i;
-      expected_extrapolated += reference[k].last_extrapolated() ? 1 : 0;
+      ASSERT_EQ(outside, reference[k].last_outside()) << imu.channels[k].id.role() << " sample " << i;
+      expected_channels_outside += reference[k].last_outside() != 0 ? 1 : 0;
+      seen_outside |= reference[k].last_outside();
     }
-    ASSERT_EQ(extrapolated, expected_extrapolated) << i;
+    ASSERT_EQ(channels_outside, expected_channels_outside) << i;
   }
+  EXPECT_EQ(seen_outside, kOutsideTemperature | kOutsideTemperatureRate | kOutsideBranchState | kOutsideRbfInputs)
+      << "the records leave every input's range at some sample";
 }
 
 TEST(CalibrationExports, PrefixesThatAreNoSafeCIdentifierStartAreRefused) {

@@ -29,6 +29,8 @@ inline CalibrationModel example_full_model() {
   m.temperature_rate_rad_s_per_k_s = 3e-3;
   m.hysteresis_rad_s = -2e-5;
   m.hysteresis_width_k = 1.5;
+  m.temperature_rate_range_k_s = InputRange{-0.1, 0.1};  // the test records leave both ranges
+  m.hysteresis_state_range = InputRange{-0.8, 1.0};
   RbfTerm r;
   r.mean = {20, 0, 0};
   r.scale = {15, 0.01, 0.5};

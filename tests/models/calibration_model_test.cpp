@@ -217,9 +217,9 @@ TEST(CausalCompensator, SubtractsThePolynomialAndFlagsAndClampsOutsideTheRange) 
     return m.bias_rad_s[0] + m.bias_rad_s[1] * (t - 25) + m.bias_rad_s[2] * (t - 25) * (t - 25);
   };
   EXPECT_NEAR(c.step(0.0, 0.01, 30.0), 0.01 - p(30.0), kRounding);
-  EXPECT_FALSE(c.last_extrapolated());
+  EXPECT_EQ(c.last_outside(), 0u);
   EXPECT_NEAR(c.step(1.0, 0.01, 70.0), 0.01 - p(50.0), kRounding) << "clamp holds the edge value";
-  EXPECT_TRUE(c.last_extrapolated());
+  EXPECT_EQ(c.last_outside(), kOutsideTemperature);
   CalibrationModel lin = m;
   lin.extrapolation = Extrapolation::Linear;
   const double slope = m.bias_rad_s[1] + 2 * m.bias_rad_s[2] * (50.0 - 25.0);
@@ -250,6 +250,33 @@ TEST(CausalCompensator, EvaluatesTheRbfNetworkInsideTheRangeOfItsFittingData) {
   m.rbf->input_min.clear();
   m.rbf->input_max.clear();
   EXPECT_GT(std::abs(after_ramp(m, 1.5) - after_ramp(m, 2.4)), 1e-10) << "without the range the network extrapolates";
+}
+
+TEST(CausalCompensator, LimitsDTdtAndTheBranchStateToTheirFittedRangesAndSaysWhichInputWasOutside) {
+  // rad/s: after 20 min the 20-s derivative filter and the 1.5-K branch have settled (60 widths).
+  constexpr double kSettled = 1e-12;
+  CalibrationModel m = testing::example_polynomial_model();
+  m.kind = ModelKind::Physical;
+  m.derivative_tau_s = 20.0;
+  m.temperature_rate_rad_s_per_k_s = 3e-3;
+  m.temperature_rate_range_k_s = InputRange{-0.01, 0.01};  // fitted on ramps of up to 0.6 degC/min
+  m.hysteresis_rad_s = -2e-5;
+  m.hysteresis_width_k = 1.5;
+  m.hysteresis_state_range = InputRange{-1.0, -0.5};  // fitted on cooling only
+  CausalCompensator c(m);
+  // Heating at 1.2 degC/min from 20 to 44 degC: inside the valid temperature range, outside both others.
+  for (int k = 0; k <= 12000; ++k) c.step(0.1 * k, 0.0, 20.0 + 0.002 * k);
+  EXPECT_NEAR(c.last_bias_rad_s(), m.polynomial_bias_rad_s(44.0) + 3e-3 * 0.01 + -2e-5 * -0.5, kSettled)
+      << "dT/dt and the branch state held at the edges of their ranges";
+  EXPECT_EQ(c.last_outside(), kOutsideTemperatureRate | kOutsideBranchState);
+  EXPECT_EQ(outside_inputs_text(c.last_outside()), "dT/dt, branch state");
+  m.temperature_rate_range_k_s.reset();
+  m.hysteresis_state_range.reset();
+  CausalCompensator unlimited(m);
+  for (int k = 0; k <= 12000; ++k) unlimited.step(0.1 * k, 0.0, 20.0 + 0.002 * k);
+  EXPECT_NEAR(unlimited.last_bias_rad_s(), m.polynomial_bias_rad_s(44.0) + 3e-3 * 0.02 + -2e-5 * 1.0, 1e-9)
+      << "a file without the ranges: no limit";
+  EXPECT_EQ(unlimited.last_outside(), 0u);
 }
 
 TEST(CausalCompensator, RejectsTimeThatDoesNotIncrease) {

@@ -79,9 +79,9 @@ MethodScore score(const std::string& name, const std::string& description, const
     s.allan = a->curve;
   }
   if (compensated) {
-    double n = 0;
-    for (char c : compensated->extrapolated) n += c;
-    s.extrapolated = n / static_cast<double>(compensated->extrapolated.size());
+    const auto outside = std::count_if(compensated->outside.begin(), compensated->outside.end(),
+                                       [](unsigned char flags) { return flags != 0; });
+    s.extrapolated = static_cast<double>(outside) / static_cast<double>(compensated->outside.size());
     s.block_bias_dph = block_means_dph(blocks, compensated->bias_rad_s);
   }
   s.block_mean_dph = block_means_dph(blocks, error);
@@ -218,7 +218,9 @@ nlohmann::json report_head_json(const ReportInput& in, const std::vector<std::st
       {"residual_drift_by_leg_dph", "the same over each leg of the held-out record (legs: evaluations[].legs)"},
       {"B_dph", "bias instability: min overlapping Allan deviation of (output - true rate) / 0.664, deg/h"},
       {"N_dph_rthz", "Allan deviation at tau = 1 s, deg/h/sqrt(Hz); every causal model keeps the full bandwidth fs/2"},
-      {"extrapolated_fraction", "share of samples whose model temperature was outside the calibrated range"}};
+      {"extrapolated_fraction",
+       "share of samples with a model input (model temperature, dT/dt, branch state, RBF input) outside the range it "
+       "was fitted on"}};
   j["quality_gate"] = nlohmann::json::array();
   for (const auto& f : in.gate)
     j["quality_gate"].push_back(

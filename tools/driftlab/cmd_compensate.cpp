@@ -14,8 +14,10 @@
 // Output: every input column in its own name, unit and order; the columns of the channels the model
 // covers hold the compensated values (in the column's own unit), every other cell is passed through
 // as it was. Appended: bias_<column> (the correction subtracted, same unit) per corrected column,
-// with --kalman compensated_<column> (before the Kalman stage) per gyro column, and extrapolated
-// (1 when some channel's model temperature was outside its calibrated range).
+// with --kalman compensated_<column> (before the Kalman stage) per gyro column, and extrapolated:
+// 0 when every model input of every channel was inside the range it was fitted on, else the sum of
+// the inputs outside (calibration::kOutside*: 1 model temperature, 2 dT/dt, 4 branch state, 8 an
+// RBF input), over the channels.
 #include <unistd.h>
 
 #include <cerrno>
@@ -153,7 +155,7 @@ class Engine {
     const double t = parser_.time_s();
     replaced_.assign(cells.size(), std::string());
     std::string tail;
-    bool extrapolated = false;
+    unsigned outside = 0;
     for (auto& k : corrected_) {
       const Unit& unit = columns[k.value].unit;
       if (k.device && !k.channel->device_id.empty()) {
@@ -176,7 +178,7 @@ class Engine {
         check_static(*k.filter, *k.kalman, w, columns[k.value], line_number);
         y = k.filter->step(w);
       }
-      extrapolated = extrapolated || k.compensator.last_extrapolated();
+      outside |= k.compensator.last_outside();
       append_number(from_internal(y, unit), replaced_[columns[k.value].index]);
       tail += ',';
       append_number(difference_from_internal(k.compensator.last_bias_rad_s(), unit), tail);
@@ -193,7 +195,9 @@ class Engine {
         out += replaced_[i];
     }
     out += tail;
-    out += extrapolated ? ",1\n" : ",0\n";
+    out += ',';
+    out += std::to_string(outside);
+    out += '\n';
   }
 
  private:

@@ -95,14 +95,14 @@ void compensate_command(const MrptOptions& o, CommandEnv& env) {
   }
   std::vector<calibration::CausalCompensator> compensators;
   for (const auto* channel : applied) compensators.emplace_back(channel->model);
-  std::vector<std::size_t> extrapolated(applied.size(), 0);
+  std::vector<calibration::OutsideCount> outside(applied.size());
   std::vector<mrpt_bridge::FieldCorrection> corrections;
   for (std::size_t i = 0; i < applied.size(); ++i)
     corrections.push_back({mrpt_bridge::imu_field(applied[i]->id.sensor, applied[i]->id.axis),
                            applied[i]->id.role() + " of " + o.model,
-                           [&compensators, &extrapolated, i](double t, double value, double temp) {
+                           [&compensators, &outside, i](double t, double value, double temp) {
                              const double out = compensators[i].step(t, value, temp);
-                             if (compensators[i].last_extrapolated()) ++extrapolated[i];
+                             outside[i].add(compensators[i].last_outside());
                              return out;
                            }});
   env.progress("mrpt compensate", 0.0);
@@ -129,9 +129,8 @@ void compensate_command(const MrptOptions& o, CommandEnv& env) {
     std::cout << "\n";
   }
   for (std::size_t i = 0; i < applied.size(); ++i)
-    if (extrapolated[i] > 0)
-      std::cerr << "driftlab: warning: " << applied[i]->id.role() << ": " << extrapolated[i]
-                << " observations had a temperature outside the model's calibrated range (extrapolated)\n";
+    if (outside[i].samples > 0)
+      std::cerr << "driftlab: warning: " << applied[i]->id.role() << ": " << outside[i].text("observations") << "\n";
 }
 
 void info_command(const MrptOptions& o) {

@@ -342,11 +342,9 @@ void simulated_nav(const NavOptions& o, CommandEnv& env) {
 
   // The compensated rate: the given model, or one calibrated on a simulated oven run.
   const auto yaw = yaw_model(o, device, scenario, outputs, out, env);
-  std::size_t extrapolated = 0;
-  const Eigen::VectorXd compensated = mrpt_bridge::compensate_drive(yaw.model, drive, &extrapolated);
-  if (extrapolated > 0)
-    std::cerr << "driftlab nav: warning: " << extrapolated
-              << " drive samples had a temperature outside the model's calibrated range (extrapolated)\n";
+  calibration::OutsideCount outside;
+  const Eigen::VectorXd compensated = mrpt_bridge::compensate_drive(yaw.model, drive, &outside);
+  if (outside.samples > 0) std::cerr << "driftlab nav: warning: " << outside.text("drive samples") << "\n";
 
   NavReport report;
   report.input = mrpt_bridge::nav_input(drive);
@@ -409,10 +407,9 @@ void record_nav(const NavOptions& o, CommandEnv& env) {
   const Eigen::Index n = table.time_s.size();
   const auto compensated =
       calibration::compensate(yaw->model, table.time_s, table.values("rate_rps"), table.values("temp_c"));
-  const auto extrapolated = std::count(compensated.extrapolated.begin(), compensated.extrapolated.end(), 1);
-  if (extrapolated > 0)
-    std::cerr << "driftlab nav: warning: " << extrapolated
-              << " samples had a temperature outside the model's calibrated range (extrapolated)\n";
+  calibration::OutsideCount outside;
+  for (const unsigned char flags : compensated.outside) outside.add(flags);
+  if (outside.samples > 0) std::cerr << "driftlab nav: warning: " << outside.text("samples") << "\n";
 
   NavReport report;
   report.input = std::move(record.input);
@@ -442,7 +439,7 @@ void record_nav(const NavOptions& o, CommandEnv& env) {
   info["duration_s"] = table.time_s[n - 1];
   info["model"] = o.model;
   info["model_channel"] = yaw_id.role();
-  info["extrapolated_samples"] = extrapolated;
+  info["extrapolated_samples"] = outside.samples;
   info["position_fixes"] = 0;
   info["filter"] = "mrpt::bayes::CKalmanFilterCapable<4,2,0,3> EKF (kfEKFNaive): x, y, heading, gyro bias";
   info["process_noise"] = process_noise_json(noise);

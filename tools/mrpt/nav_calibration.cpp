@@ -32,16 +32,16 @@ calibration::CalibrationModel calibrate_on_oven_run(const devices::DeviceDefinit
 }
 
 Eigen::VectorXd compensate_drive(const calibration::CalibrationModel& model, const DriveRecord& drive,
-                                 std::size_t* extrapolated) {
+                                 calibration::OutsideCount* outside_count) {
   calibration::CausalCompensator compensator(model);
   const auto& g = drive.gyro;
   Eigen::VectorXd out(g.time_s.size());
-  std::size_t outside = 0;
+  calibration::OutsideCount count;
   for (Eigen::Index k = 0; k < g.time_s.size(); ++k) {
     out[k] = compensator.step(g.time_s[k], g.rate_rad_s[k], g.temp_c[k]);
-    outside += compensator.last_extrapolated() ? 1 : 0;
+    count.add(compensator.last_outside());
   }
-  if (extrapolated) *extrapolated = outside;
+  if (outside_count) *outside_count = count;
   return out;
 }
 

@@ -27,8 +27,8 @@ calibration::CalibrationModel calibrate_on_oven_run(const devices::DeviceDefinit
                                                     const OvenCalibration& options);
 
 // The drive's measured yaw rate through calibration::CausalCompensator (rad/s, one per sample).
-// `extrapolated` (optional) receives the number of samples outside the model's temperature range.
+// `outside_count` (optional) receives the samples with a model input outside its fitted range.
 Eigen::VectorXd compensate_drive(const calibration::CalibrationModel& model, const DriveRecord& drive,
-                                 std::size_t* extrapolated = nullptr);
+                                 calibration::OutsideCount* outside_count = nullptr);
 
 }  // namespace driftlab::mrpt_bridge
