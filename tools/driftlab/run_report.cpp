@@ -271,8 +271,7 @@ void add_grouping(HtmlReport& html, const PipelineStep& step, const std::vector<
   HtmlTable g;
   g.caption = "The group of each IMF of the " + q.name + " and why";
   g.header = {"IMF", "sample entropy", "group", "reason"};
-  for (const auto& d : decisions)
-    g.rows.push_back({static_cast<double>(d.imf), d.score, group_label(d.group, decisions), d.reason});
+  for (const auto& d : decisions) g.rows.push_back({static_cast<double>(d.imf), d.score, to_string(d.group), d.reason});
   html.table(g);
 }
 
@@ -374,8 +373,7 @@ void add_reconstruction(HtmlReport& html, const TimeSeries& record, const Pipeli
     add_rate(in->second.front(), "before the " + filter + " (" + readable_name(in->second.front()) + ")");
     if (filtered.series.size() > before) add_rate(step.name + ".signal", "after the " + filter);
   }
-  Figure f{{before_after, p}, 900, 300, 1, ""};
-  f.shared_x = true;
+  Figure f{{before_after, p}, 900, 300, 1, ""};  // not shared_x: the filter panel is in seconds
   if (!filtered.series.empty()) f.panels.push_back(filtered);
   html.section("Reconstruction");
   html.figure(f,
@@ -439,7 +437,7 @@ HtmlTable table2_html(Table2Layout layout, const std::vector<Table2Row>& rows,
                       const std::optional<PipelineReference>& reference) {
   HtmlTable t;
   if (layout == Table2Layout::Compare) {
-    t.caption = "Table 2 columns per pipeline and stage";
+    t.caption = "B, N, bandwidth, residual drift and run time per pipeline and stage (the paper's Table 2 columns)";
     t.header = {
         "pipeline",    "stage", "B (°/h)", "B interval (°/h)", "N (°/h/√Hz)", "bandwidth (Hz)", "residual drift (°/h)",
         "run time (s)"};
