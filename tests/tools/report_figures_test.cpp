@@ -198,7 +198,7 @@ TEST_F(ReportFigures, NavPlot) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string text = read_text(dir() / "nav" / "nav.svg");
   expect_readable_svg(text, "driftlab nav");
-  EXPECT_THAT(text, ::testing::HasSubstr("EKF 1σ"));
+  EXPECT_THAT(text, ::testing::HasSubstr("<title>EKF 1σ</title>"));
 }
 
 }  // namespace

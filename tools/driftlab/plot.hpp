@@ -87,8 +87,9 @@ struct Figure {
 std::string palette_color(std::size_t index);
 
 // A pipeline-internal name as words: a port suffix (".signal", ".residual", ".fitted") dropped, a
-// "stage_" prefix dropped, the step and port joined by a space, underscores as spaces:
-// "temperature_trend.signal" -> "temperature trend", "mixed_rbf_ga.residual" -> "mixed rbf ga residual".
+// "stage_" prefix dropped, underscores and the dot between step and port as spaces:
+// "temperature_trend.signal" -> "temperature trend", "classify.mixed" -> "classify mixed". Reports
+// that know better name things themselves (a stage's label, an IMF group with its IMFs).
 std::string readable_name(const std::string& name);
 
 // An Allan curve as a series: (tau, dev) with its interval [dev_lo, dev_hi], each deviation times
