@@ -230,8 +230,10 @@ std::size_t display_length(const std::string& s) {
 
 // The legend's place: the requested corner, or (Auto) the corner where the least data lies; when
 // every corner holds data, top right above the data, whose y axes get that much headroom.
+// A legend beside the plot takes a right margin for `beside_chars` characters (the longest entry
+// of the figure's column, so that stacked panels keep one plot width).
 std::string legend_command(const PlotPanel& panel, const std::vector<std::vector<Point>>& data, const Axis& x, Axis& y,
-                           Axis& y2, const Geometry& g) {
+                           Axis& y2, const Geometry& g, std::size_t beside_chars) {
   std::size_t labelled = 0, longest = 0;
   for (const auto& s : panel.series)
     if (!s.label.empty()) ++labelled, longest = std::max(longest, display_length(s.label));
@@ -273,7 +275,8 @@ std::string legend_command(const PlotPanel& panel, const std::vector<std::vector
   const bool right_axis =
       std::any_of(panel.series.begin(), panel.series.end(), [](const auto& s) { return s.right_axis; });
   if (!right_axis)  // beside the plot, in a right margin wide enough for the longest entry
-    return "set rmargin " + std::to_string(static_cast<int>(static_cast<double>(longest) * 0.95) + 9) +
+    return "set rmargin " +
+           std::to_string(static_cast<int>(static_cast<double>(std::max(longest, beside_chars)) * 0.95) + 9) +
            "\nset key outside right top" + style;
   y.raise_top(kh + 0.02);
   y2.raise_top(kh + 0.02);
@@ -286,6 +289,7 @@ struct Placement {
   std::string commands;
   bool x_labels = true;
   Range shared_x, shared_y;
+  std::size_t legend_chars = 0;  // the longest legend entry of the panel's column
 };
 
 void panel_script(std::string& script, const PlotPanel& panel, std::size_t index, const Geometry& g,
@@ -335,7 +339,7 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
   const Axis x = make_axis(xr, panel.log_x, g.plot_width / 90.0, false, markers ? 0.02 : 0.0);
   Axis y = make_axis(yr, panel.log_y, g.plot_height / 38.0, true, 0.0);
   Axis y2 = make_axis(y2r, panel.log_y2, g.plot_height / 38.0, true, 0.0);
-  const std::string key = legend_command(panel, data, x, y, y2, g);
+  const std::string key = legend_command(panel, data, x, y, y2, g, place.legend_chars);
 
   script += "reset\n" + place.commands + "set encoding utf8\nset lmargin 12\nset bmargin 3.5\nset tmargin 2.2\n";
   script += any_right_axis ? "set rmargin 12\n" : "set rmargin 4\n";
@@ -639,6 +643,10 @@ std::string render_svg(const Figure& figure) {
     place.x_labels = row_labels(row);
     place.shared_x = shared;
     place.shared_y = shared_y;
+    for (std::size_t q = static_cast<std::size_t>(column); q < figure.panels.size();
+         q += static_cast<std::size_t>(columns))
+      for (const auto& s : figure.panels[q].series)
+        place.legend_chars = std::max(place.legend_chars, display_length(s.label));
     place.commands = "set origin " + number(static_cast<double>(column) / static_cast<double>(columns)) + "," +
                      screen(height - row_top[r + 1]) + "\nset size " + number(1.0 / static_cast<double>(columns)) +
                      "," + screen(row_top[r + 1] - row_top[r]) + "\n";

@@ -370,7 +370,7 @@ void add_reconstruction(HtmlReport& html, const TimeSeries& record, const Pipeli
     if (in == step.inputs.end() || in->second.size() != 1) continue;
     const auto before = filtered.series.size();
     const std::string filter = readable_name(step.plugin.substr(step.plugin.find('/') + 1)) + " filter";
-    add_rate(in->second.front(), "before the " + filter + " (" + readable_name(in->second.front()) + ")");
+    add_rate(in->second.front(), "before the " + filter);
     if (filtered.series.size() > before) add_rate(step.name + ".signal", "after the " + filter);
   }
   Figure f{{before_after, p}, 900, 300, 1, ""};  // not shared_x: the filter panel is in seconds
