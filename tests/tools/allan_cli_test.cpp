@@ -101,7 +101,8 @@ TEST(AllanCommand, WritesIntervalsTermsAndAPlotForAWhiteNoiseRecord) {
   const std::string plot = read_text(svg);
   EXPECT_THAT(plot, HasSubstr("<svg"));
   EXPECT_THAT(plot, HasSubstr("tau (s)"));
-  EXPECT_THAT(plot, HasSubstr("N term"));
+  EXPECT_THAT(plot, HasSubstr("slope -1/2: N"));  // the reading guides
+  EXPECT_THAT(plot, HasSubstr("oadev (°/h)"));    // the text's unit
 }
 
 TEST(AllanCommand, SaysWhichGnuplotItCouldNotRunWhenAPlotIsAsked) {

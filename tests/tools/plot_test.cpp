@@ -238,6 +238,74 @@ TEST(Plot, LabelsASharedXAxisOnceUnderTheBottomPanel) {
   EXPECT_LT(first[1], last[1]);
 }
 
+// The d attribute of the first path drawn for plot element `id`.
+std::string path_of(const std::string& svg, const std::string& id) {
+  const auto d = svg.find("d='M", svg.find("id=\"" + id + "\""));
+  return svg.substr(d + 3, svg.find('\'', d + 3) - d - 3);
+}
+
+TEST(Plot, SharesOneYRangeWhenAsked) {
+  Figure f;
+  f.columns = 2;
+  f.panels.push_back({"small", "T (°C)", "residual (°/h)", false, false, {line("a", {0, 1}, {0, 1})}});
+  f.panels.push_back({"large", "T (°C)", "residual (°/h)", false, false, {line("b", {0, 1}, {0, 100})}});
+  EXPECT_EQ(count(render_svg(f), ">100<"), 1u);
+  f.shared_y = true;
+  EXPECT_EQ(count(render_svg(f), ">100<"), 2u);  // the top tick of both panels
+}
+
+TEST(Plot, GuidesNeverWidenAnAxis) {
+  Figure f;
+  f.panels.push_back({"adev", "tau (s)", "sigma (°/h)", true, true, {line("adev", {1, 10, 100}, {3, 1, 2})}});
+  const std::string alone = path_of(render_svg(f), "gnuplot_plot_1a");
+  auto slope = line("slope -1/2", {1, 10, 100}, {1e3, 3e2, 1e2}, PlotSeries::Style::Dashed);
+  slope.guide = true;
+  f.panels[0].series.push_back(slope);
+  f.panels[0].legend = PlotPanel::Legend::None;
+  EXPECT_EQ(path_of(render_svg(f), "gnuplot_plot_1a"), alone);  // the data where they were
+}
+
+TEST(Plot, BreaksALineAtARecordsGapsWhenAsked) {
+  Figure f;
+  auto bursts = line("bursts", {0, 1, 2, 3, 50, 51, 52, 53}, {0, 1, 0, 1, 0, 1, 0, 1});
+  f.panels.push_back({"", "time (s)", "rate (°/h)", false, false, {bursts}});
+  EXPECT_EQ(count(path_of(render_svg(f), "gnuplot_plot_1a"), "M"), 1u);
+  f.panels[0].series[0].break_at_gaps = true;
+  EXPECT_EQ(count(path_of(render_svg(f), "gnuplot_plot_1a"), "M"), 2u);
+}
+
+TEST(Plot, TicksALogAxisUnderTwoDecadesAtOneTwoAndFive) {
+  Figure f;
+  f.panels.push_back({"spectrum", "period (s)", "amplitude (°/h)", true, false, {line("a", {30, 400}, {1, 2})}});
+  const std::string svg = render_svg(f);
+  for (const char* tick : {">50<", ">100<", ">200<"}) EXPECT_THAT(svg, HasSubstr(tick));
+}
+
+TEST(Plot, NamesPipelinePortsInWordsAndColoursFromOnePalette) {
+  EXPECT_EQ(readable_name("temperature_trend.signal"), "temperature trend");
+  EXPECT_EQ(readable_name("stage_rbf_ga_kf.signal"), "rbf ga kf");
+  EXPECT_EQ(readable_name("mixed_rbf_ga.residual"), "mixed rbf ga");
+  EXPECT_EQ(readable_name("classify.mixed"), "classify mixed");
+  std::set<std::string> colours;
+  for (std::size_t k = 0; k < 12; ++k) colours.insert(palette_color(k));
+  EXPECT_EQ(colours.size(), 12u);
+  EXPECT_EQ(palette_color(12), palette_color(0));
+}
+
+TEST(Plot, AllanGuidesShowTheSlopesAndWhereNAndBAreRead) {
+  allan::Analysis a;
+  for (double tau : {0.1, 1.0, 10.0, 100.0}) a.curve.push_back({1, tau, 0.01 / std::sqrt(tau), 0, 0});
+  a.arw_rad_sqrt_s = 0.01;
+  a.bias_instability = {true, 0.002, 0.0018, 0.0022, 100.0, 100.0};
+  const auto guides = allan_guides(a, 2.0, "°/h");
+  ASSERT_EQ(guides.size(), 3u);  // slope -1/2, slope 0, the read-off points (no K without a fit)
+  for (const auto& g : guides) EXPECT_TRUE(g.guide) << g.label;
+  EXPECT_DOUBLE_EQ(guides[0].y[1], 0.02);                                    // N / sqrt(tau) at tau = 1 s
+  EXPECT_DOUBLE_EQ(guides[1].y[0], 0.002 * allan::kFlickerFloorFactor * 2);  // the floor 0.664 B
+  EXPECT_EQ(guides[2].x, (std::vector<double>{1.0, 100.0}));
+  EXPECT_THAT(guides[2].label, HasSubstr("N = 0.02 °/h/√Hz at 1 s; B = 0.004 °/h at 100 s"));
+}
+
 TEST(Plot, DrawsAPanelWithoutDataAsEmpty) {
   Figure f;
   f.panels.push_back({"nothing yet", "x", "y", true, true, {line("none", {}, {})}});

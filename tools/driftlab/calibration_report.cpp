@@ -155,6 +155,7 @@ void add_figures(HtmlReport& html, const ReportInput& in, const std::vector<Reco
     PlotSeries h{s.name, blocks.t_s, {}};
     t.style = PlotSeries::Style::Markers;
     h.style = blocks.t_s.size() < 60 ? PlotSeries::Style::Markers : PlotSeries::Style::Line;
+    h.break_at_gaps = true;  // a burst record's gaps stay gaps
     for (const double v : s.block_mean_dph) {
       t.y.push_back(std::abs(v));
       h.y.push_back(std::abs(v));
@@ -164,10 +165,18 @@ void add_figures(HtmlReport& html, const ReportInput& in, const std::vector<Reco
     if (s.allan.empty()) continue;
     allan.series.push_back(allan_series(s.name, s.allan, kDphPerRadPerSec));
   }
-  html.figure_or_note({{by_temp}, 900, 360, 1, ""}, "Residual of every method against temperature on " + r.name);
-  html.figure_or_note({{by_time}, 900, 300, 1, ""}, "Residual of every method against time on " + r.name);
+  html.figure_or_note({{by_temp}, 900, 360, 1, ""},
+                      "Residual of every method against temperature on " + r.name +
+                          " (log scale: 'none' is orders of magnitude above the models); a model whose points rise at "
+                          "the ends of the range extrapolates badly there");
+  html.figure_or_note({{by_time}, 900, 300, 1, ""}, "Residual of every method against time on " + r.name +
+                                                        " (log scale); peaks at the turns of "
+                                                        "the temperature are a lag the model "
+                                                        "does not follow");
   if (!allan.series.empty())
-    html.figure_or_note({{allan}, 900, 420, 1, ""}, "Allan deviation of every method's residual on " + r.name);
+    html.figure_or_note({{allan}, 900, 420, 1, ""},
+                        "Allan deviation of every method's residual on " + r.name +
+                            ", 68.3 % intervals as bands: lower at long tau means less drift left");
 }
 
 std::string terms_text(const calibration::CalibrationModel& m) {

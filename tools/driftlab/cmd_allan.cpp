@@ -8,6 +8,7 @@
 // rad/s for rad); the deviations then come out in that rate unit.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -190,16 +191,20 @@ nlohmann::json readings_json(const allan::Analysis& a, bool angular, const std::
             {"how", "-1/2 slope line at tau = 1 s"}}}};
 }
 
-Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& curve, const allan::NoiseFit* fit,
-                    const allan::gmwm::Fit* gmwm, double scale, const std::string& unit) {
+// The plot in the printed text's unit: deg/h for a rate in rad/s (`factor` from SI), else the
+// channel's display unit (factor 1 / scale). The readings' guides (allan_guides) and the fitted
+// models are guides: the axes follow the measured curve.
+Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& curve, const allan::Analysis* analysis,
+                    const allan::gmwm::Fit* gmwm, double factor, const std::string& unit) {
   PlotPanel panel;
-  panel.title = o.kind + " of " + o.data.path;
+  panel.title = o.kind + " of " + std::filesystem::path(o.data.path).filename().string();
   panel.x_label = "tau (s)";
   panel.y_label = o.kind + " (" + unit + ")";
   panel.log_x = panel.log_y = true;
   panel.series.push_back(
-      allan_series(o.kind + " with " + std::to_string(o.confidence * 100.0).substr(0, 4) + " % interval", curve,
-                   1.0 / scale, PlotSeries::Style::Markers, PlotSeries::Interval::Bars));
+      allan_series(o.kind + " with " + std::to_string(o.confidence * 100.0).substr(0, 4) + " % interval", curve, factor,
+                   PlotSeries::Style::Markers, PlotSeries::Interval::Bars));
+  const allan::NoiseFit* fit = analysis && analysis->fit ? &*analysis->fit : nullptr;
   if ((fit != nullptr || gmwm != nullptr) && !curve.empty()) {
     const double first = curve.front().tau;
     const double last = curve.back().tau;
@@ -209,21 +214,16 @@ Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& c
       PlotSeries line;
       line.label = label;
       line.style = style;
+      line.guide = true;
       for (const double t : taus) {
         line.x.push_back(t);
-        line.y.push_back(dev(t) / scale);
+        line.y.push_back(dev(t) * factor);
       }
       panel.series.push_back(line);
     };
-    if (fit) {
-      for (const auto& c : allan::kIeee952Units) {
-        if (!(*fit)[c.term].fitted) continue;
-        add_line(std::string(c.key) + " term", PlotSeries::Style::Dashed,
-                 [&](double t) { return fit->term_deviation(c.term, t); });
-      }
+    if (fit)
       add_line("fitted model (IEEE 952 terms)", PlotSeries::Style::Line,
                [&](double t) { return fit->model_deviation(t); });
-    }
     if (gmwm) {
       std::vector<allan::gmwm::Process> model;
       for (const auto& c : gmwm->components) model.push_back(c.process);
@@ -231,8 +231,11 @@ Figure allan_figure(const AllanOptions& o, const std::vector<allan::Estimate>& c
                [&](double t) { return std::sqrt(gmwm->model_variance(t)); });
     }
   }
+  if (analysis)
+    for (auto& g : allan_guides(*analysis, factor, unit)) panel.series.push_back(std::move(g));
   Figure figure;
   figure.panels.push_back(panel);
+  figure.width = 1000;
   figure.panel_height = 480;
   return figure;
 }
@@ -443,7 +446,8 @@ void allan_command(const AllanOptions& o) {
     outputs.write(o.json, summary.dump(2) + "\n");
   }
   if (!o.plot.empty())
-    outputs.write(o.plot, render_svg(allan_figure(o, curve, fit, gmwm ? &*gmwm : nullptr, scale, unit)));
+    outputs.write(o.plot, render_svg(allan_figure(o, curve, analysis ? &*analysis : nullptr, gmwm ? &*gmwm : nullptr,
+                                                  angular ? kDphPerRadPerSec : 1.0 / scale, angular ? "°/h" : unit)));
   outputs.commit();
 
   std::cout << o.kind << " of " << role << ": " << curve.size() << " taus from " << curve.front().tau << " s to "
@@ -476,7 +480,9 @@ void add_allan_command(CLI::App& app, CommandEnv& env) {
       ->capture_default_str();
   cmd->add_option("--out", options->out, "output CSV: tau_s,dev,dev_lo,dev_hi,n")->required();
   cmd->add_option("--json", options->json, "summary JSON with the fitted noise terms");
-  cmd->add_option("--plot", options->plot, "log-log SVG plot with intervals and fitted terms");
+  cmd->add_option(
+      "--plot", options->plot,
+      "log-log SVG plot (deg/h for a rate) with intervals, the slopes N, B and K are read from and the fitted model");
   cmd->add_option("--gmwm", options->gmwm,
                   "also fit a composite noise model by GMWM, processes joined by '+': wn (white), qn (quantization), "
                   "rw (rate random walk), dr (rate ramp), gm (Gauss-Markov, may repeat); e.g. wn+rw+gm");

@@ -72,17 +72,6 @@ Table2Row row(const std::string& pipeline, const RunScores& scores, const evalua
   return r;
 }
 
-PlotSeries curve_series(const std::string& label, const allan::Analysis& a, PlotSeries::Style style) {
-  PlotSeries s;
-  s.label = label;
-  s.style = style;
-  for (const auto& e : a.curve) {
-    s.x.push_back(e.tau);
-    s.y.push_back(e.dev * kDphPerRadPerSec);
-  }
-  return s;
-}
-
 void compare(const CompareOptions& o, CommandEnv& env) {
   if (o.pipelines.size() < 1) throw ConfigError({"", 0, "--pipeline"}, "give at least one --pipeline");
   const auto& registry = env.registry();
@@ -133,20 +122,23 @@ void compare(const CompareOptions& o, CommandEnv& env) {
   const HtmlTable table = table2_html(Table2Layout::Compare, rows, std::nullopt);
 
   PlotPanel panel;
-  panel.title = "Overlapping Allan deviation of every output";
+  panel.title = "Overlapping Allan deviation of every output, 68.3 % intervals";
   panel.x_label = "tau (s)";
-  panel.y_label = "OADEV (°/h)";
+  panel.y_label = "Allan deviation (°/h)";
   panel.log_x = panel.log_y = true;
+  const auto curve = [](const std::string& label, const allan::Analysis& a, PlotSeries::Style style) {
+    return allan_series(label, a.curve, kDphPerRadPerSec, style);
+  };
   for (const auto& s : first.stages)
-    if (!is_pipeline_stage(s)) panel.series.push_back(curve_series(s.stage, s.analysis, PlotSeries::Style::Dashed));
-  if (first.intrinsic)
-    panel.series.push_back(curve_series("intrinsic floor", *first.intrinsic, PlotSeries::Style::Dashed));
+    if (!is_pipeline_stage(s)) panel.series.push_back(curve(stage_label(s), s.analysis, PlotSeries::Style::Dashed));
+  if (first.intrinsic) panel.series.push_back(curve("intrinsic floor", *first.intrinsic, PlotSeries::Style::Dashed));
   for (const auto& r : results)
     for (const auto& s : r.scores.stages)
       if (is_pipeline_stage(s))
-        panel.series.push_back(curve_series(r.label + ": " + s.stage, s.analysis, PlotSeries::Style::Line));
+        panel.series.push_back(curve(r.label + ": " + stage_label(s), s.analysis, PlotSeries::Style::Line));
   Figure figure;
   figure.panels.push_back(panel);
+  figure.width = 1000;
   figure.panel_height = 520;
 
   nlohmann::json report{{"format", "driftlab-compare-report/1"},
@@ -184,8 +176,9 @@ void compare(const CompareOptions& o, CommandEnv& env) {
                  format_number(record.sample_rate_hz()) + " Hz.");
   html.table(table);
   html.figure(figure,
-              "Allan deviation of the record, the PX4-style baseline, the intrinsic floor (when the record "
-              "has a systematic column) and every pipeline output");
+              "Allan deviation of the record, the PX4-style baseline and the intrinsic floor (dashed; the floor when "
+              "the record has a systematic column) and every pipeline output (solid), each with its 68.3 % interval "
+              "as a band. Lower at long tau: less drift left; a curve on the intrinsic floor has removed all of it.");
   files.write(report_html, html.html());
   files.commit();
 

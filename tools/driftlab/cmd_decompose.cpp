@@ -13,6 +13,7 @@
 //   energy share     sum_t c_k(t)^2 / sum over all components (IMFs and residue) of sum_t c(t)^2.
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -62,7 +63,7 @@ Figure component_figure(const DecomposeOptions& o, const Eigen::VectorXd& t, con
     PlotPanel panel;
     panel.title = title;
     panel.x_label = "t (s)";
-    panel.y_label = unit;
+    panel.y_label = "signal (" + unit + ")";
     PlotSeries series;
     series.label = title;
     series.x.assign(t.data(), t.data() + t.size());
@@ -71,7 +72,7 @@ Figure component_figure(const DecomposeOptions& o, const Eigen::VectorXd& t, con
     panel.series.push_back(std::move(series));
     figure.panels.push_back(std::move(panel));
   };
-  add("signal (" + o.data.path + ")", x);
+  add("signal (" + std::filesystem::path(o.data.path).filename().string() + ")", x);
   for (Eigen::Index k = 0; k < imfs.cols(); ++k)
     add("imf" + std::to_string(k + 1) + " (" + groups[static_cast<std::size_t>(k)] + ")", imfs.col(k));
   add("residue", residue);

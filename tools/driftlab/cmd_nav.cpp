@@ -162,15 +162,28 @@ void write_report(const NavReport& report, nlohmann::ordered_json info, OutputSe
   outputs.write_csv(out / "trajectory.csv", traj);
   outputs.write_csv(out / "errors.csv", errs);
 
+  // Log scales: the raw run's error is orders of magnitude above the others. Each run's EKF 1-sigma
+  // heading bound is dashed in the run's colour: an error above its bound is one the filter did not expect.
   Figure figure;
-  PlotPanel heading{report.title, "time (min)", "heading error (deg)"};
-  PlotPanel position{"Position error", "time (min)", "position error (m)"};
+  PlotPanel heading{report.title + " (dashed: each run's EKF 1σ)", "time (min)", "|heading error| (deg), log scale"};
+  PlotPanel position{"Position error", "time (min)", "position error (m), log scale"};
+  heading.log_y = position.log_y = true;
   const auto minutes = as_std(pick(in.time_s, idx, 1.0 / 60.0));
-  for (const auto& run : report.runs) {
-    heading.series.push_back({run.name, minutes, as_std(pick(run.track.heading_error_rad, idx, kDegPerRad))});
-    position.series.push_back({run.name, minutes, as_std(pick(run.track.position_error_m, idx))});
+  for (std::size_t k = 0; k < report.runs.size(); ++k) {
+    const auto& run = report.runs[k];
+    const std::string name = readable_name(run.name);
+    PlotSeries error{name, minutes, as_std(pick(run.track.heading_error_rad, idx, kDegPerRad).cwiseAbs())};
+    // One legend entry for the bounds (the title says they are dashed): both panels' legends then
+    // have the same width and their plots line up.
+    PlotSeries sigma{k == 0 ? "EKF 1σ" : "", minutes, as_std(pick(run.track.heading_sigma_rad, idx, kDegPerRad))};
+    PlotSeries metres{name, minutes, as_std(pick(run.track.position_error_m, idx))};
+    error.color = sigma.color = metres.color = palette_color(k);
+    sigma.style = PlotSeries::Style::Dashed;
+    heading.series.insert(heading.series.end(), {error, sigma});
+    position.series.push_back(metres);
   }
   figure.panels = {heading, position};
+  figure.shared_x = true;
   try {
     outputs.write(out / "nav.svg", render_svg(figure));
   } catch (const PlotError& e) {  // the numbers stand without the figure

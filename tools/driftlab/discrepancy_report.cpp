@@ -24,9 +24,13 @@ std::vector<double> to_vector(const Eigen::VectorXd& v, double scale) {
   return out;
 }
 
+// One colour per model in every panel: the initial model blue, the final model red.
+const std::string kInitialColor = palette_color(0), kFinalColor = palette_color(1);
+
 PlotSeries bin_series(const std::string& label, const std::vector<discrepancy::Bin>& bins, double center_scale,
-                      PlotSeries::Style style) {
+                      PlotSeries::Style style, const std::string& color) {
   PlotSeries s{label, {}, {}, {}, {}, style};
+  s.color = color;
   for (const auto& b : bins) {
     s.x.push_back(b.center * center_scale);
     s.y.push_back(dph(b.mean_rad_s));
@@ -36,8 +40,9 @@ PlotSeries bin_series(const std::string& label, const std::vector<discrepancy::B
   return s;
 }
 
-PlotSeries spectrum_series(const std::string& label, const discrepancy::Views& v, PlotSeries::Style style) {
-  PlotSeries s{label, {}, {}, {}, {}, style};
+PlotSeries spectrum_series(const std::string& label, const discrepancy::Views& v, const std::string& color) {
+  PlotSeries s{label, {}, {}, {}, {}, PlotSeries::Style::Line};
+  s.color = color;
   for (const auto& line : v.spectrum) {
     s.x.push_back(line.period_s);
     s.y.push_back(dph(line.amplitude_rad_s));
@@ -48,43 +53,50 @@ PlotSeries spectrum_series(const std::string& label, const discrepancy::Views& v
 Figure residual_figure(const discrepancy::Result& r) {
   const auto& a = r.initial_views;
   const auto& b = r.final_views;
+  const auto over_time = [](const std::string& label, const discrepancy::Views& v, const std::string& color) {
+    PlotSeries s{label, to_vector(v.time_s, 1.0 / kSecondsPerHour), to_vector(v.residual_rad_s, kDphPerRadPerSec)};
+    s.color = color;
+    s.break_at_gaps = true;  // a burst record's gaps stay gaps
+    return s;
+  };
   Figure f;
+  f.panels.push_back({"residual over time (block means): measured - model",
+                      "time (h)",
+                      "residual (°/h)",
+                      false,
+                      false,
+                      {over_time("initial model", a, kInitialColor), over_time("final model", b, kFinalColor)}});
   f.panels.push_back(
-      {"residual over time (block means): measured - model",
-       "time (h)",
-       "residual (deg/h)",
+      {"residual by temperature, heating solid, cooling dashed (mean ± s/√n per bin)",
+       "temperature (°C)",
+       "residual (°/h)",
        false,
        false,
-       {{"initial model", to_vector(a.time_s, 1.0 / kSecondsPerHour), to_vector(a.residual_rad_s, kDphPerRadPerSec)},
-        {"final model", to_vector(b.time_s, 1.0 / kSecondsPerHour), to_vector(b.residual_rad_s, kDphPerRadPerSec)}}});
-  f.panels.push_back({"residual by temperature, heating and cooling (mean +- s/sqrt(n) per bin)",
-                      "temperature (degC)",
-                      "residual (deg/h)",
-                      false,
-                      false,
-                      {bin_series("initial, heating", a.heating_by_temperature, 1.0, PlotSeries::Style::Markers),
-                       bin_series("initial, cooling", a.cooling_by_temperature, 1.0, PlotSeries::Style::Markers),
-                       bin_series("final, heating", b.heating_by_temperature, 1.0, PlotSeries::Style::Line),
-                       bin_series("final, cooling", b.cooling_by_temperature, 1.0, PlotSeries::Style::Line)}});
-  f.panels.push_back({"residual by temperature rate",
-                      "dT/dt (degC/min)",
-                      "residual (deg/h)",
-                      false,
-                      false,
-                      {bin_series("initial model", a.by_temperature_rate, 60.0, PlotSeries::Style::Markers),
-                       bin_series("final model", b.by_temperature_rate, 60.0, PlotSeries::Style::Line)}});
+       {bin_series("initial model, heating", a.heating_by_temperature, 1.0, PlotSeries::Style::Line, kInitialColor),
+        bin_series("initial model, cooling", a.cooling_by_temperature, 1.0, PlotSeries::Style::Dashed, kInitialColor),
+        bin_series("final model, heating", b.heating_by_temperature, 1.0, PlotSeries::Style::Line, kFinalColor),
+        bin_series("final model, cooling", b.cooling_by_temperature, 1.0, PlotSeries::Style::Dashed, kFinalColor)}});
+  f.panels.push_back(
+      {"residual by temperature rate (mean ± s/√n per bin)",
+       "dT/dt (°C/min)",
+       "residual (°/h)",
+       false,
+       false,
+       {bin_series("initial model", a.by_temperature_rate, 60.0, PlotSeries::Style::Markers, kInitialColor),
+        bin_series("final model", b.by_temperature_rate, 60.0, PlotSeries::Style::Markers, kFinalColor)}});
   if (!a.spectrum.empty())
-    f.panels.push_back({"residual spectrum (least-squares sinusoid amplitude)",
-                        "period (s)",
-                        "amplitude (deg/h)",
-                        true,
-                        false,
-                        {spectrum_series("initial model", a, PlotSeries::Style::Line),
-                         spectrum_series("final model", b, PlotSeries::Style::Line)}});
+    f.panels.push_back(
+        {"residual spectrum (least-squares sinusoid amplitude)",
+         "period (s)",
+         "amplitude (°/h)",
+         true,
+         false,
+         {spectrum_series("initial model", a, kInitialColor), spectrum_series("final model", b, kFinalColor)}});
   if (!a.allan.empty()) {
     PlotSeries before{"initial model residual", {}, {}, {}, {}, PlotSeries::Style::Markers};
     PlotSeries after{"final model residual", {}, {}, {}, {}, PlotSeries::Style::Markers};
     PlotSeries model{"noise terms (device)", {}, {}, {}, {}, PlotSeries::Style::Dashed};
+    before.color = kInitialColor, after.color = kFinalColor, model.color = "#555555";
     for (const auto& p : a.allan) {
       before.x.push_back(p.tau_s);
       before.y.push_back(dph(p.residual_rad_s));
@@ -97,7 +109,7 @@ Figure residual_figure(const discrepancy::Result& r) {
     }
     f.panels.push_back({"Allan deviation of the residual against the model's noise terms",
                         "tau (s)",
-                        "Allan deviation (deg/h)",
+                        "Allan deviation (°/h)",
                         true,
                         true,
                         {before, after, model}});
@@ -153,8 +165,11 @@ std::string discrepancy_html(const discrepancy::Result& r, const discrepancy::Re
   }
   html.section("Where the model misses: before and after");
   html.figure(residual_figure(r), "The residual (measured - modelled systematic rate) of " + initial_model +
-                                      " and of the final model with the named effects, in the views the candidates are "
-                                      "scored on");
+                                      " (blue) and of the final model with the named effects (red), in the views the "
+                                      "candidates are scored on: over time, by temperature (heating solid, cooling "
+                                      "dashed: apart where a lag or hysteresis is missing), by temperature rate, as a "
+                                      "spectrum and as an Allan deviation against the model's noise terms (grey). "
+                                      "Red flat on zero: nothing left to explain.");
   html.section("Last round of scores");
   HtmlTable scores{"", {"effect", "Δχ²", "ΔBIC", "parameters added"}};
   for (const auto& s : r.final_scores) {

@@ -491,8 +491,6 @@ std::vector<std::string> spec_violations(const UnitSummary& unit) {
 
 namespace {
 
-constexpr const char* kFamilyColours[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2"};
-
 // Per channel the held-out residual of every passed unit (manifest order), units with a finding on
 // that channel marked apart.
 Figure holdout_figure(const std::vector<UnitSummary>& units, const std::vector<Outlier>& outliers) {
@@ -511,10 +509,12 @@ Figure holdout_figure(const std::vector<UnitSummary>& units, const std::vector<O
       if (p.series.empty()) {
         p.title = channel;
         p.x_label = "unit (manifest order)";
-        p.y_label = key + (id->sensor == imu::Sensor::Gyro ? " (°/h)" : " (mg)");
+        p.y_label = std::string(kFigures[4].doc) + (id->sensor == imu::Sensor::Gyro ? " (°/h)" : " (mg)");
+        p.legend = PlotPanel::Legend::None;  // small panels: the caption says what the colours are
         p.series = {{"unit", {}, {}}, {"unit with a finding on " + channel, {}, {}}};
         for (auto& s : p.series) s.style = PlotSeries::Style::Markers;
-        p.series[1].color = "#d62728";
+        p.series[0].color = palette_color(0);
+        p.series[1].color = palette_color(1);
       }
       PlotSeries& s = p.series[flagged.count({units[i].unit, channel}) ? 1 : 0];
       s.x.push_back(static_cast<double>(i + 1));
@@ -545,7 +545,7 @@ Figure family_figure(const std::vector<UnitSummary>& units, const Families& fami
       PlotSeries s;
       s.x.assign(std::begin(kFamilyGridC), std::end(kFamilyGridC));
       s.y = u.bias_curves.at(channel);
-      s.color = kFamilyColours[fam->second % std::size(kFamilyColours)];
+      s.color = palette_color(fam->second);
       p.series.push_back(std::move(s));
     }
     f.panels.push_back(std::move(p));
@@ -559,9 +559,8 @@ std::string family_sizes(const Families& families) {
   for (const auto& [unit, family] : families.family) ++size[family];
   std::string text;
   for (std::size_t f = 0; f < families.k; ++f)
-    text += (f ? ", " : "") + std::string("family ") + std::to_string(f + 1) + " (" +
-            kFamilyColours[f % std::size(kFamilyColours)] + "): " + std::to_string(size[f]) + " units, medoid " +
-            families.medoids[f];
+    text += (f ? ", " : "") + std::string("family ") + std::to_string(f + 1) + " (" + palette_color(f) +
+            "): " + std::to_string(size[f]) + " units, medoid " + families.medoids[f];
   return text;
 }
 
@@ -772,7 +771,10 @@ std::string report_html(const std::vector<UnitSummary>& units, const std::vector
   html.section("Failures").table(failed_table(units)).section("Outliers").table(outlier_table(outliers));
   if (const Figure f = holdout_figure(units, outliers); !f.panels.empty())
     html.figure_or_note(
-        f, "Held-out residual of every calibrated unit per channel; red: a unit with a finding on that channel");
+        f,
+        "Held-out residual of every calibrated unit per channel, units in manifest order; blue: a unit without "
+        "findings on that channel, red: a unit with one (see the outlier table). A point far above the others "
+        "is a unit whose calibration does not transfer to its held-out data.");
   html.section("Families").paragraph(families_text(families));
   if (const Figure f = family_figure(units, families); !f.panels.empty())
     html.figure_or_note(f, "Fitted gyro bias against temperature, one line per unit, coloured by family");

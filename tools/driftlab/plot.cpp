@@ -16,13 +16,17 @@
 #include <cstring>
 #include <limits>
 
+#include "framework/number_text.hpp"
+
 extern char** environ;
 
 namespace driftlab::cli {
 namespace {
 
-constexpr std::array<const char*, 8> kColors = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e",
-                                                "#9467bd", "#8c564b", "#e377c2", "#17becf"};
+// Tableau's ten and two darker ones: neighbours in the list differ in hue and lightness.
+constexpr std::array<const char*, 12> kColors = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b",
+                                                 "#e377c2", "#17becf", "#7f7f7f", "#bcbd22", "#000000", "#393b79"};
+constexpr double kGapFactor = 3.0;            // break_at_gaps: a step this many times the median step is a gap
 constexpr std::size_t kReduceLinesAbove = 4;  // points per pixel column before lines are reduced
 constexpr std::size_t kReduceMarkersAbove = 2000;
 constexpr long kMarkerCellPx = 3;          // about a marker's diameter
@@ -81,7 +85,19 @@ std::vector<Point> points_of(const PlotSeries& s, bool log_x, bool log_y) {
   std::vector<Point> out;
   out.reserve(n);
   const double nan = std::numeric_limits<double>::quiet_NaN();
+  double gap = std::numeric_limits<double>::infinity();
+  if (s.break_at_gaps && n > 2) {
+    std::vector<double> steps;
+    for (std::size_t i = 1; i < n; ++i)
+      if (std::isfinite(s.x[i] - s.x[i - 1])) steps.push_back(std::abs(s.x[i] - s.x[i - 1]));
+    if (!steps.empty()) {
+      std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+      gap = kGapFactor * steps[steps.size() / 2];
+    }
+  }
   for (std::size_t i = 0; i < n; ++i) {
+    if (i > 0 && !out.empty() && !std::isnan(out.back().x) && std::abs(s.x[i] - out.back().x) > gap)
+      out.push_back({nan, nan, nan, nan, nan});
     if (!usable(s.x[i], log_x) || !usable(s.y[i], log_y) || (coloured && !std::isfinite(s.z[i]))) {
       if (!out.empty() && !std::isnan(out.back().x)) out.push_back({nan, nan, nan, nan, nan});
       continue;
@@ -140,7 +156,7 @@ std::vector<Point> reduce_markers(const std::vector<Point>& pts, const Range& xr
 }
 
 std::string color_of(const PlotSeries& s, std::size_t index) {
-  return s.color.empty() ? kColors[index % kColors.size()] : s.color;
+  return s.color.empty() ? palette_color(index) : s.color;
 }
 
 // Panel geometry, in px of the SVG's viewBox (gnuplot's margins are in characters of ~6.6 x 15 px).
@@ -191,6 +207,20 @@ Axis make_axis(const Range& r, bool log, double ticks, bool extend, double pad) 
 std::string range_commands(const char* name, const Axis& a) {
   std::string out = std::string("set ") + name + "range [" + number(a.lo) + ":" + number(a.hi) + "]\n";
   if (a.step > 0) out += std::string("set ") + name + "tics " + number(a.step) + "\n";
+  if (a.log && a.hi < 100 * a.lo) {  // under two decades: ticks at 1, 2 and 5 (or every digit) x 10^k
+    for (const std::vector<double>& mantissas : {std::vector<double>{1, 2, 5}, {1, 2, 3, 4, 5, 6, 7, 8, 9}}) {
+      std::string list;
+      int ticks = 0;
+      for (double decade = std::pow(10.0, std::floor(std::log10(a.lo))); decade <= a.hi; decade *= 10)
+        for (double m : mantissas)
+          if (m * decade >= a.lo * (1 - 1e-9) && m * decade <= a.hi * (1 + 1e-9))
+            list += (ticks++ ? "," : "") + number(m * decade);
+      if (ticks < 2 && mantissas.size() == 3) continue;
+      out +=
+          std::string("set ") + name + "tics (" + list + ")\nset format " + name + " '%g'\nunset m" + name + "tics\n";
+      break;
+    }
+  }
   return out;
 }
 
@@ -200,8 +230,10 @@ std::size_t display_length(const std::string& s) {
 
 // The legend's place: the requested corner, or (Auto) the corner where the least data lies; when
 // every corner holds data, top right above the data, whose y axes get that much headroom.
+// A legend beside the plot takes a right margin for `beside_chars` characters (the longest entry
+// of the figure's column, so that stacked panels keep one plot width).
 std::string legend_command(const PlotPanel& panel, const std::vector<std::vector<Point>>& data, const Axis& x, Axis& y,
-                           Axis& y2, const Geometry& g) {
+                           Axis& y2, const Geometry& g, std::size_t beside_chars) {
   std::size_t labelled = 0, longest = 0;
   for (const auto& s : panel.series)
     if (!s.label.empty()) ++labelled, longest = std::max(longest, display_length(s.label));
@@ -240,6 +272,12 @@ std::string legend_command(const PlotPanel& panel, const std::vector<std::vector
   }
   const auto best = static_cast<std::size_t>(std::min_element(crowd.begin(), crowd.end()) - crowd.begin());
   if (crowd[best] == 0) return std::string("set key inside ") + names[best] + style;
+  const bool right_axis =
+      std::any_of(panel.series.begin(), panel.series.end(), [](const auto& s) { return s.right_axis; });
+  if (!right_axis)  // beside the plot, in a right margin wide enough for the longest entry
+    return "set rmargin " +
+           std::to_string(static_cast<int>(static_cast<double>(std::max(longest, beside_chars)) * 0.95) + 9) +
+           "\nset key outside right top" + style;
   y.raise_top(kh + 0.02);
   y2.raise_top(kh + 0.02);
   return std::string("set key inside top right") + style;
@@ -250,7 +288,8 @@ std::string legend_command(const PlotPanel& panel, const std::vector<std::vector
 struct Placement {
   std::string commands;
   bool x_labels = true;
-  Range shared_x;
+  Range shared_x, shared_y;
+  std::size_t legend_chars = 0;  // the longest legend entry of the panel's column
 };
 
 void panel_script(std::string& script, const PlotPanel& panel, std::size_t index, const Geometry& g,
@@ -262,12 +301,14 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
   for (const auto& s : panel.series) {
     auto pts = points_of(s, panel.log_x, s.right_axis ? panel.log_y2 : panel.log_y);
     for (const auto& p : pts) {
+      if (s.guide) continue;
       xr.add(p.x);
       (s.right_axis ? y2r : yr).add(p.low), (s.right_axis ? y2r : yr).add(p.high);
     }
     data.push_back(std::move(pts));
   }
   if (!place.shared_x.empty()) xr = place.shared_x;
+  if (!place.shared_y.empty()) yr = place.shared_y;
   for (std::size_t k = 0; k < data.size(); ++k) {
     const auto& s = panel.series[k];
     if (!s.y_low.empty() || !s.y_high.empty()) continue;
@@ -298,7 +339,7 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
   const Axis x = make_axis(xr, panel.log_x, g.plot_width / 90.0, false, markers ? 0.02 : 0.0);
   Axis y = make_axis(yr, panel.log_y, g.plot_height / 38.0, true, 0.0);
   Axis y2 = make_axis(y2r, panel.log_y2, g.plot_height / 38.0, true, 0.0);
-  const std::string key = legend_command(panel, data, x, y, y2, g);
+  const std::string key = legend_command(panel, data, x, y, y2, g, place.legend_chars);
 
   script += "reset\n" + place.commands + "set encoding utf8\nset lmargin 12\nset bmargin 3.5\nset tmargin 2.2\n";
   script += any_right_axis ? "set rmargin 12\n" : "set rmargin 4\n";
@@ -336,6 +377,7 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
     const std::string src = tag + std::to_string(k);
     const std::string axes = s.right_axis ? " axes x1y2" : "";
     const std::string lc = " lc rgb '" + color_of(s, k) + "'";
+    const std::string width = s.guide ? " lw 1" : " lw 1.3";
     const std::string title = s.label.empty() ? " notitle" : " title " + quoted(s.label) + " noenhanced";
     const bool interval = !s.y_low.empty() && s.y_low.size() == s.y.size() && s.y_high.size() == s.y.size();
     const bool band = interval && s.interval == PlotSeries::Interval::Band;
@@ -355,7 +397,7 @@ void panel_script(std::string& script, const PlotPanel& panel, std::size_t index
       const std::string dash = s.style == PlotSeries::Style::Dashed ? " dt (6,4)" : "";
       if (interval && !band)
         items.push_back(src + " using 1:2:3:4" + axes + " with yerrorbars pt 7 ps 0.3 lw 1" + lc + " notitle");
-      item = src + " using 1:2" + axes + " with lines lw 1.3" + dash + lc;
+      item = src + " using 1:2" + axes + " with lines" + width + dash + lc;
     }
     items.push_back(item + title);
   }
@@ -495,6 +537,54 @@ std::string run_gnuplot(const std::string& script) {
 
 }  // namespace
 
+std::string palette_color(std::size_t index) { return kColors[index % kColors.size()]; }
+
+std::string readable_name(const std::string& name) {
+  std::string text = name;
+  for (const char* port : {".signal", ".residual", ".fitted"})
+    if (text.size() > std::strlen(port) && text.ends_with(port)) text.resize(text.size() - std::strlen(port));
+  if (text.starts_with("stage_")) text.erase(0, 6);
+  std::replace(text.begin(), text.end(), '_', ' ');
+  std::replace(text.begin(), text.end(), '.', ' ');
+  return text;
+}
+
+std::vector<PlotSeries> allan_guides(const allan::Analysis& a, double factor, const std::string& unit) {
+  std::vector<PlotSeries> out;
+  if (a.curve.empty()) return out;
+  const auto guide = [&](std::string label, PlotSeries::Style style, auto dev) {
+    PlotSeries s;
+    s.label = std::move(label);
+    s.style = style;
+    s.guide = true;
+    s.color = "#555555";
+    for (const auto& e : a.curve) s.x.push_back(e.tau), s.y.push_back(dev(e.tau) * factor);
+    out.push_back(std::move(s));
+  };
+  const double n = a.arw_rad_sqrt_s;
+  const auto& b = a.bias_instability;
+  const double floor = b.value * allan::kFlickerFloorFactor;
+  guide("slope -1/2: N (white noise)", PlotSeries::Style::Dashed, [&](double tau) { return n / std::sqrt(tau); });
+  guide(b.resolved ? "slope 0: 0.664 B (flicker floor)" : "slope 0: lowest point (B only bounded)",
+        PlotSeries::Style::Dashed, [&](double) { return floor; });
+  if (a.fit && (*a.fit)[allan::Term::K].resolved) {
+    const double k = (*a.fit)[allan::Term::K].value;
+    guide("slope +1/2: K (rate random walk)", PlotSeries::Style::Dashed,
+          [&](double tau) { return k * std::sqrt(tau / 3.0); });
+  }
+  PlotSeries read;
+  read.style = PlotSeries::Style::Markers;
+  read.guide = true;
+  read.color = "#000000";
+  read.label = "read: N = " + format_number(n * factor, 3) + " " + unit + "/√Hz at 1 s; B " +
+               (b.resolved ? "= " + format_number(b.value * factor, 3) : "< " + format_number(b.high * factor, 3)) +
+               " " + unit + " at " + format_number(b.tau_s, 3) + " s";
+  if (a.curve.front().tau <= 1.0 && a.curve.back().tau >= 1.0) read.x.push_back(1.0), read.y.push_back(n * factor);
+  read.x.push_back(b.tau_s), read.y.push_back(floor * factor);
+  out.push_back(std::move(read));
+  return out;
+}
+
 PlotSeries allan_series(std::string label, std::span<const allan::Estimate> curve, double factor,
                         PlotSeries::Style style, PlotSeries::Interval interval) {
   PlotSeries s;
@@ -525,12 +615,19 @@ std::string render_svg(const Figure& figure) {
   const bool any_right = std::any_of(figure.panels.begin(), figure.panels.end(), [](const PlotPanel& p) {
     return std::any_of(p.series.begin(), p.series.end(), [](const PlotSeries& s) { return s.right_axis; });
   });
-  Range shared;
+  Range shared, shared_y;
   if (figure.shared_x && !figure.panels.empty()) {
     shared.log = figure.panels.front().log_x;
     for (const auto& panel : figure.panels)
       for (const auto& s : panel.series)
         for (double v : s.x) shared.add(v);
+  }
+  if (figure.shared_y && !figure.panels.empty()) {
+    shared_y.log = figure.panels.front().log_y;
+    for (const auto& panel : figure.panels)
+      for (const auto& s : panel.series)
+        if (!s.right_axis && !s.guide)
+          for (const auto& p : points_of(s, panel.log_x, panel.log_y)) shared_y.add(p.low), shared_y.add(p.high);
   }
 
   std::string script = "set terminal svg size " + std::to_string(figure.width) + "," + std::to_string(height) +
@@ -545,6 +642,11 @@ std::string render_svg(const Figure& figure) {
     Placement place;
     place.x_labels = row_labels(row);
     place.shared_x = shared;
+    place.shared_y = shared_y;
+    for (std::size_t q = static_cast<std::size_t>(column); q < figure.panels.size();
+         q += static_cast<std::size_t>(columns))
+      for (const auto& s : figure.panels[q].series)
+        place.legend_chars = std::max(place.legend_chars, display_length(s.label));
     place.commands = "set origin " + number(static_cast<double>(column) / static_cast<double>(columns)) + "," +
                      screen(height - row_top[r + 1]) + "\nset size " + number(1.0 / static_cast<double>(columns)) +
                      "," + screen(row_top[r + 1] - row_top[r]) + "\n";

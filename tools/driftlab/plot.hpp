@@ -13,7 +13,16 @@
 // - Non-finite points, and points <= 0 on a log axis, are left out (a line breaks there); on a log
 //   y axis an interval's lower end <= 0 is drawn from the point itself.
 // - The x axis spans the data (2 % more at each end when a series has markers); y axes extend to
-//   whole ticks (whole decades when log). Tick steps follow the panel's size.
+//   whole ticks (whole decades when log). Tick steps follow the panel's size; a log axis spanning
+//   less than two decades is ticked at 1, 2 and 5 times its powers of ten (never a lone tick).
+//   Guide series (slope lines, model terms) never widen an axis: they are drawn within the range
+//   the other series make.
+// - Colours: series k of a panel takes palette_color(k) unless it names its own; the palette's 12
+//   colours are told apart at a glance (for more curves, pair a colour with a dashed style).
+// - Legend entries are words a reader knows ("temperature trend", "RBF NN + GA + KF"), never a
+//   pipeline's port names ("temperature_trend.signal"): readable_name() turns a name into words.
+//   A legend that finds no empty corner goes to the right of the plot when the panel has no right
+//   axis (the data keep their range), else above the data.
 // - Long series are reduced before they reach gnuplot: lines to the min and max of each pixel
 //   column (in their original order), markers to one point per 3 x 3 px cell. Series with
 //   intervals are drawn as given.
@@ -26,6 +35,7 @@
 #include <vector>
 
 #include "framework/error.hpp"
+#include "models/allan/analysis.hpp"
 #include "models/allan/confidence.hpp"
 
 namespace driftlab::cli {
@@ -43,8 +53,10 @@ struct PlotSeries {
   enum class Style { Line, Dashed, Markers } style = Style::Line;
   enum class Interval { Bars, Band } interval = Interval::Bars;  // how y_low/y_high are drawn
   bool right_axis = false;                                       // drawn against the panel's second y axis
-  std::vector<double> z;  // optional colour value per point (same length as y; Markers)
-  std::string color;      // "#rrggbb"; empty = the palette colour of its index
+  std::vector<double> z;       // optional colour value per point (same length as y; Markers)
+  std::string color;           // "#rrggbb"; empty = the palette colour of its index
+  bool guide = false;          // a guide (slope line, model term): drawn thin, never widens the axes
+  bool break_at_gaps = false;  // line breaks where x steps more than 3 x its median step (a record's gaps)
 };
 
 struct PlotPanel {
@@ -68,13 +80,29 @@ struct Figure {
   std::string title;      // above all panels; may be empty
   bool shared_x = false;  // one x range for all panels, labelled only under the bottom row
                           // (rows with a panel below every one of theirs are 40 px shorter)
+  bool shared_y = false;  // one left y range for all panels: panels meant to be compared
 };
+
+// Colour k of the palette (cycling after 12): "#rrggbb".
+std::string palette_color(std::size_t index);
+
+// A pipeline-internal name as words: a port suffix (".signal", ".residual", ".fitted") dropped, a
+// "stage_" prefix dropped, underscores and the dot between step and port as spaces:
+// "temperature_trend.signal" -> "temperature trend", "classify.mixed" -> "classify mixed". Reports
+// that know better name things themselves (a stage's label, an IMF group with its IMFs).
+std::string readable_name(const std::string& name);
 
 // An Allan curve as a series: (tau, dev) with its interval [dev_lo, dev_hi], each deviation times
 // `factor` (e.g. kDphPerRadPerSec for deg/h); drawn as `style` with the interval as `interval`.
 PlotSeries allan_series(std::string label, std::span<const allan::Estimate> curve, double factor,
                         PlotSeries::Style style = PlotSeries::Style::Line,
                         PlotSeries::Interval interval = PlotSeries::Interval::Band);
+
+// The reading guides of an Allan deviation plot (deviations times `factor`, in `unit`): grey
+// dashed lines of slope -1/2 through N at tau = 1 s, slope 0 at the floor where B is read
+// (0.664 B, or the bound's level when unresolved) and, when the term fit resolved K, slope +1/2 of
+// K; and markers where N and B are read, labelled with their values. Guides: they never widen the axes.
+std::vector<PlotSeries> allan_guides(const allan::Analysis& analysis, double factor, const std::string& unit);
 
 // The figure as a standalone SVG document (viewBox width x rows * panel_height, less the rows
 // shortened by shared_x, plus 30 px for a title).

@@ -44,38 +44,50 @@ Figure raw_figure(const TimeSeries& record) {
   return {{p}, 900, 320, 1, ""};
 }
 
-Figure imf_figure(const std::string& step, const Signal& imfs, const Signal* residue, const Eigen::VectorXd& time) {
-  const bool rate = imfs.unit == "rad/s";
-  const double ys = rate ? kDphPerRadPerSec : 1.0;
-  const std::string unit = rate ? "°/h" : imfs.unit == "degC" ? "°C" : imfs.unit;
+// What a decomposed signal is, in words and with its display unit and factor.
+struct Quantity {
+  std::string name, unit;
+  double factor = 1.0;
+};
+Quantity quantity_of(const Signal& s) {
+  if (s.unit == "rad/s") return {"rate", "°/h", kDphPerRadPerSec};
+  if (s.unit == "degC") return {"temperature", "°C", 1.0};
+  return {"signal", s.unit, 1.0};
+}
+
+Figure imf_figure(const Signal& imfs, const Signal* residue, const Eigen::VectorXd& time) {
+  const auto q = quantity_of(imfs);
   Figure f;
   f.columns = 3;
   f.width = 1100;
-  f.panel_height = 170;
-  f.title = step + ": IMFs (" + unit + ") over time (h)";
+  f.panel_height = 190;
+  f.shared_x = true;
+  f.title = "IMFs of the " + q.name + " (" + q.unit + ") over time (h)";
   for (Eigen::Index k = 0; k <= imfs.columns.cols(); ++k) {
     if (k == imfs.columns.cols() && residue == nullptr) break;
     PlotPanel p;
     p.title = k < imfs.columns.cols() ? imfs.labels[static_cast<std::size_t>(k)] : "residue";
+    p.x_label = "time (h)";
+    p.y_label = q.name + " (" + q.unit + ")";
     p.legend = PlotPanel::Legend::None;
     const Eigen::VectorXd values =
         k < imfs.columns.cols() ? Eigen::VectorXd(imfs.columns.col(k)) : residue->columns.col(0);
-    p.series.push_back(line("", time, values, kHoursPerSecond, ys));
+    p.series.push_back(line("", time, values, kHoursPerSecond, q.factor));
     f.panels.push_back(std::move(p));
   }
   return f;
 }
 
-Figure entropy_figure(const std::string& step, const std::vector<ImfDecision>& decisions) {
+Figure entropy_figure(const std::string& of, const std::vector<ImfDecision>& decisions) {
   PlotPanel p;
-  p.title = step + ": sample entropy per IMF and the groups (paper Fig. 12)";
-  p.x_label = "IMF";
-  p.y_label = "SampEn";
+  p.title = "Sample entropy of the " + of + "'s IMFs and their groups";
+  p.x_label = "IMF (number, 1 = fastest)";
+  p.y_label = "sample entropy (dimensionless)";
   p.legend = PlotPanel::Legend::TopRight;
   std::map<ImfGroup, PlotSeries> groups;
   for (const auto& d : decisions) {
     auto& s = groups[d.group];
-    s.label = to_string(d.group);
+    s.label = group_label(d.group, decisions);
     s.style = PlotSeries::Style::Markers;
     s.x.push_back(static_cast<double>(d.imf));
     s.y.push_back(d.score);
@@ -94,14 +106,16 @@ Figure allan_figure(const RunScores& scores) {
   const auto add = [&](const std::string& label, const allan::Analysis& a, PlotSeries::Style style) {
     p.series.push_back(allan_series(label, a.curve, kDphPerRadPerSec, style));
   };
-  for (const auto& st : scores.stages) add(st.stage, st.analysis, PlotSeries::Style::Line);
+  for (const auto& st : scores.stages) add(stage_label(st), st.analysis, PlotSeries::Style::Line);
   if (scores.intrinsic) add("intrinsic floor (measured - systematic)", *scores.intrinsic, PlotSeries::Style::Dashed);
-  return {{p}, 900, 520, 1, ""};
+  for (auto& g : allan_guides(scores.stages.front().analysis, kDphPerRadPerSec, "°/h")) p.series.push_back(g);
+  return {{p}, 1000, 520, 1, ""};
 }
 
 // Block means (60 s) of the residual of a stage against temperature, heating and cooling apart.
 Figure residual_figure(const TimeSeries& record, const std::vector<std::string>& stages,
-                       const std::map<std::string, Eigen::VectorXd>& outputs) {
+                       const std::map<std::string, Eigen::VectorXd>& outputs,
+                       const std::map<std::string, std::string>& labels) {
   const Eigen::VectorXd& time = record.time();
   const Eigen::VectorXd& temp = record.channel(role::kTemperature).values;
   const Eigen::VectorXd& truth = record.channel(role::kTrueRate).values;
@@ -110,10 +124,11 @@ Figure residual_figure(const TimeSeries& record, const std::vector<std::string>&
   f.columns = static_cast<int>(std::min<std::size_t>(stages.size(), 2));
   f.width = 1100;
   f.panel_height = 320;
+  f.shared_y = true;
   f.title = "Residual (output - true rate), 60-s block means, against the case temperature";
   for (const auto& stage : stages) {
     PlotPanel p;
-    p.title = stage;
+    p.title = labels.at(stage);
     p.x_label = "temperature (°C)";
     p.y_label = "residual (°/h)";
     PlotSeries heat, cool;
@@ -151,7 +166,8 @@ const char* const kRunTable2Note =
     "original record's white level). Residual drift: rms of 60-s block means of output - true rate. Max error / "
     "floor: largest ratio over tau of the Allan deviation of (output - true rate) to that of the intrinsic "
     "noise (measured - true systematic rate); 'within 1.5x' when every tau is, allowing for both intervals. "
-    "px4_polynomial: third-order polynomial in temperature fitted on the first heating leg, clipped to it.";
+    "PX4-style polynomial (px4_polynomial): third-order polynomial in temperature fitted on the heating bins (on "
+    "every bin when there are too few), the temperature clamped to their range.";
 
 const char* const kCompareTable2Note =
     "B: flat floor of the overlapping Allan deviation / 0.664 beyond the output's correlation time, "
@@ -180,9 +196,10 @@ std::vector<HtmlCell> run_cells(const Table2Row& r, bool reference) {
              {b_value_cell(a.bias_instability, BStyle::Bound), b_text(b_deg_h(a.bias_instability), BStyle::Interval),
               a.bias_instability.tau_s, a.arw_rad_sqrt_s * kDphPerRadPerSec, r.bandwidth_hz});
   row.push_back(r.residual_drift_rad_s ? HtmlCell(*r.residual_drift_rad_s * kDphPerRadPerSec) : kNone);
-  row.push_back(r.against_floor ? HtmlCell(fmt(r.against_floor->max_ratio, "%.2f") +
-                                           (r.against_floor->within ? " (within 1.5x)" : " (above)"))
-                                : kNone);
+  row.push_back(r.against_floor
+                    ? HtmlCell(fmt(r.against_floor->max_ratio, "%.2f") +
+                               (r.against_floor->within ? " (within 1.5x given the intervals)" : " (above)"))
+                    : kNone);
   return row;
 }
 
@@ -201,7 +218,7 @@ std::vector<HtmlCell> compare_cells(const Table2Row& r) {
 // ---- the sections of report.html, in order ----
 
 void add_table2(HtmlReport& html, const TimeSeries& record, const RunScores& scores) {
-  html.section("Table 2: Allan figures per stage");
+  html.section("Allan figures per stage (the paper's Table 2)");
   std::vector<Table2Row> rows;
   for (const auto& st : scores.stages) {
     rows.push_back(table2_row(scores, st));
@@ -215,9 +232,12 @@ void add_table2(HtmlReport& html, const TimeSeries& record, const RunScores& sco
     rows.push_back(floor);
   }
   html.table(table2_html(Table2Layout::Run, rows, scores.reference));
-  html.figure(allan_figure(scores),
-              "Allan deviation of the original record, every stage, the PX4-style baseline and "
-              "the intrinsic floor, with 68.3 % intervals (bands)");
+  html.figure(
+      allan_figure(scores),
+      "Allan deviation of the original record, every stage, the PX4-style baseline and the intrinsic floor, "
+      "with 68.3 % intervals (bands). Grey dashed: the slopes the original record's figures are read from "
+      "(-1/2: N; 0: the floor 0.664 B; +1/2: K where the term fit resolves it); black dots: where N (tau = 1 s) "
+      "and B (the curve's minimum) are read. A stage lower at long tau has less drift left.");
 }
 
 void add_decomposition(HtmlReport& html, const PipelineStep& step, const TimeSeries& record,
@@ -225,21 +245,31 @@ void add_decomposition(HtmlReport& html, const PipelineStep& step, const TimeSer
   const auto imfs = step_signals.find(step.name + ".imfs");
   const auto residue = step_signals.find(step.name + ".residue");
   if (imfs == step_signals.end()) return;
-  html.section("Decomposition: " + step.name + " (" + step.plugin + ")");
-  html.figure(
-      imf_figure(step.name, imfs->second, residue == step_signals.end() ? nullptr : &residue->second, record.time()),
-      imfs->second.unit == "rad/s" ? "IMFs of the rate (paper Fig. 11)" : "IMFs of the temperature (paper Fig. 13)");
+  const auto q = quantity_of(imfs->second);
+  html.section("Decomposition of the " + q.name + ": step " + step.name + " (" + step.plugin + ")");
+  html.figure(imf_figure(imfs->second, residue == step_signals.end() ? nullptr : &residue->second, record.time()),
+              "IMFs of the " + q.name + ", fastest first, and the residue" +
+                  (q.name == "rate" ? " (paper Fig. 11): the first carry the noise, the last the thermal drift"
+                                    : ": the first carry the sensor's noise, the last the oven cycle"));
 }
 
-void add_grouping(HtmlReport& html, const PipelineStep& step, const std::vector<StepRecord>& steps) {
+void add_grouping(HtmlReport& html, const PipelineStep& step, const std::vector<StepRecord>& steps,
+                  const std::map<std::string, Signal>& step_signals) {
   std::vector<ImfDecision> decisions;
   for (const auto& s : steps)
     if (s.name == step.name) decisions = imf_decisions(s.diagnostics);
   if (decisions.empty()) return;
-  html.section("Grouping: " + step.name + " (" + step.plugin + ")");
-  html.figure(entropy_figure(step.name, decisions), "Sample entropy per IMF and the groups (paper Fig. 12)");
+  const auto imfs = step.inputs.find("imfs");
+  const auto signal = imfs == step.inputs.end() || imfs->second.size() != 1 ? step_signals.end()
+                                                                            : step_signals.find(imfs->second.front());
+  const auto q = signal == step_signals.end() ? Quantity{"signal", "", 1.0} : quantity_of(signal->second);
+  html.section("Grouping of the " + q.name + "'s IMFs: step " + step.name + " (" + step.plugin + ")");
+  html.figure(entropy_figure(q.name, decisions),
+              "Sample entropy of each IMF of the " + q.name + " and the group it falls in" +
+                  (q.name == "rate" ? " (paper Fig. 12)" : "") +
+                  ": high entropy is noise, low entropy is drift, the middle is mixed");
   HtmlTable g;
-  g.caption = step.name + ": the group of each IMF and why";
+  g.caption = "The group of each IMF of the " + q.name + " and why";
   g.header = {"IMF", "sample entropy", "group", "reason"};
   for (const auto& d : decisions) g.rows.push_back({static_cast<double>(d.imf), d.score, to_string(d.group), d.reason});
   html.table(g);
@@ -248,22 +278,34 @@ void add_grouping(HtmlReport& html, const PipelineStep& step, const std::vector<
 // Temperature trend: degC step outputs over the temperature.
 void add_temperature_trend(HtmlReport& html, const TimeSeries& record,
                            const std::map<std::string, Signal>& step_signals) {
-  PlotPanel p;
+  const Eigen::VectorXd& temp = record.channel(role::kTemperature).values;
+  PlotPanel p, removed;
   p.title = "Temperature and its trend (paper Fig. 13)";
-  p.x_label = "time (h)";
+  p.x_label = removed.x_label = "time (h)";
   p.y_label = "temperature (°C)";
-  p.series.push_back(
-      line("case temperature", record.time(), record.channel(role::kTemperature).values, kHoursPerSecond, 1.0));
+  removed.title = "What each trend leaves out: case temperature - trend";
+  removed.y_label = "temperature difference (K)";
+  p.series.push_back(line("case temperature", record.time(), temp, kHoursPerSecond, 1.0));
+  p.series.back().color = "#aaaaaa";
   for (const auto& [name, s] : step_signals)
-    if (s.unit == "degC" && s.columns.cols() == 1 && name.size() > 7 && name.substr(name.size() - 7) == ".signal")
-      p.series.push_back(line(name, record.time(), s.columns.col(0), kHoursPerSecond, 1.0));
+    if (s.unit == "degC" && s.columns.cols() == 1 && name.ends_with(".signal")) {
+      p.series.push_back(line(readable_name(name), record.time(), s.columns.col(0), kHoursPerSecond, 1.0));
+      p.series.back().style = PlotSeries::Style::Dashed;
+      p.series.back().color = palette_color(removed.series.size());
+      removed.series.push_back(line(readable_name(name), record.time(), temp - s.columns.col(0), kHoursPerSecond, 1.0));
+    }
   html.section("Temperature trend");
-  html.figure({{p}, 900, 320, 1, ""}, "The case temperature and the trend the drift is compensated with");
+  Figure f{{p}, 900, 320, 1, ""};
+  if (!removed.series.empty()) f.panels.push_back(removed), f.shared_x = true;
+  html.figure(f,
+              "The case temperature (grey) and the trend the drift is compensated with (dashed); they nearly "
+              "coincide, so the lower panel shows their difference: the sensor noise the trend removes");
 }
 
 // The rate of every stage (the record, the pipeline's, the baseline), by name in Table 2's order.
 struct StageOutputs {
   std::map<std::string, Eigen::VectorXd> rates;
+  std::map<std::string, std::string> labels;  // stage_label of each
   std::vector<std::string> names;
   std::optional<std::string> final_stage, baseline_stage;
 };
@@ -280,6 +322,7 @@ StageOutputs stage_outputs(const RunScores& scores, const std::map<std::string, 
       s.rates[st.stage] = outputs.at(st.stage).columns.col(0);
     }
     s.names.push_back(st.stage);
+    s.labels[st.stage] = stage_label(st);
   }
   return s;
 }
@@ -289,38 +332,58 @@ void add_reconstruction(HtmlReport& html, const TimeSeries& record, const Pipeli
   // Minute means: the noise of a 10-Hz record hides the drift the stages remove.
   const Eigen::VectorXd& time = record.time();
   const Eigen::VectorXd minutes = evaluation::block_means(time, time).means;
-  PlotPanel p;
-  p.title = "Reconstructed rate per stage, 60-s means (paper Fig. 14)";
-  p.x_label = "time (h)";
-  p.y_label = "rate (°/h)";
+  const auto minute_means = [&](const std::string& label, const Eigen::VectorXd& rate) {
+    return line(label, minutes, evaluation::block_means(time, rate).means, kHoursPerSecond, kDphPerRadPerSec);
+  };
+  PlotPanel before_after, p;
+  before_after.title = "Before and after: the record and the final stage, 60-s means";
+  before_after.x_label = p.x_label = "time (h)";
+  before_after.y_label = p.y_label = "rate (°/h)";
+  before_after.series.push_back(minute_means("original record", record.channel(role::kRate).values));
+  if (stages.final_stage)
+    before_after.series.push_back(
+        minute_means(stages.labels.at(*stages.final_stage), stages.rates.at(*stages.final_stage)));
+  p.title = "After, every stage on its own scale, 60-s means (paper Fig. 14)";
+  // The final stage first and solid, the others dashed over it: a stage the next one barely changes
+  // stays visible.
   for (const auto& name : stages.names) {
-    p.series.push_back(line(name, minutes, evaluation::block_means(time, stages.rates.at(name)).means, kHoursPerSecond,
-                            kDphPerRadPerSec));
+    auto s = minute_means(stages.labels.at(name), stages.rates.at(name));
+    s.color = palette_color(1 + static_cast<std::size_t>(&name - stages.names.data()));
+    if (name != stages.final_stage) s.style = PlotSeries::Style::Dashed;
+    p.series.insert(name == stages.final_stage ? p.series.begin() : p.series.end(), std::move(s));
   }
   // Every filter step on a rate: its input and its output over the first 10 minutes.
   PlotPanel filtered;
-  filtered.title = "Filter steps on a rate, input and output, first 10 minutes";
+  filtered.title = "Filter steps on a rate, before and after, first 10 minutes";
   filtered.x_label = "time (s)";
   filtered.y_label = "rate (°/h)";
   const auto first = std::min<Eigen::Index>(record.size(), static_cast<Eigen::Index>(600.0 * record.sample_rate_hz()));
-  const auto add_rate = [&](const std::string& name) {
+  const auto add_rate = [&](const std::string& name, const std::string& label) {
     const auto it = step_signals.find(name);
     if (it != step_signals.end() && it->second.unit == "rad/s" && it->second.columns.cols() == 1)
       filtered.series.push_back(
-          line(name, record.time().head(first), it->second.columns.col(0).head(first), 1.0, kDphPerRadPerSec));
+          line(label, record.time().head(first), it->second.columns.col(0).head(first), 1.0, kDphPerRadPerSec));
   };
   for (const auto& step : pipeline.steps) {
     if (step.plugin.rfind("filter/", 0) != 0) continue;
     const auto in = step.inputs.find("signal");
     if (in == step.inputs.end() || in->second.size() != 1) continue;
     const auto before = filtered.series.size();
-    add_rate(in->second.front());
-    if (filtered.series.size() > before) add_rate(step.name + ".signal");
+    const std::string filter = readable_name(step.plugin.substr(step.plugin.find('/') + 1)) + " filter";
+    add_rate(in->second.front(), "before the " + filter);
+    if (filtered.series.size() > before) add_rate(step.name + ".signal", "after the " + filter);
   }
-  Figure f{{p}, 900, 320, 1, ""};
+  Figure f{{before_after, p}, 900, 300, 1, ""};  // not shared_x: the filter panel is in seconds
   if (!filtered.series.empty()) f.panels.push_back(filtered);
   html.section("Reconstruction");
-  html.figure(f, "The reconstructed rate of every stage (60-s means) and what each filter step on a rate does");
+  html.figure(f,
+              "Top: the record's rate and the final stage's, 60-s means, on one scale: the thermal drift removed. "
+              "Middle: every stage's output alone (the final stage solid, the others dashed), where what each "
+              "stage adds is visible." +
+                  std::string(filtered.series.empty()
+                                  ? ""
+                                  : " Bottom: each filter step on a rate, its input and output over the first 10 "
+                                    "minutes (every sample)."));
 }
 
 void add_residual(HtmlReport& html, const TimeSeries& record, const StageOutputs& stages) {
@@ -328,12 +391,35 @@ void add_residual(HtmlReport& html, const TimeSeries& record, const StageOutputs
   if (stages.final_stage) shown.push_back(*stages.final_stage);
   if (stages.baseline_stage) shown.push_back(*stages.baseline_stage);
   html.section("Residual against temperature");
-  html.figure(residual_figure(record, shown, stages.rates),
+  html.figure(residual_figure(record, shown, stages.rates, stages.labels),
               "Residual of the final stage and of the PX4-style baseline against temperature, heating (red) and "
-              "cooling (blue) apart: what a temperature model left");
+              "cooling (blue) apart, on one y scale: what a temperature model left. Red and blue apart at one "
+              "temperature: a heating/cooling difference (thermal lag or hysteresis) the model does not follow.");
 }
 
 }  // namespace
+
+std::string stage_label(const StageScore& st) {
+  if (st.label != st.stage) return st.label;
+  if (st.stage == evaluation::kOriginalStage) return "original record";
+  if (st.stage == evaluation::kBaselineStage) return "PX4-style polynomial";
+  return readable_name(st.stage);
+}
+
+std::string group_label(ImfGroup group, const std::vector<ImfDecision>& decisions) {
+  std::vector<int> imfs;
+  for (const auto& d : decisions)
+    if (d.group == group) imfs.push_back(static_cast<int>(d.imf));
+  std::string text = to_string(group) + " group";
+  if (imfs.empty()) return text;
+  std::sort(imfs.begin(), imfs.end());
+  const bool run = imfs.back() - imfs.front() + 1 == static_cast<int>(imfs.size());
+  text += imfs.size() == 1 ? " (IMF " + std::to_string(imfs.front()) : " (IMFs ";
+  if (imfs.size() > 1 && run) text += std::to_string(imfs.front()) + "–" + std::to_string(imfs.back());
+  if (imfs.size() > 1 && !run)
+    for (std::size_t i = 0; i < imfs.size(); ++i) text += (i ? ", " : "") + std::to_string(imfs[i]);
+  return text + ")";
+}
 
 Table2Row table2_row(const RunScores& scores, const StageScore& st) {
   Table2Row r;
@@ -351,7 +437,7 @@ HtmlTable table2_html(Table2Layout layout, const std::vector<Table2Row>& rows,
                       const std::optional<PipelineReference>& reference) {
   HtmlTable t;
   if (layout == Table2Layout::Compare) {
-    t.caption = "Table 2 columns per pipeline and stage";
+    t.caption = "B, N, bandwidth, residual drift and run time per pipeline and stage (the paper's Table 2 columns)";
     t.header = {
         "pipeline",    "stage", "B (°/h)", "B interval (°/h)", "N (°/h/√Hz)", "bandwidth (Hz)", "residual drift (°/h)",
         "run time (s)"};
@@ -391,7 +477,7 @@ std::string run_html(const std::string& title, const std::string& data, const Ti
     if (kind == "decomposition")
       add_decomposition(html, step, record, step_signals);
     else if (kind == "classifier")
-      add_grouping(html, step, steps);
+      add_grouping(html, step, steps, step_signals);
   }
   if (record.has(role::kTemperature)) add_temperature_trend(html, record, step_signals);
 

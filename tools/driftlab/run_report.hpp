@@ -28,6 +28,13 @@ using evaluation::stage_json;
 using evaluation::StageScore;
 using evaluation::table2_text;
 
+// A stage as figures and tables name it: the pipeline's label ("RBF NN + GA + KF"), "original
+// record", "PX4-style polynomial", else its name in words (readable_name).
+std::string stage_label(const StageScore& stage);
+
+// An IMF group as figures and tables name it, with its IMFs: "mixed group (IMFs 3–4)".
+std::string group_label(ImfGroup group, const std::vector<ImfDecision>& decisions);
+
 // One row of a Table 2 HTML table: a scored stage (or the intrinsic floor) and what the report
 // adds beside it.
 struct Table2Row {
