@@ -37,7 +37,9 @@ void run(const RunOptions& o, CommandEnv& env) {
   const auto pipeline = load_pipeline(o.pipeline, registry, pipeline_overrides(o.sets));
   if (o.validate_only) {
     std::cout << o.pipeline << ": valid (" << pipeline.steps.size() << " steps"
-              << (pipeline.overrides.empty() ? "" : ", " + std::to_string(pipeline.overrides.size()) + " overrides")
+              << (pipeline.overrides.empty() ? ""
+                                             : ", " + std::to_string(pipeline.overrides.size()) +
+                                                   (pipeline.overrides.size() == 1 ? " override" : " overrides"))
               << ")\n";
     return;
   }
