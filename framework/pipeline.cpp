@@ -426,14 +426,246 @@ Signal side_by_side(const std::vector<const Signal*>& parts) {
 
 }  // namespace
 
-Pipeline parse_pipeline(const std::string& yaml_text, const std::string& file_label, const Registry& registry) {
-  std::vector<Diagnostic> duplicates;  // reported together with every other problem
-  const YAML::Node root = load_yaml_checked(yaml_text, file_label, &duplicates);
-  return Parser(registry, file_label, std::move(duplicates)).parse(root);
+PipelineOverride parse_pipeline_override(const std::string& text, const std::string& option) {
+  static const std::regex name_re("[A-Za-z_][A-Za-z0-9_]*");
+  const auto fail = [&](const std::string& why) -> PipelineOverride {
+    throw ConfigError({"", 0, option + " " + quoted_excerpt(text)},
+                      why + " (expected STEP.PARAM=VALUE, STEP.PARAM.NESTED_PARAM=VALUE or STEP.plugin=KIND/NAME)");
+  };
+  const auto eq = text.find('=');
+  if (eq == std::string::npos) return fail("no '='");
+  PipelineOverride o;
+  o.text = text;
+  o.value = text.substr(eq + 1);
+  if (o.value.empty()) return fail("no value after '='");
+  std::vector<std::string> names;
+  for (std::size_t start = 0;;) {
+    const auto dot = text.find('.', start);
+    const auto end = dot == std::string::npos || dot > eq ? eq : dot;
+    names.push_back(text.substr(start, end - start));
+    if (!std::regex_match(names.back(), name_re))
+      return fail("'" + names.back() + "' is not a step or parameter name (letters, digits, _)");
+    if (end == eq) break;
+    start = end + 1;
+  }
+  if (names.size() < 2) return fail("no parameter after the step name");
+  o.step = names.front();
+  o.key.assign(names.begin() + 1, names.end());
+  if (o.key.front() == "plugin" && o.key.size() > 1) return fail("'plugin' has no sub-keys");
+  return o;
 }
 
-Pipeline load_pipeline(const std::filesystem::path& path, const Registry& registry) {
-  return parse_pipeline(read_config_text(path, "pipeline file"), input_name(path), registry);
+namespace {
+
+// The key path a pipeline problem names for what an override changes: "STEP.plugin", or
+// "STEP.params.PARAM[.params.NESTED...]".
+std::string override_field(const PipelineOverride& o) {
+  if (o.key.front() == "plugin") return o.step + ".plugin";
+  std::string field = o.step + ".params";
+  for (std::size_t i = 0; i < o.key.size(); ++i) field += (i ? ".params." : ".") + o.key[i];
+  return field;
+}
+
+// The YAML of the overrides applied to `root` (the parsed pipeline file), and their records.
+class OverrideApplier {
+ public:
+  OverrideApplier(const Registry& registry, const std::string& file, std::vector<Diagnostic>& problems)
+      : registry_(registry), file_(file), problems_(problems) {}
+
+  // Applies swaps first, then parameter settings, each in the order given. Returns the records
+  // (the text, with the parameters a swap dropped).
+  std::vector<std::string> apply(YAML::Node root, const std::vector<PipelineOverride>& overrides) {
+    std::vector<std::string> records;
+    for (const bool swaps : {true, false})
+      for (const auto& o : overrides)
+        if ((o.key.front() == "plugin") == swaps) {
+          if (auto record = apply_one(root.IsMap() ? root["steps"] : YAML::Node(), o)) records.push_back(*record);
+        }
+    return records;
+  }
+
+ private:
+  void problem(const PipelineOverride& o, const std::string& field, const std::string& message) {
+    problems_.push_back({{"--set " + o.text, 0, field}, message});
+  }
+
+  std::optional<std::string> apply_one(YAML::Node steps, const PipelineOverride& o) {
+    std::vector<std::string> names;
+    if (steps && steps.IsSequence()) {
+      for (std::size_t i = 0; i < steps.size(); ++i) {
+        YAML::Node step = steps[i];
+        const auto name = step.IsMap() ? scalar_text(step["name"]) : std::nullopt;
+        if (!name) continue;
+        if (*name == o.step) return apply_to_step(step, o);
+        names.push_back(*name);
+      }
+    }
+    std::string list;
+    for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+    problem(o, o.step, "no step '" + o.step + "' in " + file_ + " (its steps: " + (list.empty() ? "none" : list) + ")");
+    return std::nullopt;
+  }
+
+  std::optional<YAML::Node> value_of(const PipelineOverride& o) {
+    std::vector<Diagnostic> duplicates;
+    try {
+      YAML::Node value = load_yaml_checked(o.value, "--set " + o.text, &duplicates);
+      if (duplicates.empty()) return value;
+      problems_.insert(problems_.end(), duplicates.begin(), duplicates.end());
+    } catch (const ConfigError& e) {
+      problems_.insert(problems_.end(), e.problems().begin(), e.problems().end());
+    }
+    return std::nullopt;
+  }
+
+  std::optional<std::string> apply_to_step(YAML::Node step, const PipelineOverride& o) {
+    if (step["sum"]) {
+      problem(o, o.step, "step '" + o.step + "' is a sum step: it has no plugin or parameters to set");
+      return std::nullopt;
+    }
+    const auto value = value_of(o);
+    if (!value) return std::nullopt;
+    const std::string plugin = scalar_text(step["plugin"]).value_or("");
+    if (o.key.front() == "plugin") return swap(step, o, plugin, *value);
+    if (!step["params"] || !step["params"].IsMap()) step["params"] = YAML::Node(YAML::NodeType::Map);
+    if (!set_param(step["params"], plugin, o, 0, *value, o.step + ".params")) return std::nullopt;
+    return o.text;
+  }
+
+  std::optional<std::string> swap(YAML::Node step, const PipelineOverride& o, const std::string& old,
+                                  const YAML::Node& value) {
+    const std::string kind = registry_.contains(old) ? registry_.info(old).kind() : "";
+    const auto name = scalar_text(value);
+    std::string known;
+    for (const auto* info : registry_.list(kind)) known += (known.empty() ? "" : ", ") + info->name;
+    if (!name || !registry_.contains(*name)) {
+      problem(o, o.step + ".plugin",
+              "expected a " + (kind.empty() ? std::string("plugin") : kind + " plugin") + " name (known: " + known +
+                  "), got " + yaml_shape(value));
+      return std::nullopt;
+    }
+    if (!kind.empty() && registry_.info(*name).kind() != kind) {
+      problem(o, o.step + ".plugin",
+              "expected a " + kind + " plugin (the step's " + old + " is one; known: " + known + "), got " + *name +
+                  ", a " + registry_.info(*name).kind() + " plugin");
+      return std::nullopt;
+    }
+    step["plugin"] = *name;
+    std::string dropped;
+    if (YAML::Node params = step["params"]; params && params.IsMap()) {
+      const auto& table = registry_.info(*name).params;
+      std::vector<std::string> keys;
+      for (const auto& kv : params)
+        if (const auto key = scalar_text(kv.first); key && !table.find(*key)) keys.push_back(*key);
+      for (const auto& key : keys) {
+        params.remove(key);
+        dropped += (dropped.empty() ? "" : ", ") + key;
+      }
+    }
+    return dropped.empty() ? o.text : o.text + " (dropped " + old + "'s " + dropped + ")";
+  }
+
+  // Sets o.key[depth...] in `params` (the parameter map of `plugin`); false after a problem.
+  bool set_param(YAML::Node params, const std::string& plugin, const PipelineOverride& o, std::size_t depth,
+                 const YAML::Node& value, const std::string& field) {
+    const std::string& key = o.key[depth];
+    if (depth + 1 == o.key.size()) {
+      params[key] = value;  // type and range checked by the parser, as a value in the file is
+      return true;
+    }
+    const ParamSpec* spec = registry_.contains(plugin) ? registry_.info(plugin).params.find(key) : nullptr;
+    if (!spec || spec->type != ParamType::Plugin) {
+      problem(o, field + "." + key,
+              spec ? "parameter '" + key + "' of " + plugin + " is not a nested plugin: it has no parameters"
+                   : "unknown parameter of " + plugin + " (valid: " + joined_keys(plugin) + ")");
+      return false;
+    }
+    const YAML::Node current = params[key];
+    std::string nested = std::get<std::shared_ptr<const PluginSpec>>(spec->default_value)->name;
+    if (const auto text = scalar_text(current))
+      nested = *text;
+    else if (current && current.IsMap() && scalar_text(current["plugin"]))
+      nested = *scalar_text(current["plugin"]);
+    if (!current || !current.IsMap()) {
+      YAML::Node expanded(YAML::NodeType::Map);
+      expanded["plugin"] = nested;
+      params[key] = expanded;
+    }
+    YAML::Node node = params[key];
+    if (!node["params"] || !node["params"].IsMap()) node["params"] = YAML::Node(YAML::NodeType::Map);
+    return set_param(node["params"], nested, o, depth + 1, value, field + "." + key + ".params");
+  }
+
+  std::string joined_keys(const std::string& plugin) const {
+    std::string list;
+    for (const auto& k : registry_.info(plugin).params.keys()) list += (list.empty() ? "" : ", ") + k;
+    return list;
+  }
+
+  const Registry& registry_;
+  const std::string& file_;
+  std::vector<Diagnostic>& problems_;
+};
+
+// The steps `reference` ("step.port" or an input name) reads, directly or through other steps.
+void upstream_steps(const Pipeline& p, const std::string& reference, std::set<std::string>& found) {
+  const auto dot = reference.find('.');
+  if (dot == std::string::npos) return;
+  const std::string name = reference.substr(0, dot);
+  if (!found.insert(name).second) return;
+  for (const auto& step : p.steps)
+    if (step.name == name)
+      for (const auto& [port, refs] : step.inputs)
+        for (const auto& ref : refs) upstream_steps(p, ref, found);
+}
+
+// Appends to each declared stage's label the overrides of the steps its output depends on.
+void label_stages_with_overrides(Pipeline& p, const std::vector<PipelineOverride>& overrides) {
+  for (auto& stage : p.stages) {
+    std::set<std::string> upstream;
+    upstream_steps(p, p.outputs.at(stage.output), upstream);
+    std::string applied;
+    for (const auto& o : overrides)
+      if (upstream.count(o.step)) applied += (applied.empty() ? "" : ", ") + o.text;
+    if (!applied.empty()) stage.label += " [" + applied + "]";
+  }
+}
+
+}  // namespace
+
+Pipeline parse_pipeline(const std::string& yaml_text, const std::string& file_label, const Registry& registry,
+                        const std::vector<PipelineOverride>& overrides) {
+  std::vector<Diagnostic> problems;  // repeated keys and override problems, reported with every other
+  YAML::Node root = load_yaml_checked(yaml_text, file_label, &problems);
+  std::vector<std::string> records;
+  if (!overrides.empty()) {
+    records = OverrideApplier(registry, file_label, problems).apply(root, overrides);
+    if (!problems.empty() && records.size() < overrides.size()) throw ConfigError(problems);
+  }
+  try {
+    Pipeline p = Parser(registry, file_label, std::move(problems)).parse(root);
+    p.overrides = std::move(records);
+    label_stages_with_overrides(p, overrides);
+    return p;
+  } catch (const ConfigError& e) {
+    if (overrides.empty()) throw;
+    // A problem with what an override set is that override's: named by it, not by the file.
+    std::vector<Diagnostic> mapped = e.problems();
+    for (auto& d : mapped) {
+      if (d.where.file != file_label) continue;
+      for (const auto& o : overrides) {
+        const std::string field = override_field(o);
+        if (d.where.field == field || d.where.field.rfind(field + ".", 0) == 0)
+          d.where = {"--set " + o.text, 0, d.where.field};
+      }
+    }
+    throw ConfigError(std::move(mapped));
+  }
+}
+
+Pipeline load_pipeline(const std::filesystem::path& path, const Registry& registry,
+                       const std::vector<PipelineOverride>& overrides) {
+  return parse_pipeline(read_config_text(path, "pipeline file"), input_name(path), registry, overrides);
 }
 
 std::string effective_pipeline_yaml(const Pipeline& pipeline, const Registry& registry) {

@@ -82,11 +82,38 @@ struct Pipeline {
   std::vector<std::string> output_order;       // output names in file order
   std::vector<PipelineStage> stages;           // declared stages in file order; empty: not declared
   std::optional<PipelineReference> reference;  // published figures, when the pipeline reproduces some
+  std::vector<std::string> overrides;          // the overrides applied (PipelineOverride::text), in order
 };
 
-// Parses and validates. Throws ConfigError with every problem found.
-Pipeline load_pipeline(const std::filesystem::path& path, const Registry& registry);
-Pipeline parse_pipeline(const std::string& yaml_text, const std::string& file_label, const Registry& registry);
+// One change to a step made outside the file (`driftlab run/compare --set STEP.KEY=VALUE`):
+//   STEP.plugin=KIND/NAME     swaps the step's plugin for another of the same kind; the step's
+//                             parameters that the new plugin does not declare are dropped;
+//   STEP.PARAM=VALUE          sets a parameter of the step's plugin;
+//   STEP.PARAM.SUB...=VALUE   sets a parameter of a nested plugin (`mixed_rbf_ga.optimizer.population=40`);
+//                             `STEP.PARAM=KIND/NAME` or `STEP.PARAM={plugin: ..., params: {...}}`
+//                             replaces the nested plugin (its old parameters go with it).
+// VALUE is read as YAML (a number, text, a list [a, b] or a map). Swaps are applied before the
+// parameter settings, each in the order given; the result is validated by the parameter tables
+// exactly as the file is.
+struct PipelineOverride {
+  std::string step;
+  std::vector<std::string> key;  // "plugin", or a parameter name followed by nested parameter names
+  std::string value;             // YAML text
+  std::string text;              // as given ("decompose.plugin=decomposition/ceemdan"), for messages
+};
+// Parses "STEP.KEY=VALUE". Throws ConfigError at field `option` saying what was expected.
+PipelineOverride parse_pipeline_override(const std::string& text, const std::string& option = "--set");
+
+// Parses and validates, after applying `overrides`. Throws ConfigError with every problem found;
+// a problem caused by an override is reported at that override ("--set STEP.KEY=VALUE" as the
+// file, the step's key path as the field), an unknown step with the steps the pipeline has, and
+// a plugin swap across kinds with the kind expected. With overrides, every declared stage whose
+// output depends on an overridden step has the overrides of those steps appended to its label
+// ("RBF NN + GA [mixed_rbf_ga.optimizer.population=40]"), so reports name what ran.
+Pipeline load_pipeline(const std::filesystem::path& path, const Registry& registry,
+                       const std::vector<PipelineOverride>& overrides = {});
+Pipeline parse_pipeline(const std::string& yaml_text, const std::string& file_label, const Registry& registry,
+                        const std::vector<PipelineOverride>& overrides = {});
 
 // The effective pipeline: every parameter and seed written out. Loading it gives the same run.
 std::string effective_pipeline_yaml(const Pipeline& pipeline, const Registry& registry);

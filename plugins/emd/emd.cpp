@@ -60,7 +60,8 @@ double population_std(const double* x, Index n) {
 struct EmdWorkspace {
   explicit EmdWorkspace(const SiftConfig& sift) : sifter(sift) {}
 
-  void decompose(const double* x, Index n, int cap) {
+  // `progress`, when set, is called with the fraction of `cap` IMFs extracted after each IMF.
+  void decompose(const double* x, Index n, int cap, const Progress& progress = {}) {
     residue = Eigen::Map<const Eigen::VectorXd>(x, n);
     if (imfs.rows() != n || imfs.cols() < cap) imfs.resize(n, cap);
     sifts.assign(static_cast<std::size_t>(cap), 0);
@@ -71,6 +72,7 @@ struct EmdWorkspace {
       sifts[count] = sifter.sift(imf, n);
       residue -= imfs.col(count);
       ++count;
+      if (progress && count < cap) progress(static_cast<double>(count) / cap);
     }
   }
 
@@ -97,15 +99,18 @@ void fill_gaussian(std::uint64_t seed, int member, double* out, Index n) {
 // Runs work(member, slot) for every member and reduce(member, slot) in member order 0, 1, ...,
 // members - 1. Members go in batches of `threads` (at most `members`) through parallel_for, member
 // first + k of a batch in slot k < threads, and a batch is reduced before the next one starts, so
-// a slot's buffers serve one member at a time.
+// a slot's buffers serve one member at a time. `reduced(done)`, when given, is called after each
+// batch with the number of members reduced so far.
 template <class Work, class Reduce>
-void for_members_in_order(int members, unsigned threads, Work work, Reduce reduce) {
+void for_members_in_order(int members, unsigned threads, Work work, Reduce reduce,
+                          const std::function<void(int done)>& reduced = {}) {
   const int batch = static_cast<int>(std::min<unsigned>(std::max(threads, 1u), static_cast<unsigned>(members)));
   for (int first = 0; first < members; first += batch) {
     const int size = std::min(batch, members - first);
     parallel_for(static_cast<std::size_t>(size), threads,
                  [&](std::size_t k) { work(first + static_cast<int>(k), static_cast<unsigned>(k)); });
     for (int k = 0; k < size; ++k) reduce(first + k, static_cast<unsigned>(k));
+    if (reduced) reduced(first + size);
   }
 }
 
@@ -123,7 +128,7 @@ Result emd(const Eigen::VectorXd& x, const EmdConfig& config) {
   check_finite(x);
   const Index n = x.size();
   EmdWorkspace ws(config.sift);
-  ws.decompose(x.data(), n, imf_cap(config.max_imfs, n));
+  ws.decompose(x.data(), n, imf_cap(config.max_imfs, n), config.progress);
   Result result;
   result.imfs = std::move(ws.imfs);
   result.imfs.conservativeResize(n, ws.count);  // drops the unused columns in place
@@ -165,6 +170,10 @@ Result eemd(const Eigen::VectorXd& x, const EnsembleConfig& config) {
           sifts[k] += ws.sifts[k];
         }
         widest = std::max(widest, ws.count);
+      },
+      [&](int done) {
+        if (config.progress && done < config.ensemble_size)
+          config.progress(static_cast<double>(done) / config.ensemble_size);
       });
 
   const int count = config.max_imfs > 0 ? cap : widest;
@@ -248,6 +257,11 @@ Result ceemdan(const Eigen::VectorXd& x, const CeemdanConfig& config) {
         [&](int, unsigned w) {
           sum += workers[w].first;
           stage_sifts += workers[w].sifts;
+        },
+        [&](int done) {
+          if (!ens.progress) return;
+          const double fraction = (stage + static_cast<double>(done) / members) / cap;
+          if (fraction < 1.0) ens.progress(fraction);
         });
 
     sum /= static_cast<double>(members);

@@ -122,6 +122,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace driftlab::emd {
@@ -129,6 +130,13 @@ namespace driftlab::emd {
 enum class StopRule { SNumber, SNumberSteady, CauchySd, FixedSifts };
 enum class EndPolicy { Mirror, Linear };
 enum class CeemdanVariant { Torres2011, Colominas2014 };
+
+// Progress of a decomposition: called on the calling thread (never from a worker) with the
+// fraction of the work done, in [0, 1), non-decreasing; emd after each IMF, eemd after each batch
+// of members, ceemdan after each batch of members of each stage. The fraction counts the IMF cap
+// (max_imfs, or floor(log2 N)) as the number of IMFs, so it jumps when the decomposition stops
+// earlier. Empty: not called. It never changes the result.
+using Progress = std::function<void(double fraction)>;
 
 struct SiftConfig {
   StopRule stop_rule = StopRule::SNumber;
@@ -142,6 +150,7 @@ struct SiftConfig {
 struct EmdConfig {
   SiftConfig sift;
   int max_imfs = 0;  // 0: until the residue has too few extrema, at most floor(log2 N)
+  Progress progress;
 };
 
 struct EnsembleConfig {
@@ -151,6 +160,7 @@ struct EnsembleConfig {
   double noise_strength = 0.2;  // eps0, noise std relative to std(x)
   std::uint64_t seed = 1;
   unsigned threads = 1;  // results do not depend on it
+  Progress progress;
 };
 
 struct CeemdanConfig {

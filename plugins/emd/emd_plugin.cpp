@@ -59,7 +59,7 @@ class EmdDecomposer final : public Decomposer {
     }
     emd::Result result;
     try {
-      result = run_kernel(x, ctx.threads);
+      result = run_kernel(x, ctx);
     } catch (const std::domain_error& e) {
       throw DataError({"", 0, "signal"}, e.what());
     } catch (const std::invalid_argument& e) {
@@ -72,14 +72,15 @@ class EmdDecomposer final : public Decomposer {
   }
 
  private:
-  emd::Result run_kernel(const Eigen::VectorXd& x, unsigned threads) const {
-    if (method_ == Method::Emd) return emd::emd(x, {.sift = sift_, .max_imfs = max_imfs_});
+  emd::Result run_kernel(const Eigen::VectorXd& x, const RunContext& ctx) const {
+    if (method_ == Method::Emd) return emd::emd(x, {.sift = sift_, .max_imfs = max_imfs_, .progress = ctx.progress});
     const emd::EnsembleConfig ensemble{.sift = sift_,
                                        .max_imfs = max_imfs_,
                                        .ensemble_size = ensemble_size_,
                                        .noise_strength = noise_strength_,
                                        .seed = seed_,
-                                       .threads = std::max(1u, threads)};
+                                       .threads = std::max(1u, ctx.threads),
+                                       .progress = ctx.progress};
     if (method_ == Method::Eemd) return emd::eemd(x, ensemble);
     return emd::ceemdan(x, {.ensemble = ensemble, .variant = variant_});
   }

@@ -158,6 +158,11 @@ Result minimize(const Objective& objective, const std::vector<Bound>& bounds, co
   result.history.push_back(values[order[0]]);
   result.best = population[order[0]];
   result.best_value = values[order[0]];
+  const auto report = [&](std::size_t evaluated) {
+    if (config.progress && evaluated <= config.generations)
+      config.progress(static_cast<double>(evaluated) / static_cast<double>(config.generations + 1));
+  };
+  report(1);
 
   for (std::size_t gen = 0; gen < config.generations; ++gen) {
     std::vector<Eigen::VectorXd> next;
@@ -185,6 +190,7 @@ Result minimize(const Objective& objective, const std::vector<Bound>& bounds, co
       result.best = population[order[0]];
       result.best_value = values[order[0]];
     }
+    report(gen + 2);
   }
 
   return result;

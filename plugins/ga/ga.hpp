@@ -53,6 +53,10 @@ struct Config {
   std::size_t elites = 2;              // best individuals copied unchanged, < population
   std::uint64_t seed = 1;
   unsigned threads = 1;  // evaluation workers; results do not depend on it
+  // Called on the calling thread after generation g = 0 .. G_MAX - 1 is evaluated with
+  // (g + 1) / (G_MAX + 1), the fraction of the generations evaluated, in (0, 1) (not after the
+  // last: the caller says when its own work is done); empty: not called. It never changes the result.
+  std::function<void(double fraction)> progress;
 };
 
 // Objective to minimize; called concurrently from `threads` workers.

@@ -32,6 +32,7 @@ class GaPlugin final : public Optimizer {
     for (const auto& b : bounds) genes.push_back({b.lower, b.upper, b.integer});
     ga::Config config = config_;
     config.threads = ctx.threads;
+    config.progress = ctx.progress;
     ga::Result r;
     try {
       r = ga::minimize(f, genes, config);

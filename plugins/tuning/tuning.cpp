@@ -126,6 +126,7 @@ Search search(Optimizer& optimizer, const std::vector<Bound>& bounds, const Sett
   RunContext inner;
   inner.seed = ctx.seed;
   inner.threads = ctx.threads;
+  inner.progress = ctx.progress;  // the optimizer's progress is the step's
   const auto objective = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
     const Eigen::VectorXd c = criteria(v);
     return s.objectives == 1 ? Eigen::VectorXd(c.head(1)) : c;

@@ -630,6 +630,55 @@ TEST(Eemd, AlignsImfCountsToMaxImfsWhenGiven) {
   EXPECT_LT(reconstruction_error(x, r), kRoundingTolerance);
 }
 
+// Progress (emd::Progress): fractions in [0, 1), increasing, reported on the calling thread, and
+// the decomposition bit-identical with or without a listener.
+std::vector<double> checked_fractions(const std::vector<double>& fractions) {
+  for (std::size_t i = 0; i < fractions.size(); ++i) {
+    EXPECT_GE(fractions[i], 0.0);
+    EXPECT_LT(fractions[i], 1.0);
+    if (i > 0) EXPECT_GT(fractions[i], fractions[i - 1]);
+  }
+  return fractions;
+}
+
+TEST(EmdProgress, EmdReportsEachImfAndGivesTheSameBits) {
+  const Eigen::VectorXd x = busy_signal(1500, 21);
+  std::vector<double> fractions;
+  const auto r = emd::emd(x, {.progress = [&](double f) { fractions.push_back(f); }});
+  const auto plain = emd::emd(x, {});
+  EXPECT_EQ(r.imfs, plain.imfs);
+  EXPECT_EQ(r.residue, plain.residue);
+  const int cap = static_cast<int>(std::floor(std::log2(1500.0)));
+  // One report after each IMF but the last of the cap (the caller ends the task).
+  EXPECT_EQ(static_cast<long>(checked_fractions(fractions).size()), std::min<long>(r.imfs.cols(), cap - 1));
+  EXPECT_DOUBLE_EQ(fractions.front(), 1.0 / cap);
+}
+
+TEST(EmdProgress, EemdReportsEachBatchOfMembersAndGivesTheSameBits) {
+  const Eigen::VectorXd x = busy_signal(1500, 22);
+  auto c = small_ensemble(5, 2);  // 2 threads: batches of 2 members
+  const auto plain = emd::eemd(x, c);
+  std::vector<double> fractions;
+  c.progress = [&](double f) { fractions.push_back(f); };
+  const auto r = emd::eemd(x, c);
+  EXPECT_EQ(r.imfs, plain.imfs);
+  const int batches = (c.ensemble_size + 1) / 2;
+  EXPECT_EQ(static_cast<int>(checked_fractions(fractions).size()), batches - 1);
+}
+
+TEST(EmdProgress, CeemdanReportsEveryBatchOfMembersOfEveryStageAndGivesTheSameBits) {
+  const Eigen::VectorXd x = busy_signal(1500, 23);
+  auto c = small_ensemble(6, 1);  // 1 thread: one member per batch
+  const auto plain = emd::ceemdan(x, {.ensemble = c});
+  std::vector<double> fractions;
+  c.progress = [&](double f) { fractions.push_back(f); };
+  const auto r = emd::ceemdan(x, {.ensemble = c});
+  EXPECT_EQ(r.imfs, plain.imfs);
+  EXPECT_EQ(r.residue, plain.residue);
+  // Every member of every stage, but not the last report of a decomposition that fills its cap.
+  EXPECT_GE(checked_fractions(fractions).size(), static_cast<std::size_t>(c.ensemble_size * r.imfs.cols() - 1));
+}
+
 class CeemdanVariants : public ::testing::TestWithParam<emd::CeemdanVariant> {};
 
 TEST_P(CeemdanVariants, ReconstructsTheInputToRounding) {

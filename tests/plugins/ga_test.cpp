@@ -93,6 +93,20 @@ TEST(Ga, GivesTheSameHistoryAndResultForOneTwoAndThreeThreads) {
   }
 }
 
+TEST(Ga, ReportsProgressAfterEveryGenerationButTheLastAndGivesTheSameResult) {
+  const std::vector<ga::Bound> bounds(3, {-5.12, 5.12, false});
+  ga::Config c = config_with_seed(12);
+  c.generations = 9;
+  const auto plain = ga::minimize(shifted_rastrigin, bounds, c);
+  std::vector<double> fractions;
+  c.progress = [&](double f) { fractions.push_back(f); };
+  const auto r = ga::minimize(shifted_rastrigin, bounds, c);
+  EXPECT_EQ(r.history, plain.history);
+  EXPECT_EQ(r.best, plain.best);
+  ASSERT_EQ(fractions.size(), c.generations);  // generations 0 .. G_MAX - 1
+  for (std::size_t g = 0; g < fractions.size(); ++g) EXPECT_DOUBLE_EQ(fractions[g], (g + 1.0) / (c.generations + 1.0));
+}
+
 TEST(Ga, GivesADifferentHistoryForADifferentSeed) {
   const std::vector<ga::Bound> bounds(3, {-5.12, 5.12, false});
   ga::Config c = config_with_seed(11);

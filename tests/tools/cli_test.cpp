@@ -8,6 +8,7 @@ namespace driftlab {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 using namespace testing_cli;
 
 const std::string kData = DRIFTLAB_TEST_DATA;
@@ -63,6 +64,23 @@ TEST(Cli, ACsvWithANanOnLine1234ExitsThreeNamingFileLineAndColumn) {
                               " --out " + dir.string());
   EXPECT_EQ(r.exit_code, 3);
   EXPECT_THAT(r.err, HasSubstr(data + ":1234: rate_dps: value is 'nan' (NaN/Inf not allowed)"));
+}
+
+// Progress on stderr when it is a file (the harness redirects it): a plain line when each step
+// starts and ends, no carriage returns; --quiet silences it, and the outputs do not depend on it.
+TEST(Cli, WritesProgressLinesWhenStderrIsAFileAndNoneWithQuiet) {
+  const auto dir = scratch_dir("progress_lines"), quiet_dir = scratch_dir("progress_quiet");
+  const std::string args = " run --pipeline " + kData + "/pipelines/external.yaml --data " + kData + "/csv/good.csv";
+  const auto r = run_driftlab(kPlugins + args + " --out " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("driftlab: [1/1] smooth: started\n"));
+  EXPECT_THAT(r.err, ::testing::ContainsRegex("driftlab: \\[1/1\\] smooth: done in [0-9.]+ s\n"));
+  EXPECT_THAT(r.err, Not(HasSubstr("\r")));
+
+  const auto q = run_driftlab(kPlugins + " --quiet" + args + " --out " + quiet_dir.string());
+  ASSERT_EQ(q.exit_code, 0) << q.err;
+  EXPECT_THAT(q.err, Not(HasSubstr("smooth")));
+  EXPECT_EQ(read_text(quiet_dir / "outputs.csv"), read_text(dir / "outputs.csv"));
 }
 
 TEST(Cli, RunsAPipelineWithAnExternalPluginAndTheEffectivePipelineReproducesIt) {

@@ -132,6 +132,30 @@ TEST(DecomposeCommand, RunsTheEnsemblePluginsWithTheSameOutputForAnyThreadCount)
   EXPECT_EQ(outputs[0], outputs[1]);
 }
 
+// CEEMDAN reports per ensemble member: with plain lines allowed at any interval
+// ($DRIFTLAB_PROGRESS_INTERVAL_S=0), stderr (a file here) holds percentages between the start and
+// the end line, each with its elapsed time; a bad interval is a usage error naming the variable.
+TEST(DecomposeCommand, ReportsEnsembleProgressAsPlainLinesBetweenStartAndEnd) {
+  const auto dir = scratch_dir("decompose_progress");
+  const auto csv = tones_csv(dir);
+  const std::string args = "decompose --data " + csv.string() +
+                           " --plugin decomposition/ceemdan --set ensemble_size=8 --out " + (dir / "imfs.csv").string();
+  const auto r = run_driftlab(args, "DRIFTLAB_PROGRESS_INTERVAL_S=0");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto started = r.err.find("driftlab: decompose: started\n");
+  const auto done = r.err.find("driftlab: decompose: done in ");
+  ASSERT_NE(started, std::string::npos) << r.err;
+  ASSERT_NE(done, std::string::npos) << r.err;
+  std::size_t percentages = 0;  // lines "driftlab: decompose: NN%, ..." between the two
+  for (auto at = r.err.find("%, ", started); at < done; at = r.err.find("%, ", at + 1)) ++percentages;
+  EXPECT_GE(percentages, 8u) << r.err;  // at least one line per member of the first stage
+  EXPECT_THAT(r.err, ::testing::ContainsRegex("driftlab: decompose: [0-9]+%, [0-9.]+ s elapsed"));
+
+  const auto bad = run_driftlab(args, "DRIFTLAB_PROGRESS_INTERVAL_S=soon");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_THAT(bad.err, HasSubstr("DRIFTLAB_PROGRESS_INTERVAL_S: expected a finite number of seconds >= 0"));
+}
+
 TEST(DecomposeCommand, RejectsBadParametersAndPluginsOfAnotherKind) {
   const auto dir = scratch_dir("decompose_errors");
   const auto csv = tones_csv(dir);

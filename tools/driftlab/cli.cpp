@@ -1,7 +1,5 @@
 #include "tools/driftlab/cli.hpp"
 
-#include <unistd.h>
-
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -29,13 +27,21 @@ const Registry& CommandEnv::registry() {
   return *registry_;
 }
 
-bool CommandEnv::show_progress() const { return !quiet && ::isatty(STDERR_FILENO); }
+std::filesystem::path executable_dir() {
+  std::error_code ec;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  return ec ? std::filesystem::path(".") : self.parent_path();
+}
 
-void CommandEnv::progress(const std::string& label, double fraction) const {
-  if (!show_progress()) return;
-  std::fprintf(stderr, "\r%-40s %3d%%", label.c_str(), static_cast<int>(fraction * 100.0 + 0.5));
-  if (fraction >= 1.0) std::fputc('\n', stderr);
-  std::fflush(stderr);
+std::filesystem::path installed_lib_dir() { return executable_dir() / DRIFTLAB_LIB_FROM_BIN; }
+
+std::filesystem::path installed_data_dir() { return executable_dir() / DRIFTLAB_DATA_FROM_BIN; }
+
+void CommandEnv::progress(const std::string& label, double fraction) {
+  if (!progress_)
+    progress_ = std::make_unique<ProgressDisplay>(ProgressDisplay::mode_for(quiet), stderr,
+                                                  ProgressDisplay::line_interval_from_environment());
+  progress_->update(label, fraction);
 }
 
 CLI::Validator finite_number(double lo, double hi, bool lo_open) {
@@ -200,6 +206,21 @@ std::string display_unit(const TimeSeries& record, const std::string& role, cons
   return unit == "rad/s" ? "deg/s" : unit;
 }
 
+void add_set_option(CLI::App* command, std::vector<std::string>& sets) {
+  command->add_option("--set", sets,
+                      "override a step of the pipeline without editing it (repeatable): STEP.PARAM=VALUE sets a "
+                      "parameter (checked as in the file), STEP.PARAM.NESTED=VALUE a nested plugin's (e.g. "
+                      "mixed_rbf_ga.optimizer.population=40), STEP.plugin=KIND/NAME swaps the plugin for one of the "
+                      "same kind (e.g. decompose.plugin=decomposition/ceemdan); VALUE is YAML. The report lists the "
+                      "overrides and the stage labels name them");
+}
+
+std::vector<PipelineOverride> pipeline_overrides(const std::vector<std::string>& sets) {
+  std::vector<PipelineOverride> overrides;
+  for (const auto& text : sets) overrides.push_back(parse_pipeline_override(text));
+  return overrides;
+}
+
 ReportFiles plan_report_files(OutputSet& outputs, const std::filesystem::path& dir, const std::string& option) {
   outputs.make_directory(dir, option);
   ReportFiles files{dir / "report.json", dir / "report.html"};
@@ -216,7 +237,9 @@ int run(int argc, char** argv, const std::vector<AddCommand>& commands) {
   app.add_option("--plugin-path", env.plugin_dirs,
                  "directory of external plugin libraries (*.so); repeatable; also $DRIFTLAB_PLUGIN_PATH")
       ->check(CLI::ExistingDirectory);
-  app.add_flag("--quiet,-q", env.quiet, "no progress output on stderr");
+  app.add_flag("--quiet,-q", env.quiet,
+               "no progress on stderr (otherwise drawn in place on a terminal, and written as a line when a step "
+               "starts or ends and at most every 5 s, $DRIFTLAB_PROGRESS_INTERVAL_S, when stderr is a file or a pipe)");
   app.add_option("--threads", env.threads, "worker threads (results do not depend on it)")
       ->check(CLI::Range(1u, 256u))
       ->capture_default_str();

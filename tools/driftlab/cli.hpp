@@ -12,10 +12,12 @@
 
 #include "framework/csv.hpp"
 #include "framework/output_set.hpp"
+#include "framework/pipeline.hpp"
 #include "framework/record_reader.hpp"
 #include "framework/registry.hpp"
 #include "framework/sampling.hpp"
 #include "framework/time_series.hpp"
+#include "tools/driftlab/progress.hpp"
 
 namespace driftlab::cli {
 
@@ -28,16 +30,27 @@ struct CommandEnv {
 
   // Built-ins plus external plugins, loaded on first use.
   const Registry& registry();
-  // True when progress should be drawn (stderr is a terminal and not --quiet).
-  bool show_progress() const;
-  // Draws "label  NN%" on stderr (overwriting the line) when show_progress(); fraction in [0, 1].
-  void progress(const std::string& label, double fraction) const;
+  // Reports that task `label` is `fraction` done ([0, 1]; 1 ends the task) on stderr, as
+  // ProgressDisplay says: redrawn in place on a terminal, periodic plain lines otherwise, nothing
+  // with --quiet. The mode is chosen at the first call, after the options are parsed.
+  void progress(const std::string& label, double fraction);
 
  private:
   std::unique_ptr<Registry> registry_;
+  std::unique_ptr<ProgressDisplay> progress_;
 };
 
 using AddCommand = void (*)(CLI::App& app, CommandEnv& env);
+
+// The directory of the running executable (/proc/self/exe); "." when it cannot be read.
+std::filesystem::path executable_dir();
+// Where an installed driftlab keeps what it loads at run time, found from the executable's own
+// directory by the relative paths of the install layout (CMake GNUInstallDirs, fixed at configure
+// time; tools/driftlab/CMakeLists.txt): the library directory (libdriftlab_framework.so, the reader
+// modules, the fleet's MPI module) and the data directory share/driftlab (devices/, pipelines/).
+// In the build tree neither exists; callers fall back to the build and source trees.
+std::filesystem::path installed_lib_dir();
+std::filesystem::path installed_data_dir();
 
 // The `driftlab` command line: the global options (--plugin-path, --quiet, --threads, --version),
 // the given subcommands, and errors mapped to exit codes. Its main() (main.cpp) and that of
@@ -115,6 +128,11 @@ TimeSeries load_even_or_bursts_record(const DataOptions& data, std::vector<std::
 std::string primary_role(const DataOptions& data);
 // Unit a channel is written back in: the unit it was read in when known ("deg/s" for rates).
 std::string display_unit(const TimeSeries& record, const std::string& role, const DataOptions& data);
+
+// The --set STEP.KEY=VALUE option of run and compare (repeatable), and the overrides it gives
+// (framework/pipeline.hpp PipelineOverride; a malformed one is a ConfigError naming --set, exit 2).
+void add_set_option(CLI::App* command, std::vector<std::string>& sets);
+std::vector<PipelineOverride> pipeline_overrides(const std::vector<std::string>& sets);
 
 // The report pair of a command that writes into a directory (run and compare --out, calibrate
 // --report): DIR/report.json and DIR/report.html.

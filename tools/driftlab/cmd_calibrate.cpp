@@ -40,7 +40,7 @@ struct CalibrateOptions {
   std::string device;  // free text stored in the model
 };
 
-calibration::FitOptions fit_options(const CalibrateOptions& o, const CommandEnv& env, const std::string& channel) {
+calibration::FitOptions fit_options(const CalibrateOptions& o, CommandEnv& env, const std::string& channel) {
   calibration::FitOptions f = o.fit;
   f.kind = model_kind_option(o.model);
   f.extrapolation = extrapolation_option(o.extrapolation);

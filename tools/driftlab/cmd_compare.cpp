@@ -33,6 +33,7 @@ struct CompareOptions {
   std::vector<std::string> pipelines;
   DataOptions data;
   std::string out;
+  std::vector<std::string> sets;  // --set STEP.KEY=VALUE, applied to every pipeline with that step
 };
 
 struct PipelineResult {
@@ -77,15 +78,39 @@ void compare(const CompareOptions& o, CommandEnv& env) {
   const auto& registry = env.registry();
   std::vector<PipelineResult> results;
   std::set<std::string> roles_needed{role::kRate}, labels;
+  const auto overrides = pipeline_overrides(o.sets);
+  std::vector<bool> override_used(overrides.size(), false);
+  std::string steps_seen;                 // for the message of an override no pipeline can take
   for (const auto& file : o.pipelines) {  // every pipeline is validated before any data is read
     PipelineResult r;
     r.file = file;
     r.label = unique_label(file, labels);
     r.pipeline = load_pipeline(file, registry);
+    std::vector<PipelineOverride> mine;  // the overrides of the steps this pipeline has
+    std::string steps;
+    for (const auto& step : r.pipeline.steps) steps += (steps.empty() ? "" : ", ") + step.name;
+    steps_seen += (steps_seen.empty() ? "" : "; ") + r.label + ": " + steps;
+    for (std::size_t i = 0; i < overrides.size(); ++i)
+      for (const auto& step : r.pipeline.steps)
+        if (step.name == overrides[i].step) {
+          mine.push_back(overrides[i]);
+          override_used[i] = true;
+          break;
+        }
+    if (!mine.empty()) {
+      r.pipeline = load_pipeline(file, registry, mine);
+      std::string applied;
+      for (const auto& text : r.pipeline.overrides) applied += (applied.empty() ? "" : ", ") + text;
+      r.label += " [" + applied + "]";
+    }
     for (const auto& [name, role] : r.pipeline.inputs)
       if (role != "time") roles_needed.insert(role);
     results.push_back(std::move(r));
   }
+  for (std::size_t i = 0; i < overrides.size(); ++i)
+    if (!override_used[i])
+      throw ConfigError({"--set " + overrides[i].text, 0, overrides[i].step},
+                        "no pipeline has a step '" + overrides[i].step + "' (steps: " + steps_seen + ")");
   std::vector<std::filesystem::path> inputs{o.data.path};
   inputs.insert(inputs.end(), o.pipelines.begin(), o.pipelines.end());
   OutputSet files(inputs);  // planned before the data is read, committed together at the end
@@ -108,6 +133,7 @@ void compare(const CompareOptions& o, CommandEnv& env) {
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     env.progress(prefix + "scoring", 0.0);
     r.scores = score_run(record, r.pipeline, outputs);
+    env.progress(prefix + "scoring", 1.0);
   }
 
   // The record-level rows (original, PX4-style baseline, intrinsic floor) are the same for every
@@ -155,6 +181,7 @@ void compare(const CompareOptions& o, CommandEnv& env) {
     p["pipeline"] = r.file;
     p["label"] = r.label;
     p["seed"] = r.pipeline.seed;
+    p["overrides"] = r.pipeline.overrides;
     p["seconds"] = r.seconds;
     p["steps"] = nlohmann::json::array();
     for (const auto& s : r.steps)
@@ -204,6 +231,7 @@ void add_compare_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--pipeline", opts->pipelines, "pipeline description (YAML); repeatable")->required();
   add_data_options(cmd, opts->data, "column mapping role=column:unit (e.g. rate=gyro_z:rad/s); repeatable");
   cmd->add_option("--out", opts->out, "output directory (created if missing)")->required();
+  add_set_option(cmd, opts->sets);
   cmd->callback([opts, &env] { compare(*opts, env); });
 }
 

@@ -101,6 +101,7 @@ void decompose_command(const DecomposeOptions& o, CommandEnv& env) {
   RunContext ctx;
   ctx.threads = env.threads;
   ctx.time_s = record.time();
+  ctx.progress = [&env](double f) { env.progress("decompose", 0.7 * f); };  // the classifier takes the rest
   env.progress("decompose", 0.0);
   const Decomposition d = decomposer->decompose(x, ctx);
   env.progress("decompose", 0.7);

@@ -171,7 +171,8 @@ void add_devices_command(CLI::App& app, CommandEnv&) {
   };
   auto options = std::make_shared<Options>();
   devices->add_option("--devices-dir", options->devices_dir,
-                      "directory of device files (default $DRIFTLAB_DEVICES_DIR, else the source tree's devices/)");
+                      "directory of device files (default $DRIFTLAB_DEVICES_DIR, else an installed driftlab's "
+                      "share/driftlab/devices, else the source tree's devices/)");
 
   devices->fallthrough();  // --devices-dir may also follow `list` or `describe`
   auto* list = devices->add_subcommand("list", "list the device files with their name and title");

@@ -507,7 +507,8 @@ std::pair<std::size_t, std::size_t> parse_shard(const std::string& text) {
   return {i - 1, n};
 }
 
-void fleet_command(const FleetOptions& o) {
+// Progress (CommandEnv::progress) is reported per finished unit when the units run on threads.
+void fleet_command(const FleetOptions& o, CommandEnv& env) {
   if (o.manifest.empty() || o.out.empty())
     throw ConfigError({"", 0, o.manifest.empty() ? "--manifest" : "--out"},
                       "driftlab fleet needs --manifest and --out");
@@ -529,10 +530,14 @@ void fleet_command(const FleetOptions& o) {
     if (!*master) return;  // an MPI worker rank: rank 0 writes the report
   } else {
     std::mutex console;
+    const std::string label = "fleet: " + std::to_string(mine.size()) + " units";
+    std::size_t done = 0;
+    if (!mine.empty()) env.progress(label, 0.0);
     parallel_for(mine.size(), o.workers, [&](std::size_t k) {
       const std::string line = run(k);
       const std::lock_guard<std::mutex> lock(console);
       std::cout << line << "\n" << std::flush;
+      env.progress(label, static_cast<double>(++done) / static_cast<double>(mine.size()));
     });
   }
   if (o.shard.empty()) return report_command(units, o);
@@ -592,7 +597,7 @@ void add_fleet_command(CLI::App& app, CommandEnv& env) {
   cmd->require_subcommand(0, 1);
   cmd->callback([o, merge, &env] {
     o->registry = &env.registry();
-    if (!merge->parsed()) fleet_command(*o);
+    if (!merge->parsed()) fleet_command(*o, env);
   });
 }
 

@@ -16,11 +16,7 @@
 namespace driftlab::cli {
 namespace {
 
-std::filesystem::path mrpt_executable() {
-  std::error_code ec;
-  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
-  return (ec ? std::filesystem::path("driftlab") : self).parent_path() / "driftlab-mrpt";
-}
+std::filesystem::path mrpt_executable() { return executable_dir() / "driftlab-mrpt"; }
 
 [[noreturn]] void execute(const std::string& command, const CommandEnv& env, const std::vector<std::string>& rest) {
   const auto program = mrpt_executable();

@@ -29,13 +29,18 @@ struct RunOptions {
   DataOptions data;
   std::string out;
   bool validate_only = false;
+  std::vector<std::string> sets;  // --set STEP.KEY=VALUE
 };
 
 void run(const RunOptions& o, CommandEnv& env) {
   const auto& registry = env.registry();
-  const auto pipeline = load_pipeline(o.pipeline, registry);
+  const auto pipeline = load_pipeline(o.pipeline, registry, pipeline_overrides(o.sets));
   if (o.validate_only) {
-    std::cout << o.pipeline << ": valid (" << pipeline.steps.size() << " steps)\n";
+    std::cout << o.pipeline << ": valid (" << pipeline.steps.size() << " steps"
+              << (pipeline.overrides.empty() ? ""
+                                             : ", " + std::to_string(pipeline.overrides.size()) +
+                                                   (pipeline.overrides.size() == 1 ? " override" : " overrides"))
+              << ")\n";
     return;
   }
   const auto out_dir = std::filesystem::path(o.out);
@@ -57,6 +62,7 @@ void run(const RunOptions& o, CommandEnv& env) {
                         {"data", o.data.path},
                         {"samples", record.size()},
                         {"seed", pipeline.seed},
+                        {"overrides", pipeline.overrides},
                         {"threads", env.threads}};
   PipelineRunOptions options;
   options.threads = env.threads;
@@ -106,8 +112,10 @@ void run(const RunOptions& o, CommandEnv& env) {
   files.write(report_json, report.dump(2) + "\n");
   if (scores) {
     env.progress("figures (gnuplot)", 0.0);
-    files.write(report_html, run_html("driftlab run: " + pipeline.file, o.data.path, record, pipeline, outputs,
-                                      step_signals, steps, *scores));
+    std::string title = "driftlab run: " + pipeline.file;
+    for (std::size_t i = 0; i < pipeline.overrides.size(); ++i)
+      title += (i ? ", " : " with --set ") + pipeline.overrides[i];
+    files.write(report_html, run_html(title, o.data.path, record, pipeline, outputs, step_signals, steps, *scores));
     env.progress("figures (gnuplot)", 1.0);
     std::cout << table2_text(*scores);
   } else {
@@ -129,6 +137,7 @@ void add_run_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--pipeline", opts->pipeline, "pipeline description (YAML, driftlab-pipeline/1)")->required();
   add_data_options(cmd, opts->data, "column mapping role=column:unit (e.g. rate=gyro_z:rad/s); repeatable");
   cmd->add_option("--out", opts->out, "output directory (created if missing)");
+  add_set_option(cmd, opts->sets);
   cmd->add_flag("--validate-only", opts->validate_only, "check the pipeline and stop before reading data");
   cmd->callback([opts, &env] {
     if (!opts->validate_only && opts->out.empty()) throw ConfigError({"", 0, "--out"}, "--out is required");

@@ -1,5 +1,6 @@
 // Where `driftlab devices` and `driftlab simulate` find device files: --devices-dir, else
-// $DRIFTLAB_DEVICES_DIR, else the source tree's devices/ (compile definition DRIFTLAB_DEVICES_DIR).
+// $DRIFTLAB_DEVICES_DIR, else an installed driftlab's share/driftlab/devices (cli.hpp
+// installed_data_dir), else the source tree's devices/ (compile definition DRIFTLAB_DEVICES_DIR).
 #pragma once
 
 #include <cstdlib>
@@ -7,12 +8,15 @@
 #include <string>
 
 #include "devices/device_file.hpp"
+#include "tools/driftlab/cli.hpp"
 
 namespace driftlab::cli {
 
 inline std::filesystem::path resolve_devices_dir(const std::string& option) {
   if (!option.empty()) return option;
   if (const char* env = std::getenv("DRIFTLAB_DEVICES_DIR"); env && *env) return env;
+  if (const auto installed = installed_data_dir() / "devices"; std::filesystem::is_directory(installed))
+    return installed;
   return DRIFTLAB_DEVICES_DIR;
 }
 

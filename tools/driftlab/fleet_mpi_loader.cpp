@@ -1,5 +1,6 @@
 // run_over_mpi (fleet_mpi.hpp): in a single process, std::nullopt; started as several ranks, the
-// MPI engine, the module libdriftlab_fleet_mpi.so next to the driftlab executable (fleet_mpi.cpp),
+// MPI engine, the module libdriftlab_fleet_mpi.so (fleet_mpi.cpp) next to the driftlab executable
+// (the build tree) or in an installed driftlab's library directory (cli.hpp installed_lib_dir),
 // loaded then and only then, so that no other run of driftlab loads the MPI libraries. Loaded with
 // RTLD_GLOBAL: Open MPI's own components resolve their symbols against libmpi.
 #include <dlfcn.h>
@@ -7,6 +8,7 @@
 #include <filesystem>
 
 #include "framework/error.hpp"
+#include "tools/driftlab/cli.hpp"
 #include "tools/driftlab/fleet_mpi.hpp"
 
 namespace driftlab::cli {
@@ -19,9 +21,9 @@ RunOverMpi load_engine() {
     throw ConfigError({"", 0, "mpirun"},
                       "this driftlab was built without MPI (CMake DRIFTLAB_WITH_MPI; Debian "
                       "libboost-mpi-dev, openmpi-bin): run the fleet in one process, or --shard");
-  std::error_code ec;
-  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
-  const auto module = (ec ? std::filesystem::path("driftlab") : self).parent_path() / "libdriftlab_fleet_mpi.so";
+  const std::string name = "libdriftlab_fleet_mpi.so";
+  const auto beside = executable_dir() / name;
+  const auto module = std::filesystem::exists(beside) ? beside : installed_lib_dir() / name;
   void* handle = dlopen(module.c_str(), RTLD_NOW | RTLD_GLOBAL);
   const char* error = handle ? nullptr : dlerror();
   const auto run = handle ? reinterpret_cast<RunOverMpi>(dlsym(handle, "driftlab_run_over_mpi")) : nullptr;
