@@ -17,6 +17,7 @@
 #include <limits>
 
 #include "framework/number_text.hpp"
+#include "framework/sampling.hpp"
 
 extern char** environ;
 
@@ -26,7 +27,6 @@ namespace {
 // Tableau's ten and two darker ones: neighbours in the list differ in hue and lightness.
 constexpr std::array<const char*, 12> kColors = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b",
                                                  "#e377c2", "#17becf", "#7f7f7f", "#bcbd22", "#000000", "#393b79"};
-constexpr double kGapFactor = 3.0;            // break_at_gaps: a step this many times the median step is a gap
 constexpr std::size_t kReduceLinesAbove = 4;  // points per pixel column before lines are reduced
 constexpr std::size_t kReduceMarkersAbove = 2000;
 constexpr long kMarkerCellPx = 3;          // about a marker's diameter
@@ -92,7 +92,7 @@ std::vector<Point> points_of(const PlotSeries& s, bool log_x, bool log_y) {
       if (std::isfinite(s.x[i] - s.x[i - 1])) steps.push_back(std::abs(s.x[i] - s.x[i - 1]));
     if (!steps.empty()) {
       std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
-      gap = kGapFactor * steps[steps.size() / 2];
+      gap = sampling::kGapFactor * steps[steps.size() / 2];  // the records' gap rule
     }
   }
   for (std::size_t i = 0; i < n; ++i) {

@@ -56,7 +56,7 @@ struct PlotSeries {
   std::vector<double> z;       // optional colour value per point (same length as y; Markers)
   std::string color;           // "#rrggbb"; empty = the palette colour of its index
   bool guide = false;          // a guide (slope line, model term): drawn thin, never widens the axes
-  bool break_at_gaps = false;  // line breaks where x steps more than 3 x its median step (a record's gaps)
+  bool break_at_gaps = false;  // line breaks where x steps more than sampling::kGapFactor x its median step
 };
 
 struct PlotPanel {
