@@ -22,6 +22,7 @@ namespace {
 
 constexpr int kScaleFactorOrder = 2;       // k_0 + k_1 dT + k_2 dT^2
 constexpr double kVaryingTrueRate = 1e-3;  // rad/s: a true rate with a larger std drives a scale-factor fit
+constexpr double kSaturatedBranch = 1e-6;  // of the branch state's +-1 (hysteresis_state_range)
 
 // How the RBF network on the physical residual is tuned (add_rbf): the shared tuning loop
 // (plugins/tuning search(), optimizer/ga with --ga-population, --ga-generations and --seed) on a
@@ -394,7 +395,11 @@ class Fitter {
       m.hysteresis_width_k = best.width_k;
       m.hysteresis_rad_s = lf.coefficients[c];
       m.hysteresis_sigma_rad_s = inflate * lf.standard_errors[c];
-      m.hysteresis_state_range = InputRange{s_.minCoeff(), s_.maxCoeff()};
+      // The state saturates at +-1 exponentially: a bin mean within kSaturatedBranch of it saw the
+      // saturated branch, whose samples reach +-1 itself.
+      const auto saturated = [](double edge) { return std::abs(std::abs(edge) - 1.0) <= kSaturatedBranch; };
+      m.hysteresis_state_range =
+          InputRange{saturated(s_.minCoeff()) ? -1.0 : s_.minCoeff(), saturated(s_.maxCoeff()) ? 1.0 : s_.maxCoeff()};
       ++c;
     }
     if (with_sf_) {
