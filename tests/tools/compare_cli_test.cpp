@@ -73,6 +73,11 @@ TEST(CompareCli, RunsEveryPipelineOnTheSameRecordAndWritesOneReport) {
   const std::string html = read_text(dir / "out" / "report.html");
   EXPECT_THAT(html, HasSubstr("<svg"));
   EXPECT_THAT(html, HasSubstr("polynomial_baseline_2: polynomial"));
+  // The terminal table has its header, and the record's rows include the intrinsic floor (the
+  // simulated record has its systematic column), as in the HTML table.
+  EXPECT_EQ(r.out.substr(0, r.out.find('\n')).rfind("pipeline  stage  B", 0), 0u) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("\n(record)  intrinsic floor  "));
+  EXPECT_THAT(html, HasSubstr("<td>intrinsic floor</td>"));
   EXPECT_THAT(r.out, HasSubstr("polynomial_baseline"));
 }
 

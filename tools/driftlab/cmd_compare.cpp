@@ -142,6 +142,10 @@ void compare(const CompareOptions& o, CommandEnv& env) {
   std::vector<Table2Row> rows;
   for (const auto& s : first.stages)
     if (!is_pipeline_stage(s)) rows.push_back(row("(record)", first, s, std::nullopt));
+  if (first.intrinsic) {
+    rows.push_back(intrinsic_floor_row(first, record.sample_rate_hz()));
+    rows.back().pipeline = "(record)";
+  }
   for (const auto& r : results)
     for (const auto& s : r.scores.stages)
       if (is_pipeline_stage(s)) rows.push_back(row(r.label, r.scores, s, stage_seconds(r, s.stage)));
@@ -209,6 +213,9 @@ void compare(const CompareOptions& o, CommandEnv& env) {
   files.write(report_html, html.html());
   files.commit();
 
+  std::string header;
+  for (const auto& h : table.header) header += (header.empty() ? "" : "  ") + h;
+  std::cout << header << "\n";
   for (const auto& cells : table.rows) {
     std::string line;
     for (const auto& c : cells) {

@@ -224,13 +224,7 @@ void add_table2(HtmlReport& html, const TimeSeries& record, const RunScores& sco
     rows.push_back(table2_row(scores, st));
     if (st.label != st.stage) rows.back().stage = st.stage + " (" + st.label + ")";
   }
-  if (scores.intrinsic) {
-    Table2Row floor;
-    floor.stage = "intrinsic floor";
-    floor.analysis = &*scores.intrinsic;
-    floor.bandwidth_hz = record.sample_rate_hz() / 2.0;
-    rows.push_back(floor);
-  }
+  if (scores.intrinsic) rows.push_back(intrinsic_floor_row(scores, record.sample_rate_hz()));
   html.table(table2_html(Table2Layout::Run, rows, scores.reference));
   html.figure(
       allan_figure(scores),
@@ -419,6 +413,14 @@ std::string group_label(ImfGroup group, const std::vector<ImfDecision>& decision
   if (imfs.size() > 1 && !run)
     for (std::size_t i = 0; i < imfs.size(); ++i) text += (i ? ", " : "") + std::to_string(imfs[i]);
   return text + ")";
+}
+
+Table2Row intrinsic_floor_row(const RunScores& scores, double sample_rate_hz) {
+  Table2Row floor;
+  floor.stage = "intrinsic floor";
+  floor.analysis = &*scores.intrinsic;
+  floor.bandwidth_hz = sample_rate_hz / 2.0;
+  return floor;
 }
 
 Table2Row table2_row(const RunScores& scores, const StageScore& st) {

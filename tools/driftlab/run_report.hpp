@@ -49,6 +49,9 @@ struct Table2Row {
 };
 // A stage's row: its analysis, bandwidth, residual drift, reference row and comparison with the floor.
 Table2Row table2_row(const RunScores& scores, const StageScore& stage);
+// The intrinsic floor's row (scores.intrinsic must be set): the Allan figures of measured - systematic
+// at the record's full bandwidth (half its sample rate, Hz).
+Table2Row intrinsic_floor_row(const RunScores& scores, double sample_rate_hz);
 
 // The two Table 2 tables: `driftlab run`'s (stage, the reference's B and N when the pipeline has
 // one, B, its interval, the minimum's tau, N, noise bandwidth, residual drift, max error / floor)
