@@ -24,11 +24,15 @@ cat <<EOF
 Reading the table: B is the flat floor of the overlapping Allan deviation / 0.664 (IEEE 952), read beyond
 each output's correlation time, a value only where the deviation has a floor (otherwise the bound '< x':
 the deviation still falls at the longest tau); N is read at tau = 1 s and is only comparable at equal noise bandwidth
-(bandwidth). Residual drift: rms of 60-s block means of output - true rate. The paper's last row owes its
-N = 0.97 to the Kalman filter's narrow bandwidth; ours states the bandwidth instead. "intrinsic floor":
-the same analysis of measured - true systematic rate, the gyro's own noise. px4_polynomial: third-order
-polynomial in temperature fitted on the heating bins, clamped outside their range (the PX4 thermal
-calibration: driftlab calibrate's PX4-style model, fitted on this record).
+(bandwidth). Residual drift: rms of 60-s block means of output - true rate; systematic error: the same
+of output - true rate - the gyro's own noise, the drift a stage left (the noise's 60-s means, ~13 deg/h,
+dominate the residual drift of every good stage). The paper's last row owes its N = 0.97 to the Kalman
+filter's narrow bandwidth; ours states the bandwidth instead. "intrinsic floor": the same analysis of
+measured - true systematic rate, the gyro's own noise. px4_polynomial: third-order polynomial in
+temperature fitted on the heating bins, clamped outside their range (the PX4 thermal calibration:
+driftlab calibrate's PX4-style model, fitted on this record); cubic_whole_record: the same cubic on
+every bin, heating and cooling, the strongest simple model fitted in-sample like the pipeline.
+"note:" lines above the table: a GA tuning that ended at a search bound or did not improve.
 
 Report with Table 2 and the paper's figures: $out/run/report.html
 EOF

@@ -190,6 +190,13 @@ struct CalibrationModel {
   bool uses_state() const {
     return lag_tau_s > 0 || temperature_rate_rad_s_per_k_s != 0.0 || hysteresis_width_k > 0 || rbf.has_value();
   }
+  // The hysteresis as every report states it, the effect catalogue's convention (framework/
+  // effect_catalogue.cpp, hysteresis height_dph, which `driftlab discrepancy` reports): the full gap
+  // between the saturated branches, cooling minus heating, = -2 hysteresis_rad_s (bias h s with
+  // s = +1 heating, -1 cooling); positive: the cooling branch above. Its 1-sigma is
+  // 2 hysteresis_sigma_rad_s. Channel unit (rad/s for a gyro); 0 without a hysteresis term.
+  double hysteresis_height() const { return -2.0 * hysteresis_rad_s; }
+  double hysteresis_height_sigma() const { return 2.0 * hysteresis_sigma_rad_s; }
   // Polynomial part of the bias at model temperature T (degC), with the extrapolation policy.
   double polynomial_bias_rad_s(double temp_c) const;
   // Scale factor sf at T (clamped to the valid range); 1 without a scale-factor model.

@@ -487,9 +487,12 @@ class Fitter {
         std::max(centres.lower, std::min<double>(centres.upper, static_cast<double>(split.X_train.rows()) / 4.0));
     double best_value = std::numeric_limits<double>::infinity();
     Eigen::VectorXd best;
+    std::string search_notes;  // "; GA: ..." when the search ended at a bound or did not improve
     try {
-      auto found = tuning::search(*optimizer, {kRbfTuning.sigma, kRbfTuning.log10_regularization, centres}, settings,
-                                  split, fit_and_score, ctx);
+      const std::vector<Bound> bounds{kRbfTuning.sigma, kRbfTuning.log10_regularization, centres};
+      auto found = tuning::search(*optimizer, bounds, settings, split, fit_and_score, ctx);
+      for (const auto& note : tuning::search_notes(found.result, bounds))
+        search_notes += (search_notes.empty() ? "; GA tuning: " : "; ") + note;
       best_value = found.result.best_value;
       best = std::move(found.result.best);
     } catch (const DataError&) {  // no candidate gave a finite held-out error: no network
@@ -512,7 +515,7 @@ class Fitter {
       m.rbf = std::move(t);
       m.kind = ModelKind::Rbf;
       m.fit.selection += "; RBF on the physical residual, GA-tuned (holdout RMSE " + std::to_string(best_value) +
-                         " vs " + std::to_string(no_rbf) + " rad/s without it)";
+                         " vs " + std::to_string(no_rbf) + " rad/s without it)" + search_notes;
     } else {
       m.fit.selection += "; no RBF network: it did not lower the held-out residual (" + std::to_string(no_rbf) +
                          " rad/s) by " + std::to_string(static_cast<int>(100 * kTransferMargin)) + " %";
@@ -730,18 +733,29 @@ CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOp
   return m;
 }
 
-CalibrationModel fit_px4_style(const std::vector<Record>& records, const FitOptions& base) {
+namespace {
+
+FitOptions fixed_cubic(const FitOptions& base, bool heating_only) {
   FitOptions o = base;
   o.kind = ModelKind::Polynomial;
   o.min_order = o.max_order = 3;
   o.extrapolation = Extrapolation::Clamp;
-  o.heating_only = true;
+  o.heating_only = heating_only;
+  return o;
+}
+
+}  // namespace
+
+CalibrationModel fit_px4_style(const std::vector<Record>& records, const FitOptions& base) {
   try {
-    return fit_calibration(records, o);
+    return fit_calibration(records, fixed_cubic(base, true));
   } catch (const DataError&) {
-    o.heating_only = false;
-    return fit_calibration(records, o);
+    return fit_cubic_all_bins(records, base);
   }
+}
+
+CalibrationModel fit_cubic_all_bins(const std::vector<Record>& records, const FitOptions& base) {
+  return fit_calibration(records, fixed_cubic(base, false));
 }
 
 Disagreement largest_disagreement(const std::vector<Record>& records) {

@@ -84,15 +84,21 @@ struct FitOptions {
 // inconsistent options.
 CalibrationModel fit_calibration(const std::vector<Record>& records, const FitOptions& options);
 
-// The PX4/ArduPilot thermal calibration practice, the one home of every "PX4-style" figure (the
-// baseline of `driftlab calibrate --report` and the px4_polynomial row of `driftlab run`'s Table 2):
-// fit_calibration with `base`'s records, bins, blocks and reference temperature, and
-//   kind poly, order 3 (no selection), heating bins only (dT/dt estimate > 0: every heating leg of
-//   every record), clamped outside the range of those bins.
-// When the records hold too few heating bins (a cooling-only run), the same cubic is fitted on all
-// bins instead; the model says which in fit.heating_only. Throws what fit_calibration throws when
-// even that is impossible.
+// The two simple cubics every report sets beside a richer model, fitted with `base`'s records, bins,
+// blocks and reference temperature as kind poly, order 3 (no selection), clamped outside the range of
+// the bins they were fitted on:
+//   fit_px4_style         the PX4/ArduPilot thermal calibration practice, the one home of every
+//                         "PX4-style" figure (the baseline of `driftlab calibrate --report` and the
+//                         px4_polynomial row of `driftlab run`'s Table 2): heating bins only (dT/dt
+//                         estimate > 0: every heating leg of every record). When the records hold too
+//                         few heating bins (a cooling-only run), the same cubic is fitted on all bins
+//                         instead; the model says which in fit.heating_only.
+//   fit_cubic_all_bins    every bin of every record, both directions (the cubic_whole_record row of
+//                         Table 2: the strongest simple in-sample peer of a pipeline fitted on the
+//                         same record).
+// Both throw what fit_calibration throws when the cubic cannot be fitted.
 CalibrationModel fit_px4_style(const std::vector<Record>& records, const FitOptions& base);
+CalibrationModel fit_cubic_all_bins(const std::vector<Record>& records, const FitOptions& base);
 
 // Whether several records of one channel can be one device: each record's bias (60-s bin means of
 // signal - truth) gets a least-squares cubic in temperature; for every pair, the rms difference of

@@ -50,6 +50,7 @@ StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_r
   if (truth != nullptr) {
     const Eigen::VectorXd error = output_rad_s - truth->true_rate_rad_s;
     s.residual_drift_rad_s = block_mean_rms(time_s, error);
+    if (truth->intrinsic_noise_rad_s) s.systematic_error_rad_s = block_mean_rms(time_s, error - *truth->intrinsic_noise_rad_s);
     s.error = allan::analyze_rate(error, sample_rate_hz, options);
   }
   return s;
@@ -62,9 +63,8 @@ Eigen::VectorXd intrinsic_noise(const Eigen::VectorXd& measured_rad_s, const Eig
   return measured_rad_s - systematic_rad_s;
 }
 
-allan::Analysis intrinsic_floor(const Eigen::VectorXd& measured_rad_s, const Eigen::VectorXd& systematic_rad_s,
-                                double sample_rate_hz) {
-  return allan::analyze_rate(intrinsic_noise(measured_rad_s, systematic_rad_s), sample_rate_hz);
+allan::Analysis intrinsic_floor(const Eigen::VectorXd& intrinsic_noise_rad_s, double sample_rate_hz) {
+  return allan::analyze_rate(intrinsic_noise_rad_s, sample_rate_hz);
 }
 
 FloorComparison compare_to_floor(const allan::Analysis& error, const allan::Analysis& floor, double factor) {

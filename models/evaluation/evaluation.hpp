@@ -7,7 +7,10 @@
 //   - the output's noise bandwidth relative to the white level N of the original record (N is only
 //     comparable at equal bandwidth);
 //   - with a truth (simulated records): the residual drift, the rms of 60-s block means of
-//     (output - true rate), and the Allan curve of (output - true rate) against the intrinsic floor.
+//     (output - true rate), and the Allan curve of (output - true rate) against the intrinsic floor;
+//   - with the true systematic rate as well: the systematic error, the rms of 60-s block means of
+//     (output - true rate - intrinsic noise), what the stage left of the drift once the gyro's own
+//     noise, which dominates the residual drift of a good stage, is taken out.
 // Intrinsic floor: the same analysis of (measured - true systematic rate), i.e. the gyro's own noise,
 // which no compensation can remove.
 // The block means here are the one home of the residual-drift metric: `driftlab run`, `driftlab
@@ -30,8 +33,8 @@ namespace driftlab::evaluation {
 inline constexpr double kResidualBlockS = 60.0;  // block length of the residual-drift metric
 
 struct Truth {
-  Eigen::VectorXd true_rate_rad_s;                  // the table's rate
-  std::optional<Eigen::VectorXd> systematic_rad_s;  // everything but noise (simulator), for the floor
+  Eigen::VectorXd true_rate_rad_s;                       // the table's rate
+  std::optional<Eigen::VectorXd> intrinsic_noise_rad_s;  // measured - systematic (simulator): intrinsic_noise
 };
 
 struct StageScore {
@@ -42,7 +45,8 @@ struct StageScore {
   allan::Analysis analysis;                    // B, N, curve of the output
   double bandwidth_hz = 0.0;                   // noise bandwidth relative to the original record's N
   double correlation_time_s = 0.0;             // 1 / bandwidth: B is read beyond it
-  std::optional<double> residual_drift_rad_s;  // rms of 60-s block means of output - true rate
+  std::optional<double> residual_drift_rad_s;   // rms of 60-s block means of output - true rate
+  std::optional<double> systematic_error_rad_s;  // the same of output - true rate - intrinsic noise
   std::optional<allan::Analysis> error;        // Allan analysis of output - true rate
 };
 
@@ -80,8 +84,7 @@ StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_r
 Eigen::VectorXd intrinsic_noise(const Eigen::VectorXd& measured_rad_s, const Eigen::VectorXd& systematic_rad_s);
 
 // Allan analysis of intrinsic_noise (read like the original record: full bandwidth).
-allan::Analysis intrinsic_floor(const Eigen::VectorXd& measured_rad_s, const Eigen::VectorXd& systematic_rad_s,
-                                double sample_rate_hz);
+allan::Analysis intrinsic_floor(const Eigen::VectorXd& intrinsic_noise_rad_s, double sample_rate_hz);
 
 // The largest ratio over tau of the error curve to the intrinsic curve, and whether every tau is
 // within `factor` of it once both intervals are allowed for (error.dev_lo <= factor * floor.dev_hi).

@@ -84,7 +84,8 @@ RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const st
   std::optional<Truth> truth;
   if (record.has(role::kTrueRate)) {
     truth = Truth{record.channel(role::kTrueRate).values, std::nullopt};
-    if (record.has(role::kSystematic)) truth->systematic_rad_s = record.channel(role::kSystematic).values;
+    if (record.has(role::kSystematic))
+      truth->intrinsic_noise_rad_s = intrinsic_noise(rate, record.channel(role::kSystematic).values);
   }
   const Truth* t = truth ? &*truth : nullptr;
   // The record's Allan curve, estimated once: its N is the reference of every bandwidth, and the
@@ -99,7 +100,7 @@ RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const st
     s.stages.push_back(score_stage(stage.output, outputs.at(stage.output).columns.col(0), time, fs, reference_n, t));
     s.stages.back().label = stage.label;
   }
-  // The PX4-style row needs an oven run the calibration quality gate does not refuse.
+  // The baselines need an oven run the calibration quality gate does not refuse.
   const auto fittable = [&](const Eigen::VectorXd& temp) {
     const auto gate = calibration::quality_gate(
         {calibration::analyse_oven_run("the record", time, temp, calibration::FitOptions{}.bin_s)});
@@ -108,14 +109,18 @@ RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const st
   };
   if (record.has(role::kTemperature) && fittable(record.channel(role::kTemperature).values)) {
     const Eigen::VectorXd& temp = record.channel(role::kTemperature).values;
-    auto model = calibration::fit_px4_style({{"the record", time, rate, temp, {}, {}}}, {});
-    Eigen::VectorXd compensated = calibration::compensate(model, time, rate, temp).rate_rad_s;
-    s.baseline = Px4Baseline{std::move(model), std::move(compensated)};
-    s.stages.push_back(score_stage(kBaselineStage, s.baseline->compensated_rad_s, time, fs, reference_n, t));
-    s.stages.back().source = StageScore::Source::Baseline;
+    const std::vector<calibration::Record> fitted_on{{"the record", time, rate, temp, {}, {}}};
+    for (auto& [stage, model] :
+         {std::pair{kPx4BaselineStage, calibration::fit_px4_style(fitted_on, {})},
+          std::pair{kCubicBaselineStage, calibration::fit_cubic_all_bins(fitted_on, {})}}) {
+      Eigen::VectorXd compensated = calibration::compensate(model, time, rate, temp).rate_rad_s;
+      s.stages.push_back(score_stage(stage, compensated, time, fs, reference_n, t));
+      s.stages.back().source = StageScore::Source::Baseline;
+      s.baselines.push_back({stage, model, std::move(compensated)});
+    }
   }
-  if (truth && truth->systematic_rad_s) {
-    s.intrinsic = intrinsic_floor(rate, *truth->systematic_rad_s, fs);
+  if (truth && truth->intrinsic_noise_rad_s) {
+    s.intrinsic = intrinsic_floor(*truth->intrinsic_noise_rad_s, fs);
     for (const auto& stage : s.stages)
       if (stage.error) s.against_floor[stage.stage] = compare_to_floor(*stage.error, *s.intrinsic, kFloorFactor);
   }
@@ -192,6 +197,7 @@ nlohmann::json stage_json(const RunScores& s, const StageScore& st) {
                      {"fit", fit_json(a)}};
   row.update(b_json(a.bias_instability));
   if (st.residual_drift_rad_s) row["residual_drift_deg_h"] = *st.residual_drift_rad_s * kDphPerRadPerSec;
+  if (st.systematic_error_rad_s) row["systematic_error_deg_h"] = *st.systematic_error_rad_s * kDphPerRadPerSec;
   if (const auto it = s.against_floor.find(st.stage); it != s.against_floor.end()) {
     row["error_vs_floor"] = {{"max_ratio", it->second.max_ratio},
                              {"tau_of_max_s", it->second.tau_of_max_s},
@@ -223,24 +229,27 @@ nlohmann::json scores_json(const RunScores& s) {
     j["intrinsic_floor"] = intrinsic_floor_json(*s.intrinsic);
     curves["intrinsic_floor"] = curve_json(*s.intrinsic);
   }
-  if (s.baseline) {
-    const auto& m = s.baseline->model;
+  for (const auto& b : s.baselines) {
+    const auto& m = b.model;
     nlohmann::json c = nlohmann::json::array();
     for (double v : m.bias_rad_s) c.push_back(v * kDphPerRadPerSec);
-    j["baseline"] = {{"what", std::string("PX4-style (driftlab calibrate's PX4-style poly, fitted on this record): "
-                                          "third-order polynomial in T - T0 fitted on ") +
-                                  (m.fit.heating_only ? "the heating bins" : "all bins (too few heating bins)") +
-                                  ", T clamped to their range"},
-                     {"coefficients_deg_h_per_c_pow_i", c},
-                     {"reference_temp_c", m.reference_temp_c},
-                     {"fit_range_c", {m.valid_min_c, m.valid_max_c}},
-                     {"heating_only", m.fit.heating_only},
-                     {"bin_s", m.fit.bin_s}};
+    const std::string bins = b.stage == kPx4BaselineStage
+                                 ? (m.fit.heating_only ? "the heating bins (PX4 practice)"
+                                                       : "all bins (PX4 practice, but too few heating bins)")
+                                 : "all bins, both directions";
+    j["baselines"][b.stage] = {
+        {"what", "third-order polynomial in T - T0 fitted on this record's " + bins + ", T clamped to their range"},
+        {"coefficients_deg_h_per_c_pow_i", c},
+        {"reference_temp_c", m.reference_temp_c},
+        {"fit_range_c", {m.valid_min_c, m.valid_max_c}},
+        {"heating_only", m.fit.heating_only},
+        {"bin_s", m.fit.bin_s}};
   }
   j["units"] = {{"B", "deg/h"},
                 {"N", "deg/h/sqrt(Hz)"},
                 {"bandwidth", "Hz (one-sided equivalent noise bandwidth)"},
                 {"residual_drift", "deg/h, rms of 60-s block means of output - true rate"},
+                {"systematic_error", "deg/h, rms of 60-s block means of output - true rate - intrinsic noise"},
                 {"allan", "deg/h"}};
   j["readings"] = {{"B",
                     "flat floor of the overlapping Allan deviation / 0.664 (IEEE 952 Annex C), at tau >= the "
@@ -253,42 +262,52 @@ nlohmann::json scores_json(const RunScores& s) {
 
 std::string table2_text(const RunScores& s) {
   std::string out;
-  char line[256];
-  out +=
-      "Table 2 (B in deg/h, N in deg/h/sqrt(Hz), noise bandwidth in Hz, residual drift in deg/h; B is a value "
-      "[68% CI] only where the Allan deviation has a floor, otherwise a bound '< x' within the taus read)\n";
-  // The reference's two columns only for a pipeline that has one.
+  // The reference's two columns only for a pipeline that has one; the systematic error only for a
+  // record with its true systematic rate.
   const bool ref = s.reference.has_value();
+  const bool syst = std::any_of(s.stages.begin(), s.stages.end(),
+                                [](const StageScore& st) { return st.systematic_error_rad_s.has_value(); });
+  out += "Table 2 (B in deg/h, N in deg/h/sqrt(Hz), noise bandwidth in Hz, residual drift" +
+         std::string(syst ? " and systematic error" : "") +
+         " in deg/h; B is a value [68% CI] only where the Allan deviation has a floor, otherwise a bound '< x' "
+         "within the taus read)\n";
   const auto row_text = [&](const std::string& stage, const std::string& ref_b, const std::string& ref_n,
                             const std::string& b, const std::string& n, const std::string& bandwidth,
-                            const std::string& drift) {
-    if (ref)
-      std::snprintf(line, sizeof line, "%-16s %10s %10s  %20s %12s %10s %14s\n", stage.c_str(), ref_b.c_str(),
-                    ref_n.c_str(), b.c_str(), n.c_str(), bandwidth.c_str(), drift.c_str());
-    else
-      std::snprintf(line, sizeof line, "%-16s %20s %12s %10s %14s\n", stage.c_str(), b.c_str(), n.c_str(),
-                    bandwidth.c_str(), drift.c_str());
+                            const std::string& drift, const std::string& systematic) {
+    char line[256];
+    std::snprintf(line, sizeof line, "%-18s", stage.c_str());
     out += line;
+    if (ref) {
+      std::snprintf(line, sizeof line, " %10s %10s ", ref_b.c_str(), ref_n.c_str());
+      out += line;
+    }
+    std::snprintf(line, sizeof line, " %20s %12s %10s %14s", b.c_str(), n.c_str(), bandwidth.c_str(), drift.c_str());
+    out += line;
+    if (syst) {
+      std::snprintf(line, sizeof line, " %12s", systematic.c_str());
+      out += line;
+    }
+    out += "\n";
   };
-  row_text("stage", "paper B", "paper N", "B", "N", "bandwidth", "resid. drift");
+  row_text("stage", "paper B", "paper N", "B", "N", "bandwidth", "resid. drift", "syst. error");
   const auto cell = [](std::optional<double> v, const char* fmt) {
-    char b[32];
-    if (!v) return std::string("-");
-    std::snprintf(b, sizeof b, fmt, *v);
-    return std::string(b);
+    return v ? number_text(*v, fmt) : std::string("-");
+  };
+  const auto deg_h = [](std::optional<double> rad_s) {
+    return rad_s ? std::optional<double>(*rad_s * kDphPerRadPerSec) : std::nullopt;
   };
   for (const auto& st : s.stages) {
     const auto* p = reference_row(s, st.stage);
     const auto& a = st.analysis;
     row_text(st.stage, p ? cell(p->b_deg_h, "%.4g") : "-", p ? cell(p->n_deg_h_rthz, "%.4g") : "-",
              b_text(a.bias_instability), cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g"),
-             cell(st.bandwidth_hz, "%.3g"),
-             st.residual_drift_rad_s ? cell(*st.residual_drift_rad_s * kDphPerRadPerSec, "%.3g") : "-");
+             cell(st.bandwidth_hz, "%.3g"), cell(deg_h(st.residual_drift_rad_s), "%.3g"),
+             cell(deg_h(st.systematic_error_rad_s), "%.3g"));
   }
   if (s.intrinsic) {
     const auto& a = *s.intrinsic;
     row_text("intrinsic floor", "-", "-", b_text(a.bias_instability), cell(a.arw_rad_sqrt_s * kDphPerRadPerSec, "%.4g"),
-             "-", "-");
+             "-", "-", "-");
   }
   if (ref) out += "paper: " + s.reference->source + "\n";
   return out;

@@ -1,10 +1,12 @@
 // The Table 2 scores (issue 12; Li et al. 2023, Table 2) of `driftlab run`, `driftlab compare` and
 // the Python module's Pipeline.run: every pipeline output in a rate unit is a stage, scored by
 // evaluation.hpp beside the original record, the intrinsic floor (when the record has a systematic
-// rate) and the PX4-style polynomial baseline (when it has a temperature): calibration::fit_px4_style
-// fitted on the scored record itself (rate and temperature, never the truth; in-sample like the
-// pipeline's stages) and applied by the model's causal compensator. Units in the JSON: deg/h for B
-// and the residual drift, deg/h/sqrt(Hz) for N, Hz for bandwidths, s for taus.
+// rate) and two simple baselines (when it has a temperature): the PX4-style polynomial
+// (calibration::fit_px4_style) and a cubic on every bin of the record (calibration::fit_cubic_all_bins,
+// the strongest simple in-sample peer), each fitted on the scored record itself (rate and temperature,
+// never the truth; in-sample like the pipeline's stages) and applied by the model's causal
+// compensator. Units in the JSON: deg/h for B, the residual drift and the systematic error,
+// deg/h/sqrt(Hz) for N, Hz for bandwidths, s for taus.
 #pragma once
 
 #include <map>
@@ -25,22 +27,24 @@ namespace driftlab::evaluation {
 // output order, labelled by its name. The last is the pipeline's final stage.
 std::vector<PipelineStage> rate_stages(const Pipeline& pipeline, const std::map<std::string, Signal>& outputs);
 
-struct Px4Baseline {
+struct Baseline {
+  std::string stage;  // kPx4BaselineStage or kCubicBaselineStage
   calibration::CalibrationModel model;
   Eigen::VectorXd compensated_rad_s;
 };
 
-// The stage names of the record itself and of the PX4-style baseline in RunScores::stages.
+// The stage names of the record itself and of the baselines in RunScores::stages.
 inline constexpr const char* kOriginalStage = "original";
-inline constexpr const char* kBaselineStage = "px4_polynomial";
+inline constexpr const char* kPx4BaselineStage = "px4_polynomial";
+inline constexpr const char* kCubicBaselineStage = "cubic_whole_record";
 
 inline bool is_pipeline_stage(const StageScore& stage) { return stage.source == StageScore::Source::Pipeline; }
 
 struct RunScores {
-  std::vector<StageScore> stages;              // kOriginalStage, the pipeline's stages, kBaselineStage
+  std::vector<StageScore> stages;              // kOriginalStage, the pipeline's stages, the baselines
   std::optional<PipelineReference> reference;  // the pipeline's published figures, when it has some
   std::optional<allan::Analysis> intrinsic;    // measured - systematic
-  std::optional<Px4Baseline> baseline;
+  std::vector<Baseline> baselines;             // in the order of their stages
   std::map<std::string, FloorComparison> against_floor;  // per stage, factor 1.5
 };
 
@@ -82,7 +86,7 @@ enum class BStyle {
 // resolved B, the value with four significant digits (tables write the number itself).
 std::string b_text(const BDegH& b, BStyle style);
 
-// report.json's "table2", "intrinsic_floor", "baseline" and "allan" entries.
+// report.json's "table2", "intrinsic_floor", "baselines" (by stage) and "allan" entries.
 nlohmann::json scores_json(const RunScores& scores);
 // One "table2" row of scores_json, and its "intrinsic_floor" entry.
 nlohmann::json stage_json(const RunScores& scores, const StageScore& stage);

@@ -143,6 +143,7 @@ class RbfPlugin final : public Regressor {
                                  {"best", describe(best, result.best_value)},
                                  {"history", result.history},
                                  {"evaluations", result.evaluations},
+                                 {"notes", tuning::search_notes(result, bounds)},
                                  {"optimizer", found.optimizer_diagnostics}};
     return best;
   }

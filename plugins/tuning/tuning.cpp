@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "framework/error.hpp"
+#include "framework/number_text.hpp"
 #include "framework/resources.hpp"
 #include "plugins/common/holdout.hpp"
 
@@ -138,6 +139,25 @@ Search search(Optimizer& optimizer, const std::vector<Bound>& bounds, const Sett
   return {std::move(r), std::move(inner.diagnostics)};
 }
 
+std::vector<std::string> search_notes(const OptimizationResult& r, const std::vector<Bound>& bounds) {
+  std::vector<std::string> notes;
+  for (std::size_t i = 0; i < bounds.size() && i < static_cast<std::size_t>(r.best.size()); ++i) {
+    const Bound& b = bounds[i];
+    if (b.integer && b.upper - b.lower <= 1.0) continue;  // a choice between two values, not a range
+    const double v = r.best[static_cast<Eigen::Index>(i)], margin = kBoundFraction * (b.upper - b.lower);
+    const bool low = v <= b.lower + margin, high = v >= b.upper - margin;
+    if (!low && !high) continue;
+    notes.push_back(b.name + " ended at its " + (low ? "lower" : "upper") + " search bound (" +
+                    format_number(low ? b.lower : b.upper) + ", best " + format_number(v) +
+                    "): the optimum may lie outside the range; widen it");
+  }
+  const auto& h = r.history;
+  if (h.size() >= 3 && std::isfinite(h.front()) && std::abs(h.back() - h.front()) <= kFlatFraction * std::abs(h.front()))
+    notes.push_back("the best held-out error did not improve over " + std::to_string(h.size()) +
+                    " generations (flat history): the result is no better than the first population's best");
+  return notes;
+}
+
 Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s, const Eigen::MatrixXd& X,
                     const Eigen::VectorXd& y, const FitAndScore& fit_and_score, RunContext& ctx) {
   const Split data = split(X, y, s);
@@ -162,6 +182,7 @@ Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, cons
                                {"best", best},
                                {"history", r.history},
                                {"evaluations", r.evaluations},
+                               {"notes", search_notes(r, bounds)},
                                {"optimizer", found.optimizer_diagnostics}};
   return r.best;
 }

@@ -88,8 +88,20 @@ inline constexpr double kSecondsPerRowEvaluation = 1e-7;
 Search search(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s, const Split& data,
               const FitAndScore& fit_and_score, RunContext& ctx);
 
+// What a tuning result does not settle, in words for the reports (empty when nothing):
+//   - a parameter whose best value lies within kBoundFraction of its search range's width of a
+//     bound: the optimum may lie outside the range, which should be widened (not said of an
+//     integer parameter with two values, a choice such as linear_tail);
+//   - a best-value history (one value per generation / iteration, at least 3) whose last value is
+//     within kFlatFraction (relative) of its first: the search found nothing better than its start,
+//     so the result is as good as a random draw from the range.
+inline constexpr double kBoundFraction = 0.02;
+inline constexpr double kFlatFraction = 1e-3;
+std::vector<std::string> search_notes(const OptimizationResult& result, const std::vector<Bound>& bounds);
+
 // split(), then search(); returns the chosen decision vector. Writes ctx.diagnostics["tuning"]
-// (objectives, holdout sizes, best, history, optimizer diagnostics).
+// (objectives, holdout sizes, best, history, evaluations, notes (search_notes), optimizer
+// diagnostics).
 Eigen::VectorXd run(Optimizer& optimizer, const std::vector<Bound>& bounds, const Settings& s, const Eigen::MatrixXd& X,
                     const Eigen::VectorXd& y, const FitAndScore& fit_and_score, RunContext& ctx);
 

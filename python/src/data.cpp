@@ -754,8 +754,9 @@ void bind_pipeline(py::module_& m) {
                     "report.json's data as `driftlab run` writes it: per step its status, seconds and the plugin's "
                     "diagnostics ('steps'); for a record with a rate, Table 2 (models/evaluation/run_scores.hpp): "
                     "'table2' (per stage B_deg_h with B_ci and B_resolved, or B_upper_deg_h within B_within_tau_s; "
-                    "N_deg_h_rtHz; bandwidth_hz; residual_drift_deg_h with a truth; the paper's row), 'allan' "
-                    "(curves, deg/h), 'intrinsic_floor', 'baseline', 'units', 'readings'; 'table2_skipped' when "
+                    "N_deg_h_rtHz; bandwidth_hz; residual_drift_deg_h with a truth; systematic_error_deg_h with the "
+                    "systematic rate; the paper's row), 'allan' (curves, deg/h), 'intrinsic_floor', 'baselines' (by "
+                    "stage), 'units', 'readings'; 'table2_skipped' when "
                     "the record is too short for them")
       .def_readonly("table2_text", &PipelineRun::table2_text,
                     "Table 2 as `driftlab run` prints it (empty when the record has no rate or is too short)");

@@ -101,6 +101,22 @@ TEST(CalibrationEvidence, ThePhysicalModelRecoversTheLagAndReachesTheIntrinsicFl
               m.lag_tau_s, physical / kRadPerSecPerDph, floor / kRadPerSecPerDph);
 }
 
+// The hysteresis a model reports is the effect catalogue's height (cooling minus heating branch,
+// the convention of the device file and of `driftlab discrepancy`): a simulated device with only a
+// hysteresis of +150 deg/h (cooling branch above) reads back +150 within 20 %, not -75 (the
+// coefficient of the branch state) or -150.
+TEST(CalibrationEvidence, TheFittedHysteresisIsTheCataloguesHeightWithItsSign) {
+  constexpr double kHeightDph = 150.0, kRelativeTolerance = 0.2;
+  auto device = fmvmg(false);
+  device.error_model.effects.hysteresis = error_model::Hysteresis{kHeightDph * kRadPerSecPerDph, 2.0};
+  const CalibrationModel m = fit(run(device, devices::default_oven_profile(), 1), ModelKind::Physical);
+  ASSERT_GT(m.hysteresis_width_k, 0.0) << m.fit.selection;
+  const double height = m.hysteresis_height() / kRadPerSecPerDph, sigma = m.hysteresis_height_sigma() / kRadPerSecPerDph;
+  EXPECT_NEAR(height, kHeightDph, kRelativeTolerance * kHeightDph) << "sigma " << sigma;
+  std::printf("[ summary  ] hysteresis height %.1f +- %.1f deg/h (truth %.0f), width %.2f K (truth 2)\n", height, sigma,
+              kHeightDph, m.hysteresis_width_k);
+}
+
 TEST(CalibrationEvidence, ThePhysicalModelDoesNoWorseWhereTheDriftIsPolynomial) {
   // No effects: the device's bias(T) is smooth. Held-out noise makes two fits differ a little.
   constexpr double kNoiseTolerance = 1.05;

@@ -1,6 +1,8 @@
 // The 60-s block means of models/evaluation, the one home of the residual-drift metric: time blocks
 // that agree with the sample-count blocking on evenly sampled records (a partial last block left
 // out), skip gaps, and keep every block of a record with gaps, a burst record's last burst too.
+// Table 2's scores: the reference columns, the systematic error (what a stage left of the drift once
+// the intrinsic noise is taken out) and the two baselines fitted on the record.
 #include "models/evaluation/evaluation.hpp"
 
 #include <gtest/gtest.h>
@@ -9,6 +11,7 @@
 #include <vector>
 
 #include "framework/error.hpp"
+#include "framework/units.hpp"
 #include "models/evaluation/run_scores.hpp"
 
 namespace driftlab::evaluation {
@@ -133,6 +136,60 @@ TEST(RunScores, ShowTheReferenceColumnsOnlyForAPipelineWithAReference) {
   EXPECT_EQ(json["reference"]["source"], "A paper, Table 2");
   EXPECT_EQ(json["table2"][1]["stage"], "out");
   EXPECT_EQ(json["table2"][1]["reference"]["N_deg_h_rtHz"], 0.967814);
+}
+
+// A simulated oven record: true rate 0, a systematic bias that is an exact quadratic in temperature
+// (two cycles, heating and cooling), white noise on top. Outputs of known residual: the noise alone
+// (the drift removed exactly) and the noise plus a constant. The systematic error reads 0 and the
+// constant where the residual drift reads the noise's block means as well; the whole-record cubic
+// recovers the quadratic (its systematic error a small fraction of the record's).
+TEST(RunScores, SystematicErrorIsTheDriftLeftOnceTheIntrinsicNoiseIsTakenOut) {
+  const Eigen::Index n = 72000;  // 2 h at 10 Hz
+  const double kOffset = 2e-5;   // rad/s
+  TimeSeries record(times(n, 10.0));
+  Eigen::VectorXd temp(n), systematic(n), noise(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) / 10.0;
+    temp[i] = 20.0 - 30.0 * std::cos(2.0 * M_PI * t / 3600.0);
+    const double d = temp[i] - 25.0;
+    systematic[i] = 1e-3 + 2e-5 * d + 3e-7 * d * d;
+    noise[i] = 1e-4 * std::sin(1.7 * static_cast<double>(i * i % 997));
+  }
+  record.set_channel({role::kRate, "rad/s", "test", systematic + noise});
+  record.set_channel({role::kTemperature, "degC", "test", temp});
+  record.set_channel({role::kTrueRate, "rad/s", "test", Eigen::VectorXd::Zero(n)});
+  record.set_channel({role::kSystematic, "rad/s", "test", systematic});
+  const std::map<std::string, Signal> outputs{
+      {"exact", Signal::single(noise, "signal", "rad/s")},
+      {"offset", Signal::single(noise.array() + kOffset, "signal", "rad/s")}};
+  Pipeline p;
+  p.file = "p.yaml";
+  p.outputs = {{"exact", "s.a"}, {"offset", "s.b"}};
+  p.output_order = {"exact", "offset"};
+  const RunScores scores = score_run(record, p, outputs);
+  std::map<std::string, const StageScore*> by_stage;
+  for (const auto& st : scores.stages) by_stage[st.stage] = &st;
+  ASSERT_EQ(by_stage.size(), 5u) << table2_text(scores);
+  ASSERT_TRUE(by_stage.count(kPx4BaselineStage) && by_stage.count(kCubicBaselineStage)) << table2_text(scores);
+  for (const auto& [stage, st] : by_stage) ASSERT_TRUE(st->systematic_error_rad_s.has_value()) << stage;
+
+  const double original = *by_stage.at(kOriginalStage)->systematic_error_rad_s;
+  EXPECT_NEAR(*by_stage.at("exact")->systematic_error_rad_s, 0.0, 1e-15);
+  EXPECT_GT(*by_stage.at("exact")->residual_drift_rad_s, 1e-7) << "the noise's block means are in the residual drift";
+  EXPECT_NEAR(*by_stage.at("offset")->systematic_error_rad_s, kOffset, 1e-15);
+  EXPECT_LT(*by_stage.at(kCubicBaselineStage)->systematic_error_rad_s, 0.02 * original);
+  EXPECT_NE(table2_text(scores).find("syst. error"), std::string::npos);
+  const auto json = scores_json(scores);
+  EXPECT_TRUE(json["baselines"].contains(kCubicBaselineStage));
+  EXPECT_FALSE(json["baselines"][kCubicBaselineStage]["heating_only"].get<bool>());
+  EXPECT_NEAR(json["table2"][2]["systematic_error_deg_h"].get<double>(), kOffset * kDphPerRadPerSec, 1e-9);
+
+  // Without the systematic column, no such column.
+  TimeSeries bare(record.time());
+  for (const auto* r : {role::kRate, role::kTemperature, role::kTrueRate}) bare.set_channel(record.channel(r));
+  const RunScores without = score_run(bare, p, outputs);
+  EXPECT_EQ(table2_text(without).find("syst. error"), std::string::npos);
+  for (const auto& st : without.stages) EXPECT_FALSE(st.systematic_error_rad_s.has_value()) << st.stage;
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
 #include "plugins/common/holdout.hpp"
+#include "plugins/tuning/tuning.hpp"
 
 namespace driftlab {
 namespace {
@@ -204,6 +205,39 @@ TEST(RbfPlugin, GaTuningImprovesTheHeldOutRmseOverAPoorStartingSigma) {
   ASSERT_EQ(history.size(), 9u);
   EXPECT_EQ(history.back(), best);
   EXPECT_EQ(tuning.at("optimizer").at("history").get<std::vector<double>>(), history);
+}
+
+// A search range that holds the optimum at a bound, and a search that cannot improve on its first
+// population, are both said in the tuning's notes (plugins/tuning: search_notes); a parameter with
+// room in its range and an improving search say nothing.
+TEST(RbfPlugin, TuningSaysWhenItEndsAtASearchBoundOrItsHistoryIsFlat) {
+  const Eigen::MatrixXd X = uniform_points(1500, -3.0, 3.0, 8);
+  const std::string ga = "optimizer={plugin: optimizer/ga, params: {population: 12, generations: 8}}";
+  const auto notes_of = [&](std::vector<std::string> params) {
+    params.insert(params.end(), {"centres=10", "tune=true", ga});
+    RunContext ctx;
+    make_rbf(params)->fit(X, sin_cos(X), ctx);
+    return ctx.diagnostics.at("tuning").at("notes").get<std::vector<std::string>>();
+  };
+  // sin/cos on [-3, 3] with 10 centres wants a width of order 1 (standardized units): 0.02-0.03 is
+  // far too narrow, so the best sigma is the range's top.
+  const auto narrow = notes_of({"tune_sigma=[0.02, 0.03]"});
+  ASSERT_FALSE(narrow.empty());
+  EXPECT_NE(narrow.front().find("sigma ended at its upper search bound (0.03"), std::string::npos) << narrow.front();
+  for (const auto& note : notes_of({})) EXPECT_EQ(note.find("sigma"), std::string::npos) << note;
+
+  OptimizationResult flat;
+  flat.best = Eigen::Vector2d(0.5, -4.0);
+  flat.history = {2.0, 2.0, 2.0, 2.0};
+  const std::vector<Bound> bounds{{"sigma", 0.0, 1.0, false}, {"log10_regularization", -10.0, -2.0, false}};
+  const auto said = tuning::search_notes(flat, bounds);
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_NE(said.front().find("did not improve over 4 generations"), std::string::npos) << said.front();
+  flat.history.back() = 1.0;
+  EXPECT_TRUE(tuning::search_notes(flat, bounds).empty());
+  flat.best[1] = -10.0;
+  EXPECT_NE(tuning::search_notes(flat, bounds).front().find("log10_regularization ended at its lower search bound"),
+            std::string::npos);
 }
 
 TEST(RbfPlugin, SameSeedGivesTheSameModelOnAnyThreadCount) {

@@ -85,11 +85,11 @@ def test_table2_of_li2023_equals_driftlab_runs_report_and_print(cli, oven_csv, t
     report = json.loads((tmp_path / "run" / "report.json").read_text())
     run = driftlab.Pipeline.from_yaml("li2023").run(driftlab.read_record(oven_csv))
     # The same scoring code on the same record: every number equal (JSON keeps doubles exactly).
-    for key in ("table2", "allan", "intrinsic_floor", "baseline", "units", "readings"):
+    for key in ("table2", "allan", "intrinsic_floor", "baselines", "units", "readings"):
         assert run.report[key] == report[key], key
     assert run.table2_text and run.table2_text in printed
     rows = {row["stage"]: row for row in run.report["table2"]}
-    assert list(rows) == ["original", "rbf", "rbf_ga", "rbf_ga_kf", "px4_polynomial"]
+    assert list(rows) == ["original", "rbf", "rbf_ga", "rbf_ga_kf", "px4_polynomial", "cubic_whole_record"]
     for stage, row in rows.items():
         # A value with its interval only where the deviation has a floor, otherwise the bound alone.
         if row["B_resolved"]:

@@ -62,6 +62,9 @@ void expect_the_papers_claims_hold(const MainJob& job, const std::string& label)
   const std::vector<std::string> stages{"original", "rbf", "rbf_ga", "rbf_ga_kf"};
   for (const auto& s : stages) ASSERT_TRUE(job.rows.count(s)) << "missing Table 2 row " << s;
   ASSERT_TRUE(job.rows.count("px4_polynomial"));
+  ASSERT_TRUE(job.rows.count("cubic_whole_record"));
+  for (const auto& [stage, row] : job.rows)
+    EXPECT_TRUE(row.contains("systematic_error_deg_h")) << stage << ": the record carries its systematic rate";
   ASSERT_TRUE(job.report.contains("intrinsic_floor"));
 
   for (std::size_t k = 1; k < stages.size(); ++k) {

@@ -86,10 +86,16 @@ void print_model_summary(std::ostream& out, const calibration::ChannelCalibratio
            "corrects bias(T) - bias(T0)\n";
   if (m.kind != calibration::ModelKind::Polynomial) {
     std::snprintf(line, sizeof line,
-                  "  lag_tau = %g s, dT/dt coefficient = %.4e +- %.1e %s per K/s (smoothing %g s), "
-                  "hysteresis = %.4e +- %.1e %s (width %g K)\n",
-                  m.lag_tau_s, m.temperature_rate_rad_s_per_k_s, m.temperature_rate_sigma, unit.c_str(),
-                  m.derivative_tau_s, m.hysteresis_rad_s, m.hysteresis_sigma_rad_s, unit.c_str(), m.hysteresis_width_k);
+                  "  lag_tau = %g s, dT/dt coefficient = %.4e +- %.1e %s per K/s (smoothing %g s)\n", m.lag_tau_s,
+                  m.temperature_rate_rad_s_per_k_s, m.temperature_rate_sigma, unit.c_str(), m.derivative_tau_s);
+    out << line;
+    if (m.hysteresis_width_k > 0)
+      std::snprintf(line, sizeof line,
+                    "  hysteresis height (cooling minus heating branch) = %.4g +- %.2g %s (1 sigma), width %g K\n",
+                    m.hysteresis_height() * display, m.hysteresis_height_sigma() * display, display_unit,
+                    m.hysteresis_width_k);
+    else
+      std::snprintf(line, sizeof line, "  no hysteresis term\n");
     out << line;
   }
   if (m.rbf) out << "  RBF network: " << m.rbf->centres.rows() << " centres, sigma " << m.rbf->sigma << "\n";

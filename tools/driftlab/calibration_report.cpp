@@ -188,7 +188,8 @@ std::string terms_text(const calibration::CalibrationModel& m) {
   }
   if (m.temperature_rate_rad_s_per_k_s != 0.0) t += ", dT/dt";
   if (m.hysteresis_width_k > 0) {
-    std::snprintf(buf, sizeof buf, ", hysteresis (width %g K)", m.hysteresis_width_k);
+    std::snprintf(buf, sizeof buf, ", hysteresis %.3g °/h (width %g K)", m.hysteresis_height() * kDphPerRadPerSec,
+                  m.hysteresis_width_k);
     t += buf;
   }
   if (m.rbf && m.rbf->centres.rows() > 0) t += ", RBF " + std::to_string(m.rbf->centres.rows()) + " centres";
@@ -206,7 +207,8 @@ nlohmann::json model_json(const CompetingModel& m) {
     j["heating_only"] = m.model->fit.heating_only;
     j["lag_tau_s"] = m.model->lag_tau_s;
     j["temperature_rate_rad_s_per_k_s"] = m.model->temperature_rate_rad_s_per_k_s;
-    j["hysteresis_rad_s"] = m.model->hysteresis_rad_s;
+    j["hysteresis_height_dph"] = m.model->hysteresis_height() * kDphPerRadPerSec;
+    j["hysteresis_height_sigma_dph"] = m.model->hysteresis_height_sigma() * kDphPerRadPerSec;
     j["hysteresis_width_k"] = m.model->hysteresis_width_k;
     j["rbf_centres"] = m.model->rbf ? m.model->rbf->centres.rows() : 0;
     j["calibration_holdout_rms_dph"] = m.model->fit.holdout_rms_rad_s * kDphPerRadPerSec;
@@ -227,6 +229,10 @@ nlohmann::json report_head_json(const ReportInput& in, const std::vector<std::st
       {"residual_drift_by_leg_dph", "the same over each leg of the held-out record (legs: evaluations[].legs)"},
       {"B_dph", "bias instability: min overlapping Allan deviation of (output - true rate) / 0.664, deg/h"},
       {"N_dph_rthz", "Allan deviation at tau = 1 s, deg/h/sqrt(Hz); every causal model keeps the full bandwidth fs/2"},
+      {"hysteresis_height_dph",
+       "models[]: the full gap between the saturated heating and cooling branches, cooling minus heating (positive: "
+       "the cooling branch above), deg/h, with its 1-sigma; the convention of driftlab discrepancy's hysteresis "
+       "height_dph"},
       {"extrapolated_fraction",
        "share of samples with a model input (model temperature, dT/dt, branch state, RBF input) outside the range it "
        "was fitted on"}};

@@ -131,12 +131,14 @@ void compare(const CompareOptions& o, CommandEnv& env) {
     const auto start = std::chrono::steady_clock::now();
     const auto outputs = run_pipeline(r.pipeline, registry, record, options, r.steps);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!env.quiet)
+      for (const auto& note : tuning_notes(r.steps)) std::cerr << "note: " << r.label << ": " << note << "\n";
     env.progress(prefix + "scoring", 0.0);
     r.scores = score_run(record, r.pipeline, outputs);
     env.progress(prefix + "scoring", 1.0);
   }
 
-  // The record-level rows (original, PX4-style baseline, intrinsic floor) are the same for every
+  // The record-level rows (original, the baselines, intrinsic floor) are the same for every
   // pipeline: taken from the first.
   const RunScores& first = results.front().scores;
   std::vector<Table2Row> rows;
@@ -207,7 +209,7 @@ void compare(const CompareOptions& o, CommandEnv& env) {
                  format_number(record.sample_rate_hz()) + " Hz.");
   html.table(table);
   html.figure(figure,
-              "Allan deviation of the record, the PX4-style baseline and the intrinsic floor (dashed; the floor when "
+              "Allan deviation of the record, the two baselines and the intrinsic floor (dashed; the floor when "
               "the record has a systematic column) and every pipeline output (solid), each with its 68.3 % interval "
               "as a band. Lower at long tau: less drift left; a curve on the intrinsic floor has removed all of it.");
   files.write(report_html, html.html());

@@ -112,29 +112,31 @@ nlohmann::ordered_json process_noise_json(const mrpt_bridge::NavNoise& noise) {
 void write_report(const NavReport& report, nlohmann::ordered_json info, OutputSet& outputs, const fs::path& out,
                   double every_s) {
   const Eigen::Index n = report.input.time_s.size();
-  // summary.json: the keys (degrees and metres; magnitudes).
-  nlohmann::ordered_json summary, heading_final, position_final, heading_rms;
-  std::optional<double> raw_heading_final, compensated_heading_final;
+  // summary.json (degrees and metres; magnitudes): the heading error's RMS and worst moment first (a
+  // final value can be a lucky zero crossing), then the final values.
+  nlohmann::ordered_json summary, heading_rms, heading_worst, heading_final, position_final;
   for (const auto& run : report.runs) {
     if (run.name == "noise_only") continue;  // reported in nav_info.json and on stdout
-    const double heading = std::abs(run.track.heading_error_rad[n - 1]) * kDegPerRad;
-    if (run.name == "raw") raw_heading_final = heading;
-    if (run.name == "compensated") compensated_heading_final = heading;
-    heading_final[run.name] = heading;
-    position_final[run.name] = run.track.position_error_m[n - 1];
     heading_rms[run.name] = rms(run.track.heading_error_rad) * kDegPerRad;
+    heading_worst[run.name] = run.track.heading_error_rad.cwiseAbs().maxCoeff() * kDegPerRad;
+    heading_final[run.name] = std::abs(run.track.heading_error_rad[n - 1]) * kDegPerRad;
+    position_final[run.name] = run.track.position_error_m[n - 1];
   }
+  summary["heading_error_rms_deg"] = heading_rms;
+  summary["heading_error_worst_deg"] = heading_worst;
   summary["heading_error_final_deg"] = heading_final;
   summary["position_error_final_m"] = position_final;
-  summary["heading_error_rms_deg"] = heading_rms;
   outputs.write(out / "summary.json", summary.dump(2) + "\n");
 
-  for (const auto& run : report.runs)
-    info["heading_error_max_abs_deg"][run.name] = run.track.heading_error_rad.cwiseAbs().maxCoeff() * kDegPerRad;
-  if (raw_heading_final && compensated_heading_final && *compensated_heading_final > 0)
-    info["heading_error_final_raw_over_compensated"] = *raw_heading_final / *compensated_heading_final;
+  if (heading_rms.contains("raw") && heading_rms.contains("compensated") && heading_rms["compensated"] > 0) {
+    info["heading_error_rms_raw_over_compensated"] =
+        heading_rms["raw"].get<double>() / heading_rms["compensated"].get<double>();
+    info["heading_error_worst_raw_over_compensated"] =
+        heading_worst["raw"].get<double>() / heading_worst["compensated"].get<double>();
+  }
   const std::string ref = report.reference;
-  info["outputs"]["summary.json"] = "final heading error (deg), final position error (m), heading error RMS (deg)";
+  info["outputs"]["summary.json"] =
+      "heading error RMS and worst (deg), final heading error (deg), final position error (m), per run";
   info["outputs"]["trajectory.csv"] = "t_s, " + ref + "_x_m, " + ref + "_y_m, " + ref +
                                       "_heading_deg and each run's x_m, y_m, heading_deg, every --every s";
   info["outputs"]["errors.csv"] =
@@ -192,20 +194,21 @@ void write_report(const NavReport& report, nlohmann::ordered_json info, OutputSe
   }
 }
 
-// The table of final and RMS errors on stdout.
+// The table of errors on stdout: the heading error's RMS and worst moment first, then the final values.
 void print_runs(const NavReport& report) {
   const Eigen::Index n = report.input.time_s.size();
-  std::cout << "  run           heading final (deg)  heading RMS (deg)  position final (m)\n";
+  std::cout << "  run           heading RMS (deg)  heading worst (deg)  heading final (deg)  position final (m)\n";
   for (const auto& run : report.runs)
-    std::cout << "  " << std::left << std::setw(13) << run.name << std::right << std::setw(20)
-              << std::abs(run.track.heading_error_rad[n - 1]) * kDegPerRad << std::setw(19)
-              << rms(run.track.heading_error_rad) * kDegPerRad << std::setw(20) << run.track.position_error_m[n - 1]
-              << "\n";
+    std::cout << "  " << std::left << std::setw(13) << run.name << std::right << std::setw(18)
+              << rms(run.track.heading_error_rad) * kDegPerRad << std::setw(21)
+              << run.track.heading_error_rad.cwiseAbs().maxCoeff() * kDegPerRad << std::setw(21)
+              << std::abs(run.track.heading_error_rad[n - 1]) * kDegPerRad << std::setw(20)
+              << run.track.position_error_m[n - 1] << "\n";
   const auto& raw = report.runs.front().track.heading_error_rad;
   const auto& comp = report.runs[1].track.heading_error_rad;
-  if (std::abs(comp[n - 1]) > 0)
-    std::cout << "  final heading error raw / compensated: " << std::setprecision(1)
-              << std::abs(raw[n - 1]) / std::abs(comp[n - 1]) << "x\n";
+  if (rms(comp) > 0)
+    std::cout << "  heading error raw / compensated: " << std::setprecision(1) << rms(raw) / rms(comp) << "x on RMS, "
+              << raw.cwiseAbs().maxCoeff() / comp.cwiseAbs().maxCoeff() << "x on the worst moment\n";
 }
 
 // The cost of a simulated drive per sample: the drive, the tracks and the output text held at once
@@ -288,9 +291,10 @@ nlohmann::ordered_json simulated_info(const NavOptions& o, const fs::path& devic
   const auto& floor_track = report.runs.back().track;
   info["noise_only"] = {
       {"what", "true rate + the gyro's noise only (measured - simulated systematic rate): the intrinsic floor"},
+      {"heading_error_rms_deg", rms(floor_track.heading_error_rad) * kDegPerRad},
+      {"heading_error_worst_deg", floor_track.heading_error_rad.cwiseAbs().maxCoeff() * kDegPerRad},
       {"heading_error_final_deg", std::abs(floor_track.heading_error_rad[n - 1]) * kDegPerRad},
-      {"position_error_final_m", floor_track.position_error_m[n - 1]},
-      {"heading_error_rms_deg", rms(floor_track.heading_error_rad) * kDegPerRad}};
+      {"position_error_final_m", floor_track.position_error_m[n - 1]}};
   if (!o.no_rawlog)
     info["outputs"]["drive.rawlog"] =
         "the drive for `nav --rawlog`: CObservationIMU (raw IMU_WZ rad/s, IMU_TEMPERATURE degC) with "

@@ -83,6 +83,8 @@ void run(const RunOptions& o, CommandEnv& env) {
     throw;
   }
   report["status"] = "ok";
+  if (!env.quiet)
+    for (const auto& note : tuning_notes(steps)) std::cerr << "note: " << note << "\n";
   report["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   std::vector<CsvColumn> columns{CsvColumn::view("t_s", record.time(), "s")};

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "framework/number_text.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/html_report.hpp"
 #include "tools/driftlab/plot.hpp"
@@ -163,18 +164,23 @@ const char* const kRunTable2Note =
     "(a minimum with rising or flat neighbours within the intervals); where it is still falling at the longest "
     "tau, only the bound '< x' (the upper end of the minimum's interval / 0.664). N: the -1/2 slope line at "
     "tau = 1 s; N is only comparable at equal noise bandwidth (one-sided equivalent bandwidth relative to the "
-    "original record's white level). Residual drift: rms of 60-s block means of output - true rate. Max error / "
+    "original record's white level). Residual drift: rms of 60-s block means of output - true rate. Systematic "
+    "error (records with the true systematic rate): the same of output - true rate - intrinsic noise, the drift a "
+    "stage left once the gyro's own noise, which dominates a good stage's residual drift, is taken out. Max error / "
     "floor: largest ratio over tau of the Allan deviation of (output - true rate) to that of the intrinsic "
     "noise (measured - true systematic rate); 'within 1.5x' when every tau is, allowing for both intervals. "
     "PX4-style polynomial (px4_polynomial): third-order polynomial in temperature fitted on the heating bins (on "
-    "every bin when there are too few), the temperature clamped to their range.";
+    "every bin when there are too few), the temperature clamped to their range. Cubic on the whole record "
+    "(cubic_whole_record): the same on every bin, heating and cooling: the strongest simple model fitted in-sample "
+    "like the pipeline.";
 
 const char* const kCompareTable2Note =
     "B: flat floor of the overlapping Allan deviation / 0.664 beyond the output's correlation time, "
     "with the chi-square interval of that point (68.3 %), where the deviation has a floor; otherwise "
     "only the bound '< x' within the taus read; N: the -1/2 line at tau = 1 s, comparable "
     "only at equal noise bandwidth (one-sided, relative to the record's white level); residual "
-    "drift: rms of 60-s block means of output - true rate (records with a truth column); run time: "
+    "drift: rms of 60-s block means of output - true rate (records with a truth column); systematic error: the "
+    "same of output - true rate - intrinsic noise (records with the true systematic rate); run time: "
     "wall-clock seconds until the stage's step finished, on this machine.";
 
 const HtmlCell kNone = std::string("–");
@@ -185,7 +191,9 @@ HtmlCell b_value_cell(const allan::FloorReading& reading, BStyle bound) {
   return b.resolved ? HtmlCell(b.value) : HtmlCell(b_text(b, bound));
 }
 
-std::vector<HtmlCell> run_cells(const Table2Row& r, bool reference) {
+HtmlCell deg_h_cell(std::optional<double> rad_s) { return rad_s ? HtmlCell(*rad_s * kDphPerRadPerSec) : kNone; }
+
+std::vector<HtmlCell> run_cells(const Table2Row& r, bool reference, bool systematic) {
   const auto& a = *r.analysis;
   std::vector<HtmlCell> row{r.stage};
   if (reference) {
@@ -195,7 +203,8 @@ std::vector<HtmlCell> run_cells(const Table2Row& r, bool reference) {
   row.insert(row.end(),
              {b_value_cell(a.bias_instability, BStyle::Bound), b_text(b_deg_h(a.bias_instability), BStyle::Interval),
               a.bias_instability.tau_s, a.arw_rad_sqrt_s * kDphPerRadPerSec, r.bandwidth_hz});
-  row.push_back(r.residual_drift_rad_s ? HtmlCell(*r.residual_drift_rad_s * kDphPerRadPerSec) : kNone);
+  row.push_back(deg_h_cell(r.residual_drift_rad_s));
+  if (systematic) row.push_back(deg_h_cell(r.systematic_error_rad_s));
   row.push_back(r.against_floor
                     ? HtmlCell(fmt(r.against_floor->max_ratio, "%.2f") +
                                (r.against_floor->within ? " (within 1.5x given the intervals)" : " (above)"))
@@ -203,16 +212,18 @@ std::vector<HtmlCell> run_cells(const Table2Row& r, bool reference) {
   return row;
 }
 
-std::vector<HtmlCell> compare_cells(const Table2Row& r) {
+std::vector<HtmlCell> compare_cells(const Table2Row& r, bool systematic) {
   const auto& a = *r.analysis;
-  return {r.pipeline,
-          r.stage,
-          b_value_cell(a.bias_instability, BStyle::BoundFourDigits),
-          b_text(b_deg_h(a.bias_instability), BStyle::IntervalBracketed),
-          a.arw_rad_sqrt_s * kDphPerRadPerSec,
-          r.bandwidth_hz,
-          r.residual_drift_rad_s ? HtmlCell(*r.residual_drift_rad_s * kDphPerRadPerSec) : kNone,
-          r.seconds ? HtmlCell(*r.seconds) : kNone};
+  std::vector<HtmlCell> row{r.pipeline,
+                            r.stage,
+                            b_value_cell(a.bias_instability, BStyle::BoundFourDigits),
+                            b_text(b_deg_h(a.bias_instability), BStyle::IntervalBracketed),
+                            a.arw_rad_sqrt_s * kDphPerRadPerSec,
+                            r.bandwidth_hz,
+                            deg_h_cell(r.residual_drift_rad_s)};
+  if (systematic) row.push_back(deg_h_cell(r.systematic_error_rad_s));
+  row.push_back(r.seconds ? HtmlCell(*r.seconds) : kNone);
+  return row;
 }
 
 // ---- the sections of report.html, in order ----
@@ -228,7 +239,7 @@ void add_table2(HtmlReport& html, const TimeSeries& record, const RunScores& sco
   html.table(table2_html(Table2Layout::Run, rows, scores.reference));
   html.figure(
       allan_figure(scores),
-      "Allan deviation of the original record, every stage, the PX4-style baseline and the intrinsic floor, "
+      "Allan deviation of the original record, every stage, the two baselines and the intrinsic floor, "
       "with 68.3 % intervals (bands). Grey dashed: the slopes the original record's figures are read from "
       "(-1/2: N; 0: the floor 0.664 B; +1/2: K where the term fit resolves it); black dots: where N (tau = 1 s) "
       "and B (the curve's minimum) are read. A stage lower at long tau has less drift left.");
@@ -296,12 +307,12 @@ void add_temperature_trend(HtmlReport& html, const TimeSeries& record,
               "coincide, so the lower panel shows their difference: the sensor noise the trend removes");
 }
 
-// The rate of every stage (the record, the pipeline's, the baseline), by name in Table 2's order.
+// The rate of every stage (the pipeline's, the baselines'), by name in Table 2's order.
 struct StageOutputs {
   std::map<std::string, Eigen::VectorXd> rates;
   std::map<std::string, std::string> labels;  // stage_label of each
   std::vector<std::string> names;
-  std::optional<std::string> final_stage, baseline_stage;
+  std::optional<std::string> final_stage, px4_stage;
 };
 
 StageOutputs stage_outputs(const RunScores& scores, const std::map<std::string, Signal>& outputs) {
@@ -309,8 +320,9 @@ StageOutputs stage_outputs(const RunScores& scores, const std::map<std::string, 
   for (const auto& st : scores.stages) {
     if (st.source == StageScore::Source::Record) continue;
     if (st.source == StageScore::Source::Baseline) {
-      s.baseline_stage = st.stage;
-      s.rates[st.stage] = scores.baseline->compensated_rad_s;
+      for (const auto& b : scores.baselines)
+        if (b.stage == st.stage) s.rates[st.stage] = b.compensated_rad_s;
+      if (st.stage == evaluation::kPx4BaselineStage) s.px4_stage = st.stage;
     } else {
       s.final_stage = st.stage;
       s.rates[st.stage] = outputs.at(st.stage).columns.col(0);
@@ -383,7 +395,7 @@ void add_reconstruction(HtmlReport& html, const TimeSeries& record, const Pipeli
 void add_residual(HtmlReport& html, const TimeSeries& record, const StageOutputs& stages) {
   std::vector<std::string> shown;
   if (stages.final_stage) shown.push_back(*stages.final_stage);
-  if (stages.baseline_stage) shown.push_back(*stages.baseline_stage);
+  if (stages.px4_stage) shown.push_back(*stages.px4_stage);
   html.section("Residual against temperature");
   html.figure(residual_figure(record, shown, stages.rates, stages.labels),
               "Residual of the final stage and of the PX4-style baseline against temperature, heating (red) and "
@@ -391,12 +403,51 @@ void add_residual(HtmlReport& html, const TimeSeries& record, const StageOutputs
               "temperature: a heating/cooling difference (thermal lag or hysteresis) the model does not follow.");
 }
 
+void add_tuning(HtmlReport& html, const std::vector<StepRecord>& steps) {
+  HtmlTable t;
+  t.caption = "Hyperparameters found by each tuned step on its blocked holdout";
+  t.header = {"step", "plugin", "best hyperparameters", "held-out RMSE (step's unit)", "evaluations", "notes"};
+  for (const auto& s : steps) {
+    const auto it = s.diagnostics.find("tuning");
+    if (it == s.diagnostics.end()) continue;
+    const auto& tuning = *it;
+    std::string best, notes;
+    double rmse = 0.0;
+    const nlohmann::json found = tuning.value("best", nlohmann::json::object());
+    for (const auto& [key, value] : found.items()) {
+      if (key == "holdout_rmse") rmse = value.get<double>();
+      else if (value.is_number()) best += (best.empty() ? "" : ", ") + key + " = " + format_number(value.get<double>());
+    }
+    for (const auto& note : tuning.value("notes", nlohmann::json::array()))
+      notes += (notes.empty() ? "" : "; ") + note.get<std::string>();
+    t.rows.push_back({s.name, s.plugin, best, rmse, static_cast<double>(tuning.value("evaluations", 0)),
+                      notes.empty() ? std::string("–") : notes});
+  }
+  if (t.rows.empty()) return;
+  t.note = "A best value at a search bound means the optimum may lie outside the range (widen it with --set "
+           "STEP.PARAM=[low,high]); a flat history means the search found nothing better than its first population.";
+  html.section("Tuning");
+  html.table(t);
+}
+
 }  // namespace
+
+std::vector<std::string> tuning_notes(const std::vector<StepRecord>& steps) {
+  std::vector<std::string> lines;
+  for (const auto& s : steps) {
+    const auto it = s.diagnostics.find("tuning");
+    if (it == s.diagnostics.end()) continue;
+    for (const auto& note : it->value("notes", nlohmann::json::array()))
+      lines.push_back("step " + s.name + " (" + s.plugin + "): " + note.get<std::string>());
+  }
+  return lines;
+}
 
 std::string stage_label(const StageScore& st) {
   if (st.label != st.stage) return st.label;
   if (st.stage == evaluation::kOriginalStage) return "original record";
-  if (st.stage == evaluation::kBaselineStage) return "PX4-style polynomial";
+  if (st.stage == evaluation::kPx4BaselineStage) return "PX4-style polynomial";
+  if (st.stage == evaluation::kCubicBaselineStage) return "cubic on the whole record";
   return readable_name(st.stage);
 }
 
@@ -429,6 +480,7 @@ Table2Row table2_row(const RunScores& scores, const StageScore& st) {
   r.analysis = &st.analysis;
   r.bandwidth_hz = st.bandwidth_hz;
   r.residual_drift_rad_s = st.residual_drift_rad_s;
+  r.systematic_error_rad_s = st.systematic_error_rad_s;
   r.reference = evaluation::reference_row(scores, st.stage);
   if (const auto it = scores.against_floor.find(st.stage); it != scores.against_floor.end())
     r.against_floor = &it->second;
@@ -438,24 +490,30 @@ Table2Row table2_row(const RunScores& scores, const StageScore& st) {
 HtmlTable table2_html(Table2Layout layout, const std::vector<Table2Row>& rows,
                       const std::optional<PipelineReference>& reference) {
   HtmlTable t;
+  const bool systematic =
+      std::any_of(rows.begin(), rows.end(), [](const Table2Row& r) { return r.systematic_error_rad_s.has_value(); });
   if (layout == Table2Layout::Compare) {
     t.caption = "B, N, bandwidth, residual drift and run time per pipeline and stage (the paper's Table 2 columns)";
-    t.header = {
-        "pipeline",    "stage", "B (°/h)", "B interval (°/h)", "N (°/h/√Hz)", "bandwidth (Hz)", "residual drift (°/h)",
-        "run time (s)"};
-    for (const auto& r : rows) t.rows.push_back(compare_cells(r));
+    t.header = {"pipeline", "stage", "B (°/h)", "B interval (°/h)", "N (°/h/√Hz)", "bandwidth (Hz)",
+                "residual drift (°/h)"};
+    if (systematic) t.header.push_back("systematic error (°/h)");
+    t.header.push_back("run time (s)");
+    for (const auto& r : rows) t.rows.push_back(compare_cells(r, systematic));
     t.note = kCompareTable2Note;
     return t;
   }
   const bool ref = reference.has_value();
-  t.caption =
-      ref ? "The stages of the pipeline beside " + reference->source + ", the intrinsic floor and a PX4-style baseline"
-          : std::string("The stages of the pipeline, the intrinsic floor and a PX4-style baseline");
+  t.caption = (ref ? "The stages of the pipeline beside " + reference->source
+                   : std::string("The stages of the pipeline")) +
+              ", two simple baselines fitted on the same record (PX4-style, cubic on the whole record) and the "
+              "intrinsic floor";
   t.header = {"stage"};
   if (ref) t.header.insert(t.header.end(), {"paper B (°/h)", "paper N (°/h/√Hz)"});
   t.header.insert(t.header.end(), {"B (°/h)", "B interval (°/h)", "minimum at tau (s)", "N (°/h/√Hz)",
-                                   "noise bandwidth (Hz)", "residual drift (°/h)", "max error / floor"});
-  for (const auto& r : rows) t.rows.push_back(run_cells(r, ref));
+                                   "noise bandwidth (Hz)", "residual drift (°/h)"});
+  if (systematic) t.header.push_back("systematic error (°/h)");
+  t.header.push_back("max error / floor");
+  for (const auto& r : rows) t.rows.push_back(run_cells(r, ref, systematic));
   t.note = kRunTable2Note;
   return t;
 }
@@ -487,6 +545,7 @@ std::string run_html(const std::string& title, const std::string& data, const Ti
   add_reconstruction(html, record, pipeline, step_signals, stages);
   if (record.has(role::kTrueRate) && record.has(role::kTemperature) && !stages.names.empty())
     add_residual(html, record, stages);
+  add_tuning(html, steps);
   return html.html();
 }
 

@@ -29,7 +29,7 @@ using evaluation::StageScore;
 using evaluation::table2_text;
 
 // A stage as figures and tables name it: the pipeline's label ("RBF NN + GA + KF"), "original
-// record", "PX4-style polynomial", else its name in words (readable_name).
+// record", "PX4-style polynomial", "cubic on the whole record", else its name in words (readable_name).
 std::string stage_label(const StageScore& stage);
 
 // An IMF group as figures and tables name it, with its IMFs: "mixed group (IMFs 3–4)".
@@ -43,6 +43,7 @@ struct Table2Row {
   const allan::Analysis* analysis = nullptr;  // B, N and the minimum's tau
   double bandwidth_hz = 0.0;
   std::optional<double> residual_drift_rad_s;         // none: "–"
+  std::optional<double> systematic_error_rad_s;       // none: "–"
   const PipelineReference::Row* reference = nullptr;  // the published figures, if any
   const evaluation::FloorComparison* against_floor = nullptr;
   std::optional<double> seconds;  // compare: until the stage's step finished
@@ -54,14 +55,20 @@ Table2Row table2_row(const RunScores& scores, const StageScore& stage);
 Table2Row intrinsic_floor_row(const RunScores& scores, double sample_rate_hz);
 
 // The two Table 2 tables: `driftlab run`'s (stage, the reference's B and N when the pipeline has
-// one, B, its interval, the minimum's tau, N, noise bandwidth, residual drift, max error / floor)
-// and `driftlab compare`'s (pipeline, stage, B, interval, N, bandwidth, residual drift, run time).
+// one, B, its interval, the minimum's tau, N, noise bandwidth, residual drift, systematic error when a
+// row has one, max error / floor) and `driftlab compare`'s (pipeline, stage, B, interval, N, bandwidth,
+// residual drift, systematic error when a row has one, run time).
 enum class Table2Layout { Run, Compare };
 HtmlTable table2_html(Table2Layout layout, const std::vector<Table2Row>& rows,
                       const std::optional<PipelineReference>& reference);
 
+// What the steps' hyperparameter tunings (plugins/tuning: diagnostics["tuning"]["notes"]) did not
+// settle, one line each: "step rbf_ga (regressor/rbf): sigma ended at its upper search bound ...".
+std::vector<std::string> tuning_notes(const std::vector<StepRecord>& steps);
+
 // report.html: Table 2 with the honest columns, the IMF groups and their reasons, and the paper's
-// figures (Figs. 10-15) plus the residual against temperature, heating and cooling apart. The
+// figures (Figs. 10-15) plus the residual against temperature, heating and cooling apart, and the
+// tuned steps (best hyperparameters, held-out error, evaluations, tuning_notes). The
 // figures come from what the run produced: every decomposition step (its IMFs), every classifier
 // step (sample entropy per IMF and the groups, from its step record), temperature-unit step outputs
 // (the trend), the stages and, with a truth column, the residual. `data`: the record's path as the
