@@ -451,7 +451,7 @@ CalibrationModel read_model_body(const Reader& r, const nlohmann::json& j, const
     if (!(m.derivative_tau_s > 0)) r.fail(Reader::join(pa, "derivative_tau_s"), "must be > 0 s");
     if (m.hysteresis_width_k < 0) r.fail(Reader::join(pa, "hysteresis_width_k"), "must be >= 0 K");
     for (const auto& [stored, name] : {std::pair{&m.temperature_rate_range_k_s, "temperature_rate_range_k_s"},
-                                      std::pair{&m.hysteresis_state_range, "hysteresis_state_range"}})
+                                       std::pair{&m.hysteresis_state_range, "hysteresis_state_range"}})
       if (const auto* v = r.optional(*p, name)) {
         const auto values = r.numbers(*v, Reader::join(pa, name));
         if (values.size() != 2 || !(values[0] <= values[1]))

@@ -50,7 +50,8 @@ StageScore score_stage(const std::string& stage, const Eigen::VectorXd& output_r
   if (truth != nullptr) {
     const Eigen::VectorXd error = output_rad_s - truth->true_rate_rad_s;
     s.residual_drift_rad_s = block_mean_rms(time_s, error);
-    if (truth->intrinsic_noise_rad_s) s.systematic_error_rad_s = block_mean_rms(time_s, error - *truth->intrinsic_noise_rad_s);
+    if (truth->intrinsic_noise_rad_s)
+      s.systematic_error_rad_s = block_mean_rms(time_s, error - *truth->intrinsic_noise_rad_s);
     s.error = allan::analyze_rate(error, sample_rate_hz, options);
   }
   return s;

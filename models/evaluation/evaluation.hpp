@@ -42,12 +42,12 @@ struct StageScore {
   std::string stage;                                 // the output's name
   std::string label;                                 // what reports call it (the pipeline's stage label)
   Source source = Source::Pipeline;
-  allan::Analysis analysis;                    // B, N, curve of the output
-  double bandwidth_hz = 0.0;                   // noise bandwidth relative to the original record's N
-  double correlation_time_s = 0.0;             // 1 / bandwidth: B is read beyond it
-  std::optional<double> residual_drift_rad_s;   // rms of 60-s block means of output - true rate
+  allan::Analysis analysis;                      // B, N, curve of the output
+  double bandwidth_hz = 0.0;                     // noise bandwidth relative to the original record's N
+  double correlation_time_s = 0.0;               // 1 / bandwidth: B is read beyond it
+  std::optional<double> residual_drift_rad_s;    // rms of 60-s block means of output - true rate
   std::optional<double> systematic_error_rad_s;  // the same of output - true rate - intrinsic noise
-  std::optional<allan::Analysis> error;        // Allan analysis of output - true rate
+  std::optional<allan::Analysis> error;          // Allan analysis of output - true rate
 };
 
 // Means of x over blocks of block_s seconds of time, for evenly sampled records and for records with

@@ -110,9 +110,8 @@ RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const st
   if (record.has(role::kTemperature) && fittable(record.channel(role::kTemperature).values)) {
     const Eigen::VectorXd& temp = record.channel(role::kTemperature).values;
     const std::vector<calibration::Record> fitted_on{{"the record", time, rate, temp, {}, {}}};
-    for (auto& [stage, model] :
-         {std::pair{kPx4BaselineStage, calibration::fit_px4_style(fitted_on, {})},
-          std::pair{kCubicBaselineStage, calibration::fit_cubic_all_bins(fitted_on, {})}}) {
+    for (auto& [stage, model] : {std::pair{kPx4BaselineStage, calibration::fit_px4_style(fitted_on, {})},
+                                 std::pair{kCubicBaselineStage, calibration::fit_cubic_all_bins(fitted_on, {})}}) {
       Eigen::VectorXd compensated = calibration::compensate(model, time, rate, temp).rate_rad_s;
       s.stages.push_back(score_stage(stage, compensated, time, fs, reference_n, t));
       s.stages.back().source = StageScore::Source::Baseline;

@@ -41,10 +41,10 @@ inline constexpr const char* kCubicBaselineStage = "cubic_whole_record";
 inline bool is_pipeline_stage(const StageScore& stage) { return stage.source == StageScore::Source::Pipeline; }
 
 struct RunScores {
-  std::vector<StageScore> stages;              // kOriginalStage, the pipeline's stages, the baselines
-  std::optional<PipelineReference> reference;  // the pipeline's published figures, when it has some
-  std::optional<allan::Analysis> intrinsic;    // measured - systematic
-  std::vector<Baseline> baselines;             // in the order of their stages
+  std::vector<StageScore> stages;                        // kOriginalStage, the pipeline's stages, the baselines
+  std::optional<PipelineReference> reference;            // the pipeline's published figures, when it has some
+  std::optional<allan::Analysis> intrinsic;              // measured - systematic
+  std::vector<Baseline> baselines;                       // in the order of their stages
   std::map<std::string, FloorComparison> against_floor;  // per stage, factor 1.5
 };
 

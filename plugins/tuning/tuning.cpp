@@ -152,7 +152,8 @@ std::vector<std::string> search_notes(const OptimizationResult& r, const std::ve
                     "): the optimum may lie outside the range; widen it");
   }
   const auto& h = r.history;
-  if (h.size() >= 3 && std::isfinite(h.front()) && std::abs(h.back() - h.front()) <= kFlatFraction * std::abs(h.front()))
+  if (h.size() >= 3 && std::isfinite(h.front()) &&
+      std::abs(h.back() - h.front()) <= kFlatFraction * std::abs(h.front()))
     notes.push_back("the best held-out error did not improve over " + std::to_string(h.size()) +
                     " generations (flat history): the result is no better than the first population's best");
   return notes;

@@ -111,7 +111,8 @@ TEST(CalibrationEvidence, TheFittedHysteresisIsTheCataloguesHeightWithItsSign) {
   device.error_model.effects.hysteresis = error_model::Hysteresis{kHeightDph * kRadPerSecPerDph, 2.0};
   const CalibrationModel m = fit(run(device, devices::default_oven_profile(), 1), ModelKind::Physical);
   ASSERT_GT(m.hysteresis_width_k, 0.0) << m.fit.selection;
-  const double height = m.hysteresis_height() / kRadPerSecPerDph, sigma = m.hysteresis_height_sigma() / kRadPerSecPerDph;
+  const double height = m.hysteresis_height() / kRadPerSecPerDph,
+               sigma = m.hysteresis_height_sigma() / kRadPerSecPerDph;
   EXPECT_NEAR(height, kHeightDph, kRelativeTolerance * kHeightDph) << "sigma " << sigma;
   std::printf("[ summary  ] hysteresis height %.1f +- %.1f deg/h (truth %.0f), width %.2f K (truth 2)\n", height, sigma,
               kHeightDph, m.hysteresis_width_k);

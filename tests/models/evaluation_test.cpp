@@ -159,9 +159,8 @@ TEST(RunScores, SystematicErrorIsTheDriftLeftOnceTheIntrinsicNoiseIsTakenOut) {
   record.set_channel({role::kTemperature, "degC", "test", temp});
   record.set_channel({role::kTrueRate, "rad/s", "test", Eigen::VectorXd::Zero(n)});
   record.set_channel({role::kSystematic, "rad/s", "test", systematic});
-  const std::map<std::string, Signal> outputs{
-      {"exact", Signal::single(noise, "signal", "rad/s")},
-      {"offset", Signal::single(noise.array() + kOffset, "signal", "rad/s")}};
+  const std::map<std::string, Signal> outputs{{"exact", Signal::single(noise, "signal", "rad/s")},
+                                              {"offset", Signal::single(noise.array() + kOffset, "signal", "rad/s")}};
   Pipeline p;
   p.file = "p.yaml";
   p.outputs = {{"exact", "s.a"}, {"offset", "s.b"}};

@@ -122,5 +122,24 @@ TEST(Cli, ValidatesAPipelineWithoutData) {
   EXPECT_THAT(r.out, HasSubstr("valid (1 steps)"));
 }
 
+// --pipeline takes a file or the name of a bundled pipeline (models/pipelines/, or an installed
+// driftlab's share/driftlab/pipelines); a name that is neither is an error listing the bundled ones.
+TEST(Cli, APipelineIsAFileOrTheNameOfABundledOne) {
+  for (const std::string name : {"li2023", "li2023.yaml"}) {
+    const auto r = run_driftlab("run --validate-only --pipeline " + name);
+    EXPECT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    EXPECT_THAT(r.out, HasSubstr("valid (14 steps)")) << name;
+  }
+  for (const std::string command :
+       {"run --validate-only --pipeline no_such_pipeline", "compare --pipeline no_such_pipeline --data x.csv --out cmp",
+        "calibrate --data x.csv --paper-pipeline no_such_pipeline --out m.json"}) {
+    const auto r = run_driftlab(command);
+    EXPECT_EQ(r.exit_code, 2) << command;
+    EXPECT_THAT(r.err, HasSubstr("no_such_pipeline")) << command;
+    EXPECT_THAT(r.err, HasSubstr("no bundled pipeline of that name")) << command << ": " << r.err;
+    EXPECT_THAT(r.err, HasSubstr("li2023")) << command;
+  }
+}
+
 }  // namespace
 }  // namespace driftlab

@@ -52,10 +52,13 @@ TEST(Install, AnInstalledDriftlabRunsFromAnotherDirectoryWithItsOwnLibraryDevice
   const auto simulated =
       installed("--quiet simulate --device fmvmg --profile oven --fs 1 --duration 1800 --out rec.csv");
   ASSERT_EQ(simulated.exit_code, 0) << simulated.err;
-  const auto run = installed("--quiet run --pipeline " + (share / "pipelines" / "polynomial_baseline.yaml").string() +
-                             " --data rec.csv --out run");
+  // A pipeline by name is the installed one; an unknown name lists the installed directory.
+  const auto run = installed("--quiet run --pipeline polynomial_baseline --data rec.csv --out run");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_TRUE(fs::exists(elsewhere / "run" / "outputs.csv"));
+  const auto unknown = installed("run --validate-only --pipeline no_such_pipeline");
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_THAT(unknown.err, HasSubstr((share / "pipelines").string()));
 
   // The executable loads the prefix's libdriftlab_framework.so (its RUNPATH), not the build tree's.
   const std::string ldd = "ldd " + (prefix / "bin" / "driftlab").string() + " >" + (dir / "ldd").string();

@@ -824,7 +824,9 @@ TEST(MrptNav, CalibrationModelCutsTheOneHourHeadingErrorRmsAndWorstAtLeastTenfol
   const auto raw = run_nav(input, drive.gyro.rate_rad_s, noise, false, prior);
   const auto comp = run_nav(input, compensated, noise, false, prior);
   // On the heading error's RMS and its worst moment: the final value can be a lucky zero crossing.
-  const auto rms_deg = [](const Eigen::VectorXd& e) { return std::sqrt(e.squaredNorm() / e.size()) * driftlab::kDegPerRad; };
+  const auto rms_deg = [](const Eigen::VectorXd& e) {
+    return std::sqrt(e.squaredNorm() / e.size()) * driftlab::kDegPerRad;
+  };
   const auto worst_deg = [](const Eigen::VectorXd& e) { return e.cwiseAbs().maxCoeff() * driftlab::kDegPerRad; };
   std::cout << "heading error: raw RMS " << rms_deg(raw.heading_error_rad) << " deg, worst "
             << worst_deg(raw.heading_error_rad) << " deg; compensated RMS " << rms_deg(comp.heading_error_rad)

@@ -85,9 +85,9 @@ void print_model_summary(std::ostream& out, const calibration::ChannelCalibratio
     out << "  a0 = 0: the constant offset is not observable without a reference (gravity along the axis); the model "
            "corrects bias(T) - bias(T0)\n";
   if (m.kind != calibration::ModelKind::Polynomial) {
-    std::snprintf(line, sizeof line,
-                  "  lag_tau = %g s, dT/dt coefficient = %.4e +- %.1e %s per K/s (smoothing %g s)\n", m.lag_tau_s,
-                  m.temperature_rate_rad_s_per_k_s, m.temperature_rate_sigma, unit.c_str(), m.derivative_tau_s);
+    std::snprintf(line, sizeof line, "  lag_tau = %g s, dT/dt coefficient = %.4e +- %.1e %s per K/s (smoothing %g s)\n",
+                  m.lag_tau_s, m.temperature_rate_rad_s_per_k_s, m.temperature_rate_sigma, unit.c_str(),
+                  m.derivative_tau_s);
     out << line;
     if (m.hysteresis_width_k > 0)
       std::snprintf(line, sizeof line,

@@ -19,6 +19,7 @@
 #include "tools/driftlab/calibration_cli.hpp"
 #include "tools/driftlab/calibration_report.hpp"
 #include "tools/driftlab/cli.hpp"
+#include "tools/driftlab/data_dirs.hpp"
 #include "tools/driftlab/run_report.hpp"
 
 namespace driftlab::cli {
@@ -300,8 +301,8 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
                   "write DIR/report.json and DIR/report.html: no compensation, PX4-style polynomial, poly, "
                   "physical and rbf scored on the held-out records");
   cmd->add_option("--paper-pipeline", o->paper_pipeline,
-                  "also run this pipeline offline on each held-out record as a reference (e.g. "
-                  "models/pipelines/li2023.yaml; slow on long records)");
+                  "also run this pipeline offline on each held-out record as a reference (a file or the name of "
+                  "a bundled pipeline, e.g. li2023; slow on long records)");
   cmd->callback([o, &env, cmd] {
     o->command_line = "driftlab calibrate";
     for (const auto* opt : cmd->get_options()) {
@@ -309,6 +310,8 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
     }
     if (o->fit.min_order > o->fit.max_order)
       throw ConfigError({"", 0, "--min-order"}, "--min-order exceeds --max-order");
+    if (!o->paper_pipeline.empty())  // before the records are read and fitted
+      o->paper_pipeline = resolve_pipeline_file(o->paper_pipeline, "--paper-pipeline").string();
     calibrate_command(*o, env);
   });
 }

@@ -21,6 +21,7 @@
 #include "framework/pipeline.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
+#include "tools/driftlab/data_dirs.hpp"
 #include "tools/driftlab/html_report.hpp"
 #include "tools/driftlab/plot.hpp"
 #include "tools/driftlab/run_report.hpp"
@@ -85,7 +86,8 @@ void compare(const CompareOptions& o, CommandEnv& env) {
     PipelineResult r;
     r.file = file;
     r.label = unique_label(file, labels);
-    r.pipeline = load_pipeline(file, registry);
+    const auto path = resolve_pipeline_file(file, "--pipeline");
+    r.pipeline = load_pipeline(path, registry);
     std::vector<PipelineOverride> mine;  // the overrides of the steps this pipeline has
     std::string steps;
     for (const auto& step : r.pipeline.steps) steps += (steps.empty() ? "" : ", ") + step.name;
@@ -98,7 +100,7 @@ void compare(const CompareOptions& o, CommandEnv& env) {
           break;
         }
     if (!mine.empty()) {
-      r.pipeline = load_pipeline(file, registry, mine);
+      r.pipeline = load_pipeline(path, registry, mine);
       std::string applied;
       for (const auto& text : r.pipeline.overrides) applied += (applied.empty() ? "" : ", ") + text;
       r.label += " [" + applied + "]";
@@ -237,7 +239,9 @@ void add_compare_command(CLI::App& app, CommandEnv& env) {
   auto* cmd = app.add_subcommand("compare",
                                  "run several pipelines on the same record; writes one report (report.json, "
                                  "report.html: Table 2 columns per pipeline and stage, Allan curves)");
-  cmd->add_option("--pipeline", opts->pipelines, "pipeline description (YAML); repeatable")->required();
+  cmd->add_option("--pipeline", opts->pipelines,
+                  "pipeline description (YAML): a file, or the name of a bundled pipeline (li2023, ...); repeatable")
+      ->required();
   add_data_options(cmd, opts->data, "column mapping role=column:unit (e.g. rate=gyro_z:rad/s); repeatable");
   cmd->add_option("--out", opts->out, "output directory (created if missing)")->required();
   add_set_option(cmd, opts->sets);

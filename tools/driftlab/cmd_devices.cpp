@@ -9,7 +9,7 @@
 #include "framework/imu.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
-#include "tools/driftlab/devices_dir.hpp"
+#include "tools/driftlab/data_dirs.hpp"
 
 namespace driftlab::cli {
 namespace {

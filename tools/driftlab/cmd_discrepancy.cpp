@@ -16,7 +16,7 @@
 #include "framework/output_set.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
-#include "tools/driftlab/devices_dir.hpp"
+#include "tools/driftlab/data_dirs.hpp"
 #include "tools/driftlab/discrepancy_report.hpp"
 
 namespace driftlab::cli {

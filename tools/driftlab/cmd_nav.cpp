@@ -23,7 +23,7 @@
 #include "framework/units.hpp"
 #include "models/evaluation/evaluation.hpp"
 #include "tools/driftlab/cli.hpp"
-#include "tools/driftlab/devices_dir.hpp"
+#include "tools/driftlab/data_dirs.hpp"
 #include "tools/driftlab/plot.hpp"
 #include "tools/mrpt/nav_calibration.hpp"
 #include "tools/mrpt/nav_record.hpp"

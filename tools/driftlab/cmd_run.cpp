@@ -9,6 +9,7 @@
 #include "framework/output_set.hpp"
 #include "framework/pipeline.hpp"
 #include "tools/driftlab/cli.hpp"
+#include "tools/driftlab/data_dirs.hpp"
 #include "tools/driftlab/run_report.hpp"
 #include "tools/driftlab/version.hpp"
 
@@ -34,7 +35,8 @@ struct RunOptions {
 
 void run(const RunOptions& o, CommandEnv& env) {
   const auto& registry = env.registry();
-  const auto pipeline = load_pipeline(o.pipeline, registry, pipeline_overrides(o.sets));
+  const auto pipeline =
+      load_pipeline(resolve_pipeline_file(o.pipeline, "--pipeline"), registry, pipeline_overrides(o.sets));
   if (o.validate_only) {
     std::cout << o.pipeline << ": valid (" << pipeline.steps.size() << " steps"
               << (pipeline.overrides.empty() ? ""
@@ -136,7 +138,10 @@ void add_run_command(CLI::App& app, CommandEnv& env) {
   auto* cmd = app.add_subcommand("run",
                                  "run a pipeline on a record; writes outputs.csv, pipeline.effective.yaml, "
                                  "report.json and report.html (Table 2, figures) into --out");
-  cmd->add_option("--pipeline", opts->pipeline, "pipeline description (YAML, driftlab-pipeline/1)")->required();
+  cmd->add_option("--pipeline", opts->pipeline,
+                  "pipeline description (YAML, driftlab-pipeline/1): a file, or the name of a bundled pipeline "
+                  "(li2023, ...)")
+      ->required();
   add_data_options(cmd, opts->data, "column mapping role=column:unit (e.g. rate=gyro_z:rad/s); repeatable");
   cmd->add_option("--out", opts->out, "output directory (created if missing)");
   add_set_option(cmd, opts->sets);

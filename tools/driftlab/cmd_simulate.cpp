@@ -23,7 +23,7 @@
 #include "framework/resources.hpp"
 #include "framework/units.hpp"
 #include "tools/driftlab/cli.hpp"
-#include "tools/driftlab/devices_dir.hpp"
+#include "tools/driftlab/data_dirs.hpp"
 
 namespace driftlab::cli {
 namespace {

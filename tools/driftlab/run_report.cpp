@@ -415,8 +415,10 @@ void add_tuning(HtmlReport& html, const std::vector<StepRecord>& steps) {
     double rmse = 0.0;
     const nlohmann::json found = tuning.value("best", nlohmann::json::object());
     for (const auto& [key, value] : found.items()) {
-      if (key == "holdout_rmse") rmse = value.get<double>();
-      else if (value.is_number()) best += (best.empty() ? "" : ", ") + key + " = " + format_number(value.get<double>());
+      if (key == "holdout_rmse")
+        rmse = value.get<double>();
+      else if (value.is_number())
+        best += (best.empty() ? "" : ", ") + key + " = " + format_number(value.get<double>());
     }
     for (const auto& note : tuning.value("notes", nlohmann::json::array()))
       notes += (notes.empty() ? "" : "; ") + note.get<std::string>();
@@ -424,8 +426,9 @@ void add_tuning(HtmlReport& html, const std::vector<StepRecord>& steps) {
                       notes.empty() ? std::string("–") : notes});
   }
   if (t.rows.empty()) return;
-  t.note = "A best value at a search bound means the optimum may lie outside the range (widen it with --set "
-           "STEP.PARAM=[low,high]); a flat history means the search found nothing better than its first population.";
+  t.note =
+      "A best value at a search bound means the optimum may lie outside the range (widen it with --set "
+      "STEP.PARAM=[low,high]); a flat history means the search found nothing better than its first population.";
   html.section("Tuning");
   html.table(t);
 }
@@ -494,8 +497,8 @@ HtmlTable table2_html(Table2Layout layout, const std::vector<Table2Row>& rows,
       std::any_of(rows.begin(), rows.end(), [](const Table2Row& r) { return r.systematic_error_rad_s.has_value(); });
   if (layout == Table2Layout::Compare) {
     t.caption = "B, N, bandwidth, residual drift and run time per pipeline and stage (the paper's Table 2 columns)";
-    t.header = {"pipeline", "stage", "B (°/h)", "B interval (°/h)", "N (°/h/√Hz)", "bandwidth (Hz)",
-                "residual drift (°/h)"};
+    t.header = {
+        "pipeline", "stage", "B (°/h)", "B interval (°/h)", "N (°/h/√Hz)", "bandwidth (Hz)", "residual drift (°/h)"};
     if (systematic) t.header.push_back("systematic error (°/h)");
     t.header.push_back("run time (s)");
     for (const auto& r : rows) t.rows.push_back(compare_cells(r, systematic));
@@ -503,10 +506,10 @@ HtmlTable table2_html(Table2Layout layout, const std::vector<Table2Row>& rows,
     return t;
   }
   const bool ref = reference.has_value();
-  t.caption = (ref ? "The stages of the pipeline beside " + reference->source
-                   : std::string("The stages of the pipeline")) +
-              ", two simple baselines fitted on the same record (PX4-style, cubic on the whole record) and the "
-              "intrinsic floor";
+  t.caption =
+      (ref ? "The stages of the pipeline beside " + reference->source : std::string("The stages of the pipeline")) +
+      ", two simple baselines fitted on the same record (PX4-style, cubic on the whole record) and the "
+      "intrinsic floor";
   t.header = {"stage"};
   if (ref) t.header.insert(t.header.end(), {"paper B (°/h)", "paper N (°/h/√Hz)"});
   t.header.insert(t.header.end(), {"B (°/h)", "B interval (°/h)", "minimum at tau (s)", "N (°/h/√Hz)",
