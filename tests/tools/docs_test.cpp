@@ -2,13 +2,17 @@
 // relative link in README.md and docs/ resolves to a file (and heading) inside the repository; the
 // generated references (docs/cli.md, the plugin table of docs/plugins.md) equal what the program
 // prints; and the fenced shell and Python blocks marked `<!-- docs-test: runs -->` run as written,
-// page by page in one scratch directory each, with `driftlab` on the PATH, the build tree's Python
-// package importable and the repository's devices/, models/, tests/ and tools/ beside them.
+// page by page in one scratch directory each, which is also $HOME (so `~/.local` stays inside it),
+// with `driftlab` on the PATH, `python3` the interpreter the Python module was built for, the build
+// tree's Python package importable, and the repository's devices/, models/, tests/, tools/ and
+// python/ and the build tree (as build/) beside them.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
+#include <iostream>
 #include <regex>
 #include <set>
 
@@ -227,25 +231,35 @@ TEST_P(DocsPage, MarkedCodeBlocksRunAsWritten) {
     if (block.marked_runs) blocks.push_back(block);
   }
   const auto dir = scratch_dir("docs_run_" + page.stem().string());
-  for (const auto* tree : {"devices", "models", "tests", "tools"})
+  for (const auto* tree : {"devices", "models", "python", "tests", "tools"})
     fs::create_directory_symlink(kSource / tree, dir / tree);
+  fs::create_directory_symlink(DRIFTLAB_BUILD_DIR, dir / "build");
   const auto bin = fs::path(DRIFTLAB_EXE).parent_path();
+  const std::string python = DRIFTLAB_PYTHON;
+  // `python3` in a shell block is the interpreter the module was built for (the PATH's may be another).
+  const auto python_bin = dir / ".python3";
+  fs::create_directory(python_bin);
+  if (!python.empty()) fs::create_symlink(python, python_bin / "python3");
   for (const auto& block : blocks) {
     const bool needs_mrpt =
         block.text.find("driftlab nav") != std::string::npos || block.text.find("driftlab mrpt") != std::string::npos;
     if (needs_mrpt && !DRIFTLAB_HAVE_MRPT) continue;
-    const std::string python = DRIFTLAB_PYTHON;
-    if (block.python && python.empty()) continue;  // built without the Python module
+    const bool needs_python = block.python || block.text.find("python3") != std::string::npos;
+    if (needs_python && python.empty()) continue;  // built without the Python module
     const auto script = dir / ("block_" + std::to_string(block.line) + (block.python ? ".py" : ".sh"));
     std::ofstream(script) << block.text;
     const auto log = dir / "output";
     const std::string interpreter =
         block.python ? std::string("PYTHONPATH=") + DRIFTLAB_PYTHONPATH + " " + python : "bash -e -o pipefail";
-    const std::string command = "cd " + dir.string() + " && PATH=" + bin.string() + ":$PATH " + interpreter + " " +
-                                script.string() + " >" + log.string() + " 2>&1";
+    const std::string command = "cd " + dir.string() + " && HOME=" + dir.string() + " PATH=" + bin.string() + ":" +
+                                python_bin.string() + ":$PATH " + interpreter + " " + script.string() + " >" +
+                                log.string() + " 2>&1";
+    const auto start = std::chrono::steady_clock::now();
     EXPECT_EQ(std::system(command.c_str()), 0) << relative_name(page) << ":" << block.line << ": the block failed:\n"
                                                << block.text << "--- output:\n"
                                                << read_text(log);
+    const std::chrono::duration<double> took = std::chrono::steady_clock::now() - start;
+    std::cout << relative_name(page) << ":" << block.line << ": " << took.count() << " s\n";
   }
 }
 
