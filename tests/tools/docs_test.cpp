@@ -1,11 +1,14 @@
 // The documentation against the product: README.md is an entry point of at most 200 lines; every
 // relative link in README.md and docs/ resolves to a file (and heading) inside the repository; the
 // generated references (docs/cli.md, the plugin table of docs/plugins.md) equal what the program
-// prints; and the fenced shell and Python blocks marked `<!-- docs-test: runs -->` run as written,
-// page by page in one scratch directory each, which is also $HOME (so `~/.local` stays inside it),
-// with `driftlab` on the PATH, `python3` the interpreter the Python module was built for, the build
-// tree's Python package importable, and the repository's devices/, models/, tests/, tools/ and
-// python/ and the build tree (as build/) beside them.
+// prints; and every fenced ```sh and ```python block says on the line before its fence whether it
+// runs: `<!-- docs-test: runs -->` (it is run here as written) or `<!-- docs-test: not run: REASON -->`
+// (REASON, not empty, says why it cannot run in a test: it builds the whole tree, needs a Slurm
+// cluster, a record that is not bundled, ...). A block with neither marker fails. The blocks that
+// run, run page by page in one scratch directory each, which is also $HOME (so `~/.local` stays
+// inside it), with `driftlab` on the PATH, `python3` the interpreter the Python module was built
+// for, the build tree's Python package importable, and the repository's devices/, models/, tests/,
+// tools/ and python/ and the build tree (as build/) beside them.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -28,6 +31,7 @@ namespace fs = std::filesystem;
 const fs::path kSource = DRIFTLAB_SOURCE_DIR;
 constexpr std::size_t kReadmeMaxLines = 200;
 const std::string kRunsMarker = "<!-- docs-test: runs -->";
+const std::string kNotRunMarkerBegin = "<!-- docs-test: not run:", kMarkerEnd = "-->";
 
 // README.md, then every Markdown file under docs/, sorted.
 std::vector<fs::path> markdown_pages() {
@@ -104,16 +108,29 @@ struct CodeBlock {
   bool python = false;   // a ```python block; otherwise ```sh
   std::string text;
   bool marked_runs = false;
+  bool marked_not_run = false;
+  std::string not_run_reason;  // the REASON of `<!-- docs-test: not run: REASON -->`, trimmed
 };
 
-// The ```sh and ```python blocks of a page, each with whether the line before its fence is the runs
-// marker.
+std::string trimmed(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t"), e = s.find_last_not_of(" \t");
+  return b == std::string::npos ? "" : s.substr(b, e - b + 1);
+}
+
+// The ```sh and ```python blocks of a page, each with the marker on the line before its fence.
 std::vector<CodeBlock> code_blocks(const fs::path& page) {
   const auto lines = lines_of(read_text(page));
   std::vector<CodeBlock> blocks;
   for (std::size_t i = 0; i < lines.size(); ++i) {
     if (lines[i] != "```sh" && lines[i] != "```python") continue;
     CodeBlock block{i + 1, lines[i] == "```python", "", i > 0 && lines[i - 1] == kRunsMarker};
+    const std::string before = i > 0 ? lines[i - 1] : "";
+    if (before.rfind(kNotRunMarkerBegin, 0) == 0 && before.size() >= kNotRunMarkerBegin.size() + kMarkerEnd.size() &&
+        before.compare(before.size() - kMarkerEnd.size(), kMarkerEnd.size(), kMarkerEnd) == 0) {
+      block.marked_not_run = true;
+      block.not_run_reason = trimmed(
+          before.substr(kNotRunMarkerBegin.size(), before.size() - kNotRunMarkerBegin.size() - kMarkerEnd.size()));
+    }
     for (++i; i < lines.size() && lines[i].rfind("```", 0) != 0; ++i) block.text += lines[i] + "\n";
     blocks.push_back(block);
   }
@@ -206,6 +223,29 @@ TEST(Docs, EveryShownCommandIsACommandOfTheProgram) {
     }
   }
   EXPECT_GT(shown, 20U);
+}
+
+// Every ```sh and ```python block either runs (below) or says why it cannot: a block without a marker
+// would be a command nobody checks.
+TEST(Docs, EveryCodeBlockRunsOrSaysWhyNot) {
+  std::size_t runs = 0, not_run = 0;
+  for (const auto& page : markdown_pages()) {
+    for (const auto& block : code_blocks(page)) {
+      const auto where = relative_name(page) + ":" + std::to_string(block.line);
+      if (block.marked_runs) {
+        ++runs;
+      } else if (block.marked_not_run) {
+        ++not_run;
+        EXPECT_FALSE(block.not_run_reason.empty())
+            << where << ": `" << kNotRunMarkerBegin << " REASON " << kMarkerEnd << "` needs a REASON";
+      } else {
+        ADD_FAILURE() << where << ": a block without a marker; put `" << kRunsMarker << "` or `" << kNotRunMarkerBegin
+                      << " REASON " << kMarkerEnd << "` on the line before its fence:\n"
+                      << block.text;
+      }
+    }
+  }
+  EXPECT_GT(runs, not_run) << "most shown commands should run";
 }
 
 // The pages (relative to the repository) that hold at least one block marked to run.
