@@ -1,14 +1,21 @@
 // The documentation against the product: README.md is an entry point of at most 200 lines; every
 // relative link in README.md and docs/ resolves to a file (and heading) inside the repository; the
 // generated references (docs/cli.md, the plugin table of docs/plugins.md) equal what the program
-// prints; and the fenced shell and Python blocks marked `<!-- docs-test: runs -->` run as written,
-// page by page in one scratch directory each, with `driftlab` on the PATH, the build tree's Python
-// package importable and the repository's devices/, models/, tests/ and tools/ beside them.
+// prints; and every fenced ```sh and ```python block says on the line before its fence whether it
+// runs: `<!-- docs-test: runs -->` (it is run here as written) or `<!-- docs-test: not run: REASON -->`
+// (REASON, not empty, says why it cannot run in a test: it builds the whole tree, needs a Slurm
+// cluster, a record that is not bundled, ...). A block with neither marker fails. The blocks that
+// run, run page by page in one scratch directory each, which is also $HOME (so `~/.local` stays
+// inside it), with `driftlab` on the PATH, `python3` the interpreter the Python module was built
+// for, the build tree's Python package importable, and the repository's devices/, models/, tests/,
+// tools/ and python/ and the build tree (as build/) beside them.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
+#include <iostream>
 #include <regex>
 #include <set>
 
@@ -24,6 +31,7 @@ namespace fs = std::filesystem;
 const fs::path kSource = DRIFTLAB_SOURCE_DIR;
 constexpr std::size_t kReadmeMaxLines = 200;
 const std::string kRunsMarker = "<!-- docs-test: runs -->";
+const std::string kNotRunMarkerBegin = "<!-- docs-test: not run:", kMarkerEnd = "-->";
 
 // README.md, then every Markdown file under docs/, sorted.
 std::vector<fs::path> markdown_pages() {
@@ -100,16 +108,29 @@ struct CodeBlock {
   bool python = false;   // a ```python block; otherwise ```sh
   std::string text;
   bool marked_runs = false;
+  bool marked_not_run = false;
+  std::string not_run_reason;  // the REASON of `<!-- docs-test: not run: REASON -->`, trimmed
 };
 
-// The ```sh and ```python blocks of a page, each with whether the line before its fence is the runs
-// marker.
+std::string trimmed(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t"), e = s.find_last_not_of(" \t");
+  return b == std::string::npos ? "" : s.substr(b, e - b + 1);
+}
+
+// The ```sh and ```python blocks of a page, each with the marker on the line before its fence.
 std::vector<CodeBlock> code_blocks(const fs::path& page) {
   const auto lines = lines_of(read_text(page));
   std::vector<CodeBlock> blocks;
   for (std::size_t i = 0; i < lines.size(); ++i) {
     if (lines[i] != "```sh" && lines[i] != "```python") continue;
     CodeBlock block{i + 1, lines[i] == "```python", "", i > 0 && lines[i - 1] == kRunsMarker};
+    const std::string before = i > 0 ? lines[i - 1] : "";
+    if (before.rfind(kNotRunMarkerBegin, 0) == 0 && before.size() >= kNotRunMarkerBegin.size() + kMarkerEnd.size() &&
+        before.compare(before.size() - kMarkerEnd.size(), kMarkerEnd.size(), kMarkerEnd) == 0) {
+      block.marked_not_run = true;
+      block.not_run_reason = trimmed(
+          before.substr(kNotRunMarkerBegin.size(), before.size() - kNotRunMarkerBegin.size() - kMarkerEnd.size()));
+    }
     for (++i; i < lines.size() && lines[i].rfind("```", 0) != 0; ++i) block.text += lines[i] + "\n";
     blocks.push_back(block);
   }
@@ -204,6 +225,29 @@ TEST(Docs, EveryShownCommandIsACommandOfTheProgram) {
   EXPECT_GT(shown, 20U);
 }
 
+// Every ```sh and ```python block either runs (below) or says why it cannot: a block without a marker
+// would be a command nobody checks.
+TEST(Docs, EveryCodeBlockRunsOrSaysWhyNot) {
+  std::size_t runs = 0, not_run = 0;
+  for (const auto& page : markdown_pages()) {
+    for (const auto& block : code_blocks(page)) {
+      const auto where = relative_name(page) + ":" + std::to_string(block.line);
+      if (block.marked_runs) {
+        ++runs;
+      } else if (block.marked_not_run) {
+        ++not_run;
+        EXPECT_FALSE(block.not_run_reason.empty())
+            << where << ": `" << kNotRunMarkerBegin << " REASON " << kMarkerEnd << "` needs a REASON";
+      } else {
+        ADD_FAILURE() << where << ": a block without a marker; put `" << kRunsMarker << "` or `" << kNotRunMarkerBegin
+                      << " REASON " << kMarkerEnd << "` on the line before its fence:\n"
+                      << block.text;
+      }
+    }
+  }
+  EXPECT_GT(runs, not_run) << "most shown commands should run";
+}
+
 // The pages (relative to the repository) that hold at least one block marked to run.
 std::vector<std::string> pages_with_marked_blocks() {
   std::vector<std::string> pages;
@@ -227,25 +271,35 @@ TEST_P(DocsPage, MarkedCodeBlocksRunAsWritten) {
     if (block.marked_runs) blocks.push_back(block);
   }
   const auto dir = scratch_dir("docs_run_" + page.stem().string());
-  for (const auto* tree : {"devices", "models", "tests", "tools"})
+  for (const auto* tree : {"devices", "models", "python", "tests", "tools"})
     fs::create_directory_symlink(kSource / tree, dir / tree);
+  fs::create_directory_symlink(DRIFTLAB_BUILD_DIR, dir / "build");
   const auto bin = fs::path(DRIFTLAB_EXE).parent_path();
+  const std::string python = DRIFTLAB_PYTHON;
+  // `python3` in a shell block is the interpreter the module was built for (the PATH's may be another).
+  const auto python_bin = dir / ".python3";
+  fs::create_directory(python_bin);
+  if (!python.empty()) fs::create_symlink(python, python_bin / "python3");
   for (const auto& block : blocks) {
     const bool needs_mrpt =
         block.text.find("driftlab nav") != std::string::npos || block.text.find("driftlab mrpt") != std::string::npos;
     if (needs_mrpt && !DRIFTLAB_HAVE_MRPT) continue;
-    const std::string python = DRIFTLAB_PYTHON;
-    if (block.python && python.empty()) continue;  // built without the Python module
+    const bool needs_python = block.python || block.text.find("python3") != std::string::npos;
+    if (needs_python && python.empty()) continue;  // built without the Python module
     const auto script = dir / ("block_" + std::to_string(block.line) + (block.python ? ".py" : ".sh"));
     std::ofstream(script) << block.text;
     const auto log = dir / "output";
     const std::string interpreter =
         block.python ? std::string("PYTHONPATH=") + DRIFTLAB_PYTHONPATH + " " + python : "bash -e -o pipefail";
-    const std::string command = "cd " + dir.string() + " && PATH=" + bin.string() + ":$PATH " + interpreter + " " +
-                                script.string() + " >" + log.string() + " 2>&1";
+    const std::string command = "cd " + dir.string() + " && HOME=" + dir.string() + " PATH=" + bin.string() + ":" +
+                                python_bin.string() + ":$PATH " + interpreter + " " + script.string() + " >" +
+                                log.string() + " 2>&1";
+    const auto start = std::chrono::steady_clock::now();
     EXPECT_EQ(std::system(command.c_str()), 0) << relative_name(page) << ":" << block.line << ": the block failed:\n"
                                                << block.text << "--- output:\n"
                                                << read_text(log);
+    const std::chrono::duration<double> took = std::chrono::steady_clock::now() - start;
+    std::cout << relative_name(page) << ":" << block.line << ": " << took.count() << " s\n";
   }
 }
 
