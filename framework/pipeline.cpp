@@ -281,8 +281,29 @@ class Parser {
     PipelineReference ref;
     for (const auto& kv : node) {
       const auto key = scalar_text(kv.first).value_or("?");
-      if (key != "source" && key != "rows")
-        problem(kv.first, "reference." + key, "unknown key (expected source, rows)");
+      if (key != "source" && key != "rows" && key != "figures")
+        problem(kv.first, "reference." + key, "unknown key (expected source, rows, figures)");
+    }
+    if (const auto figures = node["figures"]) {
+      std::string known;
+      for (const auto& f : kReferenceFigures) known += (known.empty() ? "" : ", ") + f;
+      if (!figures.IsMap())
+        problem(figures, "reference.figures",
+                "expected a map of report figure (" + known +
+                    ") to the publication's "
+                    "figure, got " +
+                    yaml_shape(figures));
+      else
+        for (const auto& kv : figures) {
+          const auto key = scalar_text(kv.first).value_or("?");
+          const auto text = scalar_text(kv.second);
+          if (std::find(kReferenceFigures.begin(), kReferenceFigures.end(), key) == kReferenceFigures.end())
+            problem(kv.first, "reference.figures." + key, "unknown figure (expected one of " + known + ")");
+          else if (!text || text->empty())
+            problem(kv.second, "reference.figures." + key, "expected the publication's figure (text, e.g. Fig. 10)");
+          else
+            ref.figures[key] = *text;
+        }
     }
     const auto source = scalar_text(node["source"]);
     if (!source || source->empty())
@@ -712,7 +733,13 @@ std::string effective_pipeline_yaml(const Pipeline& pipeline, const Registry& re
     for (const auto& [name, row] : pipeline.reference->rows)
       out << YAML::Key << name << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "B_deg_h" << YAML::Value
           << row.b_deg_h << YAML::Key << "N_deg_h_rtHz" << YAML::Value << row.n_deg_h_rthz << YAML::EndMap;
-    out << YAML::EndMap << YAML::EndMap;
+    out << YAML::EndMap;
+    if (!pipeline.reference->figures.empty()) {
+      out << YAML::Key << "figures" << YAML::Value << YAML::BeginMap;
+      for (const auto& [figure, text] : pipeline.reference->figures) out << YAML::Key << figure << YAML::Value << text;
+      out << YAML::EndMap;
+    }
+    out << YAML::EndMap;
   }
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";

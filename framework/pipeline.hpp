@@ -63,7 +63,8 @@ struct PipelineStage {
   std::string label;
 };
 
-// Published Allan figures a pipeline reproduces, per Table 2 row.
+// Published Allan figures a pipeline reproduces, per Table 2 row, and the publication's figures that
+// the run report's figures correspond to.
 struct PipelineReference {
   struct Row {
     double b_deg_h = 0.0;       // bias instability B, deg/h
@@ -71,7 +72,14 @@ struct PipelineReference {
   };
   std::string source;               // the publication and its table
   std::map<std::string, Row> rows;  // "original" (the record) or an output name
+  // report figure (one of kReferenceFigures) -> the publication's figure, e.g. "Fig. 10"; the report
+  // captions "(paper Fig. 10)" only where a pipeline names one.
+  std::map<std::string, std::string> figures;
 };
+// The run report's figures a reference may name: the record, the rate's IMFs, the rate's grouping
+// by sample entropy, the temperature trend, the stages over time, the stages' Allan deviation.
+inline const std::vector<std::string> kReferenceFigures{"record", "rate_imfs", "rate_grouping", "temperature_trend",
+                                                        "stages", "allan"};
 
 struct Pipeline {
   std::string file;

@@ -156,6 +156,7 @@ outputs: {a: s.signal}
   const auto p = parse_pipeline(head + R"(reference:
   source: A paper, Table 2
   rows: {original: {B_deg_h: 34.66, N_deg_h_rtHz: 99.608}, a: {B_deg_h: 3.589, N_deg_h_rtHz: 0.967814}}
+  figures: {record: Fig. 10, allan: Fig. 15}
 )",
                                 "reference.yaml", registry_);
   ASSERT_TRUE(p.reference.has_value());
@@ -167,11 +168,14 @@ outputs: {a: s.signal}
   const auto again = parse_pipeline(effective, "effective.yaml", registry_);
   ASSERT_TRUE(again.reference.has_value());
   EXPECT_EQ(again.reference->rows.at("a").b_deg_h, 3.589);
+  EXPECT_EQ(again.reference->figures,
+            (std::map<std::string, std::string>{{"allan", "Fig. 15"}, {"record", "Fig. 10"}}));
   EXPECT_EQ(effective_pipeline_yaml(again, registry_), effective);
   EXPECT_FALSE(parse_pipeline(head, "none.yaml", registry_).reference.has_value());
   try {
     parse_pipeline(head + R"(reference:
   rows: {z: {B_deg_h: 1, N_deg_h_rtHz: 1}, a: {B_deg_h: -1, N_deg_h_rtHz: 1}, original: {B_deg_h: 1}}
+  figures: {raw: Fig. 10, allan: ""}
 )",
                    "bad_reference.yaml", registry_);
     FAIL() << "a bad reference was accepted";
@@ -183,6 +187,10 @@ outputs: {a: s.signal}
     EXPECT_TRUE(reported(e.problems(), 6, "reference.rows.a.B_deg_h", "expected a finite number > 0"))
         << all(e.problems());
     EXPECT_TRUE(reported(e.problems(), 6, "reference.rows.original.N_deg_h_rtHz", "missing")) << all(e.problems());
+    EXPECT_TRUE(reported(e.problems(), 7, "reference.figures.raw", "unknown figure (expected one of record, "))
+        << all(e.problems());
+    EXPECT_TRUE(reported(e.problems(), 7, "reference.figures.allan", "expected the publication's figure"))
+        << all(e.problems());
   }
 }
 

@@ -141,6 +141,13 @@ TEST_F(ReportFigures, RunReport) {
   EXPECT_THAT(html, ::testing::HasSubstr("<title>RBF NN + GA + KF</title>"));
   EXPECT_THAT(html, ::testing::HasSubstr("<title>temperature trend</title>"));
   EXPECT_THAT(html, ::testing::HasSubstr("<title>original record</title>"));
+  // The paper's figures by the numbers li2023.yaml's reference gives them, each once.
+  for (int figure = 10; figure <= 15; ++figure) {
+    const std::string caption = "(paper Fig. " + std::to_string(figure) + ")";
+    const auto first = html.find(caption);
+    ASSERT_NE(first, std::string::npos) << caption;
+    EXPECT_EQ(html.find(caption, first + 1), std::string::npos) << caption << " twice";
+  }
 }
 
 TEST_F(ReportFigures, CompareReport) {

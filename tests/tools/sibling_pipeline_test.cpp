@@ -59,6 +59,8 @@ TEST(SiblingPipeline, RunsEndToEndFromItsYaml) {
   EXPECT_THAT(report, HasSubstr("output_weight_norm"));  // tuned on the paper's two objectives
   EXPECT_THAT(report, HasSubstr("pareto_front"));
   EXPECT_THAT(read_text(dir / "out" / "outputs.csv"), HasSubstr("tfpf_elm_dps"));
+  // Not the paper's pipeline: no figure is captioned as one of the paper's.
+  EXPECT_THAT(read_text(dir / "out" / "report.html"), ::testing::Not(HasSubstr("paper Fig.")));
 }
 
 TEST(SiblingPipeline, SwappingOneBlockIsAOneLineChangeThatStillRuns) {

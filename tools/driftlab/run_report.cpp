@@ -26,9 +26,17 @@ PlotSeries line(std::string label, const Eigen::VectorXd& x, const Eigen::Vector
   return s;
 }
 
+// " (paper Fig. 10)" where the pipeline's reference names the publication's figure for `figure`
+// (PipelineReference::figures), else nothing.
+std::string paper_figure(const std::optional<PipelineReference>& reference, const std::string& figure) {
+  if (!reference) return "";
+  const auto it = reference->figures.find(figure);
+  return it == reference->figures.end() ? "" : " (paper " + it->second + ")";
+}
+
 Figure raw_figure(const TimeSeries& record) {
   PlotPanel p;
-  p.title = "Raw record (paper Fig. 10)";
+  p.title = "Raw record";
   p.x_label = "time (h)";
   p.y_label = "rate (°/h)";
   p.y2_label = "temperature (°C)";
@@ -100,7 +108,7 @@ Figure entropy_figure(const std::string& of, const std::vector<ImfDecision>& dec
 
 Figure allan_figure(const RunScores& scores) {
   PlotPanel p;
-  p.title = "Allan deviation of every stage, 68.3 % intervals (paper Fig. 15)";
+  p.title = "Allan deviation of every stage, 68.3 % intervals" + paper_figure(scores.reference, "allan");
   p.x_label = "tau (s)";
   p.y_label = "Allan deviation (°/h)";
   p.log_x = p.log_y = true;
@@ -246,7 +254,8 @@ void add_table2(HtmlReport& html, const TimeSeries& record, const RunScores& sco
 }
 
 void add_decomposition(HtmlReport& html, const PipelineStep& step, const TimeSeries& record,
-                       const std::map<std::string, Signal>& step_signals) {
+                       const std::map<std::string, Signal>& step_signals,
+                       const std::optional<PipelineReference>& reference) {
   const auto imfs = step_signals.find(step.name + ".imfs");
   const auto residue = step_signals.find(step.name + ".residue");
   if (imfs == step_signals.end()) return;
@@ -254,12 +263,14 @@ void add_decomposition(HtmlReport& html, const PipelineStep& step, const TimeSer
   html.section("Decomposition of the " + q.name + ": step " + step.name + " (" + step.plugin + ")");
   html.figure(imf_figure(imfs->second, residue == step_signals.end() ? nullptr : &residue->second, record.time()),
               "IMFs of the " + q.name + ", fastest first, and the residue" +
-                  (q.name == "rate" ? " (paper Fig. 11): the first carry the noise, the last the thermal drift"
+                  (q.name == "rate" ? paper_figure(reference, "rate_imfs") +
+                                          ": the first carry the noise, the last the thermal drift"
                                     : ": the first carry the sensor's noise, the last the oven cycle"));
 }
 
 void add_grouping(HtmlReport& html, const PipelineStep& step, const std::vector<StepRecord>& steps,
-                  const std::map<std::string, Signal>& step_signals) {
+                  const std::map<std::string, Signal>& step_signals,
+                  const std::optional<PipelineReference>& reference) {
   std::vector<ImfDecision> decisions;
   for (const auto& s : steps)
     if (s.name == step.name) decisions = imf_decisions(s.diagnostics);
@@ -271,7 +282,7 @@ void add_grouping(HtmlReport& html, const PipelineStep& step, const std::vector<
   html.section("Grouping of the " + q.name + "'s IMFs: step " + step.name + " (" + step.plugin + ")");
   html.figure(entropy_figure(q.name, decisions),
               "Sample entropy of each IMF of the " + q.name + " and the group it falls in" +
-                  (q.name == "rate" ? " (paper Fig. 12)" : "") +
+                  (q.name == "rate" ? paper_figure(reference, "rate_grouping") : "") +
                   ": high entropy is noise, low entropy is drift, the middle is mixed");
   HtmlTable g;
   g.caption = "The group of each IMF of the " + q.name + " and why";
@@ -282,10 +293,11 @@ void add_grouping(HtmlReport& html, const PipelineStep& step, const std::vector<
 
 // Temperature trend: degC step outputs over the temperature.
 void add_temperature_trend(HtmlReport& html, const TimeSeries& record,
-                           const std::map<std::string, Signal>& step_signals) {
+                           const std::map<std::string, Signal>& step_signals,
+                           const std::optional<PipelineReference>& reference) {
   const Eigen::VectorXd& temp = record.channel(role::kTemperature).values;
   PlotPanel p, removed;
-  p.title = "Temperature and its trend (paper Fig. 13)";
+  p.title = "Temperature and its trend" + paper_figure(reference, "temperature_trend");
   p.x_label = removed.x_label = "time (h)";
   p.y_label = "temperature (°C)";
   removed.title = "What each trend leaves out: case temperature - trend";
@@ -349,7 +361,7 @@ void add_reconstruction(HtmlReport& html, const TimeSeries& record, const Pipeli
   if (stages.final_stage)
     before_after.series.push_back(
         minute_means(stages.labels.at(*stages.final_stage), stages.rates.at(*stages.final_stage)));
-  p.title = "After, every stage on its own scale, 60-s means (paper Fig. 14)";
+  p.title = "After, every stage on its own scale, 60-s means" + paper_figure(pipeline.reference, "stages");
   // The final stage first and solid, the others dashed over it: a stage the next one barely changes
   // stays visible.
   for (const auto& name : stages.names) {
@@ -533,16 +545,16 @@ std::string run_html(const std::string& title, const std::string& data, const Ti
   add_table2(html, record, scores);
 
   html.section("The record");
-  html.figure(raw_figure(record), "Rate and case temperature over time (paper Fig. 10)");
+  html.figure(raw_figure(record), "Rate and case temperature over time" + paper_figure(pipeline.reference, "record"));
   for (const auto& step : pipeline.steps) {
     if (step.plugin.empty()) continue;
     const auto kind = step.plugin.substr(0, step.plugin.find('/'));
     if (kind == "decomposition")
-      add_decomposition(html, step, record, step_signals);
+      add_decomposition(html, step, record, step_signals, pipeline.reference);
     else if (kind == "classifier")
-      add_grouping(html, step, steps, step_signals);
+      add_grouping(html, step, steps, step_signals, pipeline.reference);
   }
-  if (record.has(role::kTemperature)) add_temperature_trend(html, record, step_signals);
+  if (record.has(role::kTemperature)) add_temperature_trend(html, record, step_signals, pipeline.reference);
 
   const auto stages = stage_outputs(scores, outputs);
   add_reconstruction(html, record, pipeline, step_signals, stages);

@@ -1,4 +1,4 @@
-// report.html of `driftlab run` (issue 12; Li et al. 2023, Table 2 and Figs. 10-15), around the
+// report.html of `driftlab run` (Li et al. 2023, Table 2 and Figs. 10-15), around the
 // scores of models/evaluation/run_scores.hpp.
 #pragma once
 
@@ -67,7 +67,8 @@ HtmlTable table2_html(Table2Layout layout, const std::vector<Table2Row>& rows,
 std::vector<std::string> tuning_notes(const std::vector<StepRecord>& steps);
 
 // report.html: Table 2 with the honest columns, the IMF groups and their reasons, and the paper's
-// figures (Figs. 10-15) plus the residual against temperature, heating and cooling apart, and the
+// figures (Figs. 10-15, captioned with the publication's figure where the pipeline's reference names
+// it: PipelineReference::figures) plus the residual against temperature, heating and cooling apart, and the
 // tuned steps (best hyperparameters, held-out error, evaluations, tuning_notes). The
 // figures come from what the run produced: every decomposition step (its IMFs), every classifier
 // step (sample entropy per IMF and the groups, from its step record), temperature-unit step outputs
