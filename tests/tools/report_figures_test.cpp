@@ -204,7 +204,16 @@ TEST_F(ReportFigures, CalibrationReport) {
   const auto r = run_driftlab("-q calibrate --data " + oven.string() + " --evaluate " + held_out.string() + " --out " +
                               (dir() / "model.json").string() + " --report " + (dir() / "calibration").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  expect_readable_report(read_text(dir() / "calibration" / "report.html"), "driftlab calibrate", 3);
+  const std::string html = read_text(dir() / "calibration" / "report.html");
+  expect_readable_report(html, "driftlab calibrate", 3);
+  // The Allan figure of the residuals reads N and B off the model with the least residual drift.
+  const std::string allan = figure_captioned(html, "Allan deviation of every method&#39;s residual");
+  ASSERT_FALSE(allan.empty());
+  std::smatch guided;
+  const std::regex of(R"(Grey dashed guides, of ([a-zA-Z0-9 -]+) \(the model with the least residual drift\))");
+  ASSERT_TRUE(std::regex_search(allan, guided, of)) << "the caption names whose guides they are";
+  EXPECT_NE(guided[1].str(), "none");
+  expect_allan_guides(allan, {guided[1].str()});
 }
 
 TEST_F(ReportFigures, FleetReport) {
