@@ -5,15 +5,10 @@
 
 namespace driftlab::calibration {
 
-std::optional<AllanFigures> allan_figures(const Eigen::VectorXd& error, double fs) {
+std::optional<allan::Analysis> allan_figures(const Eigen::VectorXd& error, double fs) {
   if (!(fs > 0) || static_cast<double>(error.size()) / fs < 3.0) return std::nullopt;
   try {
-    const auto a = allan::analyze_rate(error, fs, {.fit_terms = false});
-    AllanFigures f;
-    f.bias_instability = a.bias_instability;
-    f.arw_rad_sqrt_s = a.arw_rad_sqrt_s;
-    f.curve = a.curve;
-    return f;
+    return allan::analyze_rate(error, fs, {.fit_terms = false});
   } catch (const Error&) {
     return std::nullopt;
   }

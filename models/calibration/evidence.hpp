@@ -10,19 +10,15 @@
 
 #include <Eigen/Core>
 #include <optional>
-#include <vector>
 
 #include "models/allan/analysis.hpp"
 
 namespace driftlab::calibration {
 
-struct AllanFigures {
-  allan::FloorReading bias_instability;  // B, rad/s: a value where resolved, otherwise B < high
-  double arw_rad_sqrt_s = 0.0;           // N
-  std::vector<allan::Estimate> curve;    // the OADEV they are read from (octave grid, with intervals), rad/s
-};
-// Empty when the record is too short (< 3 s) or not evenly sampled enough for an Allan analysis.
-std::optional<AllanFigures> allan_figures(const Eigen::VectorXd& error_rad_s, double sample_rate_hz);
+// The analysis B and N are read from (its curve: the OADEV on the octave grid, with intervals; no
+// term fit). Empty when the record is too short (< 3 s) or not evenly sampled enough for an Allan
+// analysis.
+std::optional<allan::Analysis> allan_figures(const Eigen::VectorXd& error_rad_s, double sample_rate_hz);
 
 // N and K (rate random walk) fitted to the Allan curve (IEEE-952 five-term fit), for the model's
 // noise terms (Kalman stage, Kalibr export). Empty when the fit is impossible. A term the fit does

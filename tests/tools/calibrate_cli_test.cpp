@@ -223,6 +223,55 @@ TEST_F(CalibrateCli, TheReportScoresEveryModelOnAHeldOutRunOfAnotherProfile) {
     EXPECT_NE(html.find(caption), std::string::npos) << caption;
 }
 
+// --gmwm: every method's residual carries a GMWM fit of the model beside B and N, in `driftlab allan
+// --gmwm`'s JSON; the white noise of the chosen model's residual is the simulator's (devices/fmvmg.yaml:
+// N = 99.6 deg/h/sqrt(Hz) = 1.66 deg/sqrt(h)), within 3 % (the flicker and the drift left in the residual
+// lift the short-tau curve a little).
+TEST_F(CalibrateCli, TheReportFitsAGmwmNoiseModelToEveryResidual) {
+  const auto sim = run_driftlab("simulate --device fmvmg --fs 2 --seed 6 --out " + dir_ + "/heldout_gmwm.csv");
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const auto r =
+      run_driftlab("calibrate --data " + dir_ + "/oven.csv --model poly --out " + dir_ + "/gmwm.json --evaluate " +
+                   dir_ + "/heldout_gmwm.csv --report " + dir_ + "/report_gmwm --gmwm wn+rw --gmwm-bootstrap 20");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("GMWM wn+rw (Guerrier et al. 2013; one-sigma intervals: bootstrap"));
+  const auto j = nlohmann::json::parse(read_text(dir_ + "/report_gmwm/report.json"));
+  EXPECT_TRUE(j["metrics"].contains("gmwm"));
+  const auto& methods = j["evaluations"][0]["methods"];
+  ASSERT_EQ(methods.size(), 5u);
+  for (const auto& m : methods) {
+    SCOPED_TRACE(m["name"].get<std::string>());
+    const auto& g = m["gmwm"];
+    ASSERT_TRUE(g.is_object());
+    EXPECT_EQ(g["model"], "wn+rw");
+    EXPECT_THAT(g["intervals"].get<std::string>(), HasSubstr("bootstrap"));
+    ASSERT_EQ(g["components"].size(), 2u);
+    const auto& n = g["components"][0]["parameters"][0];
+    EXPECT_EQ(n["name"], "N");
+    EXPECT_EQ(n["unit"], "deg/sqrt(h)");
+    ASSERT_TRUE(n["resolved"].get<bool>());
+    EXPECT_LE(n["interval"][0].get<double>(), n["value"].get<double>());
+    EXPECT_GE(n["interval"][1].get<double>(), n["value"].get<double>());
+  }
+  const auto& poly = methods[2];
+  ASSERT_EQ(poly["name"], "poly");
+  EXPECT_NEAR(poly["gmwm"]["components"][0]["parameters"][0]["value"].get<double>(), 99.6 / 60.0, 0.03 * 99.6 / 60.0);
+  const std::string html = read_text(dir_ + "/report_gmwm/report.html");
+  EXPECT_THAT(html, HasSubstr("GMWM wn+rw of every method&#39;s residual"));
+  EXPECT_THAT(html, HasSubstr("wn N (deg/sqrt(h))"));
+
+  const auto bad = run_driftlab("calibrate --data " + dir_ + "/oven.csv --out " + dir_ + "/bad.json --report " + dir_ +
+                                "/report_bad --gmwm wn+flicker");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_THAT(bad.err, HasSubstr("--gmwm"));
+  EXPECT_THAT(bad.err, HasSubstr("flicker"));
+  EXPECT_FALSE(fs::exists(dir_ + "/bad.json")) << "a bad model is refused before anything is written";
+  const auto no_report =
+      run_driftlab("calibrate --data " + dir_ + "/oven.csv --out " + dir_ + "/bad.json --gmwm wn+rw");
+  EXPECT_EQ(no_report.exit_code, 2);
+  EXPECT_THAT(no_report.err, HasSubstr("--report"));
+}
+
 TEST_F(CalibrateCli, ThePaperPipelineIsScoredOnTheHeldOutRecordByItsFinalStage) {
   // The main job's pipeline as the offline reference: its final stage (the last rate output,
   // rbf_ga_kf in li2023.yaml) is scored beside the causal models.

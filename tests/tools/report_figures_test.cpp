@@ -117,6 +117,25 @@ void expect_readable_report(const std::string& html, const std::string& what, st
     EXPECT_EQ(tables[k].rfind("Table " + std::to_string(k + 1) + ". ", 0), 0u) << "table caption '" << tables[k] << "'";
 }
 
+// The figure of a report whose caption holds `caption` (as the HTML writes it), empty if none.
+std::string figure_captioned(const std::string& html, const std::string& caption) {
+  for (const auto& f : between(html, "<figure", "</figure>"))
+    if (f.find(caption) != std::string::npos) return f;
+  return "";
+}
+
+// The reading guides (plot.hpp allan_guides) of the Allan curves named in `of`, in a figure: per curve
+// the grey dashed -1/2 slope through N and the floor's level (gnuplot draws each as a dashed path in
+// rgb(85,85,85)), and the read-off points, in the legend as "<curve>, read: N = ...".
+void expect_allan_guides(const std::string& figure, const std::vector<std::string>& of) {
+  std::size_t grey_dashed = 0;
+  for (const auto& path : between(figure, "<path stroke='rgb( 85,  85,  85)'", "/>"))
+    grey_dashed += path.find("stroke-dasharray") != std::string::npos ? 1 : 0;
+  EXPECT_GE(grey_dashed, 2 * of.size()) << "the -1/2 and floor lines of every guided curve";
+  for (const auto& curve : of)
+    EXPECT_THAT(figure, ::testing::HasSubstr("<title>" + curve + ", read: N = ")) << "the read-off points of " << curve;
+}
+
 class ReportFigures : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -155,7 +174,13 @@ TEST_F(ReportFigures, CompareReport) {
                               "/models/pipelines/li2023.yaml --pipeline " + kSource +
                               "/models/pipelines/polynomial_baseline.yaml --out " + (dir() / "compare").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  expect_readable_report(read_text(dir() / "compare" / "report.html"), "driftlab compare", 1);
+  const std::string html = read_text(dir() / "compare" / "report.html");
+  expect_readable_report(html, "driftlab compare", 1);
+  // The Allan figure reads N and B off the original record and off the intrinsic floor.
+  const std::string allan = figure_captioned(html, "Allan deviation of the record");
+  ASSERT_FALSE(allan.empty());
+  expect_allan_guides(allan, {"original record", "intrinsic floor"});
+  EXPECT_THAT(allan, ::testing::HasSubstr("Grey dashed guides, of the original record and of the intrinsic floor"));
 }
 
 TEST_F(ReportFigures, AllanPlotInDegreesPerHour) {
@@ -186,7 +211,16 @@ TEST_F(ReportFigures, CalibrationReport) {
   const auto r = run_driftlab("-q calibrate --data " + oven.string() + " --evaluate " + held_out.string() + " --out " +
                               (dir() / "model.json").string() + " --report " + (dir() / "calibration").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  expect_readable_report(read_text(dir() / "calibration" / "report.html"), "driftlab calibrate", 3);
+  const std::string html = read_text(dir() / "calibration" / "report.html");
+  expect_readable_report(html, "driftlab calibrate", 3);
+  // The Allan figure of the residuals reads N and B off the model with the least residual drift.
+  const std::string allan = figure_captioned(html, "Allan deviation of every method&#39;s residual");
+  ASSERT_FALSE(allan.empty());
+  std::smatch guided;
+  const std::regex of(R"(Grey dashed guides, of ([a-zA-Z0-9 -]+) \(the model with the least residual drift\))");
+  ASSERT_TRUE(std::regex_search(allan, guided, of)) << "the caption names whose guides they are";
+  EXPECT_NE(guided[1].str(), "none");
+  expect_allan_guides(allan, {guided[1].str()});
 }
 
 TEST_F(ReportFigures, FleetReport) {

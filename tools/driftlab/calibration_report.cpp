@@ -13,6 +13,7 @@
 #include "models/evaluation/evaluation.hpp"
 #include "models/evaluation/run_scores.hpp"
 #include "tools/driftlab/html_report.hpp"
+#include "tools/driftlab/noise_report.hpp"
 
 namespace driftlab::cli {
 namespace {
@@ -64,7 +65,8 @@ Eigen::VectorXd truth_of(const calibration::Record& r) {
 }
 
 MethodScore score(const std::string& name, const std::string& description, const calibration::Record& r,
-                  const RecordBlocks& blocks, const Eigen::VectorXd& out, const calibration::Compensated* compensated) {
+                  const RecordBlocks& blocks, const Eigen::VectorXd& out, const calibration::Compensated* compensated,
+                  const GmwmRequest& gmwm) {
   MethodScore s{name, description, ""};
   const Eigen::VectorXd error = out - truth_of(r);
   s.drift_dph = evaluation::block_mean_rms(r.time_s, error) * kDphPerRadPerSec;
@@ -76,7 +78,20 @@ MethodScore score(const std::string& name, const std::string& description, const
     s.b_dph = (b.resolved ? b.value : b.high) * kDphPerRadPerSec;
     s.b_within_tau_s = b.longest_tau_s;
     s.n_dph_rthz = a->arw_rad_sqrt_s * kDphPerRadPerSec;
-    s.allan = a->curve;
+    s.allan = a;
+  }
+  if (!gmwm.model.empty()) {
+    if (!s.allan) {
+      s.gmwm_failure = facts.evenly_sampled() ? "no Allan curve: the record is too short"
+                                              : "no Allan curve: the record is not evenly sampled";
+    } else {
+      try {
+        s.gmwm = fit_gmwm(s.allan->curve, s.allan->sample_rate_hz, gmwm.model, s.allan->samples, gmwm.bootstrap,
+                          gmwm.seed, gmwm.threads);
+      } catch (const DataError& e) {
+        s.gmwm_failure = e.what();
+      }
+    }
   }
   if (compensated) {
     const auto outside = std::count_if(compensated->outside.begin(), compensated->outside.end(),
@@ -162,9 +177,17 @@ void add_figures(HtmlReport& html, const ReportInput& in, const std::vector<Reco
     }
     by_temp.series.push_back(std::move(t));
     by_time.series.push_back(std::move(h));
-    if (s.allan.empty()) continue;
-    allan.series.push_back(allan_series(s.name, s.allan, kDphPerRadPerSec));
+    if (!s.allan) continue;
+    allan.series.push_back(allan_series(s.name, s.allan->curve, kDphPerRadPerSec));
   }
+  // The reading guides of the model with the least residual drift (an external output may be
+  // low-passed: its N is not the sensor's).
+  const MethodScore* guided = nullptr;
+  for (std::size_t k = 0; k < std::min(in.models.size(), scores.size()); ++k)
+    if (scores[k].allan && (guided == nullptr || scores[k].drift_dph < guided->drift_dph)) guided = &scores[k];
+  if (guided != nullptr)
+    for (auto& g : allan_guides(*guided->allan, kDphPerRadPerSec, "°/h", guided->name))
+      allan.series.push_back(std::move(g));
   html.figure_or_note({{by_temp}, 900, 360, 1, ""},
                       "Residual of every method against temperature on " + r.name +
                           " (log scale: 'none' is orders of magnitude above the models); a model whose points rise at "
@@ -174,9 +197,15 @@ void add_figures(HtmlReport& html, const ReportInput& in, const std::vector<Reco
                                                         "the temperature are a lag the model "
                                                         "does not follow");
   if (!allan.series.empty())
-    html.figure_or_note({{allan}, 900, 420, 1, ""},
-                        "Allan deviation of every method's residual on " + r.name +
-                            ", 68.3 % intervals as bands: lower at long tau means less drift left");
+    html.figure_or_note(
+        {{allan}, 900, 420, 1, ""},
+        "Allan deviation of every method's residual on " + r.name +
+            ", 68.3 % intervals as bands: lower at long tau means less drift left" +
+            (guided == nullptr ? std::string(".")
+                               : ". Grey dashed guides, of " + guided->name +
+                                     " (the model with the least residual drift): the -1/2 slope through N at "
+                                     "tau = 1 s and the level of the floor where B is read (0.664 B), with the "
+                                     "points they are read at (black dots, their values in the legend)."));
 }
 
 std::string terms_text(const calibration::CalibrationModel& m) {
@@ -236,6 +265,11 @@ nlohmann::json report_head_json(const ReportInput& in, const std::vector<std::st
       {"extrapolated_fraction",
        "share of samples with a model input (model temperature, dT/dt, branch state, RBF input) outside the range it "
        "was fitted on"}};
+  if (!in.gmwm.model.empty())
+    j["metrics"]["gmwm"] = "GMWM fit of " + allan::gmwm::to_string(in.gmwm.model) +
+                           " to the same OADEV of (output - true rate) as B_dph and N_dph_rthz, as `driftlab allan "
+                           "--gmwm` writes it (IEEE 952 gyro units, one-sigma intervals); null with gmwm_failure "
+                           "when it could not be fitted";
   j["quality_gate"] = nlohmann::json::array();
   for (const auto& f : in.gate)
     j["quality_gate"].push_back(
@@ -296,20 +330,57 @@ std::vector<MethodScore> score_methods(const ReportInput& in, std::size_t e, con
   std::vector<MethodScore> scores;
   for (const auto& m : in.models) {
     if (!m.model) {
-      scores.push_back(score(m.name, m.description, r, blocks, r.rate_rad_s, nullptr));
+      scores.push_back(score(m.name, m.description, r, blocks, r.rate_rad_s, nullptr, in.gmwm));
     } else {
       const auto c = calibration::compensate(*m.model, r.time_s, r.rate_rad_s, r.temp_c);
-      scores.push_back(score(m.name, m.description, r, blocks, c.rate_rad_s, &c));
+      scores.push_back(score(m.name, m.description, r, blocks, c.rate_rad_s, &c, in.gmwm));
     }
     scores.back().bandwidth = "fs/2 (unchanged: the correction is a slow bias)";
   }
   for (const auto& x : in.external) {
     if (x.record == e) {
-      scores.push_back(score(x.name, x.description, r, blocks, x.rate_rad_s, nullptr));
+      scores.push_back(score(x.name, x.description, r, blocks, x.rate_rad_s, nullptr, in.gmwm));
       scores.back().bandwidth = x.bandwidth;
     }
   }
   return scores;
+}
+
+// The GMWM parameters of every method's residual on record r, one column per parameter.
+HtmlTable gmwm_table(const GmwmRequest& request, const calibration::Record& r, const std::vector<MethodScore>& scores) {
+  const std::string model = allan::gmwm::to_string(request.model);
+  const MethodScore* fitted = nullptr;
+  for (const auto& s : scores)
+    if (s.gmwm && fitted == nullptr) fitted = &s;
+  HtmlTable t{"GMWM " + model + " of every method's residual on " + r.name, {"method"}};
+  if (fitted != nullptr) {
+    for (const auto& c : fitted->gmwm->components)
+      for (const auto& p : c.parameters)
+        t.header.push_back(allan::gmwm::to_string(c.process) + " " + p.name + " (" + gmwm_unit(p, true, "rad/s").first +
+                           ")");
+    t.header.push_back("χ²/dof");
+  } else {
+    t.header.push_back("GMWM");
+  }
+  for (const auto& s : scores) {
+    std::vector<HtmlCell> row{s.name};
+    if (s.gmwm) {
+      for (const auto& c : s.gmwm->components)
+        for (const auto& p : c.parameters) row.push_back(gmwm_value_text(c, p, gmwm_unit(p, true, "rad/s").second));
+      row.push_back(s.gmwm->reduced_chi2());
+    } else {
+      row.push_back("not fitted: " + s.gmwm_failure);
+      while (row.size() < t.header.size()) row.push_back(std::string("–"));
+    }
+    t.rows.push_back(std::move(row));
+  }
+  t.note =
+      "GMWM (Guerrier et al. 2013; models/allan/gmwm.hpp) fitted to the same OADEV curve of (output - true "
+      "rate) that B and N are read from; value [one-sigma interval, " +
+      (fitted != nullptr ? fitted->gmwm->intervals : std::string("-")) +
+      "]; '< x': not resolved, only the bound; 'not determined': the component is below what the curve "
+      "resolves. N in deg/sqrt(h) is N in °/h/√Hz divided by 60.";
+  return t;
 }
 
 // The section of held-out record e: its evaluations[] entry (returned), its tables and figures
@@ -362,6 +433,11 @@ nlohmann::json held_out_section(const ReportInput& in, std::size_t e,
                              {"N_dph_rthz", number_or_null(s.n_dph_rthz)},
                              {"output_bandwidth", s.bandwidth},
                              {"extrapolated_fraction", s.extrapolated}});
+    if (s.gmwm) ej["methods"].back()["gmwm"] = gmwm_json(*s.gmwm, true, "rad/s");
+    if (!s.gmwm_failure.empty()) {
+      ej["methods"].back()["gmwm"] = nullptr;
+      ej["methods"].back()["gmwm_failure"] = s.gmwm_failure;
+    }
     evaluation::BDegH b_reading;
     b_reading.resolved = s.b_resolved;
     b_reading.value = b_reading.high = s.b_dph;  // B, or the bound when not resolved
@@ -383,6 +459,7 @@ nlohmann::json held_out_section(const ReportInput& in, std::size_t e,
       "a leg is shorter than one 60-s block.";
   html.section("Held-out record " + r.name + " (" + std::to_string(r.time_s.size()) + " samples)");
   html.table(t);
+  if (!in.gmwm.model.empty()) html.table(gmwm_table(in.gmwm, r, scores));
   if (!blocks.legs.empty()) html.table(by_leg);
   add_figures(html, in, calibration_blocks, r, blocks, scores);
   held_out.push_back({r.name, std::move(scores), floor_dph});

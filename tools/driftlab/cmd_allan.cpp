@@ -28,6 +28,7 @@
 #include "models/allan/tau_grid.hpp"
 #include "models/evaluation/run_scores.hpp"
 #include "tools/driftlab/cli.hpp"
+#include "tools/driftlab/noise_report.hpp"
 #include "tools/driftlab/plot.hpp"
 
 namespace driftlab::cli {
@@ -47,71 +48,6 @@ struct AllanOptions {
   std::uint64_t seed = 1;           // of the bootstrap's simulations
   unsigned threads = 1;
 };
-
-// Units of the fitted terms when the channel is not an angular rate: built from its unit u.
-std::string generic_unit(allan::Term term, const std::string& u) {
-  switch (term) {
-    case allan::Term::Q:
-      return u + "*s";
-    case allan::Term::N:
-      return u + "*sqrt(s)";
-    case allan::Term::B:
-      return u;
-    case allan::Term::K:
-      return u + "/sqrt(s)";
-    case allan::Term::R:
-      return u + "/s";
-  }
-  return u;
-}
-
-// A GMWM parameter's display unit and factor: the IEEE 952 gyro units for a rate in rad/s (sigma in
-// deg/h), else built from the channel's unit.
-std::pair<std::string, double> gmwm_unit(const allan::gmwm::Parameter& p, bool angular, const std::string& u) {
-  const auto ieee = [](allan::Term t) {
-    for (const auto& c : allan::kIeee952Units)
-      if (c.term == t) return std::pair<std::string, double>(std::string(c.unit), c.factor);
-    return std::pair<std::string, double>("", 1.0);
-  };
-  if (p.name == "T") return {"s", 1.0};
-  if (p.name == "sigma") return angular ? ieee(allan::Term::B) : std::pair<std::string, double>(u, 1.0);
-  const allan::Term t = p.name == "N"   ? allan::Term::N
-                        : p.name == "Q" ? allan::Term::Q
-                        : p.name == "K" ? allan::Term::K
-                                        : allan::Term::R;
-  return angular ? ieee(t) : std::pair<std::string, double>(generic_unit(t, u), 1.0);
-}
-
-nlohmann::json gmwm_json(const allan::gmwm::Fit& f, bool angular, const std::string& u) {
-  nlohmann::json components = nlohmann::json::array();
-  for (const auto& c : f.components) {
-    nlohmann::json parameters = nlohmann::json::array();
-    for (const auto& p : c.parameters) {
-      const auto [unit, factor] = gmwm_unit(p, angular, u);
-      nlohmann::json j{{"name", p.name}, {"unit", unit}, {"resolved", p.resolved}};
-      if (p.resolved) {
-        j["value"] = p.value * factor;
-        j["interval"] = {p.low * factor, p.high * factor};
-      } else {
-        j["value"] = nullptr;
-        j["upper"] = std::isfinite(p.high) ? nlohmann::json(p.high * factor) : nlohmann::json();
-      }
-      parameters.push_back(j);
-    }
-    components.push_back(
-        {{"process", allan::gmwm::to_string(c.process)}, {"observable", c.observable}, {"parameters", parameters}});
-  }
-  std::vector<allan::gmwm::Process> model;
-  for (const auto& c : f.components) model.push_back(c.process);
-  return {{"model", allan::gmwm::to_string(model)},
-          {"method", "GMWM (Guerrier et al. 2013) on the OADEV curve's variances; models/allan/gmwm.hpp"},
-          {"intervals", f.intervals},
-          {"confidence", 0.683},
-          {"points", f.points},
-          {"dof", f.dof},
-          {"chi2_per_dof", f.reduced_chi2()},
-          {"components", components}};
-}
 
 // A fitted term with its resolution (models/allan/noise_fit.hpp): an unresolved term has no value,
 // only its bound `upper`.
@@ -327,10 +263,7 @@ std::optional<allan::gmwm::Fit> gmwm_fit(const AllanOptions& o, const std::optio
     throw ConfigError({"", 0, "--gmwm-bootstrap"}, "the bootstrap simulates a contiguous record and this one is " +
                                                        std::to_string(facts.segments.size()) +
                                                        " bursts; give --gmwm-bootstrap 0 for the asymptotic intervals");
-  auto gmwm = allan::gmwm::fit(analysis->curve, fs, model);
-  if (o.gmwm_bootstrap > 0)
-    gmwm = allan::gmwm::bootstrap(gmwm, static_cast<Eigen::Index>(samples), o.gmwm_bootstrap, o.seed, o.threads);
-  return gmwm;
+  return fit_gmwm(analysis->curve, fs, model, samples, o.gmwm_bootstrap, o.seed, o.threads);
 }
 
 // ---- the console summary ----
@@ -364,29 +297,6 @@ void print_fit(const allan::NoiseFit& fit) {
     }
     std::cout << line;
   }
-}
-
-void print_gmwm(const allan::gmwm::Fit& gmwm, bool angular, const std::string& unit) {
-  std::vector<allan::gmwm::Process> model;
-  for (const auto& c : gmwm.components) model.push_back(c.process);
-  std::printf("GMWM %s (Guerrier et al. 2013; one-sigma intervals: %s; chi2/dof = %.3g, %zu points):\n",
-              allan::gmwm::to_string(model).c_str(), gmwm.intervals.c_str(), gmwm.reduced_chi2(), gmwm.points);
-  for (const auto& c : gmwm.components)
-    for (const auto& p : c.parameters) {
-      const auto [u, factor] = gmwm_unit(p, angular, unit);
-      if (p.resolved)
-        std::printf("  %s %s = %.4g %s [%.3g, %.3g]\n", allan::gmwm::to_string(c.process).c_str(), p.name.c_str(),
-                    p.value * factor, u.c_str(), p.low * factor, p.high * factor);
-      else if (!c.observable && !std::isfinite(p.high))
-        std::printf("  %s %s not determined (the component is below what the curve resolves)\n",
-                    allan::gmwm::to_string(c.process).c_str(), p.name.c_str());
-      else
-        std::printf("  %s %s < %.3g %s  (not resolved: %s)\n", allan::gmwm::to_string(c.process).c_str(),
-                    p.name.c_str(), p.high * factor, u.c_str(),
-                    c.observable ? "its interval spans more than a factor e^0.5 either way"
-                                 : "below what the curve resolves; the bound is where it would show");
-    }
-  std::fflush(stdout);
 }
 
 void allan_command(const AllanOptions& o) {
@@ -457,7 +367,7 @@ void allan_command(const AllanOptions& o) {
               << facts.segments.size() << " bursts summed; tau only up to " << curve.back().tau << " s\n";
   if (analysis && angular) print_readings(*analysis);
   if (fit && angular) print_fit(*fit);
-  if (gmwm) print_gmwm(*gmwm, angular, channel.unit);
+  if (gmwm) print_gmwm(std::cout, *gmwm, angular, channel.unit);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "framework/error.hpp"
 #include "framework/parallel.hpp"
 #include "framework/resources.hpp"
+#include "models/allan/gmwm.hpp"
 #include "models/calibration/fit.hpp"
 #include "models/calibration/oven_run.hpp"
 #include "framework/pipeline.hpp"
@@ -20,6 +21,7 @@
 #include "tools/driftlab/calibration_report.hpp"
 #include "tools/driftlab/cli.hpp"
 #include "tools/driftlab/data_dirs.hpp"
+#include "tools/driftlab/noise_report.hpp"
 #include "tools/driftlab/run_report.hpp"
 
 namespace driftlab::cli {
@@ -37,6 +39,8 @@ struct CalibrateOptions {
   double train_until_s = 0.0;         // > 0: calibrate on t < this of the --data record, test on the rest
   std::string report;                 // report directory
   std::string paper_pipeline;         // optional offline reference pipeline (e.g. models/pipelines/li2023.yaml)
+  std::string gmwm;                   // --gmwm: composite noise model of the residuals, e.g. "wn+rw"; empty: none
+  std::size_t gmwm_bootstrap = 50;    // replicates of its parametric bootstrap; 0: asymptotic intervals
   std::string command_line;
   std::string device;  // free text stored in the model
 };
@@ -85,7 +89,7 @@ std::vector<calibration::Record> matching(const std::vector<ChannelRecords>& cha
 void report_channel(const CalibrateOptions& o, CommandEnv& env, const ChannelRecords& ch,
                     const std::vector<calibration::Record>& records, const std::vector<calibration::Record>& held_out,
                     const calibration::ChannelCalibration& chosen, const std::vector<calibration::Finding>& gate,
-                    const ReportFiles& report_files, OutputSet& files) {
+                    const GmwmRequest& gmwm, const ReportFiles& report_files, OutputSet& files) {
   const calibration::FitOptions base = fit_options(o, env, ch.role);
   ReportInput in;
   in.gate = gate;
@@ -96,6 +100,7 @@ void report_channel(const CalibrateOptions& o, CommandEnv& env, const ChannelRec
   in.evaluations = held_out;
   bool any_truth = false;
   for (const auto& r : held_out) any_truth = any_truth || r.true_rate_rad_s.size();
+  in.gmwm = gmwm;
   in.truth_note = any_truth ? "the true_rate column of each held-out record (the rate-table input)"
                             : "zero: the held-out records are static (no true-rate column); the residual is the "
                               "compensated output itself (Earth rate and any constant offset included)";
@@ -150,6 +155,8 @@ void report_channel(const CalibrateOptions& o, CommandEnv& env, const ChannelRec
                     m.b_resolved && std::isfinite(m.b_dph) ? std::to_string(m.b_dph).c_str() : "-",
                     100.0 * m.extrapolated);
       std::cout << line;
+      if (m.gmwm) print_gmwm(std::cout, *m.gmwm, true, "rad/s", "    ");
+      if (!m.gmwm_failure.empty()) std::cout << "    GMWM not fitted: " << m.gmwm_failure << "\n";
     }
     if (held.intrinsic_floor_drift_dph)
       std::cout << "  intrinsic floor (measured - systematic): " << *held.intrinsic_floor_drift_dph << " deg/h\n";
@@ -162,6 +169,12 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
   if (!o.paper_pipeline.empty()) inputs.push_back(o.paper_pipeline);
   OutputSet files({inputs.begin(), inputs.end()});  // the model and the reports appear together
   files.plan(o.out, "--out");
+  GmwmRequest gmwm;  // refused before any fit when bad
+  if (!o.gmwm.empty()) {
+    if (o.report.empty())
+      throw ConfigError({"", 0, "--gmwm"}, "--gmwm fits the residuals the report scores; give --report DIR");
+    gmwm = {allan::gmwm::parse_model(o.gmwm, "--gmwm"), o.gmwm_bootstrap, o.fit.seed, env.threads};
+  }
   if (o.train_until_s > 0 && o.data.paths.size() != 1) {
     throw ConfigError({"", 0, "--train-until"}, "--train-until splits a single --data record");
   }
@@ -227,7 +240,8 @@ void calibrate_command(const CalibrateOptions& o, CommandEnv& env) {
   files.write(o.out, calibration::to_json_text(model));
   for (std::size_t c = 0; c < channels.size(); ++c)
     if (report_files[c])
-      report_channel(o, env, channels[c], fitted[c], held_out[c], model.channels[c], gate, *report_files[c], files);
+      report_channel(o, env, channels[c], fitted[c], held_out[c], model.channels[c], gate, gmwm, *report_files[c],
+                     files);
   files.commit();
   for (const auto& ch : model.channels) print_model_summary(std::cout, ch);
   std::cout << "wrote " << o.out << " (" << model.channels.size() << " channel"
@@ -291,7 +305,8 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--ga-generations", o->fit.ga_generations, "RBF tuning: GA generations")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
-  cmd->add_option("--seed", o->fit.seed, "seed of the RBF tuning (k-means, holdout, GA)")->capture_default_str();
+  cmd->add_option("--seed", o->fit.seed, "seed of the RBF tuning (k-means, holdout, GA) and of the GMWM bootstrap")
+      ->capture_default_str();
   cmd->add_option("--evaluate", o->evaluate,
                   "held-out record(s) to score in the report (other seed / profile; not a --data record)");
   cmd->add_option("--train-until", o->train_until_s,
@@ -300,6 +315,14 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--report", o->report,
                   "write DIR/report.json and DIR/report.html: no compensation, PX4-style polynomial, poly, "
                   "physical and rbf scored on the held-out records");
+  cmd->add_option("--gmwm", o->gmwm,
+                  "with --report: also fit a composite noise model by GMWM to every method's residual, beside B and "
+                  "N (as driftlab allan --gmwm): processes joined by '+' of wn, qn, rw, dr, gm; e.g. wn+rw");
+  cmd->add_option("--gmwm-bootstrap", o->gmwm_bootstrap,
+                  "replicates of the parametric bootstrap for the GMWM intervals (0: asymptotic intervals, "
+                  "which are optimistic)")
+      ->check(CLI::Range(static_cast<std::size_t>(0), static_cast<std::size_t>(10000)))
+      ->capture_default_str();
   cmd->add_option("--paper-pipeline", o->paper_pipeline,
                   "also run this pipeline offline on each held-out record as a reference (a file or the name of "
                   "a bundled pipeline, e.g. li2023; slow on long records)");

@@ -5,7 +5,8 @@
 //   report.json  per pipeline its Table 2 rows (scores_json), step seconds and total seconds;
 //   report.html  one table (B with its interval, N with the output's noise bandwidth, residual drift
 //                against the truth when the record has one, run time) per pipeline and per stage,
-//                and the Allan curves of every output in one figure.
+//                and the Allan curves of every output in one figure, with the reading guides (plot.hpp
+//                allan_guides) of the original record and of the intrinsic floor.
 // Both are planned before the record is read (an input, a directory or an unwritable --out is a
 // usage error) and appear together at the end or not at all (framework/output_set.hpp).
 // A stage's run time is the time until the step that produces it has finished (steps run in file
@@ -170,6 +171,13 @@ void compare(const CompareOptions& o, CommandEnv& env) {
     for (const auto& s : r.scores.stages)
       if (is_pipeline_stage(s))
         panel.series.push_back(curve(r.label + ": " + stage_label(s), s.analysis, PlotSeries::Style::Line));
+  // The reading guides of the original record (the first stage) and of the intrinsic floor.
+  for (auto& g :
+       allan_guides(first.stages.front().analysis, kDphPerRadPerSec, "°/h", stage_label(first.stages.front())))
+    panel.series.push_back(std::move(g));
+  if (first.intrinsic)
+    for (auto& g : allan_guides(*first.intrinsic, kDphPerRadPerSec, "°/h", "intrinsic floor"))
+      panel.series.push_back(std::move(g));
   Figure figure;
   figure.panels.push_back(panel);
   figure.width = 1000;
@@ -213,7 +221,11 @@ void compare(const CompareOptions& o, CommandEnv& env) {
   html.figure(figure,
               "Allan deviation of the record, the two baselines and the intrinsic floor (dashed; the floor when "
               "the record has a systematic column) and every pipeline output (solid), each with its 68.3 % interval "
-              "as a band. Lower at long tau: less drift left; a curve on the intrinsic floor has removed all of it.");
+              "as a band. Lower at long tau: less drift left; a curve on the intrinsic floor has removed all of it. "
+              "Grey dashed guides, of the original record" +
+                  std::string(first.intrinsic ? " and of the intrinsic floor" : "") +
+                  ": the -1/2 slope through N at tau = 1 s and the level of the floor where B is read (0.664 B), "
+                  "with the points they are read at (black dots, their values in the legend).");
   files.write(report_html, html.html());
   files.commit();
 

@@ -549,12 +549,13 @@ std::string readable_name(const std::string& name) {
   return text;
 }
 
-std::vector<PlotSeries> allan_guides(const allan::Analysis& a, double factor, const std::string& unit) {
+std::vector<PlotSeries> allan_guides(const allan::Analysis& a, double factor, const std::string& unit,
+                                     const std::string& of) {
   std::vector<PlotSeries> out;
   if (a.curve.empty()) return out;
-  const auto guide = [&](std::string label, PlotSeries::Style style, auto dev) {
+  const auto guide = [&](const std::string& label, PlotSeries::Style style, auto dev) {
     PlotSeries s;
-    s.label = std::move(label);
+    if (of.empty()) s.label = label;
     s.style = style;
     s.guide = true;
     s.color = "#555555";
@@ -576,7 +577,8 @@ std::vector<PlotSeries> allan_guides(const allan::Analysis& a, double factor, co
   read.style = PlotSeries::Style::Markers;
   read.guide = true;
   read.color = "#000000";
-  read.label = "read: N = " + format_number(n * factor, 3) + " " + unit + "/√Hz at 1 s; B " +
+  read.label = (of.empty() ? "" : of + ", ") + "read: N = " + format_number(n * factor, 3) + " " + unit +
+               "/√Hz at 1 s; B " +
                (b.resolved ? "= " + format_number(b.value * factor, 3) : "< " + format_number(b.high * factor, 3)) +
                " " + unit + " at " + format_number(b.tau_s, 3) + " s";
   if (a.curve.front().tau <= 1.0 && a.curve.back().tau >= 1.0) read.x.push_back(1.0), read.y.push_back(n * factor);

@@ -102,7 +102,10 @@ PlotSeries allan_series(std::string label, std::span<const allan::Estimate> curv
 // dashed lines of slope -1/2 through N at tau = 1 s, slope 0 at the floor where B is read
 // (0.664 B, or the bound's level when unresolved) and, when the term fit resolved K, slope +1/2 of
 // K; and markers where N and B are read, labelled with their values. Guides: they never widen the axes.
-std::vector<PlotSeries> allan_guides(const allan::Analysis& analysis, double factor, const std::string& unit);
+// With `of` (the curve's name, for a figure of several curves, whose caption then says what the grey
+// lines are) only the read-off points are in the legend, as "of, read: N = ...".
+std::vector<PlotSeries> allan_guides(const allan::Analysis& analysis, double factor, const std::string& unit,
+                                     const std::string& of = "");
 
 // The figure as a standalone SVG document (viewBox width x rows * panel_height, less the rows
 // shortened by shared_x, plus 30 px for a title).
