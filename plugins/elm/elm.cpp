@@ -90,12 +90,17 @@ Model fit(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Config& c) {
   }
   const auto standardizer = ridge::Standardizer::fit(X);
   const Eigen::MatrixXd U = standardizer.apply(X);
+  // ridge::solve on one thread forms the blocks in order, on this thread (header, "Progress").
+  const Eigen::Index blocks = (U.rows() + ridge::kBlockRows - 1) / ridge::kBlockRows;
+  const Eigen::Index stride = (blocks + 99) / 100;
+  const auto design = [&](Eigen::Index start, Eigen::Index len) {
+    if (c.progress && start > 0 && (start / ridge::kBlockRows) % stride == 0)
+      c.progress(static_cast<double>(start) / static_cast<double>(U.rows()));
+    return layer(U.middleRows(start, len), W, b, c.activation);
+  };
   Eigen::VectorXd beta;
   try {
-    beta = ridge::solve(
-        U.rows(), L,
-        [&](Eigen::Index start, Eigen::Index len) { return layer(U.middleRows(start, len), W, b, c.activation); }, y,
-        c.regularization);
+    beta = ridge::solve(U.rows(), L, design, y, c.regularization);
   } catch (const std::invalid_argument& e) {
     fail(e.what());
   }

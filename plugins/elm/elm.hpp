@@ -15,12 +15,17 @@
 // error against ||beta|| (the two objectives that the 2024 paper's NSGA-II balances).
 //
 // Draw order: for j = 1..L: w_j1..w_jd, then b_j, from SeededRandom(seed): same seed, same model.
+// Progress (Config::progress): the fraction of the N rows whose hidden-layer outputs are in H^T H,
+// reported on the calling thread before each of the ridge::kBlockRows-row blocks but the first (at
+// most 100 calls: every ceil(blocks / 100)-th block), in (0, 1), increasing; the solve for beta, a
+// small L x L system, is the caller's to end. Empty: not called. It never changes the model.
 // Cost: fit O(N L d) for the activations plus O(N L^2) for H^T H, built in row blocks (memory
 // O(L^2 + block L), not O(N L)); predict O(N L d).
 #pragma once
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 
 namespace driftlab::elm {
 
@@ -32,6 +37,7 @@ struct Config {
   double input_scale = 1.0;      // half-width of the uniform input weights and biases, > 0
   double regularization = 1e-8;  // ridge lambda, >= 0
   std::uint64_t seed = 1;
+  std::function<void(double fraction)> progress;  // see "Progress" above
 };
 
 class Model {

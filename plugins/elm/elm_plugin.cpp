@@ -42,7 +42,8 @@ class ElmPlugin final : public Regressor {
   void fit(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, RunContext& ctx) override {
     model_.reset();
     try {
-      const elm::Config config = optimizer_ ? tuned(X, y, ctx) : config_;
+      elm::Config config = optimizer_ ? tuned(X, y, ctx) : config_;
+      if (!optimizer_) config.progress = ctx.progress;  // tuned: the optimizer's progress is the step's
       model_ = elm::fit(X, y, config);
       ctx.diagnostics["hidden"] = config.hidden;
       ctx.diagnostics["regularization"] = config.regularization;

@@ -114,8 +114,10 @@ Result filter(const Eigen::VectorXd& x, const Config& config) {
   });
   const double grid = 1.0 / fft_size;
 
+  const Eigen::Index block = (n + 99) / 100;  // samples per progress report
   result.filtered.resize(n);
   for (Eigen::Index k = 0; k < n; ++k) {
+    if (config.progress && k > 0 && k % block == 0) config.progress(static_cast<double>(k) / static_cast<double>(n));
     const Eigen::Index centre = k + h;  // index into the extended phase
     for (Eigen::Index m = 0; m <= h; ++m) {
       const double d = phase[static_cast<std::size_t>(centre + m)] - phase[static_cast<std::size_t>(centre - m)];

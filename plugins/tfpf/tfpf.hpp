@@ -38,6 +38,10 @@
 //      otherwise   -> L = short_window (long_window / short_window)^((rho - 0.1) / 0.8),
 // rounded to the nearest odd integer and capped at the largest odd number <= N.
 //
+// Progress (Config::progress): the fraction of the output samples estimated, reported on the
+// calling thread after each block of ceil(N / 100) samples but the last (at most 99 calls), in
+// (0, 1), increasing (the caller reports the end). Empty: not called. It never changes the result.
+//
 // Cost: O(N F log F) for the coarse search plus O(N h) per Newton step (complex rotations, no
 // trigonometric calls inside the Newton loop).
 // Errors: std::invalid_argument for a bad configuration, std::domain_error for bad data (fewer than
@@ -45,6 +49,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 
 namespace driftlab::tfpf {
 
@@ -57,6 +62,7 @@ struct Config {
   int short_window = 9;  // odd, >= 3: NoiseLevel, signal-dominated input
   int long_window = 65;  // odd, >= short_window: NoiseLevel, noise-dominated input
   LagWindow lag_window = LagWindow::Rectangular;
+  std::function<void(double fraction)> progress;  // see "Progress" above
 };
 
 struct Result {

@@ -38,7 +38,9 @@ class TfpfFilter final : public Filter {
   Eigen::VectorXd filter(const Eigen::VectorXd& z, RunContext& ctx) override {
     tfpf::Result r;
     try {
-      r = tfpf::filter(z, config_);
+      tfpf::Config config = config_;
+      config.progress = ctx.progress;
+      r = tfpf::filter(z, config);
     } catch (const std::domain_error& e) {
       throw DataError({"", 0, "signal"}, std::string("filter/tfpf: ") + e.what());
     } catch (const std::invalid_argument& e) {

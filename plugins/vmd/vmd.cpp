@@ -103,6 +103,17 @@ std::vector<double> initial_centres(const Config& c, Eigen::Index n) {
   return omega;
 }
 
+// The progress fraction of the header ("Progress") after iteration n with stopping statistic
+// `change`, given the first iteration's statistic `first`.
+double progress_fraction(const Config& c, int n, double first, double change) {
+  double fraction = static_cast<double>(n) / c.max_iterations;
+  if (first > c.tolerance && change < first) {
+    const double decades = change > 0.0 ? std::log(first / change) / std::log(first / c.tolerance) : 1.0;
+    fraction = std::max(fraction, decades);
+  }
+  return std::min(fraction, 1.0);
+}
+
 }  // namespace
 
 Result decompose(const Eigen::VectorXd& x, const Config& config) {
@@ -148,6 +159,7 @@ Result decompose(const Eigen::VectorXd& x, const Config& config) {
   const SpectrumView spectrum{freq.data(), f_re.data(), f_im.data(), lambda_re.data(), lambda_im.data(), nb};
 
   Result result;
+  double first_change = 0.0, reported = 0.0;
   for (int iteration = 1; iteration <= config.max_iterations; ++iteration) {
     double change = 0.0;
     for (std::size_t k = 0; k < k_count; ++k) {
@@ -167,6 +179,11 @@ Result decompose(const Eigen::VectorXd& x, const Config& config) {
     if (result.final_change < config.tolerance) {
       result.converged = true;
       break;
+    }
+    if (iteration == 1) first_change = result.final_change;
+    if (config.progress) {
+      const double fraction = progress_fraction(config, iteration, first_change, result.final_change);
+      if (fraction < 1.0 && fraction >= reported + 0.01) config.progress(reported = fraction);
     }
   }
 

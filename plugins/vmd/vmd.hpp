@@ -39,6 +39,14 @@
 // x - sum_k u_k, so x = sum modes + residue holds to rounding. With tau > 0 and convergence the
 // residue is small; with tau = 0 it holds what no mode's band captured.
 //
+// Progress (Config::progress): after an iteration that does not stop the loop, the fraction
+//   p_n = max(n / max_iterations, log(c_1 / c_n) / log(c_1 / tolerance))
+// of the way to the stopping rule, with c_n the stopping statistic of iteration n: the share of the
+// iteration cap used, or of the decades the change has to fall by (it falls about geometrically),
+// whichever is further. Reported on the calling thread when it has grown by at least 0.01 since the
+// last report (at most 100 calls), in [0, 1), increasing; it jumps when the decomposition converges
+// (the caller reports the end). Empty: not called. It never changes the result.
+//
 // Cost: O(K M) per iteration plus 2 FFTs of size M at the start and K inverse FFTs at the end.
 // The per-bin update runs on separate real and imaginary arrays in an AVX2 clone
 // (framework/simd.hpp); its sums are kept in four fixed lanes, so both clones give the same bits.
@@ -48,6 +56,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 
 namespace driftlab::vmd {
 
@@ -59,9 +68,10 @@ struct Config {
   double tau = 0.0;       // dual ascent step, >= 0 (0: no exact-reconstruction constraint)
   bool dc = false;        // hold the first centre frequency at 0
   Init init = Init::Uniform;
-  double tolerance = 1e-7;   // relative change of the mode spectra, > 0
-  int max_iterations = 500;  // >= 1
-  std::uint64_t seed = 1;    // Init::Random only
+  double tolerance = 1e-7;                        // relative change of the mode spectra, > 0
+  int max_iterations = 500;                       // >= 1
+  std::uint64_t seed = 1;                         // Init::Random only
+  std::function<void(double fraction)> progress;  // see "Progress" above
 };
 
 struct Result {

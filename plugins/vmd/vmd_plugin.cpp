@@ -33,7 +33,9 @@ class VmdDecomposer final : public Decomposer {
   Decomposition decompose(const Eigen::VectorXd& x, RunContext& ctx) override {
     vmd::Result result;
     try {
-      result = vmd::decompose(x, config_);
+      vmd::Config config = config_;
+      config.progress = ctx.progress;
+      result = vmd::decompose(x, config);
     } catch (const std::domain_error& e) {
       throw DataError({"", 0, "signal"}, std::string("decomposition/vmd: ") + e.what());
     } catch (const std::invalid_argument& e) {

@@ -167,6 +167,10 @@ Result denoise(const Eigen::VectorXd& x, const Config& config) {
     return std::vector<double>(data.begin() + static_cast<std::ptrdiff_t>(b),
                                data.begin() + static_cast<std::ptrdiff_t>(e));
   };
+  // Work in coefficients (header, "Progress"): levels 1 .. L hold M - M / 2^L of them.
+  const double total_work = static_cast<double>(2 * m + m - (m >> result.levels));
+  double done = static_cast<double>(m);
+  if (config.progress) config.progress(done / total_work);
   const double finest_sigma = mad_sigma(level_coefficients(1));
   for (int l = 1; l <= result.levels; ++l) {
     std::vector<double> d = level_coefficients(l);
@@ -190,6 +194,8 @@ Result denoise(const Eigen::VectorXd& x, const Config& config) {
     result.sigma.push_back(sigma);
     result.thresholds.push_back(lambda);
     result.kept.push_back(kept);
+    done += static_cast<double>(e - b);
+    if (config.progress) config.progress(done / total_work);
   }
 
   if (gsl_wavelet_transform_inverse(w.get(), data.data(), 1, static_cast<std::size_t>(m), work.get()) != GSL_SUCCESS) {

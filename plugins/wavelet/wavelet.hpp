@@ -36,6 +36,12 @@
 // 6. Rule: soft  eta(d) = sign(d) max(|d| - lambda, 0);  hard  eta(d) = d 1{|d| > lambda}.
 // 7. Inverse DWT; the N original samples are returned.
 //
+// Progress (Config::progress): the share of the work done, counted in coefficients: the forward
+// transform M, each thresholded level its n_l, the inverse transform M. Reported on the calling
+// thread after the forward transform and after each thresholded level (at most 1 + log2 M calls),
+// in (0, 1), increasing (the caller reports the end). Empty: not called. It never changes the
+// result.
+//
 // Wavelet families (GSL): Daubechies (maximum phase, k/2 vanishing moments, k = 4, 6, ..., 20;
 // k = 8 is MATLAB's 'db4'), Haar (k = 2), biorthogonal B-spline (k = 100 i + j: 103, 105, 202,
 // 204, 206, 208, 301, 303, 305, 307, 309), each also "centered" (coefficients aligned on the
@@ -49,6 +55,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 namespace driftlab::wavelet {
@@ -65,6 +72,7 @@ struct Config {
   ThresholdRule rule = ThresholdRule::Universal;
   Shrink shrink = Shrink::Soft;
   NoiseEstimate noise = NoiseEstimate::FinestLevel;
+  std::function<void(double fraction)> progress;  // see "Progress" above
 };
 
 struct Result {

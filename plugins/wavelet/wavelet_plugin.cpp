@@ -39,7 +39,9 @@ class WaveletFilter final : public Filter {
   Eigen::VectorXd filter(const Eigen::VectorXd& z, RunContext& ctx) override {
     wavelet::Result r;
     try {
-      r = wavelet::denoise(z, config_);
+      wavelet::Config config = config_;
+      config.progress = ctx.progress;
+      r = wavelet::denoise(z, config);
     } catch (const std::domain_error& e) {
       throw DataError({"", 0, "signal"}, std::string("filter/wavelet: ") + e.what());
     } catch (const std::invalid_argument& e) {

@@ -9,6 +9,8 @@
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
+#include "plugins/common/ridge.hpp"
+#include "tests/plugins/progress_check.hpp"
 
 namespace driftlab {
 namespace {
@@ -87,6 +89,25 @@ TEST(Elm, MoreRegularizationShrinksTheOutputWeightsAndRaisesTheTrainingError) {
   }
 }
 
+// Progress (elm::Config::progress): before each block of ridge::kBlockRows rows but the first,
+// increasing in [0, 1), and the same model with or without a listener.
+TEST(Elm, ReportsEachBlockOfRowsAndGivesTheSameModel) {
+  constexpr Eigen::Index kRows = 20000;  // 5 blocks of 4096 rows
+  const Eigen::MatrixXd X = Eigen::VectorXd::LinSpaced(kRows, -2.0, 2.0);
+  const Eigen::VectorXd y = X.col(0).array().sin();
+  elm::Config c{.hidden = 10};
+  const auto plain = elm::fit(X, y, c);
+  testing_progress::Recorder recorder;
+  c.progress = recorder.listener();
+  const auto model = elm::fit(X, y, c);
+  EXPECT_EQ(model.output_weights(), plain.output_weights());
+  EXPECT_EQ(model.output_bias(), plain.output_bias());
+  const auto fractions = testing_progress::checked_fractions(recorder.fractions);
+  ASSERT_EQ(fractions.size(), 4u);
+  for (std::size_t k = 0; k < fractions.size(); ++k)
+    EXPECT_DOUBLE_EQ(fractions[k], static_cast<double>((k + 1) * ridge::kBlockRows) / kRows);
+}
+
 TEST(Elm, RejectsBadDataAndConfigurations) {
   const auto d = known_function(0.0);
   EXPECT_THROW(elm::fit(d.X, d.y.head(10), {}), std::invalid_argument);
@@ -114,6 +135,12 @@ TEST(ElmPlugin, PredictBeforeFitThrowsAndFitMatchesTheKernel) {
   elm_plugin->fit(d.X, d.y, ctx);
   EXPECT_EQ(elm_plugin->predict(d.X), elm::fit(d.X, d.y, {.hidden = 30, .seed = 2}).predict(d.X));
   EXPECT_TRUE(ctx.diagnostics.contains("output_weight_norm"));
+  // An untuned fit reports the kernel's progress as the step's (blocks of 4096 rows).
+  const Eigen::MatrixXd long_x = Eigen::VectorXd::LinSpaced(20000, -2.0, 2.0);
+  testing_progress::Recorder recorder;
+  ctx.progress = recorder.listener();
+  elm_plugin->fit(long_x, long_x.col(0), ctx);
+  EXPECT_EQ(testing_progress::checked_fractions(recorder.fractions).size(), 4u);
 }
 
 TEST(ElmPlugin, TunesWithTheGaOnOneObjectiveAndWithNsga2OnTwo) {

@@ -18,6 +18,7 @@
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
+#include "tests/plugins/progress_check.hpp"
 
 namespace driftlab {
 namespace {
@@ -630,16 +631,9 @@ TEST(Eemd, AlignsImfCountsToMaxImfsWhenGiven) {
   EXPECT_LT(reconstruction_error(x, r), kRoundingTolerance);
 }
 
-// Progress (emd::Progress): fractions in [0, 1), increasing, reported on the calling thread, and
-// the decomposition bit-identical with or without a listener.
-std::vector<double> checked_fractions(const std::vector<double>& fractions) {
-  for (std::size_t i = 0; i < fractions.size(); ++i) {
-    EXPECT_GE(fractions[i], 0.0);
-    EXPECT_LT(fractions[i], 1.0);
-    if (i > 0) EXPECT_GT(fractions[i], fractions[i - 1]);
-  }
-  return fractions;
-}
+// Progress (emd::Progress): fractions in [0, 1), increasing (testing_progress::checked_fractions),
+// reported on the calling thread, and the decomposition bit-identical with or without a listener.
+using testing_progress::checked_fractions;
 
 TEST(EmdProgress, EmdReportsEachImfAndGivesTheSameBits) {
   const Eigen::VectorXd x = busy_signal(1500, 21);

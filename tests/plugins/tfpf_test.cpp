@@ -10,6 +10,7 @@
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
+#include "tests/plugins/progress_check.hpp"
 #include "tests/plugins/seeded_noise.hpp"
 
 namespace driftlab {
@@ -108,6 +109,23 @@ TEST(Tfpf, LongerWindowsForNoisierInputsByTheDocumentedRule) {
   EXPECT_EQ(tfpf::filter(2.0 * standard_normal(2000, 6), {}).window, 65);
 }
 
+// Progress (tfpf::Config::progress): one report per block of ceil(N / 100) samples but the last,
+// increasing in [0, 1), and the same bits with or without a listener.
+TEST(Tfpf, ReportsEachBlockOfSamplesAndGivesTheSameBits) {
+  const Eigen::VectorXd x =
+      sampled(1001, [](double i) { return std::sin(2.0 * kPi * i / 300.0); }) + 0.3 * standard_normal(1001, 9);
+  tfpf::Config c;
+  const tfpf::Result plain = tfpf::filter(x, c);
+  testing_progress::Recorder recorder;
+  c.progress = recorder.listener();
+  const tfpf::Result r = tfpf::filter(x, c);
+  EXPECT_EQ(r.filtered, plain.filtered);
+  const auto fractions = testing_progress::checked_fractions(recorder.fractions);
+  ASSERT_EQ(fractions.size(), 90u);  // blocks of 11 samples: after 11, 22, ..., 990
+  EXPECT_DOUBLE_EQ(fractions.front(), 11.0 / 1001.0);
+  EXPECT_DOUBLE_EQ(fractions.back(), 990.0 / 1001.0);
+}
+
 TEST(Tfpf, RejectsBadConfigurationAndBadData) {
   const Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(20, 0.0, 1.0);
   EXPECT_THROW(tfpf::filter(x, {.window = 4}), std::invalid_argument);
@@ -128,8 +146,11 @@ TEST(TfpfPlugin, FiltersThroughTheRegistryAndReportsTheWindow) {
       {"filter/tfpf", params_from_assignments(registry, "filter/tfpf", {"window_rule=fixed", "window=21"})});
   RunContext ctx;
   ctx.time_s = Eigen::VectorXd::LinSpaced(1000, 0.0, 99.9);  // 10 Hz
+  testing_progress::Recorder recorder;
+  ctx.progress = recorder.listener();
   const Eigen::VectorXd clean = sampled(1000, [](double i) { return std::sin(2.0 * kPi * i / 300.0); });
   const Eigen::VectorXd out = filter->filter(clean + 0.3 * standard_normal(1000, 8), ctx);
+  EXPECT_EQ(testing_progress::checked_fractions(recorder.fractions).size(), 99u) << "the step's progress";
   EXPECT_GT(snr_db(clean, out), snr_db(clean, clean + 0.3 * standard_normal(1000, 8)) + 6.0);
   EXPECT_EQ(ctx.diagnostics["window_samples"].get<int>(), 21);
   EXPECT_NEAR(ctx.diagnostics["window_s"].get<double>(), 2.1, kWindowSeconds);

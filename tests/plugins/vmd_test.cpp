@@ -10,6 +10,7 @@
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
+#include "tests/plugins/progress_check.hpp"
 #include "tests/plugins/seeded_noise.hpp"
 
 namespace driftlab {
@@ -168,6 +169,40 @@ TEST(Vmd, ModesComeHighestCentreFrequencyFirstForOddLengths) {
   EXPECT_NEAR(r.centre_frequencies[0] * 1000.0, 150.0, kCentreToleranceHz);
 }
 
+// Progress (vmd::Config::progress): increasing fractions in [0, 1), at least 0.01 apart, and the
+// same bits with or without a listener.
+TEST(Vmd, ReportsProgressTowardsConvergenceAndGivesTheSameBits) {
+  const Eigen::VectorXd x = standard_normal(1000, 17);
+  vmd::Config c{.modes = 3, .tolerance = 1e-9};
+  const vmd::Result plain = vmd::decompose(x, c);
+  testing_progress::Recorder recorder;
+  c.progress = recorder.listener();
+  const vmd::Result r = vmd::decompose(x, c);
+  EXPECT_EQ(r.modes, plain.modes);
+  EXPECT_EQ(r.centre_frequencies, plain.centre_frequencies);
+  EXPECT_EQ(r.iterations, plain.iterations);
+  ASSERT_TRUE(r.converged);
+  ASSERT_GT(r.iterations, 10) << "the test needs a decomposition that takes a while";
+  const auto fractions = testing_progress::checked_fractions(recorder.fractions);
+  ASSERT_FALSE(fractions.empty());
+  EXPECT_LE(fractions.size(), 100u);
+  for (std::size_t i = 1; i < fractions.size(); ++i) EXPECT_GE(fractions[i] - fractions[i - 1], 0.01 - 1e-12);
+  // The change fell from its first value to below the tolerance: the fraction by decades passed
+  // the share of the iteration cap used.
+  EXPECT_GT(fractions.back(), static_cast<double>(r.iterations - 1) / c.max_iterations);
+}
+
+TEST(Vmd, ReportsTheIterationCapUsedWhenItDoesNotConverge) {
+  const Eigen::VectorXd x = standard_normal(512, 18);
+  testing_progress::Recorder recorder;
+  const vmd::Result r =
+      vmd::decompose(x, {.modes = 2, .tolerance = 1e-300, .max_iterations = 50, .progress = recorder.listener()});
+  ASSERT_FALSE(r.converged);
+  const auto fractions = testing_progress::checked_fractions(recorder.fractions);
+  ASSERT_FALSE(fractions.empty());
+  EXPECT_GE(fractions.back(), 49.0 / 50.0 - 1e-12);  // the last iteration is the caller's to end
+}
+
 TEST(Vmd, RejectsBadConfigurationAndBadData) {
   const Eigen::VectorXd x = Eigen::VectorXd::Ones(16);
   EXPECT_THROW(vmd::decompose(x, {.modes = 0}), std::invalid_argument);
@@ -189,8 +224,11 @@ TEST(VmdPlugin, DecomposesThroughTheRegistryAndReportsCentreFrequenciesInHertz) 
   ctx.time_s = Eigen::VectorXd::LinSpaced(1000, 0.0, 9.99);  // 100 Hz
   const Eigen::VectorXd x =
       sampled(1000, 100.0, [](double t) { return std::cos(2.0 * kPi * 2.0 * t) + std::cos(2.0 * kPi * 30.0 * t); });
+  testing_progress::Recorder recorder;
+  ctx.progress = recorder.listener();
   const Decomposition d = plugin->decompose(x, ctx);
   EXPECT_EQ(d.imfs.cols(), 2);
+  EXPECT_FALSE(testing_progress::checked_fractions(recorder.fractions).empty()) << "the step's progress";
   const auto hz = ctx.diagnostics["centre_frequencies_hz"].get<std::vector<double>>();
   ASSERT_EQ(hz.size(), 2u);
   EXPECT_NEAR(hz[0], 30.0, kCentreHz);

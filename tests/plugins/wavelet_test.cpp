@@ -11,6 +11,7 @@
 #include "framework/error.hpp"
 #include "framework/params_io.hpp"
 #include "framework/registry.hpp"
+#include "tests/plugins/progress_check.hpp"
 #include "tests/plugins/seeded_noise.hpp"
 
 namespace driftlab {
@@ -173,6 +174,26 @@ TEST(WaveletDenoise, PaddedLengthsAndEveryFamilyRoundTripWithZeroThreshold) {
   }
 }
 
+// Progress (wavelet::Config::progress): after the forward transform and after each level, counted
+// in coefficients, increasing in [0, 1), and the same bits with or without a listener.
+TEST(WaveletDenoise, ReportsTheTransformAndEachLevelAndGivesTheSameBits) {
+  const Eigen::VectorXd y = test_function("heavisine", 1000) + standard_normal(1000, 12);
+  wavelet::Config c{.levels = 5, .rule = wavelet::ThresholdRule::Sure, .noise = wavelet::NoiseEstimate::PerLevel};
+  const wavelet::Result plain = wavelet::denoise(y, c);
+  testing_progress::Recorder recorder;
+  c.progress = recorder.listener();
+  const wavelet::Result r = wavelet::denoise(y, c);
+  EXPECT_EQ(r.denoised, plain.denoised);
+  EXPECT_EQ(r.thresholds, plain.thresholds);
+  const auto fractions = testing_progress::checked_fractions(recorder.fractions);
+  // M = 1024: forward 1024, levels 512 + 256 + 128 + 64 + 32, inverse 1024 coefficients.
+  constexpr double kWork = 1024.0 + 992.0 + 1024.0;
+  ASSERT_EQ(fractions.size(), 6u);
+  EXPECT_DOUBLE_EQ(fractions.front(), 1024.0 / kWork);
+  EXPECT_DOUBLE_EQ(fractions[1], 1536.0 / kWork);
+  EXPECT_DOUBLE_EQ(fractions.back(), 2016.0 / kWork);
+}
+
 TEST(WaveletDenoise, RejectsOrdersTheFamilyLacksAndBadData) {
   const Eigen::VectorXd x = Eigen::VectorXd::Ones(64);
   EXPECT_THROW(wavelet::denoise(x, {.order = 5}), std::invalid_argument);
@@ -195,7 +216,10 @@ TEST(WaveletPlugin, FiltersThroughTheRegistryAndRejectsAMismatchedOrder) {
   const Eigen::VectorXd f = test_function("heavisine", 1024);
   const Eigen::VectorXd y = f + standard_normal(1024, 9);
   RunContext ctx;
+  testing_progress::Recorder recorder;
+  ctx.progress = recorder.listener();
   const Eigen::VectorXd out = filter->filter(y, ctx);
+  EXPECT_EQ(testing_progress::checked_fractions(recorder.fractions).size(), 5u) << "the step's progress";
   EXPECT_LT(mse(out, f), 0.5 * mse(y, f));
   EXPECT_EQ(ctx.diagnostics["levels"].get<int>(), 4);
   EXPECT_EQ(ctx.diagnostics["threshold_per_level"].size(), 4u);
