@@ -177,13 +177,23 @@ TEST_F(FleetCli, ThreeMpiRanksGiveTheSingleRunsFoldersAndReport) {
   if (!DRIFTLAB_HAVE_MPI) GTEST_SKIP() << "built without MPI (DRIFTLAB_WITH_MPI)";
   const fs::path out = kDir / "mpi";
   // Open MPI refuses to run as root unless told; the tests run as root in the project's container.
+  // DRIFTLAB_PROGRESS_INTERVAL_S=0: a progress line (stderr is a file) for every finished unit.
   const auto r = testing_cli::run_driftlab(
       "fleet --manifest " + (kSim / "manifest.csv").string() + " --out " + out.string() + " --channels gyro",
-      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe -np 3");
+      "DRIFTLAB_PROGRESS_INTERVAL_S=0 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun "
+      "--oversubscribe -np 3");
   EXPECT_NE(r.exit_code, 0) << "a unit failed: rank 0 exits 1";
   EXPECT_THAT(r.out,
               HasSubstr(std::to_string(kUnits) + " units: " + std::to_string(kUnits - 1) + " calibrated, 1 failed"))
       << r.err;
+  // Rank 0 reports the units as their results arrive; the worker ranks report nothing.
+  const std::string task = "driftlab: fleet: " + std::to_string(kUnits) + " units: ";
+  const auto started = r.err.find(task + "started\n");
+  ASSERT_NE(started, std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find(task + "started\n", started + 1), std::string::npos) << r.err;
+  for (int done = 1; done < kUnits; ++done)
+    EXPECT_THAT(r.err, HasSubstr(task + std::to_string(100 * done / kUnits) + "%, ")) << r.err;
+  EXPECT_THAT(r.err, HasSubstr(task + "done in ")) << r.err;
   for (const auto& e : fs::recursive_directory_iterator(kDir / "w1" / "units")) {
     if (e.is_regular_file()) {
       EXPECT_EQ(read_text(e.path()), read_text(out / fs::relative(e.path(), kDir / "w1"))) << e.path();

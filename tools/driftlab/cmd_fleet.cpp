@@ -507,7 +507,7 @@ std::pair<std::size_t, std::size_t> parse_shard(const std::string& text) {
   return {i - 1, n};
 }
 
-// Progress (CommandEnv::progress) is reported per finished unit when the units run on threads.
+// Progress (CommandEnv::progress) is reported per finished unit, on threads or MPI rank 0 alike.
 void fleet_command(const FleetOptions& o, CommandEnv& env) {
   if (o.manifest.empty() || o.out.empty())
     throw ConfigError({"", 0, o.manifest.empty() ? "--manifest" : "--out"},
@@ -526,19 +526,23 @@ void fleet_command(const FleetOptions& o, CommandEnv& env) {
   for (std::size_t i = first; i < units.size(); i += step) mine.push_back(i);
 
   const auto run = [&](std::size_t k) { return run_unit(units[mine[k]], o, out / "units" / units[mine[k]].id); };
-  if (const auto master = run_over_mpi(mine.size(), run)) {
+  // The units' lines and the progress, from the threads or from MPI rank 0 as results arrive.
+  std::mutex console;
+  const std::string label = "fleet: " + std::to_string(mine.size()) + " units";
+  std::size_t done = 0;
+  const auto started = [&] {
+    if (!mine.empty()) env.progress(label, 0.0);
+  };
+  const auto finished = [&](const std::string& line) {
+    const std::lock_guard<std::mutex> lock(console);
+    std::cout << line << "\n" << std::flush;
+    env.progress(label, static_cast<double>(++done) / static_cast<double>(mine.size()));
+  };
+  if (const auto master = run_over_mpi(mine.size(), run, started, finished)) {
     if (!*master) return;  // an MPI worker rank: rank 0 writes the report
   } else {
-    std::mutex console;
-    const std::string label = "fleet: " + std::to_string(mine.size()) + " units";
-    std::size_t done = 0;
-    if (!mine.empty()) env.progress(label, 0.0);
-    parallel_for(mine.size(), o.workers, [&](std::size_t k) {
-      const std::string line = run(k);
-      const std::lock_guard<std::mutex> lock(console);
-      std::cout << line << "\n" << std::flush;
-      env.progress(label, static_cast<double>(++done) / static_cast<double>(mine.size()));
-    });
+    started();
+    parallel_for(mine.size(), o.workers, [&](std::size_t k) { finished(run(k)); });
   }
   if (o.shard.empty()) return report_command(units, o);
   std::size_t failed = 0;

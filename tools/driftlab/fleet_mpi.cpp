@@ -7,7 +7,6 @@
 #include <boost/mpi/communicator.hpp>
 #include <boost/mpi/environment.hpp>
 #include <boost/serialization/string.hpp>
-#include <iostream>
 
 namespace driftlab::cli {
 namespace {
@@ -15,16 +14,18 @@ namespace {
 constexpr int kTagResult = 1;  // worker -> master: the last item's line ("" for the first request)
 constexpr int kTagWork = 2;    // master -> worker: the next item, or -1 when there is none
 
-int run_ranks(std::size_t count, const std::function<std::string(std::size_t)>& body) {
+int run_ranks(std::size_t count, const MpiBody& body, const std::function<void()>& started,
+              const std::function<void(const std::string&)>& finished) {
   boost::mpi::environment environment;
   boost::mpi::communicator world;
   if (world.size() <= 1) return -1;
   if (world.rank() == 0) {
+    started();
     std::size_t next = 0;
     for (int active = world.size() - 1; active > 0;) {
       std::string line;
       const auto status = world.recv(boost::mpi::any_source, kTagResult, line);
-      if (!line.empty()) std::cout << line << "\n" << std::flush;
+      if (!line.empty()) finished(line);
       const long item = next < count ? static_cast<long>(next++) : -1L;
       world.send(status.source(), kTagWork, item);
       active -= item < 0;
@@ -44,6 +45,8 @@ int run_ranks(std::size_t count, const std::function<std::string(std::size_t)>& 
 }  // namespace
 }  // namespace driftlab::cli
 
-extern "C" int driftlab_run_over_mpi(std::size_t count, const std::function<std::string(std::size_t)>& body) {
-  return driftlab::cli::run_ranks(count, body);
+extern "C" int driftlab_run_over_mpi(std::size_t count, const driftlab::cli::MpiBody& body,
+                                     const std::function<void()>& started,
+                                     const std::function<void(const std::string&)>& finished) {
+  return driftlab::cli::run_ranks(count, body, started, finished);
 }

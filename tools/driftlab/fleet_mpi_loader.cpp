@@ -14,7 +14,8 @@
 namespace driftlab::cli {
 namespace {
 
-using RunOverMpi = int (*)(std::size_t, const std::function<std::string(std::size_t)>&);
+using RunOverMpi = int (*)(std::size_t, const MpiBody&, const std::function<void()>&,
+                           const std::function<void(const std::string&)>&);
 
 RunOverMpi load_engine() {
   if (!DRIFTLAB_HAVE_MPI)
@@ -36,9 +37,10 @@ RunOverMpi load_engine() {
 
 }  // namespace
 
-std::optional<bool> run_over_mpi(std::size_t count, const std::function<std::string(std::size_t)>& body) {
+std::optional<bool> run_over_mpi(std::size_t count, const MpiBody& body, const std::function<void()>& started,
+                                 const std::function<void(const std::string&)>& finished) {
   if (launched_ranks() <= 1) return std::nullopt;
-  const int result = load_engine()(count, body);
+  const int result = load_engine()(count, body, started, finished);
   if (result < 0) return std::nullopt;
   return result == 1;
 }
