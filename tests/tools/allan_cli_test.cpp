@@ -210,6 +210,11 @@ TEST(AllanCommand, FitsAGmwmModelBesideTheSlopeFit) {
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_THAT(bad.err, HasSubstr("--gmwm"));
   EXPECT_THAT(bad.err, HasSubstr("flicker"));
+  const auto one_replicate = run_driftlab("allan --data " + csv.string() + " --out " + (dir / "b.csv").string() +
+                                          " --gmwm wn --gmwm-bootstrap 1");
+  EXPECT_EQ(one_replicate.exit_code, 2);
+  EXPECT_THAT(one_replicate.err, HasSubstr("--gmwm-bootstrap"));
+  EXPECT_THAT(one_replicate.err, HasSubstr("one replicate gives no interval"));
   if (std::filesystem::exists(kLsm6dsm)) {
     const auto bursts = run_driftlab("allan --data " + kLsm6dsm.string() +
                                      " --column time=time_s:s --column rate=gyro_x_rad_s:rad/s --out " +

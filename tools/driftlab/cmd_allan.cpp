@@ -396,11 +396,7 @@ void add_allan_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--gmwm", options->gmwm,
                   "also fit a composite noise model by GMWM, processes joined by '+': wn (white), qn (quantization), "
                   "rw (rate random walk), dr (rate ramp), gm (Gauss-Markov, may repeat); e.g. wn+rw+gm");
-  cmd->add_option("--gmwm-bootstrap", options->gmwm_bootstrap,
-                  "replicates of the parametric bootstrap for the GMWM intervals (0: asymptotic intervals, "
-                  "which are optimistic)")
-      ->check(CLI::Range(static_cast<std::size_t>(0), static_cast<std::size_t>(10000)))
-      ->capture_default_str();
+  add_gmwm_bootstrap_option(cmd, options->gmwm_bootstrap);
   cmd->add_option("--seed", options->seed, "seed of the bootstrap's simulated records; same seed, same intervals")
       ->check(whole_number(0, kMaxSeed))
       ->capture_default_str();

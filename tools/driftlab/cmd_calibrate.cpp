@@ -318,11 +318,7 @@ void add_calibrate_command(CLI::App& app, CommandEnv& env) {
   cmd->add_option("--gmwm", o->gmwm,
                   "with --report: also fit a composite noise model by GMWM to every method's residual, beside B and "
                   "N (as driftlab allan --gmwm): processes joined by '+' of wn, qn, rw, dr, gm; e.g. wn+rw");
-  cmd->add_option("--gmwm-bootstrap", o->gmwm_bootstrap,
-                  "replicates of the parametric bootstrap for the GMWM intervals (0: asymptotic intervals, "
-                  "which are optimistic)")
-      ->check(CLI::Range(static_cast<std::size_t>(0), static_cast<std::size_t>(10000)))
-      ->capture_default_str();
+  add_gmwm_bootstrap_option(cmd, o->gmwm_bootstrap);
   cmd->add_option("--paper-pipeline", o->paper_pipeline,
                   "also run this pipeline offline on each held-out record as a reference (a file or the name of "
                   "a bundled pipeline, e.g. li2023; slow on long records)");

@@ -1,5 +1,7 @@
 #include "tools/driftlab/noise_report.hpp"
 
+#include "tools/driftlab/cli.hpp"
+
 #include <cmath>
 #include <cstdio>
 
@@ -111,6 +113,20 @@ allan::gmwm::Fit fit_gmwm(std::span<const allan::Estimate> curve, double sample_
   auto fit = allan::gmwm::fit(curve, sample_rate_hz, model);
   if (replicates > 0) fit = allan::gmwm::bootstrap(fit, static_cast<Eigen::Index>(samples), replicates, seed, threads);
   return fit;
+}
+
+void add_gmwm_bootstrap_option(CLI::App* command, std::size_t& replicates) {
+  command
+      ->add_option("--gmwm-bootstrap", replicates,
+                   "replicates of the parametric bootstrap for the GMWM intervals (0: asymptotic intervals, "
+                   "which are optimistic; otherwise at least 2)")
+      ->check(whole_number(0, 10000))
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            return text == "1" ? "one replicate gives no interval: 0 (asymptotic intervals) or at least 2" : "";
+          },
+          "0 or 2..10000"))
+      ->capture_default_str();
 }
 
 }  // namespace driftlab::cli

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "models/allan/confidence.hpp"
@@ -49,5 +50,10 @@ void print_gmwm(std::ostream& out, const allan::gmwm::Fit& fit, bool angular, co
 allan::gmwm::Fit fit_gmwm(std::span<const allan::Estimate> curve, double sample_rate_hz,
                           const std::vector<allan::gmwm::Process>& model, std::size_t samples, std::size_t replicates,
                           std::uint64_t seed, unsigned threads);
+
+// Adds --gmwm-bootstrap, the one definition `allan` and `calibrate` share: the replicates of the
+// parametric bootstrap, 0 (the asymptotic intervals) or 2 to 10000 (one replicate gives no
+// interval); anything else is a usage error, exit 2.
+void add_gmwm_bootstrap_option(CLI::App* command, std::size_t& replicates);
 
 }  // namespace driftlab::cli

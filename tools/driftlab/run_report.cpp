@@ -415,10 +415,11 @@ void add_residual(HtmlReport& html, const TimeSeries& record, const StageOutputs
               "temperature: a heating/cooling difference (thermal lag or hysteresis) the model does not follow.");
 }
 
-void add_tuning(HtmlReport& html, const std::vector<StepRecord>& steps) {
+void add_tuning(HtmlReport& html, const std::vector<StepRecord>& steps,
+                const std::map<std::string, Signal>& step_signals) {
   HtmlTable t;
   t.caption = "Hyperparameters found by each tuned step on its blocked holdout";
-  t.header = {"step", "plugin", "best hyperparameters", "held-out RMSE (step's unit)", "evaluations", "notes"};
+  t.header = {"step", "plugin", "best hyperparameters", "held-out RMSE", "evaluations", "notes"};
   for (const auto& s : steps) {
     const auto it = s.diagnostics.find("tuning");
     if (it == s.diagnostics.end()) continue;
@@ -434,7 +435,12 @@ void add_tuning(HtmlReport& html, const std::vector<StepRecord>& steps) {
     }
     for (const auto& note : tuning.value("notes", nlohmann::json::array()))
       notes += (notes.empty() ? "" : "; ") + note.get<std::string>();
-    t.rows.push_back({s.name, s.plugin, best, rmse, static_cast<double>(tuning.value("evaluations", 0)),
+    // In the unit of the step's fitted output: deg/h for a rate.
+    const auto fitted = step_signals.find(s.name + ".fitted");
+    const std::string unit = fitted == step_signals.end() ? "" : fitted->second.unit;
+    const std::string rmse_text = unit == "rad/s" ? format_number(rmse * kDphPerRadPerSec) + " °/h"
+                                                  : format_number(rmse) + (unit.empty() ? "" : " " + unit);
+    t.rows.push_back({s.name, s.plugin, best, rmse_text, static_cast<double>(tuning.value("evaluations", 0)),
                       notes.empty() ? std::string("–") : notes});
   }
   if (t.rows.empty()) return;
@@ -560,7 +566,7 @@ std::string run_html(const std::string& title, const std::string& data, const Ti
   add_reconstruction(html, record, pipeline, step_signals, stages);
   if (record.has(role::kTrueRate) && record.has(role::kTemperature) && !stages.names.empty())
     add_residual(html, record, stages);
-  add_tuning(html, steps);
+  add_tuning(html, steps, step_signals);
   return html.html();
 }
 
