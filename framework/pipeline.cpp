@@ -281,8 +281,41 @@ class Parser {
     PipelineReference ref;
     for (const auto& kv : node) {
       const auto key = scalar_text(kv.first).value_or("?");
-      if (key != "source" && key != "rows" && key != "figures")
-        problem(kv.first, "reference." + key, "unknown key (expected source, rows, figures)");
+      if (key != "source" && key != "rows" && key != "figures" && key != "record")
+        problem(kv.first, "reference." + key, "unknown key (expected source, rows, figures, record)");
+    }
+    if (const auto record = node["record"]) {
+      const std::string expected =
+          "expected {sample_rate_hz: x, duration_s: y, temperature_range_c: [min, max]} (Hz, s, degC)";
+      PipelineReference::Record r;
+      const auto number = [&](const YAML::Node& v, const std::string& where, double& out) {
+        double x = 0.0;
+        if (!v || !YAML::convert<double>::decode(v, x) || !std::isfinite(x))
+          return problem(v ? v : record, where, "expected a finite number");
+        out = x;
+      };
+      if (!record.IsMap()) {
+        problem(record, "reference.record", expected + ", got " + yaml_shape(record));
+      } else {
+        for (const auto& kv : record) {
+          const auto key = scalar_text(kv.first).value_or("?");
+          if (key != "sample_rate_hz" && key != "duration_s" && key != "temperature_range_c")
+            problem(kv.first, "reference.record." + key, "unknown key; " + expected);
+        }
+        number(record["sample_rate_hz"], "reference.record.sample_rate_hz", r.sample_rate_hz);
+        number(record["duration_s"], "reference.record.duration_s", r.duration_s);
+        const auto range = record["temperature_range_c"];
+        if (!range || !range.IsSequence() || range.size() != 2) {
+          problem(range ? range : record, "reference.record.temperature_range_c", "expected [min, max] in degC");
+        } else {
+          number(range[0], "reference.record.temperature_range_c", r.temperature_min_c);
+          number(range[1], "reference.record.temperature_range_c", r.temperature_max_c);
+        }
+        if (!(r.sample_rate_hz > 0.0) || !(r.duration_s > 0.0) || !(r.temperature_min_c < r.temperature_max_c))
+          problem(record, "reference.record", "needs a rate > 0 Hz, a duration > 0 s and min < max degC");
+        else
+          ref.record = r;
+      }
     }
     if (const auto figures = node["figures"]) {
       std::string known;
@@ -734,6 +767,12 @@ std::string effective_pipeline_yaml(const Pipeline& pipeline, const Registry& re
       out << YAML::Key << name << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "B_deg_h" << YAML::Value
           << row.b_deg_h << YAML::Key << "N_deg_h_rtHz" << YAML::Value << row.n_deg_h_rthz << YAML::EndMap;
     out << YAML::EndMap;
+    if (const auto& r = pipeline.reference->record) {
+      out << YAML::Key << "record" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sample_rate_hz"
+          << YAML::Value << r->sample_rate_hz << YAML::Key << "duration_s" << YAML::Value << r->duration_s << YAML::Key
+          << "temperature_range_c" << YAML::Value << YAML::Flow << YAML::BeginSeq << r->temperature_min_c
+          << r->temperature_max_c << YAML::EndSeq << YAML::EndMap;
+    }
     if (!pipeline.reference->figures.empty()) {
       out << YAML::Key << "figures" << YAML::Value << YAML::BeginMap;
       for (const auto& [figure, text] : pipeline.reference->figures) out << YAML::Key << figure << YAML::Value << text;

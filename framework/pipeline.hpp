@@ -75,6 +75,14 @@ struct PipelineReference {
   // report figure (one of kReferenceFigures) -> the publication's figure, e.g. "Fig. 10"; the report
   // captions "(paper Fig. 10)" only where a pipeline names one.
   std::map<std::string, std::string> figures;
+  // The record the published figures come from, when the pipeline names it: the rows are shown
+  // beside a record like it only (models/evaluation/run_scores.hpp, reference_mismatch).
+  struct Record {
+    double sample_rate_hz = 0.0;                              // Hz
+    double duration_s = 0.0;                                  // s
+    double temperature_min_c = 0.0, temperature_max_c = 0.0;  // degC
+  };
+  std::optional<Record> record;
 };
 // The run report's figures a reference may name: the record, the rate's IMFs, the rate's grouping
 // by sample entropy, the temperature trend, the stages over time, the stages' Allan deviation.

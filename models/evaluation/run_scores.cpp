@@ -76,9 +76,34 @@ std::vector<PipelineStage> rate_stages(const Pipeline& pipeline, const std::map<
   return stages;
 }
 
+std::string reference_mismatch(const TimeSeries& record, const PipelineReference& reference) {
+  if (!reference.record || record.size() < 2) return "";
+  const auto& want = *reference.record;
+  const double rate = record.sample_rate_hz(), duration = record.time()[record.size() - 1] - record.time()[0];
+  std::string differs;
+  const auto add = [&](const std::string& what) { differs += (differs.empty() ? "" : ", ") + what; };
+  if (std::abs(rate - want.sample_rate_hz) > kReferenceRateTolerance * want.sample_rate_hz)
+    add(format_number(rate) + " Hz, not " + format_number(want.sample_rate_hz));
+  if (std::abs(duration - want.duration_s) > kReferenceDurationTolerance * want.duration_s)
+    add(format_number(duration) + " s, not " + format_number(want.duration_s));
+  if (record.has(role::kTemperature)) {
+    const Eigen::VectorXd& temp = record.channel(role::kTemperature).values;
+    if (std::abs(temp.minCoeff() - want.temperature_min_c) > kReferenceTemperatureToleranceC ||
+        std::abs(temp.maxCoeff() - want.temperature_max_c) > kReferenceTemperatureToleranceC)
+      add(format_number(temp.minCoeff()) + " to " + format_number(temp.maxCoeff()) + " degC, not " +
+          format_number(want.temperature_min_c) + " to " + format_number(want.temperature_max_c));
+  } else {
+    add("no temperature");
+  }
+  return differs.empty() ? "" : "this record is not the one " + reference.source + " reports on (" + differs + ")";
+}
+
 RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const std::map<std::string, Signal>& outputs) {
   RunScores s;
-  s.reference = pipeline.reference;
+  if (pipeline.reference) {
+    s.reference_not_shown = reference_mismatch(record, *pipeline.reference);
+    if (s.reference_not_shown.empty()) s.reference = pipeline.reference;
+  }
   const double fs = record.sample_rate_hz();
   const Eigen::VectorXd& rate = record.channel(role::kRate).values;
   std::optional<Truth> truth;
@@ -219,6 +244,7 @@ nlohmann::json scores_json(const RunScores& s) {
   auto& rows = j["table2"] = nlohmann::json::array();
   auto& curves = j["allan"] = nlohmann::json::object();
   if (s.reference) j["reference"] = {{"source", s.reference->source}};
+  if (!s.reference_not_shown.empty()) j["reference_not_shown"] = s.reference_not_shown;
   for (const auto& st : s.stages) {
     rows.push_back(stage_json(s, st));
     curves[st.stage] = curve_json(st.analysis);
@@ -309,6 +335,7 @@ std::string table2_text(const RunScores& s) {
              "-", "-", "-");
   }
   if (ref) out += "paper: " + s.reference->source + "\n";
+  if (!s.reference_not_shown.empty()) out += "paper columns not shown: " + s.reference_not_shown + "\n";
   return out;
 }
 

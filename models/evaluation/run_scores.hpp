@@ -41,17 +41,27 @@ inline constexpr const char* kCubicBaselineStage = "cubic_whole_record";
 inline bool is_pipeline_stage(const StageScore& stage) { return stage.source == StageScore::Source::Pipeline; }
 
 struct RunScores {
-  std::vector<StageScore> stages;                        // kOriginalStage, the pipeline's stages, the baselines
-  std::optional<PipelineReference> reference;            // the pipeline's published figures, when it has some
-  std::optional<allan::Analysis> intrinsic;              // measured - systematic
-  std::vector<Baseline> baselines;                       // in the order of their stages
+  std::vector<StageScore> stages;              // kOriginalStage, the pipeline's stages, the baselines
+  std::optional<PipelineReference> reference;  // the pipeline's published figures, when shown beside this record
+  std::string reference_not_shown;             // why the pipeline's figures are not shown (reference_mismatch)
+  std::optional<allan::Analysis> intrinsic;    // measured - systematic
+  std::vector<Baseline> baselines;             // in the order of their stages
   std::map<std::string, FloorComparison> against_floor;  // per stage, factor 1.5
 };
 
 inline constexpr double kFloorFactor = 1.5;  // "nothing left, nothing added": error curve within 1.5x
 
-// Scores the record's rate and every rate output (in output_order). Throws DataError when the record
-// is too short for the analysis.
+// Why a reference's figures do not belong beside `record` (empty when they do): the reference names
+// its record (PipelineReference::record) and this one differs from it in sample rate by more than
+// 1 %, in duration by more than 5 %, or in either end of its temperature range by more than 2 degC.
+// A reference that names no record is shown beside any record.
+inline constexpr double kReferenceRateTolerance = 0.01, kReferenceDurationTolerance = 0.05;
+inline constexpr double kReferenceTemperatureToleranceC = 2.0;
+std::string reference_mismatch(const TimeSeries& record, const PipelineReference& reference);
+
+// Scores the record's rate and every rate output (in output_order); the pipeline's reference is kept
+// only where reference_mismatch finds none. Throws DataError when the record is too short for the
+// analysis.
 RunScores score_run(const TimeSeries& record, const Pipeline& pipeline, const std::map<std::string, Signal>& outputs);
 
 // B as every report gives it (models/allan/analysis.hpp), deg/h: a value with its 68.3 % interval only

@@ -157,6 +157,7 @@ outputs: {a: s.signal}
   source: A paper, Table 2
   rows: {original: {B_deg_h: 34.66, N_deg_h_rtHz: 99.608}, a: {B_deg_h: 3.589, N_deg_h_rtHz: 0.967814}}
   figures: {record: Fig. 10, allan: Fig. 15}
+  record: {sample_rate_hz: 10, duration_s: 16200, temperature_range_c: [-30, 60]}
 )",
                                 "reference.yaml", registry_);
   ASSERT_TRUE(p.reference.has_value());
@@ -170,12 +171,16 @@ outputs: {a: s.signal}
   EXPECT_EQ(again.reference->rows.at("a").b_deg_h, 3.589);
   EXPECT_EQ(again.reference->figures,
             (std::map<std::string, std::string>{{"allan", "Fig. 15"}, {"record", "Fig. 10"}}));
+  ASSERT_TRUE(again.reference->record.has_value());
+  EXPECT_EQ(again.reference->record->duration_s, 16200.0);
+  EXPECT_EQ(again.reference->record->temperature_min_c, -30.0);
   EXPECT_EQ(effective_pipeline_yaml(again, registry_), effective);
   EXPECT_FALSE(parse_pipeline(head, "none.yaml", registry_).reference.has_value());
   try {
     parse_pipeline(head + R"(reference:
   rows: {z: {B_deg_h: 1, N_deg_h_rtHz: 1}, a: {B_deg_h: -1, N_deg_h_rtHz: 1}, original: {B_deg_h: 1}}
   figures: {raw: Fig. 10, allan: ""}
+  record: {sample_rate_hz: 10, duration_s: 16200, temperature_range_c: [60]}
 )",
                    "bad_reference.yaml", registry_);
     FAIL() << "a bad reference was accepted";
@@ -190,6 +195,8 @@ outputs: {a: s.signal}
     EXPECT_TRUE(reported(e.problems(), 7, "reference.figures.raw", "unknown figure (expected one of record, "))
         << all(e.problems());
     EXPECT_TRUE(reported(e.problems(), 7, "reference.figures.allan", "expected the publication's figure"))
+        << all(e.problems());
+    EXPECT_TRUE(reported(e.problems(), 8, "reference.record.temperature_range_c", "expected [min, max] in degC"))
         << all(e.problems());
   }
 }

@@ -134,6 +134,25 @@ TEST(RunScores, ShowTheReferenceColumnsOnlyForAPipelineWithAReference) {
   EXPECT_NE(text.find("paper: A paper, Table 2\n"), std::string::npos) << text;
   const auto json = scores_json(referenced);
   EXPECT_EQ(json["reference"]["source"], "A paper, Table 2");
+  EXPECT_FALSE(json.contains("reference_not_shown"));
+
+  // A reference that names its record is shown beside a record like it only: this one is 400 s at
+  // 10 Hz without a temperature.
+  p.reference->record = PipelineReference::Record{10.0, 16200.0, -30.0, 60.0};
+  const RunScores other = score_run(record, p, outputs);
+  EXPECT_FALSE(other.reference.has_value());
+  EXPECT_EQ(table2_text(other).find("paper B"), std::string::npos) << table2_text(other);
+  EXPECT_NE(table2_text(other).find("paper columns not shown: this record is not the one A paper, Table 2 reports "
+                                    "on (399.9 s, not 16200, no temperature)"),
+            std::string::npos)
+      << table2_text(other);
+  EXPECT_TRUE(scores_json(other).contains("reference_not_shown"));
+  p.reference->record = PipelineReference::Record{10.0, 400.0, -30.0, 60.0};
+  TimeSeries warm = record;
+  warm.set_channel({role::kTemperature, "degC", "test", Eigen::VectorXd::LinSpaced(n, -29.0, 61.0)});
+  EXPECT_TRUE(score_run(warm, p, outputs).reference.has_value()) << "within the tolerances";
+  warm.set_channel({role::kTemperature, "degC", "test", Eigen::VectorXd::LinSpaced(n, -20.0, 61.0)});
+  EXPECT_FALSE(score_run(warm, p, outputs).reference.has_value()) << "the cold end 10 degC off";
   EXPECT_EQ(json["table2"][1]["stage"], "out");
   EXPECT_EQ(json["table2"][1]["reference"]["N_deg_h_rtHz"], 0.967814);
 }

@@ -245,6 +245,8 @@ void add_table2(HtmlReport& html, const TimeSeries& record, const RunScores& sco
   }
   if (scores.intrinsic) rows.push_back(intrinsic_floor_row(scores, record.sample_rate_hz()));
   html.table(table2_html(Table2Layout::Run, rows, scores.reference));
+  if (!scores.reference_not_shown.empty())
+    html.paragraph("The paper's columns are not shown: " + scores.reference_not_shown + ".");
   html.figure(
       allan_figure(scores),
       "Allan deviation of the original record, every stage, the two baselines and the intrinsic floor, "
