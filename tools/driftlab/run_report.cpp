@@ -106,9 +106,9 @@ Figure entropy_figure(const std::string& of, const std::vector<ImfDecision>& dec
   return {{p}, 700, 300, 1, ""};
 }
 
-Figure allan_figure(const RunScores& scores) {
+Figure allan_figure(const RunScores& scores, const std::optional<PipelineReference>& reference) {
   PlotPanel p;
-  p.title = "Allan deviation of every stage, 68.3 % intervals" + paper_figure(scores.reference, "allan");
+  p.title = "Allan deviation of every stage, 68.3 % intervals" + paper_figure(reference, "allan");
   p.x_label = "tau (s)";
   p.y_label = "Allan deviation (°/h)";
   p.log_x = p.log_y = true;
@@ -236,7 +236,8 @@ std::vector<HtmlCell> compare_cells(const Table2Row& r, bool systematic) {
 
 // ---- the sections of report.html, in order ----
 
-void add_table2(HtmlReport& html, const TimeSeries& record, const RunScores& scores) {
+void add_table2(HtmlReport& html, const TimeSeries& record, const RunScores& scores,
+                const std::optional<PipelineReference>& reference) {
   html.section("Allan figures per stage (the paper's Table 2)");
   std::vector<Table2Row> rows;
   for (const auto& st : scores.stages) {
@@ -248,7 +249,7 @@ void add_table2(HtmlReport& html, const TimeSeries& record, const RunScores& sco
   if (!scores.reference_not_shown.empty())
     html.paragraph("The paper's columns are not shown: " + scores.reference_not_shown + ".");
   html.figure(
-      allan_figure(scores),
+      allan_figure(scores, reference),
       "Allan deviation of the original record, every stage, the two baselines and the intrinsic floor, "
       "with 68.3 % intervals (bands). Grey dashed: the slopes the original record's figures are read from "
       "(-1/2: N; 0: the floor 0.664 B; +1/2: K where the term fit resolves it); black dots: where N (tau = 1 s) "
@@ -550,7 +551,7 @@ std::string run_html(const std::string& title, const std::string& data, const Ti
                  fmt(record.sample_rate_hz()) + " Hz (" +
                  fmt(record.size() / record.sample_rate_hz() * kHoursPerSecond) + " h), seed " +
                  std::to_string(pipeline.seed) + ".");
-  add_table2(html, record, scores);
+  add_table2(html, record, scores, pipeline.reference);
 
   html.section("The record");
   html.figure(raw_figure(record), "Rate and case temperature over time" + paper_figure(pipeline.reference, "record"));
