@@ -16,4 +16,10 @@ std::string format_number(double v, int digits) {
   return buf;
 }
 
+std::string number_text(double v, const char* printf_format) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, printf_format, v);
+  return buf;
+}
+
 }  // namespace driftlab

@@ -44,12 +44,6 @@ nlohmann::json fit_json(const allan::Analysis& a) {
   return j;
 }
 
-std::string number_text(double v, const char* format) {
-  char b[32];
-  std::snprintf(b, sizeof b, format, v);
-  return b;
-}
-
 }  // namespace
 
 const PipelineReference::Row* reference_row(const RunScores& s, const std::string& stage) {

@@ -219,8 +219,9 @@ void compare(const CompareOptions& o, CommandEnv& env) {
                  format_number(record.sample_rate_hz()) + " Hz.");
   html.table(table);
   html.figure(figure,
-              "Allan deviation of the record, the two baselines and the intrinsic floor (dashed; the floor when "
-              "the record has a systematic column) and every pipeline output (solid), each with its 68.3 % interval "
+              "Allan deviation of the record, the two baselines (when the record has a temperature) and the "
+              "intrinsic floor (when it has a systematic column), dashed, and every pipeline output (solid), each with "
+              "its 68.3 % interval "
               "as a band. Lower at long tau: less drift left; a curve on the intrinsic floor has removed all of it. "
               "Grey dashed guides, of the original record" +
                   std::string(first.intrinsic ? " and of the intrinsic floor" : "") +

@@ -65,6 +65,17 @@ struct NavReport {
 
 double rms(const Eigen::VectorXd& v) { return std::sqrt(v.squaredNorm() / static_cast<double>(v.size())); }
 
+// A run's error figures, as summary.json, nav_info.json and the terminal give them: the heading
+// error's RMS, worst and final magnitude (deg) and the final position error (m).
+struct RunErrors {
+  double heading_rms_deg, heading_worst_deg, heading_final_deg, position_final_m;
+};
+RunErrors run_errors(const NavTrack& t) {
+  const Eigen::VectorXd& h = t.heading_error_rad;
+  return {rms(h) * kDegPerRad, h.cwiseAbs().maxCoeff() * kDegPerRad, std::abs(h[h.size() - 1]) * kDegPerRad,
+          t.position_error_m[t.position_error_m.size() - 1]};
+}
+
 // The first sample, the first sample of every later `every_s` interval, and the last.
 std::vector<Eigen::Index> decimation(const Eigen::VectorXd& t, double every_s) {
   constexpr double kSlack = 1e-9;  // of an interval: t = k / fs may land a rounding error short
@@ -111,16 +122,16 @@ nlohmann::ordered_json process_noise_json(const mrpt_bridge::NavNoise& noise) {
 // summary.json, nav_info.json (`info` plus the errors), trajectory.csv, errors.csv and nav.svg.
 void write_report(const NavReport& report, nlohmann::ordered_json info, OutputSet& outputs, const fs::path& out,
                   double every_s) {
-  const Eigen::Index n = report.input.time_s.size();
   // summary.json (degrees and metres; magnitudes): the heading error's RMS and worst moment first (a
   // final value can be a lucky zero crossing), then the final values.
   nlohmann::ordered_json summary, heading_rms, heading_worst, heading_final, position_final;
   for (const auto& run : report.runs) {
     if (run.name == "noise_only") continue;  // reported in nav_info.json and on stdout
-    heading_rms[run.name] = rms(run.track.heading_error_rad) * kDegPerRad;
-    heading_worst[run.name] = run.track.heading_error_rad.cwiseAbs().maxCoeff() * kDegPerRad;
-    heading_final[run.name] = std::abs(run.track.heading_error_rad[n - 1]) * kDegPerRad;
-    position_final[run.name] = run.track.position_error_m[n - 1];
+    const RunErrors e = run_errors(run.track);
+    heading_rms[run.name] = e.heading_rms_deg;
+    heading_worst[run.name] = e.heading_worst_deg;
+    heading_final[run.name] = e.heading_final_deg;
+    position_final[run.name] = e.position_final_m;
   }
   summary["heading_error_rms_deg"] = heading_rms;
   summary["heading_error_worst_deg"] = heading_worst;
@@ -196,19 +207,18 @@ void write_report(const NavReport& report, nlohmann::ordered_json info, OutputSe
 
 // The table of errors on stdout: the heading error's RMS and worst moment first, then the final values.
 void print_runs(const NavReport& report) {
-  const Eigen::Index n = report.input.time_s.size();
   std::cout << "  run           heading RMS (deg)  heading worst (deg)  heading final (deg)  position final (m)\n";
-  for (const auto& run : report.runs)
-    std::cout << "  " << std::left << std::setw(13) << run.name << std::right << std::setw(18)
-              << rms(run.track.heading_error_rad) * kDegPerRad << std::setw(21)
-              << run.track.heading_error_rad.cwiseAbs().maxCoeff() * kDegPerRad << std::setw(21)
-              << std::abs(run.track.heading_error_rad[n - 1]) * kDegPerRad << std::setw(20)
-              << run.track.position_error_m[n - 1] << "\n";
-  const auto& raw = report.runs.front().track.heading_error_rad;
-  const auto& comp = report.runs[1].track.heading_error_rad;
-  if (rms(comp) > 0)
-    std::cout << "  heading error raw / compensated: " << std::setprecision(1) << rms(raw) / rms(comp) << "x on RMS, "
-              << raw.cwiseAbs().maxCoeff() / comp.cwiseAbs().maxCoeff() << "x on the worst moment\n";
+  for (const auto& run : report.runs) {
+    const RunErrors e = run_errors(run.track);
+    std::cout << "  " << std::left << std::setw(13) << run.name << std::right << std::setw(18) << e.heading_rms_deg
+              << std::setw(21) << e.heading_worst_deg << std::setw(21) << e.heading_final_deg << std::setw(20)
+              << e.position_final_m << "\n";
+  }
+  const RunErrors raw = run_errors(report.runs.front().track), comp = run_errors(report.runs[1].track);
+  if (comp.heading_rms_deg > 0)
+    std::cout << "  heading error raw / compensated: " << std::setprecision(1)
+              << raw.heading_rms_deg / comp.heading_rms_deg << "x on RMS, "
+              << raw.heading_worst_deg / comp.heading_worst_deg << "x on the worst moment\n";
 }
 
 // The cost of a simulated drive per sample: the drive, the tracks and the output text held at once
@@ -288,13 +298,13 @@ nlohmann::ordered_json simulated_info(const NavOptions& o, const fs::path& devic
   info["filter"] = "mrpt::bayes::CKalmanFilterCapable<4,2,0,3> EKF (kfEKFNaive): x, y, heading, gyro bias";
   info["process_noise"] = process_noise_json(noise);
   info["bias_prior_sigma_dph"] = o.bias_prior_dph;
-  const auto& floor_track = report.runs.back().track;
+  const RunErrors floor = run_errors(report.runs.back().track);
   info["noise_only"] = {
       {"what", "true rate + the gyro's noise only (measured - simulated systematic rate): the intrinsic floor"},
-      {"heading_error_rms_deg", rms(floor_track.heading_error_rad) * kDegPerRad},
-      {"heading_error_worst_deg", floor_track.heading_error_rad.cwiseAbs().maxCoeff() * kDegPerRad},
-      {"heading_error_final_deg", std::abs(floor_track.heading_error_rad[n - 1]) * kDegPerRad},
-      {"position_error_final_m", floor_track.position_error_m[n - 1]}};
+      {"heading_error_rms_deg", floor.heading_rms_deg},
+      {"heading_error_worst_deg", floor.heading_worst_deg},
+      {"heading_error_final_deg", floor.heading_final_deg},
+      {"position_error_final_m", floor.position_final_m}};
   if (!o.no_rawlog)
     info["outputs"]["drive.rawlog"] =
         "the drive for `nav --rawlog`: CObservationIMU (raw IMU_WZ rad/s, IMU_TEMPERATURE degC) with "

@@ -160,12 +160,6 @@ Figure residual_figure(const TimeSeries& record, const std::vector<std::string>&
   return f;
 }
 
-std::string fmt(double v, const char* format = "%.3g") {
-  char b[64];
-  std::snprintf(b, sizeof b, format, v);
-  return b;
-}
-
 const char* const kRunTable2Note =
     "B: flat floor of the overlapping Allan deviation / 0.664 (IEEE 952 Annex C), read at tau >= the output's "
     "correlation time (1 / noise bandwidth), with its 68.3 % chi-square interval, where the deviation has a floor "
@@ -214,7 +208,7 @@ std::vector<HtmlCell> run_cells(const Table2Row& r, bool reference, bool systema
   row.push_back(deg_h_cell(r.residual_drift_rad_s));
   if (systematic) row.push_back(deg_h_cell(r.systematic_error_rad_s));
   row.push_back(r.against_floor
-                    ? HtmlCell(fmt(r.against_floor->max_ratio, "%.2f") +
+                    ? HtmlCell(number_text(r.against_floor->max_ratio, "%.2f") +
                                (r.against_floor->within ? " (within 1.5x given the intervals)" : " (above)"))
                     : kNone);
   return row;
@@ -245,15 +239,23 @@ void add_table2(HtmlReport& html, const TimeSeries& record, const RunScores& sco
     if (st.label != st.stage) rows.back().stage = st.stage + " (" + st.label + ")";
   }
   if (scores.intrinsic) rows.push_back(intrinsic_floor_row(scores, record.sample_rate_hz()));
-  html.table(table2_html(Table2Layout::Run, rows, scores.reference));
+  // What stands beside the stages: the baselines need a temperature, the floor a systematic rate.
+  std::vector<std::string> beside;
+  if (!scores.baselines.empty()) beside.push_back("two simple baselines fitted on the same record");
+  if (scores.intrinsic) beside.push_back("the intrinsic floor");
+  std::string besides;
+  for (std::size_t i = 0; i < beside.size(); ++i) besides += (i == 0 ? "" : " and ") + beside[i];
+  HtmlTable table = table2_html(Table2Layout::Run, rows, scores.reference);
+  if (!besides.empty()) table.caption += ", " + besides;
+  html.table(table);
   if (!scores.reference_not_shown.empty())
     html.paragraph("The paper's columns are not shown: " + scores.reference_not_shown + ".");
   html.figure(
       allan_figure(scores, reference),
-      "Allan deviation of the original record, every stage, the two baselines and the intrinsic floor, "
-      "with 68.3 % intervals (bands). Grey dashed: the slopes the original record's figures are read from "
-      "(-1/2: N; 0: the floor 0.664 B; +1/2: K where the term fit resolves it); black dots: where N (tau = 1 s) "
-      "and B (the curve's minimum) are read. A stage lower at long tau has less drift left.");
+      "Allan deviation of the original record and every stage" + (besides.empty() ? "" : ", " + besides) +
+          ", with 68.3 % intervals (bands). Grey dashed: the slopes the original record's figures are read from "
+          "(-1/2: N; 0: the floor 0.664 B; +1/2: K where the term fit resolves it); black dots: where N (tau = 1 s) "
+          "and B (the curve's minimum) are read. A stage lower at long tau has less drift left.");
 }
 
 void add_decomposition(HtmlReport& html, const PipelineStep& step, const TimeSeries& record,
@@ -327,7 +329,7 @@ struct StageOutputs {
   std::map<std::string, Eigen::VectorXd> rates;
   std::map<std::string, std::string> labels;  // stage_label of each
   std::vector<std::string> names;
-  std::optional<std::string> final_stage, px4_stage;
+  std::optional<std::string> final_stage;
 };
 
 StageOutputs stage_outputs(const RunScores& scores, const std::map<std::string, Signal>& outputs) {
@@ -337,7 +339,6 @@ StageOutputs stage_outputs(const RunScores& scores, const std::map<std::string, 
     if (st.source == StageScore::Source::Baseline) {
       for (const auto& b : scores.baselines)
         if (b.stage == st.stage) s.rates[st.stage] = b.compensated_rad_s;
-      if (st.stage == evaluation::kPx4BaselineStage) s.px4_stage = st.stage;
     } else {
       s.final_stage = st.stage;
       s.rates[st.stage] = outputs.at(st.stage).columns.col(0);
@@ -410,7 +411,7 @@ void add_reconstruction(HtmlReport& html, const TimeSeries& record, const Pipeli
 void add_residual(HtmlReport& html, const TimeSeries& record, const StageOutputs& stages) {
   std::vector<std::string> shown;
   if (stages.final_stage) shown.push_back(*stages.final_stage);
-  if (stages.px4_stage) shown.push_back(*stages.px4_stage);
+  if (stages.rates.count(evaluation::kPx4BaselineStage)) shown.push_back(evaluation::kPx4BaselineStage);
   html.section("Residual against temperature");
   html.figure(residual_figure(record, shown, stages.rates, stages.labels),
               "Residual of the final stage and of the PX4-style baseline against temperature, heating (red) and "
@@ -528,9 +529,7 @@ HtmlTable table2_html(Table2Layout layout, const std::vector<Table2Row>& rows,
   }
   const bool ref = reference.has_value();
   t.caption =
-      (ref ? "The stages of the pipeline beside " + reference->source : std::string("The stages of the pipeline")) +
-      ", two simple baselines fitted on the same record (PX4-style, cubic on the whole record) and the "
-      "intrinsic floor";
+      ref ? "The stages of the pipeline beside " + reference->source : std::string("The stages of the pipeline");
   t.header = {"stage"};
   if (ref) t.header.insert(t.header.end(), {"paper B (°/h)", "paper N (°/h/√Hz)"});
   t.header.insert(t.header.end(), {"B (°/h)", "B interval (°/h)", "minimum at tau (s)", "N (°/h/√Hz)",
@@ -548,8 +547,8 @@ std::string run_html(const std::string& title, const std::string& data, const Ti
                      const RunScores& scores) {
   HtmlReport html(title);
   html.paragraph("Pipeline " + pipeline.file + " on " + data + ": " + std::to_string(record.size()) + " samples at " +
-                 fmt(record.sample_rate_hz()) + " Hz (" +
-                 fmt(record.size() / record.sample_rate_hz() * kHoursPerSecond) + " h), seed " +
+                 number_text(record.sample_rate_hz(), "%.3g") + " Hz (" +
+                 number_text(record.size() / record.sample_rate_hz() * kHoursPerSecond, "%.3g") + " h), seed " +
                  std::to_string(pipeline.seed) + ".");
   add_table2(html, record, scores, pipeline.reference);
 
